@@ -1,0 +1,284 @@
+"""The ``ros2course`` command line: thin wiring from arguments to ``course`` functions.
+
+Data goes to stdout, diagnostics to stderr. Expected errors are
+:class:`~course.errors.CourseError`: one line plus a hint, the error's exit
+code, and no traceback unless ``--debug`` (httpie's rule). The only place
+that turns errors into exit codes is :func:`_handle_errors`.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import sys
+import traceback
+from pathlib import Path
+from typing import Annotated, Any, Callable, Optional
+
+import typer
+from rich.console import Console
+
+from course import env as env_mod
+from course.errors import CourseError, ExitStatus
+from course.lesson import load_catalog
+from course.progress import Workspace, find_workspace
+
+app = typer.Typer(name="ros2course", no_args_is_help=True, add_completion=False,
+                  help="Learn ROS 2 Jazzy by writing real nodes; ros2course builds, runs and grades them.")
+dev_app = typer.Typer(no_args_is_help=True, help="Course maintenance (for course authors and CI).")
+app.add_typer(dev_app, name="dev")
+
+_state = {"debug": False}
+
+WorkspaceOpt = Annotated[Optional[Path], typer.Option(
+    "--workspace", "-w", help="Workspace folder (default: nearest initialised workspace at or above the current directory).",
+    file_okay=False)]
+
+
+def stdout_console() -> Console:
+    """Console for data (created per call, so test runners that swap sys.stdout see it)."""
+    return Console(file=sys.stdout, highlight=False, soft_wrap=False)
+
+
+def stderr_console() -> Console:
+    """Console for diagnostics and progress."""
+    return Console(file=sys.stderr, highlight=False)
+
+
+def _handle_errors(func: Callable[..., Any]) -> Callable[..., Any]:
+    @functools.wraps(func)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        try:
+            return func(*args, **kwargs)
+        except CourseError as exc:
+            err = stderr_console()
+            if _state["debug"]:
+                err.print(traceback.format_exc(), markup=False, highlight=False)
+            err.print(f"[bold red]error:[/] {exc.message}", markup=True, highlight=False)
+            if exc.hint:
+                err.print(f"[cyan]hint:[/] {exc.hint}", highlight=False)
+            raise typer.Exit(int(exc.exit_status)) from None
+        except KeyboardInterrupt:
+            stderr_console().print("[yellow]interrupted[/]")
+            raise typer.Exit(130) from None
+    return wrapper
+
+
+@app.callback()
+def _root(debug: Annotated[bool, typer.Option("--debug", help="Show tracebacks of errors.")] = False) -> None:
+    _state["debug"] = debug
+    env_mod.activate()
+
+
+def _workspace(workspace: Path | None) -> Workspace:
+    return find_workspace(explicit=workspace)
+
+
+def _require_initialised(ws: Workspace) -> None:
+    if not ws.initialised:
+        raise CourseError(f"{ws.root} was never initialised for ros2course (no progress file)",
+                          f"run 'ros2course init {ws.root}' (your files are kept)")
+
+
+@app.command()
+@_handle_errors
+def init(directory: Annotated[Path, typer.Argument(help="Workspace folder to create.")] = Path(
+        "ros2_tutorial_workspace")) -> None:
+    """Create a workspace (DIR/src) and its progress file."""
+    if directory.exists() and not directory.is_dir():
+        raise CourseError(f"{directory} exists and is not a folder", "choose another name")
+    ws = Workspace(directory)
+    created = ws.init()
+    out = stdout_console()
+    if created:
+        out.print(f"Initialised ros2course workspace at [bold]{ws.root}[/]")
+    else:
+        out.print(f"{ws.root} is already a ros2course workspace; nothing changed")
+    out.print(f"Next: cd {directory} && ros2course next")
+
+
+@app.command("list")
+@_handle_errors
+def list_(workspace: WorkspaceOpt = None) -> None:
+    """Every lesson, its status and best score."""
+    from course.report import render_list  # noqa: PLC0415
+
+    catalog = load_catalog()
+    ws = _workspace(workspace)
+    render_list(catalog.lessons, ws.load_progress(), stdout_console())
+
+
+@app.command("next")
+@_handle_errors
+def next_(workspace: WorkspaceOpt = None) -> None:
+    """Move to the next lesson: show its instructions and copy its starter files."""
+    from course.report import render_lesson  # noqa: PLC0415
+    from course.starter import copy_starter
+
+    catalog = load_catalog()
+    ws = _workspace(workspace)
+    _require_initialised(ws)
+    progress = ws.load_progress()
+    err = stderr_console()
+    if progress.current is not None and progress.status(progress.current) != "done":
+        err.print(f"[yellow]note:[/] lesson {progress.current} is not done yet; you can come back with "
+                  f"'ros2course check {progress.current}'")
+    lesson = catalog.after(progress.current)
+    if lesson is None:
+        stdout_console().print("You have reached the end of the course. 'ros2course list' shows your scores.")
+        return
+    progress.current = lesson.id
+    progress.lesson(lesson.id).started = True
+    copied, kept = copy_starter(lesson, ws.root)
+    ws.save_progress(progress)
+    out = stdout_console()
+    render_lesson(lesson, out)
+    for path in copied:
+        out.print(f"[green]created[/] {path}")
+    for path in kept:
+        err.print(f"[yellow]kept your file[/] {path} (the starter version was not copied)")
+    out.print(f"When ready: [bold]ros2course check[/]   Stuck: [bold]ros2course hint[/]")
+
+
+def _lesson_for(lesson_id: str | None, ws: Workspace):
+    catalog = load_catalog()
+    if lesson_id:
+        return catalog.get(lesson_id)
+    current = ws.load_progress().current if ws.initialised else None
+    if current is None:
+        raise CourseError("no lesson given and no current lesson", "name one (ros2course list) or run 'ros2course next'")
+    return catalog.get(current)
+
+
+@app.command()
+@_handle_errors
+def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", help="Lesson id (default: current).")] = None,
+          workspace: WorkspaceOpt = None,
+          as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON on stdout, nothing else.")] = False,
+          ) -> None:
+    """Build the lesson's packages, run your nodes, grade them. Exit 0 only on full marks."""
+    from course.grading import STATUS_GRADER_ERROR, STATUS_NOT_GRADABLE, STATUS_PASSED, grade_lesson  # noqa: PLC0415
+    from course.report import render_result, result_json
+
+    ws = _workspace(workspace)
+    lesson = _lesson_for(lesson_id, ws)
+    err = stderr_console()
+    with err.status(f"grading {lesson.id} in {ws.root} ...") if not as_json and err.is_terminal else _null():
+        result = grade_lesson(lesson, ws.root)
+    if ws.initialised:
+        progress = ws.load_progress()
+        record = progress.lesson(lesson.id)
+        record.attempts += 1
+        record.last_status = result.status
+        record.max_score = result.max_score
+        if record.best_score is None or result.score > record.best_score:
+            record.best_score = result.score
+        ws.save_progress(progress)
+    if as_json:
+        sys.stdout.write(result_json(result))
+        sys.stdout.flush()
+    else:
+        render_result(result, stdout_console())
+    codes = {STATUS_PASSED: ExitStatus.OK, STATUS_NOT_GRADABLE: ExitStatus.NOT_GRADABLE,
+             STATUS_GRADER_ERROR: ExitStatus.GRADER_ERROR}
+    code = codes.get(result.status, ExitStatus.CHECK_FAILED)
+    if code:
+        raise typer.Exit(int(code))
+
+
+class _null:
+    def __enter__(self) -> None:
+        return None
+
+    def __exit__(self, *exc: Any) -> None:
+        return None
+
+
+@app.command()
+@_handle_errors
+def hint(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON")] = None,
+         workspace: WorkspaceOpt = None) -> None:
+    """Show the next hint for the lesson (each call reveals one more)."""
+    ws = _workspace(workspace)
+    lesson = _lesson_for(lesson_id, ws)
+    progress = ws.load_progress()
+    record = progress.lesson(lesson.id)
+    index = min(record.hints_shown, len(lesson.hints) - 1)
+    out = stdout_console()
+    out.print(f"[bold cyan]Hint {index + 1}/{len(lesson.hints)}[/] for {lesson.id}:")
+    from rich.markdown import Markdown  # noqa: PLC0415
+
+    out.print(Markdown(lesson.hints[index]))
+    if record.hints_shown >= len(lesson.hints):
+        out.print("[dim]That was the last hint.[/]")
+    record.hints_shown = min(record.hints_shown + 1, len(lesson.hints))
+    ws.save_progress(progress)
+
+
+@app.command()
+@_handle_errors
+def reset(lesson_id: Annotated[str, typer.Argument(metavar="LESSON")],
+          workspace: WorkspaceOpt = None) -> None:
+    """Restore the lesson's starter files; your versions are backed up first."""
+    from course.starter import reset_starter  # noqa: PLC0415
+
+    ws = _workspace(workspace)
+    lesson = load_catalog().get(lesson_id)
+    backup, restored = reset_starter(lesson, ws.root, ws.state_dir / "backups")
+    out = stdout_console()
+    for path in restored:
+        out.print(f"[green]restored[/] {path}")
+    if backup is not None:
+        out.print(f"Your previous files are in [bold]{backup}[/]")
+    if not restored:
+        out.print(f"lesson {lesson.id} has no starter files")
+
+
+@app.command()
+@_handle_errors
+def doctor(fix: Annotated[bool, typer.Option("--fix", help="Repair what the ROS wheels need (idempotent).")] = False,
+           ) -> None:
+    """Report what is installed (rclpy, RMW, colcon, cmake, C++, rclcpp, launch) and repair with --fix."""
+    from rich.table import Table  # noqa: PLC0415
+
+    rows = env_mod.doctor(fix=fix)
+    table = Table(title="ros2course doctor", title_justify="left")
+    table.add_column("component")
+    table.add_column("")
+    table.add_column("detail", overflow="fold")
+    table.add_column("hint", overflow="fold")
+    for row in rows:
+        table.add_row(row.component, "[green]ok[/]" if row.ok else "[red]missing[/]", row.detail, row.hint)
+    stdout_console().print(table)
+    essential = {"ROS 2", "rclpy", "colcon"}
+    if any(not row.ok for row in rows if row.component in essential):
+        raise typer.Exit(int(ExitStatus.MISSING_REQUIREMENT))
+
+
+@dev_app.command()
+@_handle_errors
+def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="[LESSON]...")] = None,
+             as_json: Annotated[bool, typer.Option("--json", help="Print the outcomes as JSON.")] = False) -> None:
+    """Grade every lesson's reference (full marks), starter (not full) and wrong solutions (named checks fail)."""
+    from course.validate import render_outcomes, validate_course  # noqa: PLC0415
+
+    outcomes = validate_course(lesson_ids or None, progress=stderr_console())
+    if as_json:
+        import json  # noqa: PLC0415
+
+        sys.stdout.write(json.dumps([o.to_dict() for o in outcomes], indent=2) + "\n")
+    else:
+        render_outcomes(outcomes, stdout_console())
+    bad = [o for o in outcomes if not o.ok]
+    if bad:
+        raise typer.Exit(int(ExitStatus.VALIDATION_FAILED))
+
+
+def main() -> None:
+    """Console-script entry point."""
+    os.environ.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")
+    app()
+
+
+if __name__ == "__main__":
+    main()

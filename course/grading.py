@@ -1,0 +1,360 @@
+"""The grading engine: build, launch, observe, judge, tear down.
+
+A grader module (``graders/<name>.py``) declares ``CHECKS`` (a list of
+:class:`Check`) and a function ``grade(session: GradingSession) -> None``
+that composes probes and calls :meth:`GradingSession.record` for each check.
+The engine always produces a :class:`LessonResult`, even when the grader
+itself crashes (otter-grader's rule): a visible "grader error" for the
+learner, the traceback in the log for the instructor.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import datetime as dt
+import importlib
+import json
+import os
+import sys
+import time
+import traceback
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+from course import build as build_mod
+from course import env as env_mod
+from course.errors import CourseError, NotGradable
+from course.lesson import Lesson, content_root
+from course.process import LearnerProcess, sweep_stale_fastdds_shm
+
+STATUS_PASSED = "passed"
+STATUS_FAILED = "failed"
+STATUS_NOT_GRADABLE = "not gradable"
+STATUS_GRADER_ERROR = "grader error"
+
+
+@dataclasses.dataclass(frozen=True)
+class Check:
+    """One graded property of a submission.
+
+    Attributes:
+        id: stable, snake_case, unique within the lesson (fixtures and reports name it).
+        name: one line, what is checked, in the learner's terms.
+        points: points for passing (partial credit is spread over checks).
+        hint: default learner-facing hint shown when it fails.
+    """
+
+    id: str
+    name: str
+    points: float
+    hint: str = ""
+
+
+@dataclasses.dataclass
+class CheckResult:
+    """The verdict on one :class:`Check` (the JSON shape of ``check --json``)."""
+
+    id: str
+    name: str
+    points: float
+    max_points: float
+    passed: bool
+    observed: str
+    expected: str
+    hint: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return dataclasses.asdict(self)
+
+
+@dataclasses.dataclass
+class LessonResult:
+    """Everything ``check`` reports about one submission for one lesson.
+
+    Attributes:
+        status: ``passed`` (full marks), ``failed``, ``not gradable`` or ``grader error``.
+        message: for not gradable / grader error, what happened (e.g. the build log excerpt).
+        timings: seconds spent per phase (``build``, ``grade``, ``teardown``, ...).
+        build: how the build went (``ok``, ``cached``, ``seconds``, ``log``).
+        log_dir: where the build and node logs of this check are.
+    """
+
+    lesson: str
+    score: float
+    max_score: float
+    status: str
+    checks: list[CheckResult]
+    message: str = ""
+    hint: str = ""
+    timings: dict[str, float] = dataclasses.field(default_factory=dict)
+    build: dict[str, Any] = dataclasses.field(default_factory=dict)
+    log_dir: str = ""
+
+    def to_json(self) -> dict[str, Any]:
+        """The documented ``check --json`` object (plus ``message`` when not graded)."""
+        out: dict[str, Any] = {
+            "lesson": self.lesson, "score": self.score, "max_score": self.max_score, "status": self.status,
+            "checks": [c.to_dict() for c in self.checks],
+        }
+        if self.message:
+            out["message"] = self.message
+        return out
+
+    def failed_checks(self) -> list[str]:
+        """Ids of the checks that did not get full points."""
+        return [c.id for c in self.checks if not c.passed]
+
+
+class GradingSession:
+    """What a grader's ``grade()`` works with.
+
+    Attributes:
+        lesson: the :class:`~course.lesson.Lesson`.
+        workspace_root: the colcon workspace being graded.
+        log_dir: this check's log folder (node stdout/stderr go here).
+        ros: the :class:`~course.probes.RosSession` (private domain), started on first use.
+        base_env: the ROS install's environment (no workspace overlay).
+    """
+
+    def __init__(self, lesson: Lesson, checks: list[Check], workspace_root: Path, log_dir: Path,
+                 base_env: dict[str, str]) -> None:
+        self.lesson = lesson
+        self.checks = {c.id: c for c in checks}
+        self._order = [c.id for c in checks]
+        self.workspace_root = workspace_root
+        self.log_dir = log_dir
+        self.base_env = base_env
+        self.results: dict[str, CheckResult] = {}
+        self._processes: list[LearnerProcess] = []
+        self._stack = contextlib.ExitStack()
+        self._ros = None
+        self._overlay: dict[str, str] | None = None
+        self.notes: list[str] = []
+        #: seconds per named phase (``start``, ``observe``, ``stop``...), see :meth:`phase`.
+        self.timings: dict[str, float] = {}
+
+    @contextlib.contextmanager
+    def phase(self, name: str) -> Iterator[None]:
+        """Time a phase of the grader (accumulated into ``timings[name]``, seconds)."""
+        begin = time.monotonic()
+        try:
+            yield
+        finally:
+            self.timings[name] = self.timings.get(name, 0.0) + time.monotonic() - begin
+
+    # --- recording ---------------------------------------------------------
+
+    def record(self, check_id: str, passed: bool, observed: str, expected: str, hint: str | None = None,
+               fraction: float | None = None) -> bool:
+        """Record the verdict on ``check_id``; returns ``passed``.
+
+        Args:
+            observed: what the grader saw, in the learner's terms.
+            expected: what the lesson's contract asks for.
+            hint: overrides the check's default hint (shown only on failure).
+            fraction: partial credit in [0, 1] (default: all or nothing).
+
+        Raises:
+            KeyError: ``check_id`` is not declared in the grader's ``CHECKS``.
+        """
+        check = self.checks[check_id]
+        share = (1.0 if passed else 0.0) if fraction is None else max(0.0, min(1.0, fraction))
+        self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
+                                             passed, observed, expected,
+                                             "" if passed else (hint if hint is not None else check.hint))
+        return passed
+
+    def skip_remaining(self, reason: str) -> None:
+        """Mark every check not recorded yet as failed because of ``reason`` (e.g. no node)."""
+        for check_id in self._order:
+            if check_id not in self.results:
+                check = self.checks[check_id]
+                self.results[check_id] = CheckResult(check.id, check.name, 0.0, check.points, False,
+                                                     f"not checked: {reason}", "(depends on the failed check above)",
+                                                     check.hint)
+
+    def ordered_results(self) -> list[CheckResult]:
+        self.skip_remaining("the grader stopped before this check")
+        return [self.results[c] for c in self._order]
+
+    # --- environment and processes ----------------------------------------
+
+    @property
+    def ros(self):
+        """The private ROS graph of this check (created on first use)."""
+        if self._ros is None:
+            from course.probes import RosSession  # noqa: PLC0415 - rclpy import only when grading
+
+            self._ros = self._stack.enter_context(RosSession())
+        return self._ros
+
+    def overlay(self) -> dict[str, str]:
+        """The sourced workspace environment (``install/setup.bash``), without the domain id."""
+        if self._overlay is None:
+            self._overlay = build_mod.overlay_env(self.workspace_root, self.base_env)
+        return dict(self._overlay)
+
+    def node_env(self) -> dict[str, str]:
+        """Environment for learner executables: overlay + private domain + localhost discovery."""
+        return self.ros.learner_env(self.overlay())
+
+    def find_executable(self, package: str, executable: str) -> tuple[Path | None, str]:
+        """Resolve ``package``/``executable`` the way ``ros2 run`` does.
+
+        ``ament_index_python.get_package_prefix(package)`` under the workspace
+        overlay, then ``<prefix>/lib/<package>/<executable>`` (ros2run source).
+
+        Returns:
+            ``(path, observed)``: the path (None when not found) and a sentence
+            saying what was found, for the check's "observed".
+        """
+        from ament_index_python.packages import PackageNotFoundError, get_package_prefix  # noqa: PLC0415
+
+        with patched_environ(self.overlay()):
+            try:
+                prefix = Path(get_package_prefix(package))
+            except (PackageNotFoundError, OSError, ValueError):
+                return None, f"package {package} is not in the ament index (was it built and installed?)"
+        lib = prefix / "lib" / package
+        candidate = lib / executable
+        if candidate.is_file() and os.access(candidate, os.X_OK):
+            return candidate, f"{candidate.relative_to(self.workspace_root) if candidate.is_relative_to(self.workspace_root) else candidate}"
+        others = sorted(p.name for p in lib.iterdir() if p.is_file()) if lib.is_dir() else []
+        listing = ", ".join(others) if others else "nothing"
+        return None, f"no executable {executable} in {lib}; found: {listing}"
+
+    def launch(self, path: Path, name: str, args: list[str] | None = None) -> LearnerProcess:
+        """Start a learner executable in the private domain; it is stopped at the end of the check.
+
+        Args:
+            path: the executable (from :meth:`find_executable`).
+            name: label for its log files (``<name>.stdout.log``).
+            args: extra arguments (e.g. ``["--ros-args", "-r", "__node:=x"]``).
+        """
+        proc = LearnerProcess([str(path), *(args or [])], self.node_env(), self.log_dir, name,
+                              cwd=self.workspace_root)
+        self._processes.append(proc)
+        proc.start()
+        return proc
+
+    def close(self) -> None:
+        """Stop every learner process, close the ROS graph, remove stale shared memory."""
+        for proc in self._processes:
+            proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
+        self._stack.close()
+        sweep_stale_fastdds_shm()
+
+
+@contextlib.contextmanager
+def patched_environ(env: dict[str, str]) -> Iterator[None]:
+    """Temporarily replace ``os.environ`` (for libraries that read it, like ament_index_python)."""
+    saved = dict(os.environ)
+    os.environ.clear()
+    os.environ.update(env)
+    try:
+        yield
+    finally:
+        os.environ.clear()
+        os.environ.update(saved)
+
+
+def load_grader(name: str):
+    """Import ``graders.<name>``; it must define ``CHECKS`` and ``grade``.
+
+    Raises:
+        CourseError: the module is missing or incomplete.
+    """
+    root = str(content_root())
+    if root not in sys.path:
+        sys.path.insert(0, root)
+    try:
+        module = importlib.import_module(f"graders.{name}")
+    except ImportError as exc:
+        raise CourseError(f"grader module graders.{name} cannot be imported: {exc}",
+                          "check the lesson's 'grader:' field") from exc
+    if not hasattr(module, "CHECKS") or not hasattr(module, "grade"):
+        raise CourseError(f"grader module graders.{name} lacks CHECKS or grade()", "see graders/README.md")
+    return module
+
+
+def new_log_dir(workspace_root: Path, lesson_id: str) -> Path:
+    """A fresh ``log/ros2course/<lesson>/<timestamp>`` folder; ``latest`` points at it."""
+    stamp = dt.datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")
+    folder = workspace_root / "log" / "ros2course" / lesson_id / stamp
+    folder.mkdir(parents=True, exist_ok=True)
+    latest = folder.parent / "latest"
+    with contextlib.suppress(OSError):
+        if latest.is_symlink() or latest.exists():
+            latest.unlink()
+        latest.symlink_to(folder.name)
+    return folder
+
+
+def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = None) -> LessonResult:
+    """Build the lesson's packages in ``workspace_root``, run its grader, return the result.
+
+    Never raises for problems of the submission (they become the result);
+    raises :class:`~course.errors.MissingRequirement` when the machine lacks
+    what the lesson ``requires`` (so a missing rclcpp is never a pass).
+    """
+    env_mod.require(lesson.requires, f"lesson {lesson.id}")
+    module = load_grader(lesson.grader)
+    checks: list[Check] = list(module.CHECKS)
+    max_score = float(sum(c.points for c in checks))
+    log_dir = log_dir or new_log_dir(workspace_root, lesson.id)
+    base_env = dict(os.environ)
+    env_mod.activate(base_env)
+    timings: dict[str, float] = {}
+    build_info: dict[str, Any] = {}
+
+    def not_gradable(message: str, hint: str) -> LessonResult:
+        return LessonResult(lesson.id, 0.0, max_score, STATUS_NOT_GRADABLE, [], message, hint, timings,
+                            build_info, str(log_dir))
+
+    if lesson.packages:
+        try:
+            built = build_mod.build_packages(workspace_root, lesson.packages, base_env, log_dir / "build.log")
+        except NotGradable as exc:
+            return not_gradable(exc.message, exc.hint)
+        timings["build"] = built.seconds
+        build_info = {"ok": built.ok, "cached": built.cached, "seconds": round(built.seconds, 3),
+                      "log": str(built.log_path) if built.log_path else ""}
+        if not built.ok:
+            return not_gradable(f"colcon build failed for {', '.join(lesson.packages)}:\n{built.excerpt}",
+                                f"fix the build error; full log: {built.log_path}")
+    session = GradingSession(lesson, checks, workspace_root, log_dir, base_env)
+    if lesson.packages and "build" in session.checks:
+        session.record("build", True, "colcon built " + ", ".join(lesson.packages)
+                       + (" (unchanged since the last build)" if build_info.get("cached") else ""),
+                       "the package builds with colcon")
+    begin = time.monotonic()
+    status = None
+    message = hint = ""
+    try:
+        try:
+            module.grade(session)
+        finally:
+            graded = time.monotonic()
+            timings["grade"] = graded - begin
+            session.close()
+            timings["teardown"] = time.monotonic() - graded
+            timings.update(session.timings)
+    except NotGradable as exc:
+        return not_gradable(exc.message, exc.hint)
+    except Exception as exc:  # noqa: BLE001 - any grader crash becomes a visible "grader error"
+        status = STATUS_GRADER_ERROR
+        trace = traceback.format_exc()
+        (log_dir / "grader-error.txt").write_text(trace, encoding="utf-8")
+        message = f"the grader failed: {type(exc).__name__}: {exc}"
+        hint = f"this is a fault of the course, not of your code; traceback in {log_dir / 'grader-error.txt'}"
+    results = session.ordered_results()
+    score = round(sum(r.points for r in results), 3)
+    if status is None:
+        status = STATUS_PASSED if score >= max_score else STATUS_FAILED
+    result = LessonResult(lesson.id, score, max_score, status, results, message, hint, timings, build_info,
+                          str(log_dir))
+    with contextlib.suppress(OSError):
+        (log_dir / "result.json").write_text(json.dumps(result.to_json(), indent=2), encoding="utf-8")
+    return result

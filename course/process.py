@@ -1,0 +1,286 @@
+"""Learner processes: start with a deadline, capture output, tear down completely.
+
+Rules (shared/ROS_ENV.md, "Running and stopping nodes"):
+
+* Each learner executable runs in its own session / process group
+  (``start_new_session=True``), like pexpect's ``setsid()``, so signals reach
+  its children too.
+* Teardown escalates the way ``launch`` does: SIGINT, then SIGTERM, then
+  SIGKILL, each to the whole group.
+* A child that left the group (``setsid`` + double fork) is still found: every
+  learner process carries a per-run marker in its environment, and after
+  teardown every process still carrying it is killed (psutil reads environ).
+* stdout/stderr are drained by threads into log files with a byte cap, so a
+  node that floods its output neither blocks on a full pipe nor fills the disk.
+* Fast DDS shared-memory files of processes that died without cleaning up are
+  removed only when stale: their ``_el`` lock can be taken (ROS_ENV.md).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import fcntl
+import os
+import signal
+import subprocess
+import threading
+import time
+import uuid
+from pathlib import Path
+
+import psutil
+
+#: Environment variable carrying the per-run marker (see module docstring).
+MARKER_VAR = "ROS2COURSE_RUN_MARKER"
+#: Default cap of captured output per stream, bytes.
+DEFAULT_OUTPUT_CAP = 2_000_000
+_TAIL_BYTES = 64_000
+
+
+@dataclasses.dataclass
+class ExitReport:
+    """How a learner process ended.
+
+    Attributes:
+        returncode: the exit code (negative: killed by that signal); None if it could not be reaped.
+        signal_used: the last signal we had to send (``"SIGINT"``, ``"SIGTERM"``, ``"SIGKILL"``),
+            or None when it had exited on its own.
+        seconds: from the first signal (or the teardown call) to the exit, seconds.
+        traceback: the last traceback printed on stderr/stdout, or "".
+    """
+
+    returncode: int | None
+    signal_used: str | None
+    seconds: float
+    traceback: str
+
+
+class _Drain(threading.Thread):
+    """Copy a pipe into a log file up to ``cap`` bytes, keep a tail in memory, count the rest."""
+
+    def __init__(self, pipe, log_path: Path, cap: int) -> None:
+        super().__init__(daemon=True, name=f"drain-{log_path.name}")
+        self.pipe = pipe
+        self.log_path = log_path
+        self.cap = cap
+        self.total = 0
+        self.head = bytearray()
+        self.tail = bytearray()
+        self.lock = threading.Lock()
+
+    def run(self) -> None:
+        with open(self.log_path, "wb") as log:
+            while True:
+                try:
+                    chunk = os.read(self.pipe.fileno(), 65536)
+                except OSError:
+                    break
+                if not chunk:
+                    break
+                with self.lock:
+                    room = self.cap - self.total
+                    if room > 0:
+                        log.write(chunk[:room])
+                        log.flush()
+                        if len(self.head) < _TAIL_BYTES:
+                            self.head.extend(chunk[: _TAIL_BYTES - len(self.head)])
+                    self.total += len(chunk)
+                    self.tail.extend(chunk)
+                    del self.tail[:-_TAIL_BYTES]
+            if self.total > self.cap:
+                log.write(f"\n[ros2course: output capped at {self.cap} bytes; {self.total - self.cap} more bytes dropped]\n".encode())
+        with contextlib.suppress(OSError):
+            self.pipe.close()
+
+    def text(self) -> str:
+        """The head and tail of what was captured (joined when both fit)."""
+        with self.lock:
+            if self.total <= _TAIL_BYTES:
+                return bytes(self.tail).decode(errors="replace")
+            return (bytes(self.head).decode(errors="replace") + "\n[...]\n" + bytes(self.tail).decode(errors="replace"))
+
+
+def last_traceback(text: str) -> str:
+    """The last Python traceback (or C++ terminate message) in ``text``, or ""."""
+    for marker in ("Traceback (most recent call last):", "terminate called after throwing"):
+        index = text.rfind(marker)
+        if index >= 0:
+            return text[index:].strip()
+    return ""
+
+
+class LearnerProcess:
+    """One learner executable, started in its own process group.
+
+    Args:
+        argv: the command (``argv[0]`` an absolute path to the executable).
+        env: its complete environment (the marker is added).
+        log_dir: where ``<name>.stdout.log`` / ``<name>.stderr.log`` go.
+        name: a short label for logs and messages (e.g. the executable name).
+        output_cap: bytes kept per stream in the log file.
+        cwd: working directory (default: ``log_dir``).
+    """
+
+    def __init__(self, argv: list[str], env: dict[str, str], log_dir: Path, name: str,
+                 output_cap: int = DEFAULT_OUTPUT_CAP, cwd: Path | None = None) -> None:
+        self.argv = argv
+        self.name = name
+        self.marker = uuid.uuid4().hex
+        self.env = {**env, MARKER_VAR: self.marker}
+        self.log_dir = log_dir
+        self.output_cap = output_cap
+        self.cwd = cwd or log_dir
+        self.popen: subprocess.Popen | None = None
+        self.started_at = 0.0
+        self._drains: list[_Drain] = []
+        self.report: ExitReport | None = None
+
+    @property
+    def stdout_log(self) -> Path:
+        return self.log_dir / f"{self.name}.stdout.log"
+
+    @property
+    def stderr_log(self) -> Path:
+        return self.log_dir / f"{self.name}.stderr.log"
+
+    def start(self) -> LearnerProcess:
+        """Start the process (raises OSError if the executable cannot be run)."""
+        self.log_dir.mkdir(parents=True, exist_ok=True)
+        self.started_at = time.monotonic()
+        self.popen = subprocess.Popen(  # noqa: S603 - runs the learner's own executable, by design
+            self.argv, env=self.env, cwd=self.cwd, stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        self._drains = [_Drain(self.popen.stdout, self.stdout_log, self.output_cap),
+                        _Drain(self.popen.stderr, self.stderr_log, self.output_cap)]
+        for drain in self._drains:
+            drain.start()
+        return self
+
+    @property
+    def pid(self) -> int:
+        assert self.popen is not None
+        return self.popen.pid
+
+    def poll(self) -> int | None:
+        """The exit code if it has exited, else None."""
+        return None if self.popen is None else self.popen.poll()
+
+    def stdout(self) -> str:
+        """Captured stdout (head and tail for long output)."""
+        return self._drains[0].text() if self._drains else ""
+
+    def stderr(self) -> str:
+        """Captured stderr (head and tail for long output)."""
+        return self._drains[1].text() if self._drains else ""
+
+    def output_bytes(self) -> int:
+        """Total bytes the process wrote on stdout and stderr (including dropped ones)."""
+        return sum(d.total for d in self._drains)
+
+    def _signal_group(self, sig: int) -> None:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.pid, sig)
+
+    def _wait(self, timeout: float) -> bool:
+        assert self.popen is not None
+        try:
+            self.popen.wait(timeout=max(timeout, 0.0))
+            return True
+        except subprocess.TimeoutExpired:
+            return False
+
+    def stop(self, sigint_timeout: float = 5.0, sigterm_timeout: float = 2.0) -> ExitReport:
+        """End the process and everything it started; idempotent.
+
+        SIGINT to the group, wait up to ``sigint_timeout`` s; SIGTERM, wait up to
+        ``sigterm_timeout`` s; then SIGKILL. Whatever the main process did, the
+        group and every process carrying this run's marker are SIGKILLed at the
+        end, and stale Fast DDS shared-memory files are removed.
+        """
+        if self.report is not None:
+            return self.report
+        if self.popen is None:
+            self.report = ExitReport(None, None, 0.0, "")
+            return self.report
+        begin = time.monotonic()
+        signal_used = None
+        if self.popen.poll() is None:
+            for sig, timeout in ((signal.SIGINT, sigint_timeout), (signal.SIGTERM, sigterm_timeout),
+                                 (signal.SIGKILL, 5.0)):
+                signal_used = sig.name
+                self._signal_group(sig)
+                if self._wait(timeout):
+                    break
+        seconds = time.monotonic() - begin
+        self._signal_group(signal.SIGKILL)  # children left in the group
+        kill_marked(self.marker)
+        for drain in self._drains:
+            drain.join(timeout=2.0)
+        text = self.stderr() + "\n" + self.stdout()
+        self.report = ExitReport(self.popen.poll(), signal_used, seconds, last_traceback(text))
+        sweep_stale_fastdds_shm()
+        return self.report
+
+    def __enter__(self) -> LearnerProcess:
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop(sigint_timeout=1.0, sigterm_timeout=1.0)
+
+
+def kill_marked(marker: str) -> list[int]:
+    """SIGKILL every process whose environment carries ``marker``; returns their PIDs.
+
+    Catches learner children that escaped the process group (setsid, double fork).
+    """
+    needle = f"{MARKER_VAR}={marker}".encode()
+    killed = []
+    me = os.getpid()
+    for proc in psutil.process_iter(["pid"]):
+        if proc.pid == me:
+            continue
+        try:
+            with open(f"/proc/{proc.pid}/environ", "rb") as handle:
+                if needle not in handle.read():
+                    continue
+            proc.kill()
+            killed.append(proc.pid)
+        except (OSError, psutil.Error):
+            continue
+    psutil.wait_procs([psutil.Process(pid) for pid in killed if psutil.pid_exists(pid)], timeout=3)
+    return killed
+
+
+SHM_DIR = Path("/dev/shm")
+
+
+def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR) -> list[str]:
+    """Remove Fast DDS shared-memory files whose owners are gone; returns the names removed.
+
+    A segment ``fastrtps_X`` has a lock file ``fastrtps_X_el`` that live users
+    hold a shared ``flock`` on; when ``flock(LOCK_EX|LOCK_NB)`` succeeds nobody
+    uses it and ``fastrtps_X``, ``fastrtps_X_el`` and ``sem.fastrtps_X_mutex``
+    go. Files in use are never touched (shared/ROS_ENV.md).
+    """
+    removed: list[str] = []
+    if not shm_dir.is_dir():
+        return removed
+    for lock in shm_dir.glob("fastrtps_*_el"):
+        base = lock.name[: -len("_el")]
+        try:
+            fd = os.open(lock, os.O_RDWR)
+        except OSError:
+            continue
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                continue  # in use
+            for name in (base, f"sem.{base}_mutex", lock.name):
+                with contextlib.suppress(FileNotFoundError):
+                    (shm_dir / name).unlink()
+                    removed.append(name)
+        finally:
+            os.close(fd)
+    return removed

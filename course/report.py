@@ -1,0 +1,94 @@
+"""Rendering results for people (rich) and programs (JSON).
+
+Every renderer takes an injected rich ``Console`` (rich's own testing idiom:
+``Console(file=io.StringIO(), width=100)``), so tests compare plain text.
+"""
+
+from __future__ import annotations
+
+import json
+
+from rich.console import Console, Group
+from rich.markdown import Markdown
+from rich.panel import Panel
+from rich.table import Table
+from rich.text import Text
+
+from course.grading import STATUS_PASSED, LessonResult
+from course.lesson import Lesson
+from course.progress import Progress
+
+_STATUS_STYLE = {"passed": "bold green", "failed": "bold yellow", "not gradable": "bold red",
+                 "grader error": "bold magenta"}
+
+
+def _points(value: float) -> str:
+    return f"{value:g}"
+
+
+def render_result(result: LessonResult, console: Console) -> None:
+    """Print the table of checks; under it, for each failed check, observed / expected / hint."""
+    style = _STATUS_STYLE.get(result.status, "bold")
+    title = Text.assemble((f"{result.lesson}: ", "bold"), (result.status, style),
+                          f"  {_points(result.score)}/{_points(result.max_score)} points")
+    if result.checks:
+        table = Table(title=title, title_justify="left", show_lines=False, expand=False)
+        table.add_column("", width=2)
+        table.add_column("check")
+        table.add_column("points", justify="right")
+        table.add_column("observed", overflow="fold")
+        for check in result.checks:
+            mark = Text("✔", "green") if check.passed else Text("✘", "red")
+            table.add_row(mark, check.name, f"{_points(check.points)}/{_points(check.max_points)}",
+                          Text(check.observed, style="" if check.passed else "yellow"))
+        console.print(table)
+    else:
+        console.print(title)
+    if result.message:
+        console.print(Panel(Text(result.message), title=result.status, border_style=style, expand=False))
+    if result.hint:
+        console.print(Text.assemble(("hint: ", "bold cyan"), result.hint))
+    for check in result.checks:
+        if check.passed:
+            continue
+        console.print(Text.assemble(("✘ ", "red"), (check.name, "bold")))
+        console.print(Text.assemble(("    observed: ", "dim"), check.observed))
+        console.print(Text.assemble(("    expected: ", "dim"), check.expected))
+        if check.hint:
+            console.print(Text.assemble(("    hint:     ", "cyan"), check.hint))
+    if result.status == STATUS_PASSED:
+        console.print(Text("Full marks. 'ros2course next' moves on.", style="green"))
+    if result.log_dir:
+        console.print(Text(f"logs: {result.log_dir}", style="dim"))
+
+
+def result_json(result: LessonResult) -> str:
+    """The ``check --json`` document (one JSON object, newline-terminated)."""
+    return json.dumps(result.to_json(), indent=2) + "\n"
+
+
+def render_lesson(lesson: Lesson, console: Console) -> None:
+    """The lesson's title, chapters and instructions (markdown)."""
+    chapters = ", ".join(str(c) for c in lesson.chapters)
+    console.print(Panel(Group(Text(lesson.title, style="bold"),
+                              Text(f"lesson id: {lesson.id}   seed chapter(s): {chapters}", style="dim")),
+                        expand=False))
+    console.print(Markdown(lesson.instructions))
+
+
+def render_list(lessons: list[Lesson], progress: Progress, console: Console) -> None:
+    """Every lesson with its status and best score."""
+    table = Table(title="ros2course lessons", title_justify="left")
+    table.add_column("#", justify="right")
+    table.add_column("lesson")
+    table.add_column("title")
+    table.add_column("status")
+    table.add_column("best", justify="right")
+    styles = {"done": "green", "current": "bold cyan", "started": "yellow", "not started": "dim"}
+    for index, lesson in enumerate(lessons, 1):
+        status = progress.status(lesson.id)
+        record = progress.lessons.get(lesson.id)
+        best = (f"{_points(record.best_score)}/{_points(record.max_score)}"
+                if record and record.best_score is not None and record.max_score is not None else "-")
+        table.add_row(str(index), lesson.id, lesson.title, Text(status, styles[status]), best)
+    console.print(table)

@@ -1,0 +1,56 @@
+"""Grader for ``workspace-setup`` (seed ch. 5): a colcon workspace the learner built.
+
+Looks at the folder and asks colcon and bash, as the learner's terminal would.
+"""
+
+from __future__ import annotations
+
+import subprocess
+
+from course.build import colcon_command, overlay_env
+from course.errors import NotGradable
+from course.grading import Check, GradingSession
+
+CHECKS = [
+    Check("src_folder", "The workspace has a src/ folder", 1, "mkdir -p ros2_tutorial_workspace/src"),
+    Check("colcon_reads", "colcon can read the workspace", 1,
+          "run 'colcon list' in the workspace and fix what it complains about"),
+    Check("built", "colcon build was run (build/, install/, log/)", 2,
+          "cd into the workspace folder (not src/) and run 'colcon build'"),
+    Check("sourceable", "install/setup.bash sources cleanly and adds the workspace", 1,
+          "run 'source install/setup.bash' from the workspace folder; rebuild if it fails"),
+]
+
+
+def grade(s: GradingSession) -> None:
+    """Inspect the workspace folder, then ask colcon and bash about it."""
+    root = s.workspace_root
+    has_src = (root / "src").is_dir()
+    entries = ", ".join(sorted(p.name + ("/" if p.is_dir() else "") for p in root.iterdir())) or "nothing"
+    s.record("src_folder", has_src, f"{root} holds: {entries}", "a src/ folder for the packages")
+
+    proc = subprocess.run([*colcon_command(s.base_env), "list"], cwd=root, env=s.base_env, capture_output=True,
+                          text=True, timeout=120, check=False, stdin=subprocess.DEVNULL)
+    packages = proc.stdout.strip().splitlines()
+    s.record("colcon_reads", proc.returncode == 0,
+             f"'colcon list' exited {proc.returncode}" + (f", {len(packages)} package(s)" if proc.returncode == 0
+                                                          else f": {proc.stderr.strip().splitlines()[-1:]}"),
+             "'colcon list' exits 0")
+
+    made = {name: (root / name).is_dir() for name in ("build", "install", "log")}
+    setup = (root / "install" / "setup.bash").is_file()
+    missing = [name + "/" for name, ok in made.items() if not ok] + ([] if setup else ["install/setup.bash"])
+    s.record("built", not missing, "missing: " + ", ".join(missing) if missing else
+             "build/, install/, log/ and install/setup.bash exist", "what 'colcon build' creates in the workspace folder")
+    if not setup:
+        s.skip_remaining("install/setup.bash does not exist")
+        return
+    try:
+        env = overlay_env(root, s.base_env)
+    except NotGradable as exc:
+        s.record("sourceable", False, exc.message, "'source install/setup.bash' succeeds")
+        return
+    prefixes = env.get("COLCON_PREFIX_PATH", "").split(":")
+    ok = str(root / "install") in prefixes
+    s.record("sourceable", ok, f"COLCON_PREFIX_PATH after sourcing: {env.get('COLCON_PREFIX_PATH', '(unset)')}",
+             f"it includes {root / 'install'}")
