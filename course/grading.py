@@ -234,7 +234,7 @@ class GradingSession:
             args: extra arguments (e.g. ``["--ros-args", "-r", "__node:=x"]``).
         """
         proc = LearnerProcess([str(path), *(args or [])], self.node_env(), self.log_dir, name,
-                              cwd=self.workspace_root)
+                              cwd=self.workspace_root, ros_sigint=True)
         self._processes.append(proc)
         proc.start()
         return proc

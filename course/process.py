@@ -120,11 +120,21 @@ class LearnerProcess:
         name: a short label for logs and messages (e.g. the executable name).
         output_cap: bytes kept per stream in the log file.
         cwd: working directory (default: ``log_dir``).
+        ros_sigint: start it with SIGINT ignored at exec (as ``node &`` from a
+            shell script is). Python then installs no ``KeyboardInterrupt``
+            handler and only rclpy's own SIGINT handler reacts, which in Jazzy
+            makes ``rclpy.spin()`` raise ``ExternalShutdownException``. That is
+            the case shared/LESSONS.md requires learners to handle; with the
+            default disposition whether KeyboardInterrupt or the exception
+            wins is a race, so the verdict would not be deterministic. rclpy
+            and rclcpp install their handlers regardless, so nodes still stop.
     """
 
     def __init__(self, argv: list[str], env: dict[str, str], log_dir: Path, name: str,
-                 output_cap: int = DEFAULT_OUTPUT_CAP, cwd: Path | None = None) -> None:
-        self.argv = argv
+                 output_cap: int = DEFAULT_OUTPUT_CAP, cwd: Path | None = None, ros_sigint: bool = False) -> None:
+        # sh's `trap '' INT` sets SIGINT to ignored and exec keeps that (POSIX); no preexec_fn,
+        # which is unsafe in a process with threads (the executor's).
+        self.argv = (["/bin/sh", "-c", "trap '' INT; exec \"$0\" \"$@\"", *argv] if ros_sigint else argv)
         self.name = name
         self.marker = uuid.uuid4().hex
         self.env = {**env, MARKER_VAR: self.marker}
@@ -219,7 +229,6 @@ class LearnerProcess:
             drain.join(timeout=2.0)
         text = self.stderr() + "\n" + self.stdout()
         self.report = ExitReport(self.popen.poll(), signal_used, seconds, last_traceback(text))
-        sweep_stale_fastdds_shm()
         return self.report
 
     def __enter__(self) -> LearnerProcess:
@@ -227,6 +236,7 @@ class LearnerProcess:
 
     def __exit__(self, *exc) -> None:
         self.stop(sigint_timeout=1.0, sigterm_timeout=1.0)
+        sweep_stale_fastdds_shm()
 
 
 def kill_marked(marker: str) -> list[int]:
@@ -262,10 +272,25 @@ def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR) -> list[str]:
     hold a shared ``flock`` on; when ``flock(LOCK_EX|LOCK_NB)`` succeeds nobody
     uses it and ``fastrtps_X``, ``fastrtps_X_el`` and ``sem.fastrtps_X_mutex``
     go. Files in use are never touched (shared/ROS_ENV.md).
+
+    A ``fastrtps_*`` segment (or its ``sem.*_mutex``) left without any ``_el``
+    lock file (a writer re-created a port whose listener had died) is removed
+    only if no process maps it or holds it open (/proc/*/maps and /proc/*/fd).
     """
     removed: list[str] = []
     if not shm_dir.is_dir():
         return removed
+    orphans = [p for p in shm_dir.glob("fastrtps_*") if not p.name.endswith("_el")
+               and not (shm_dir / f"{p.name}_el").exists()]
+    orphans += [p for p in shm_dir.glob("sem.fastrtps_*_mutex")
+                if not (shm_dir / f"{p.name[4:-len('_mutex')]}_el").exists()]
+    if orphans:
+        used = _shm_files_in_use()
+        for path in orphans:
+            if str(path) not in used:
+                with contextlib.suppress(FileNotFoundError):
+                    path.unlink()
+                    removed.append(path.name)
     for lock in shm_dir.glob("fastrtps_*_el"):
         base = lock.name[: -len("_el")]
         try:
@@ -284,3 +309,24 @@ def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR) -> list[str]:
         finally:
             os.close(fd)
     return removed
+
+
+def _shm_files_in_use() -> set[str]:
+    """Paths under /dev/shm that some process maps or holds open (as far as we may look)."""
+    used: set[str] = set()
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
+        with contextlib.suppress(OSError):
+            with open(f"/proc/{pid}/maps", encoding="utf-8", errors="replace") as maps:
+                for line in maps:
+                    index = line.find("/dev/shm/")
+                    if index >= 0:
+                        used.add(line[index:].strip().removesuffix(" (deleted)"))
+        with contextlib.suppress(OSError):
+            for fd in os.listdir(f"/proc/{pid}/fd"):
+                with contextlib.suppress(OSError):
+                    target = os.readlink(f"/proc/{pid}/fd/{fd}")
+                    if target.startswith("/dev/shm/"):
+                        used.add(target)
+    return used

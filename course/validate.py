@@ -215,7 +215,6 @@ def validate_lesson(lesson: Lesson) -> list[Outcome]:
     def starter(root: Path) -> None:
         (root / "src").mkdir(parents=True)
         copy_starter(lesson, root)
-        run_commands(root, lesson.reference.commands if not lesson.packages else [])
 
     result, seconds = grade_case(lesson, "starter", starter)
     outcomes.append(Outcome(lesson.id, "starter", result.status != STATUS_PASSED and result.score < result.max_score,
