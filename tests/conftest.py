@@ -1,0 +1,56 @@
+"""Shared fixtures: workspaces, the reference solution, running the CLI."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from course import env as env_mod
+from course.lesson import content_root, load_catalog
+from course.progress import Workspace
+
+ROOT = content_root()
+SOLUTIONS = ROOT / "solutions" / "src"
+
+env_mod.activate()
+
+
+@pytest.fixture
+def catalog():
+    """The course's lesson catalog."""
+    return load_catalog()
+
+
+@pytest.fixture
+def workspace(tmp_path: Path) -> Workspace:
+    """A freshly initialised, empty workspace."""
+    ws = Workspace(tmp_path / "ws")
+    ws.init()
+    return ws
+
+
+@pytest.fixture
+def solution_workspace(workspace: Workspace) -> Workspace:
+    """An initialised workspace holding the reference python_package_with_a_node."""
+    shutil.copytree(SOLUTIONS / "python_package_with_a_node", workspace.src / "python_package_with_a_node",
+                    ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    return workspace
+
+
+def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300, env: dict | None = None
+            ) -> subprocess.CompletedProcess:
+    """Run ``python -m course ARGS`` as a learner would run ``ros2course``; never hangs past ``timeout``."""
+    return subprocess.run([sys.executable, "-m", "course", *args], cwd=cwd, capture_output=True, text=True,
+                          timeout=timeout, env={**os.environ, **(env or {}), "COLUMNS": "200"},
+                          stdin=subprocess.DEVNULL, check=False)
+
+
+@pytest.fixture
+def cli():
+    """The :func:`run_cli` helper."""
+    return run_cli
