@@ -130,8 +130,15 @@ def probe_requirement(name: str) -> tuple[bool, str]:
         return (path is not None, path or "no C++ compiler (c++/g++) on PATH")
     if name in ("ament_cmake", "rosidl", "rclcpp"):
         package = {"ament_cmake": "ament_cmake", "rosidl": "rosidl_default_generators", "rclcpp": "rclcpp"}[name]
-        ok = _ament_has(package)
-        return ok, (f"{package} in the ament index" if ok else f"{package} not in the ament index")
+        if not _ament_has(package):
+            return False, f"{package} not in the ament index"
+        install = detect()
+        if name != "rclcpp" and install.kind == "wheels" and install.prefix is not None:
+            broken = cmake_files_needing_repair(install.prefix)
+            if broken:
+                return False, (f"{len(broken)} CMake file(s) of the wheels name the wheel build machine's Python "
+                               "(run 'ros2course doctor --fix')")
+        return True, f"{package} in the ament index"
     if name == "launch":
         ok = importlib.util.find_spec("launch_ros") is not None and importlib.util.find_spec("launch") is not None
         if ok:

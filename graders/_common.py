@@ -35,18 +35,33 @@ def process_state(proc: LearnerProcess) -> str:
 
 
 def wait_for_node(s: GradingSession, check_id: str, proc: LearnerProcess, node: str,
-                  timeout: float = 10.0) -> bool:
+                  timeout: float = 10.0, grace: float = 3.0) -> bool:
     """Record ``check_id`` on whether a node called ``node`` appears within ``timeout`` seconds.
 
-    Stops waiting early if the process dies. Observed lists the nodes seen.
+    Stops waiting early if the process dies, or ``grace`` seconds after other
+    nodes appeared without it (a misnamed node will not rename itself).
+    Observed lists the nodes seen.
     """
+    import time  # noqa: PLC0415
+
+    first_other: list[float] = []
+
+    def give_up() -> bool:
+        if proc.poll() is not None:
+            return True
+        if not first_other and s.ros.node_names():
+            first_other.append(time.monotonic())
+        return bool(first_other) and time.monotonic() - first_other[0] > grace
+
+    begin = time.monotonic()
     with s.phase("start"):
-        found = s.ros.wait_for_node(node, timeout, abort=lambda: proc.poll() is not None)
+        found = s.ros.wait_for_node(node, timeout, abort=give_up)
+    waited = time.monotonic() - begin
     seen = ", ".join(s.ros.node_names()) or "none"
     if found:
         return s.record(check_id, True, f"node /{node} is running", f"a node named {node}")
     state = process_state(proc)
-    return s.record(check_id, False, f"no node named {node} within {timeout:.0f} s; nodes seen: {seen}; {state}",
+    return s.record(check_id, False, f"no node named {node} after {waited:.1f} s; nodes seen: {seen}; {state}",
                     f"a node named {node} (the name passed to super().__init__)")
 
 

@@ -1,0 +1,461 @@
+#!/usr/bin/env python3
+"""How long ``ros2course check print-forever-node`` takes, and how far above the floor.
+
+Run from the repository root with the project's venv::
+
+    python benchmarks/check_speed.py [--runs N] [--json]
+
+1. A fresh temporary workspace gets the lesson's reference solution.
+2. Cold: build/ install/ log/ are removed, then ``grade_lesson`` is timed end
+   to end (colcon build included) and split into build / start / observe /
+   stop+teardown / other (``other`` = wall time minus the engine's timed phases).
+3. Warm: N more ``grade_lesson`` calls on the unchanged workspace (the
+   fingerprint cache should skip colcon); median and min/max per phase.
+4. Floor, measured in the same run: a bare rclpy node (0.5 s timer logging
+   like the lesson's node) started the way the grader starts learner nodes
+   (``LearnerProcess`` in a ``RosSession``'s private domain); the median time
+   from Popen to its first record arriving on /rosout, plus the grader's
+   observation window ((SAMPLES - 1) * PERIOD), is the least a check can take.
+5. ``python -m course check ... --json`` once, warm, through the real CLI
+   (interpreter start, imports, overlay sourcing included).
+
+Exits non-zero only when a graded result is not full marks (or the CLI run is
+not); timings are reported, never asserted. The temporary workspace is removed
+and every process this script started is gone when it exits, error or not.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import os
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import uuid
+from pathlib import Path
+from typing import Any
+
+import psutil
+from rich.console import Console
+from rich.table import Table
+
+from course import build as build_mod
+from course import env as env_mod
+from course.errors import CourseError
+from course.grading import STATUS_PASSED, LessonResult, grade_lesson, load_grader
+from course.lesson import Lesson, load_catalog
+from course.validate import reference_workspace
+
+LESSON_ID = "print-forever-node"
+#: What "warm overhead above floor" should stay under, seconds.
+GOAL_SECONDS = 1.0
+#: Every process this script starts inherits this variable (value: a per-run id), so
+#: leftovers are found by their environment and killed by PID at the end.
+BENCH_MARKER_VAR = "ROS2COURSE_BENCH_MARKER"
+#: The guard of the wheels' bootstrapper (.pth re-exec); a learner's shell does not have it.
+BOOTSTRAP_GUARD = "_ROS_WHEELS_BOOTSTRAP_COMPLETE"
+PHASES = ("build", "start", "observe", "stop+teardown", "other", "total")
+SUB_PHASES = {"stop+teardown": ("stop", "teardown")}
+FLOOR_NODE_NAME = "print_forever"
+FLOOR_TIMEOUT = 15.0
+CLI_TIMEOUT = 300.0
+
+FLOOR_NODE = '''\
+"""Benchmark floor: the lesson's node reduced to its essentials."""
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+
+
+class Floor(Node):
+    def __init__(self):
+        super().__init__({name!r})
+        self.count = 0
+        self.timer = self.create_timer({period!r}, self.tick)
+
+    def tick(self):
+        self.get_logger().info(f"Printed {{self.count}} times.")
+        self.count += 1
+
+
+def main():
+    try:
+        rclpy.init()
+        rclpy.spin(Floor())
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+
+
+if __name__ == "__main__":
+    main()
+'''
+
+
+class BenchmarkFailed(Exception):
+    """A graded result was not full marks (or a measurement could not be made)."""
+
+
+# --- small helpers -------------------------------------------------------------
+
+
+def _round(value: Any) -> Any:
+    if isinstance(value, float):
+        return round(value, 3)
+    if isinstance(value, dict):
+        return {k: _round(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_round(v) for v in value]
+    return value
+
+
+def summary(values: list[float]) -> dict[str, float]:
+    """Median, min and max of ``values`` (seconds)."""
+    return {"median": statistics.median(values), "min": min(values), "max": max(values)}
+
+
+def split(result: LessonResult, wall: float) -> dict[str, float]:
+    """A check's wall time split into the engine's phases plus ``other`` (the rest)."""
+    t = result.timings
+    parts = {name: float(t.get(name, 0.0)) for name in ("build", "start", "observe", "stop", "teardown")}
+    parts["stop+teardown"] = parts["stop"] + parts["teardown"]
+    parts["other"] = wall - (parts["build"] + parts["start"] + parts["observe"] + parts["stop+teardown"])
+    parts["total"] = wall
+    return parts
+
+
+def require_full_marks(result: LessonResult, what: str) -> None:
+    if result.status != STATUS_PASSED or result.score < result.max_score:
+        failed = ", ".join(result.failed_checks()) or "none"
+        detail = f"; {result.message.splitlines()[0]}" if result.message else ""
+        raise BenchmarkFailed(f"{what}: {result.status} {result.score:g}/{result.max_score:g} "
+                              f"(failed: {failed}{detail}); log: {result.log_dir}")
+
+
+def learner_shell_env() -> dict[str, str]:
+    """This process's environment as a learner's terminal would have it (wheels' re-exec not done yet)."""
+    env = dict(os.environ)
+    env.pop(BOOTSTRAP_GUARD, None)  # LD_LIBRARY_PATH alone is harmless; the guard alone is not
+    return env
+
+
+def timed_run(argv: list[str], env: dict[str, str], cwd: Path, timeout: float) -> tuple[float, subprocess.CompletedProcess]:
+    """Run ``argv`` in its own session; wall seconds and the completed process. Its group dies on timeout."""
+    begin = time.monotonic()
+    proc = subprocess.Popen(argv, env=env, cwd=cwd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, start_new_session=True)
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except BaseException:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.communicate()
+        raise
+    return time.monotonic() - begin, subprocess.CompletedProcess(argv, proc.returncode, out, err)
+
+
+def kill_leftovers(marker: str) -> list[int]:
+    """SIGKILL every process (other than this one) whose environment carries this run's marker."""
+    needle = f"{BENCH_MARKER_VAR}={marker}".encode()
+    me = os.getpid()
+    found = []
+    for proc in psutil.process_iter(["pid"]):
+        if proc.pid == me:
+            continue
+        try:
+            with open(f"/proc/{proc.pid}/environ", "rb") as handle:
+                if needle not in handle.read():
+                    continue
+            proc.kill()
+            found.append(proc)
+        except (OSError, psutil.Error):
+            continue
+    psutil.wait_procs(found, timeout=3)
+    return [p.pid for p in found]
+
+
+# --- the measurements ------------------------------------------------------------
+
+
+def grade_timed(lesson: Lesson, workspace: Path) -> tuple[LessonResult, dict[str, float]]:
+    begin = time.monotonic()
+    result = grade_lesson(lesson, workspace)
+    return result, split(result, time.monotonic() - begin)
+
+
+def measure_floor(runs: int, folder: Path, period: float, progress: Console) -> dict[str, Any]:
+    """Popen -> first /rosout record of a bare rclpy node, launched exactly as the grader launches nodes.
+
+    Also records, per run, Popen -> node in the graph, SIGINT -> exit, and the
+    RosSession's open/close times (what a check pays around its node).
+    """
+    from course.probes import RosSession, wait_until  # noqa: PLC0415 - rclpy only when measuring
+    from course.process import LearnerProcess, sweep_stale_fastdds_shm
+
+    folder.mkdir(parents=True, exist_ok=True)
+    script = folder / "floor_node.py"
+    script.write_text(FLOOR_NODE.format(name=FLOOR_NODE_NAME, period=period), encoding="utf-8")
+    base_env = dict(os.environ)
+    env_mod.activate(base_env)
+    wanted = f"/{FLOOR_NODE_NAME}"
+    rows: dict[str, list[float]] = {"first_record": [], "node_in_graph": [], "sigint_exit": [],
+                                    "session_open": [], "session_close": []}
+    for index in range(runs):
+        progress.print(f"  floor run {index + 1}/{runs}")
+        opening = time.monotonic()
+        session = RosSession().__enter__()
+        rows["session_open"].append(time.monotonic() - opening)
+        try:
+            probe = session.rosout()
+            proc = LearnerProcess([sys.executable, str(script)], session.learner_env(base_env), folder,
+                                  f"floor-{index}", cwd=folder, ros_sigint=True)
+            seen: dict[str, float] = {}
+            try:
+                proc.start()
+
+                def ready() -> bool:
+                    if "node" not in seen and wanted in session.node_names():
+                        seen["node"] = time.monotonic()
+                    return "node" in seen and any(m.name == FLOOR_NODE_NAME for m in probe.messages())
+
+                if not wait_until(ready, FLOOR_TIMEOUT, interval=0.01, abort=lambda: proc.poll() is not None):
+                    raise BenchmarkFailed(f"floor node: no node and /rosout record within {FLOOR_TIMEOUT:.0f} s "
+                                          f"(exit code {proc.poll()}); stderr: {proc.stderr()[-800:]}")
+                arrival = next(t for t, m in probe.samples() if m.name == FLOOR_NODE_NAME)
+                rows["first_record"].append(arrival - proc.started_at)
+                rows["node_in_graph"].append(min(seen["node"], arrival) - proc.started_at)
+            finally:
+                report = proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
+            if report.signal_used != "SIGINT" or report.returncode != 0 or report.traceback:
+                raise BenchmarkFailed(f"floor node did not stop cleanly on SIGINT: {report}")
+            rows["sigint_exit"].append(report.seconds)
+        finally:
+            closing = time.monotonic()
+            session.__exit__(None, None, None)
+            rows["session_close"].append(time.monotonic() - closing)
+            sweep_stale_fastdds_shm()
+    return rows
+
+
+def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, float]:
+    """Costs a warm check pays outside the node's own life, each timed on its own (medians, seconds)."""
+    shell = learner_shell_env()
+    python = sys.executable
+    out: dict[str, float] = {}
+
+    def median_of(argv: list[str], env: dict[str, str]) -> float:
+        times = []
+        for _ in range(runs):
+            seconds, done = timed_run(argv, env, folder, timeout=120)
+            if done.returncode != 0:
+                raise BenchmarkFailed(f"{' '.join(argv)} failed ({done.returncode}): {done.stderr.decode()[-500:]}")
+            times.append(seconds)
+        return statistics.median(times)
+
+    out["python_start_reexec"] = median_of([python, "-c", "pass"], shell)
+    out["python_start_bootstrapped"] = median_of([python, "-c", "pass"], dict(os.environ))
+    out["rclpy_import_bootstrapped"] = median_of(
+        [python, "-c", "import rclpy, rclpy.node, rclpy.executors"], dict(os.environ)) - out["python_start_bootstrapped"]
+    out["cli_help"] = median_of([python, "-m", "course", "--help"], shell)
+
+    base_env = dict(os.environ)
+    env_mod.activate(base_env)
+    times = []
+    for _ in range(runs):
+        build_mod._overlay_cache.clear()  # noqa: SLF001 - measure what a fresh CLI process pays
+        begin = time.monotonic()
+        overlay = build_mod.overlay_env(workspace, base_env)
+        times.append(time.monotonic() - begin)
+    out["overlay_sourcing"] = statistics.median(times)
+
+    # The console-script wrapper colcon installs looks the entry point up with importlib.metadata.
+    lookup = ("import time; t = time.perf_counter(); from importlib.metadata import distribution; "
+              "[e for e in distribution('python-package-with-a-node').entry_points]; "
+              "print(time.perf_counter() - t)")
+    values = []
+    for _ in range(runs):
+        _, done = timed_run([python, "-c", lookup], overlay, folder, timeout=60)
+        if done.returncode != 0:
+            raise BenchmarkFailed(f"entry point lookup failed: {done.stderr.decode()[-500:]}")
+        values.append(float(done.stdout.decode().strip()))
+    out["entry_point_lookup"] = statistics.median(values)
+    return out
+
+
+def run_cli_check(workspace: Path, folder: Path) -> dict[str, Any]:
+    """``python -m course check LESSON --workspace WS --json`` once, as a learner's terminal would run it."""
+    argv = [sys.executable, "-m", "course", "check", LESSON_ID, "--workspace", str(workspace), "--json"]
+    seconds, done = timed_run(argv, learner_shell_env(), folder, timeout=CLI_TIMEOUT)
+    try:
+        data = json.loads(done.stdout.decode())
+    except ValueError:
+        data = {}
+    info = {"wall": seconds, "exit_code": done.returncode, "status": data.get("status"),
+            "score": data.get("score"), "max_score": data.get("max_score")}
+    if done.returncode != 0 or data.get("status") != STATUS_PASSED:
+        raise BenchmarkFailed(f"CLI check was not full marks: exit {done.returncode}, {info}; "
+                              f"stderr: {done.stderr.decode()[-800:]}")
+    return info
+
+
+def benchmark(runs: int, root: Path, progress: Console) -> dict[str, Any]:
+    lesson = load_catalog().get(LESSON_ID)
+    grader = load_grader(lesson.grader)  # graders.print_forever_node
+    samples, period = grader.SAMPLES, grader.PERIOD
+    window = (samples - 1) * period
+    workspace = root / "ws"
+    progress.print(f"workspace: {workspace}")
+    reference_workspace(lesson, workspace)
+
+    progress.print("cold run (colcon build included) ...")
+    for name in ("build", "install", "log"):
+        shutil.rmtree(workspace / name, ignore_errors=True)
+    cold_result, cold = grade_timed(lesson, workspace)
+    require_full_marks(cold_result, "cold run")
+    if cold_result.build.get("cached"):
+        raise BenchmarkFailed("cold run: the build was reported cached after build/ install/ log/ were removed")
+
+    warm_runs: list[dict[str, float]] = []
+    uncached = 0
+    for index in range(runs):
+        progress.print(f"warm run {index + 1}/{runs} ...")
+        result, parts = grade_timed(lesson, workspace)
+        require_full_marks(result, f"warm run {index + 1}")
+        uncached += not result.build.get("cached")
+        warm_runs.append(parts)
+    warm = {name: summary([r[name] for r in warm_runs]) for name in (*PHASES, "stop", "teardown")}
+
+    progress.print("floor: bare rclpy node, Popen -> first /rosout record ...")
+    floor_rows = measure_floor(runs, root / "floor", period, progress)
+    first_record = statistics.median(floor_rows["first_record"])
+    floor = first_record + window
+
+    progress.print("ros2course check through the CLI (warm) ...")
+    cli = run_cli_check(workspace, root / "floor")
+
+    progress.print("diagnostics (interpreter start, imports, overlay sourcing) ...")
+    diagnostics = measure_diagnostics(runs, workspace, root / "floor")
+    diagnostics.update({f"floor_{k}": statistics.median(v) for k, v in floor_rows.items() if k != "first_record"})
+
+    return {
+        "lesson": LESSON_ID,
+        "runs": runs,
+        "cold": {**cold, "status": cold_result.status, "score": cold_result.score,
+                 "max_score": cold_result.max_score, "build_cached": bool(cold_result.build.get("cached"))},
+        "warm": warm,
+        "warm_runs": warm_runs,
+        "warm_builds_not_cached": uncached,
+        "floor": {"first_record_median": first_record, "first_record_runs": floor_rows["first_record"],
+                  "samples": samples, "period": period, "observation_window": window, "floor": floor},
+        "warm_overhead_above_floor": warm["total"]["median"] - floor,
+        "goal_overhead_below": GOAL_SECONDS,
+        "cli": {**cli, "above_floor": cli["wall"] - floor,
+                "above_in_process_warm": cli["wall"] - warm["total"]["median"]},
+        "diagnostics": diagnostics,
+    }
+
+
+# --- output --------------------------------------------------------------------------
+
+
+def render(data: dict[str, Any], console: Console) -> None:
+    table = Table(title=f"ros2course check {data['lesson']}: seconds (warm: {data['runs']} runs)",
+                  title_justify="left")
+    table.add_column("phase")
+    for column in ("cold", "warm median", "warm min", "warm max"):
+        table.add_column(column, justify="right")
+    for name in PHASES:
+        warm = data["warm"][name]
+        style = "bold" if name == "total" else None
+        table.add_row(name, f"{data['cold'][name]:.2f}", f"{warm['median']:.2f}", f"{warm['min']:.2f}",
+                      f"{warm['max']:.2f}", style=style)
+        for sub in SUB_PHASES.get(name, ()):
+            warm = data["warm"][sub]
+            table.add_row(f"  {sub}", f"{data['cold'][sub]:.2f}", f"{warm['median']:.2f}", f"{warm['min']:.2f}",
+                          f"{warm['max']:.2f}", style="dim")
+    console.print(table)
+
+    floor = data["floor"]
+    console.print(f"floor: Popen -> first /rosout record {floor['first_record_median']:.2f} s (median of "
+                  f"{len(floor['first_record_runs'])}) + observation window {floor['observation_window']:.2f} s "
+                  f"({floor['samples'] - 1} x {floor['period']:.1f} s) = {floor['floor']:.2f} s")
+    overhead = data["warm_overhead_above_floor"]
+    colour = "green" if overhead < data["goal_overhead_below"] else "red"
+    console.print(f"[{colour}]warm overhead above floor: {overhead:.2f} s (goal < {data['goal_overhead_below']:.0f} s)[/]")
+    cli = data["cli"]
+    console.print(f"CLI 'ros2course check --json' (warm, one run): {cli['wall']:.2f} s wall, "
+                  f"{cli['above_in_process_warm']:+.2f} s vs in-process warm median, "
+                  f"{cli['above_floor']:.2f} s above floor")
+    if data["warm_builds_not_cached"]:
+        console.print(f"[yellow]note:[/] {data['warm_builds_not_cached']} warm run(s) ran colcon (fingerprint cache missed)")
+
+    diag = data["diagnostics"]
+    notes = Table(title="where the time outside the node goes (medians, seconds)", title_justify="left")
+    notes.add_column("measurement")
+    notes.add_column("s", justify="right")
+    for label, key in (
+        ("python start, with the wheels' re-exec (learner's shell)", "python_start_reexec"),
+        ("python start, already bootstrapped (how nodes are started)", "python_start_bootstrapped"),
+        ("import rclpy (+node, executors), beyond python start", "rclpy_import_bootstrapped"),
+        ("python -m course --help (CLI start-up)", "cli_help"),
+        ("source install/setup.bash (overlay, uncached)", "overlay_sourcing"),
+        ("console-script entry-point lookup (importlib.metadata)", "entry_point_lookup"),
+        ("floor node: Popen -> node in the graph", "floor_node_in_graph"),
+        ("floor node: SIGINT -> exit", "floor_sigint_exit"),
+        ("RosSession open (domain, rclpy init, node, executor)", "floor_session_open"),
+        ("RosSession close", "floor_session_close"),
+    ):
+        notes.add_row(label, f"{diag[key]:.3f}")
+    console.print(notes)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=5, help="warm runs, floor runs and diagnostic repeats (default 5)")
+    parser.add_argument("--json", action="store_true", help="print the numbers as JSON on stdout instead of tables")
+    args = parser.parse_args(argv)
+    if args.runs < 1:
+        parser.error("--runs must be at least 1")
+
+    def terminate(signum: int, _frame: Any) -> None:
+        raise SystemExit(128 + signum)  # so the finally blocks below clean up
+
+    signal.signal(signal.SIGTERM, terminate)
+    os.environ.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")
+    marker = uuid.uuid4().hex
+    os.environ[BENCH_MARKER_VAR] = marker
+    env_mod.activate()
+    progress = Console(file=sys.stderr, highlight=False, quiet=args.json)
+    root = Path(tempfile.mkdtemp(prefix="ros2course-bench-"))
+    code = 0
+    try:
+        data = benchmark(args.runs, root, progress)
+    except BenchmarkFailed as exc:
+        Console(file=sys.stderr, highlight=False).print(f"[bold red]benchmark failed:[/] {exc}")
+        code = 1
+    except CourseError as exc:
+        Console(file=sys.stderr, highlight=False).print(f"[bold red]error:[/] {exc.message}\n[cyan]hint:[/] {exc.hint}")
+        code = int(exc.exit_status) or 1
+    finally:
+        leftovers = kill_leftovers(marker)
+        shutil.rmtree(root, ignore_errors=True)
+        if leftovers:
+            Console(file=sys.stderr, highlight=False).print(
+                f"[yellow]warning:[/] killed {len(leftovers)} leftover process(es): {leftovers}")
+    if code:
+        return code
+    data["leftover_processes_killed"] = len(leftovers)
+    if args.json:
+        sys.stdout.write(json.dumps(_round(data), indent=2) + "\n")
+    else:
+        render(data, Console(file=sys.stdout, highlight=False))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

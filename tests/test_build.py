@@ -1,0 +1,121 @@
+"""colcon builds: fingerprint cache, failures, the ament_cmake + rosidl path from the wheels."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from course import env as env_mod
+from course.build import build_log_excerpt, build_packages, overlay_env
+from course.errors import NotGradable
+
+DATA = Path(__file__).parent / "data"
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env_mod.activate(env)
+    return env
+
+
+@pytest.mark.ros
+def test_warm_build_is_cached_and_an_edit_rebuilds(solution_workspace, tmp_path):
+    root = solution_workspace.root
+    first = build_packages(root, ["python_package_with_a_node"], _env(), tmp_path / "b1.log")
+    assert first.ok and not first.cached
+    second = build_packages(root, ["python_package_with_a_node"], _env(), tmp_path / "b2.log")
+    assert second.ok and second.cached
+    node = root / "src/python_package_with_a_node/python_package_with_a_node/print_forever_node.py"
+    node.write_text(node.read_text() + "\n# edited\n")
+    os.utime(node, ns=(time.time_ns() + 10**9, time.time_ns() + 10**9))
+    third = build_packages(root, ["python_package_with_a_node"], _env(), tmp_path / "b3.log")
+    assert third.ok and not third.cached
+
+
+@pytest.mark.ros
+def test_failed_build_reports_the_error_lines(solution_workspace, tmp_path):
+    setup = solution_workspace.src / "python_package_with_a_node" / "setup.py"
+    setup.write_text(setup.read_text().replace("setup(", "setup(\n    this_is_not_python ((", 1))
+    result = build_packages(solution_workspace.root, ["python_package_with_a_node"], _env(), tmp_path / "b.log")
+    assert not result.ok
+    assert "SyntaxError" in result.excerpt or "error" in result.excerpt.lower()
+    # a failed build is never taken as cached next time
+    again = build_packages(solution_workspace.root, ["python_package_with_a_node"], _env(), tmp_path / "b2.log")
+    assert not again.ok and not again.cached
+
+
+def test_missing_package_is_not_gradable_and_names_what_is_there(workspace, tmp_path):
+    with pytest.raises(NotGradable) as info:
+        build_packages(workspace.root, ["python_package_with_a_node"], _env(), tmp_path / "b.log")
+    assert "python_package_with_a_node not found" in info.value.message
+    assert "packages there: none" in info.value.message
+
+
+def test_not_built_workspace_has_no_overlay(workspace):
+    with pytest.raises(NotGradable) as info:
+        overlay_env(workspace.root, _env())
+    assert "not built" in info.value.message and "colcon build" in info.value.hint
+
+
+def test_build_log_excerpt_keeps_error_lines():
+    log = "\n".join([f"line {i}" for i in range(100)] + ["CMake Error at CMakeLists.txt:3", "  bad thing"]
+                    + ["tail"] * 5)
+    excerpt = build_log_excerpt(log)
+    assert "CMake Error at CMakeLists.txt:3" in excerpt and "bad thing" in excerpt
+    assert "line 10" not in excerpt
+
+
+def test_cmake_repair_is_idempotent(tmp_path):
+    target = tmp_path / "share" / "geometry_msgs" / "cmake" / "export.cmake"
+    target.parent.mkdir(parents=True)
+    target.write_text('set_target_properties(x PROPERTIES INTERFACE_INCLUDE_DIRECTORIES '
+                      '"/opt/python/cp311-cp311/include/python3.11;'
+                      '/opt/python/cp311-cp311/lib/python3.11/site-packages/numpy/_core/include")\n')
+    assert env_mod.cmake_files_needing_repair(tmp_path) == [target]
+    assert env_mod.repair_cmake_files(tmp_path) == [target]
+    text = target.read_text()
+    assert "/opt/python" not in text
+    import sysconfig
+
+    assert sysconfig.get_paths()["include"] in text
+    assert env_mod.repair_cmake_files(tmp_path) == []
+    assert env_mod.cmake_files_needing_repair(tmp_path) == []
+
+
+@pytest.mark.ros
+def test_rosidl_interfaces_build_from_the_wheels(tmp_path):
+    """The custom-interfaces build path: ament_cmake + rosidl_generate_interfaces with the wheels."""
+    ok, detail = env_mod.probe_requirement("rosidl")
+    assert ok, f"{detail}: run 'ros2course doctor --fix' first"
+    root = tmp_path / "ws"
+    shutil.copytree(DATA / "interfaces_ws", root)
+    result = build_packages(root, ["package_with_interfaces"], _env(), tmp_path / "b.log")
+    assert result.ok, result.excerpt
+    env = overlay_env(root, _env())
+    code = ("from package_with_interfaces.msg import AmazingQuote\n"
+            "from package_with_interfaces.srv import WhatIsThePoint\n"
+            "print(AmazingQuote.get_fields_and_field_types())\n"
+            "print(WhatIsThePoint.Response.get_fields_and_field_types())\n")
+    proc = subprocess.run([sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert "{'id': 'int32', 'quote': 'string', 'philosopher_name': 'string'}" in proc.stdout
+    assert "{'point': 'geometry_msgs/Point'}" in proc.stdout
+
+
+def test_system_ros_is_detected_and_left_alone(monkeypatch, tmp_path):
+    prefix = tmp_path / "opt" / "ros" / "jazzy"
+    prefix.mkdir(parents=True)
+    (prefix / "setup.bash").write_text("")
+    monkeypatch.setenv("ROS_DISTRO", "jazzy")
+    monkeypatch.setenv("AMENT_PREFIX_PATH", str(prefix))
+    install = env_mod.detect()
+    assert install.kind == "system" and install.distro == "jazzy"
+    env = {"AMENT_PREFIX_PATH": str(prefix), "PATH": "/usr/bin"}
+    env_mod.activate(env)
+    assert env == {"AMENT_PREFIX_PATH": str(prefix), "PATH": "/usr/bin"}
