@@ -64,9 +64,14 @@ class CheckResult:
     observed: str
     expected: str
     hint: str
+    #: not judged because an earlier check failed (not part of the JSON shape).
+    skipped: bool = False
 
     def to_dict(self) -> dict[str, Any]:
-        return dataclasses.asdict(self)
+        """The documented JSON fields."""
+        out = dataclasses.asdict(self)
+        out.pop("skipped")
+        return out
 
 
 @dataclasses.dataclass
@@ -173,7 +178,7 @@ class GradingSession:
                 check = self.checks[check_id]
                 self.results[check_id] = CheckResult(check.id, check.name, 0.0, check.points, False,
                                                      f"not checked: {reason}", "(depends on the failed check above)",
-                                                     check.hint)
+                                                     check.hint, skipped=True)
 
     def ordered_results(self) -> list[CheckResult]:
         self.skip_remaining("the grader stopped before this check")

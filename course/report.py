@@ -48,14 +48,18 @@ def render_result(result: LessonResult, console: Console) -> None:
         console.print(Panel(Text(result.message), title=result.status, border_style=style, expand=False))
     if result.hint:
         console.print(Text.assemble(("hint: ", "bold cyan"), result.hint))
+    skipped = [c for c in result.checks if c.skipped]
     for check in result.checks:
-        if check.passed:
+        if check.passed or check.skipped:
             continue
         console.print(Text.assemble(("✘ ", "red"), (check.name, "bold")))
         console.print(Text.assemble(("    observed: ", "dim"), check.observed))
         console.print(Text.assemble(("    expected: ", "dim"), check.expected))
         if check.hint:
             console.print(Text.assemble(("    hint:     ", "cyan"), check.hint))
+    if skipped:
+        console.print(Text(f"{len(skipped)} check(s) not run: {skipped[0].observed.removeprefix('not checked: ')}",
+                           style="dim"))
     if result.status == STATUS_PASSED:
         console.print(Text("Full marks. 'ros2course next' moves on.", style="green"))
     if result.log_dir:
