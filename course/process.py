@@ -35,6 +35,9 @@ import psutil
 MARKER_VAR = "ROS2COURSE_RUN_MARKER"
 #: Default cap of captured output per stream, bytes.
 DEFAULT_OUTPUT_CAP = 2_000_000
+#: Default lifetime of a learner process, seconds: past it the group is killed
+#: even if the grader never got to stop it.
+DEFAULT_DEADLINE = 120.0
 _TAIL_BYTES = 64_000
 
 
@@ -128,10 +131,13 @@ class LearnerProcess:
             default disposition whether KeyboardInterrupt or the exception
             wins is a race, so the verdict would not be deterministic. rclpy
             and rclcpp install their handlers regardless, so nodes still stop.
+        deadline: seconds after start when a watchdog SIGKILLs the group and
+            the marked processes, whatever the grader is doing (None: never).
     """
 
     def __init__(self, argv: list[str], env: dict[str, str], log_dir: Path, name: str,
-                 output_cap: int = DEFAULT_OUTPUT_CAP, cwd: Path | None = None, ros_sigint: bool = False) -> None:
+                 output_cap: int = DEFAULT_OUTPUT_CAP, cwd: Path | None = None, ros_sigint: bool = False,
+                 deadline: float | None = DEFAULT_DEADLINE) -> None:
         # sh's `trap '' INT` sets SIGINT to ignored and exec keeps that (POSIX); no preexec_fn,
         # which is unsafe in a process with threads (the executor's).
         self.argv = (["/bin/sh", "-c", "trap '' INT; exec \"$0\" \"$@\"", *argv] if ros_sigint else argv)
@@ -145,6 +151,9 @@ class LearnerProcess:
         self.started_at = 0.0
         self._drains: list[_Drain] = []
         self.report: ExitReport | None = None
+        self.deadline = deadline
+        self.deadline_hit = False
+        self._watchdog: threading.Timer | None = None
 
     @property
     def stdout_log(self) -> Path:
@@ -165,7 +174,17 @@ class LearnerProcess:
                         _Drain(self.popen.stderr, self.stderr_log, self.output_cap)]
         for drain in self._drains:
             drain.start()
+        if self.deadline is not None:
+            self._watchdog = threading.Timer(self.deadline, self._on_deadline)
+            self._watchdog.daemon = True
+            self._watchdog.start()
         return self
+
+    def _on_deadline(self) -> None:
+        if self.popen is not None and self.popen.poll() is None:
+            self.deadline_hit = True
+            self._signal_group(signal.SIGKILL)
+            kill_marked(self.marker)
 
     @property
     def pid(self) -> int:
@@ -210,6 +229,8 @@ class LearnerProcess:
         """
         if self.report is not None:
             return self.report
+        if self._watchdog is not None:
+            self._watchdog.cancel()
         if self.popen is None:
             self.report = ExitReport(None, None, 0.0, "")
             return self.report
