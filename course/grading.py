@@ -305,6 +305,7 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     what the lesson ``requires`` (so a missing rclcpp is never a pass).
     """
     env_mod.require(lesson.requires, f"lesson {lesson.id}")
+    sweep_stale_fastdds_shm()  # leftovers of an earlier run that was SIGKILLed
     module = load_grader(lesson.grader)
     checks: list[Check] = list(module.CHECKS)
     max_score = float(sum(c.points for c in checks))

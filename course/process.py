@@ -22,6 +22,7 @@ import contextlib
 import dataclasses
 import fcntl
 import os
+import shutil
 import signal
 import subprocess
 import threading
@@ -138,9 +139,13 @@ class LearnerProcess:
     def __init__(self, argv: list[str], env: dict[str, str], log_dir: Path, name: str,
                  output_cap: int = DEFAULT_OUTPUT_CAP, cwd: Path | None = None, ros_sigint: bool = False,
                  deadline: float | None = DEFAULT_DEADLINE) -> None:
-        # sh's `trap '' INT` sets SIGINT to ignored and exec keeps that (POSIX); no preexec_fn,
-        # which is unsafe in a process with threads (the executor's).
-        self.argv = (["/bin/sh", "-c", "trap '' INT; exec \"$0\" \"$@\"", *argv] if ros_sigint else argv)
+        # sh's `trap '' INT` sets SIGINT to ignored and exec keeps that (POSIX); util-linux's
+        # setpriv sets the parent-death signal, so the node dies even if ros2course is
+        # SIGKILLed. Both exec into the learner's program (same PID); no preexec_fn, which is
+        # unsafe in a process with threads (the executor's).
+        wrapped = ["/bin/sh", "-c", "trap '' INT; exec \"$0\" \"$@\"", *argv] if ros_sigint else list(argv)
+        setpriv = shutil.which("setpriv")
+        self.argv = [setpriv, "--pdeathsig", "KILL", *wrapped] if setpriv else wrapped
         self.name = name
         self.marker = uuid.uuid4().hex
         self.env = {**env, MARKER_VAR: self.marker}

@@ -1,0 +1,266 @@
+"""Schema-level tests of the course content: lessons, graders, fixtures, starters.
+
+No ROS node is started here: fixtures are applied to a copy of the reference
+solution with :func:`course.validate.apply_edits`, never graded.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+from pathlib import Path
+
+import pytest
+import yaml
+
+from course.build import find_packages
+from course.errors import LessonFormatError
+from course.grading import Check, load_grader
+from course.lesson import content_root, load_catalog, load_lesson
+from course.starter import copy_starter, starter_files
+from course.validate import apply_edits, fixtures_dir, load_fixtures, reference_workspace
+
+ROOT = content_root()
+CATALOG = load_catalog()
+LESSON_IDS = CATALOG.ids()
+SNAKE = re.compile(r"^[a-z][a-z0-9_]*$")
+
+#: (lesson id, fixture file stem) for every fixture file on disk (collected from
+#: the files, not the loader, so a broken fixture is a failing case, not a collection error).
+FIXTURE_CASES = [(lesson_id, path.stem) for lesson_id in LESSON_IDS
+                 for path in sorted(fixtures_dir(lesson_id).glob("*.yaml"))]
+
+
+def snapshot(root: Path) -> dict[str, bytes | None]:
+    """Every path under ``root``: file -> content, folder -> None."""
+    return {str(p.relative_to(root)): (None if p.is_dir() else p.read_bytes())
+            for p in sorted(root.rglob("*")) if "__pycache__" not in p.parts}
+
+
+# --- the catalog ---------------------------------------------------------------
+
+def test_catalog_has_the_known_lessons_in_order():
+    assert LESSON_IDS[:2] == ["workspace-setup", "print-forever-node"]
+    assert len(set(LESSON_IDS)) == len(LESSON_IDS)
+    on_disk = sorted(p.parent for p in (ROOT / "chapters").glob("*/lesson.yaml"))
+    assert len(on_disk) == len(CATALOG.lessons), "every lesson.yaml is in the catalog"
+
+
+@pytest.mark.parametrize("lesson_id", LESSON_IDS)
+def test_lesson_loads_with_enough_hints(lesson_id):
+    lesson = CATALOG.get(lesson_id)
+    again = load_lesson(lesson.folder / "lesson.yaml")
+    assert again.id == lesson_id
+    assert re.fullmatch(rf"\d+-{re.escape(lesson_id)}", lesson.folder.name)
+    assert len(lesson.hints) >= 3
+    assert len(set(lesson.hints)) == len(lesson.hints), "no hint repeats another"
+    assert all(len(h.strip()) >= 5 for h in lesson.hints)
+    assert len(lesson.instructions.strip()) >= 20
+    assert lesson.chapters
+
+
+@pytest.mark.parametrize("lesson_id", LESSON_IDS)
+def test_grader_declares_unique_checks_with_points(lesson_id):
+    lesson = CATALOG.get(lesson_id)
+    module = load_grader(lesson.grader)
+    assert callable(module.grade)
+    checks = list(module.CHECKS)
+    assert checks
+    assert all(isinstance(c, Check) for c in checks)
+    ids = [c.id for c in checks]
+    assert len(set(ids)) == len(ids), f"duplicate check ids in graders/{lesson.grader}.py: {ids}"
+    for check in checks:
+        assert SNAKE.match(check.id), check.id
+        assert check.points > 0, check
+        assert check.name.strip(), check
+
+
+@pytest.mark.parametrize("lesson_id", LESSON_IDS)
+def test_lesson_packages_are_in_the_reference_solution(lesson_id, tmp_path):
+    """reference_workspace silently skips unknown package names: a typo would grade an empty workspace."""
+    lesson = CATALOG.get(lesson_id)
+    found = find_packages(ROOT / "solutions" / "src")
+    assert set(lesson.packages) <= set(found), f"not in solutions/src: {set(lesson.packages) - set(found)}"
+    ref = reference_workspace(lesson, tmp_path / "ref")
+    assert set(lesson.packages) <= set(find_packages(ref / "src"))
+
+
+# --- fixtures ------------------------------------------------------------------
+
+def test_fixture_folders_belong_to_lessons():
+    folders = [p.name for p in (ROOT / "tests" / "fixtures").iterdir() if p.is_dir()]
+    assert folders
+    assert set(folders) <= set(LESSON_IDS), f"fixtures for unknown lessons: {set(folders) - set(LESSON_IDS)}"
+    stray = [p.name for p in (ROOT / "tests" / "fixtures").rglob("*")
+             if p.is_file() and p.suffix != ".yaml"]
+    assert stray == [], f"files the loader would silently ignore: {stray}"
+
+
+@pytest.mark.parametrize("lesson_id", LESSON_IDS)
+def test_every_fixture_file_loads_and_names_declared_checks(lesson_id):
+    lesson = CATALOG.get(lesson_id)
+    declared = {c.id for c in load_grader(lesson.grader).CHECKS}
+    files = sorted(fixtures_dir(lesson_id).glob("*.yaml"))
+    fixtures = load_fixtures(lesson_id)
+    assert [f.name for f in fixtures] == [p.stem for p in files]
+    for fixture in fixtures:
+        assert fixture.description.strip(), fixture.name
+        assert set(fixture.fails) <= declared, (
+            f"{fixture.name}: unknown check ids {set(fixture.fails) - declared}; declared: {sorted(declared)}")
+        if fixture.expect == "full_marks":
+            assert fixture.fails == [], f"{fixture.name} expects full marks but names failing checks"
+        else:
+            assert fixture.fails, fixture.name
+        assert fixture.edits or fixture.commands is not None, f"{fixture.name} changes nothing"
+
+
+def test_print_forever_node_has_wrong_solution_fixtures():
+    assert len(load_fixtures("print-forever-node")) >= 5
+
+
+@pytest.mark.parametrize(("lesson_id", "fixture_name"), FIXTURE_CASES)
+def test_fixture_edits_apply_exactly_once_to_the_reference(lesson_id, fixture_name, tmp_path):
+    lesson = CATALOG.get(lesson_id)
+    fixture = {f.name: f for f in load_fixtures(lesson_id)}[fixture_name]
+    ref = reference_workspace(lesson, tmp_path / "ref")
+    work = reference_workspace(lesson, tmp_path / "work")
+    assert snapshot(work) == snapshot(ref)
+    for edit in fixture.edits:
+        if edit.replace is not None:
+            target = work / edit.file
+            assert target.is_file(), f"{fixture_name}: {edit.file} is not in the reference"
+            text = target.read_text(encoding="utf-8")
+            assert text.count(edit.replace) == 1, (
+                f"{fixture_name}: {edit.replace!r} occurs {text.count(edit.replace)} times in {edit.file}")
+            assert edit.replace != edit.with_, f"{fixture_name}: a replace that changes nothing"
+        elif edit.delete is not None:
+            assert (work / edit.delete).exists(), f"{fixture_name}: deletes {edit.delete}, which is not there"
+        before = snapshot(work)
+        apply_edits(work, [edit])
+        assert snapshot(work) != before, f"{fixture_name}: the edit {edit} changed nothing"
+        if edit.replace is not None:
+            after = (work / edit.file).read_text(encoding="utf-8")
+            assert after == text.replace(edit.replace, edit.with_)
+    if fixture.edits:
+        assert snapshot(work) != snapshot(ref)
+
+
+def test_apply_edits_rejects_a_replace_that_is_not_unique(tmp_path):
+    """The guard the previous test relies on: a replace text found 0 or 2 times is an error."""
+    from course.validate import Edit
+
+    (tmp_path / "f.txt").write_text("a a\n")
+    with pytest.raises(LessonFormatError, match="2 times"):
+        apply_edits(tmp_path, [Edit(file="f.txt", replace="a", with_="b")])
+    with pytest.raises(LessonFormatError, match="0 times"):
+        apply_edits(tmp_path, [Edit(file="f.txt", replace="zzz", with_="b")])
+    assert (tmp_path / "f.txt").read_text() == "a a\n"
+
+
+# --- starters ------------------------------------------------------------------
+
+@pytest.mark.parametrize("lesson_id", LESSON_IDS)
+def test_starter_differs_from_the_reference(lesson_id, tmp_path):
+    lesson = CATALOG.get(lesson_id)
+    ref = reference_workspace(lesson, tmp_path / "ref")
+    start = tmp_path / "start"
+    (start / "src").mkdir(parents=True)
+    copied, kept = copy_starter(lesson, start)
+    assert kept == []
+    assert sorted(copied) == starter_files(lesson)
+    assert snapshot(start) != snapshot(ref)
+    if not lesson.packages:
+        return
+    # the starter holds the same packages, and at least one of their files is not the solution's
+    starter_pkgs = find_packages(start / "src")
+    ref_pkgs = find_packages(ref / "src")
+    for name in lesson.packages:
+        assert name in starter_pkgs, f"the starter lacks package {name}"
+        mine, theirs = snapshot(starter_pkgs[name][0]), snapshot(ref_pkgs[name][0])
+        common = set(mine) & set(theirs)
+        assert common, f"starter and reference of {name} share no file"
+        assert any(mine[p] != theirs[p] for p in common), f"the starter of {name} is the reference solution"
+
+
+# --- the schema rejects malformed lessons ------------------------------------------
+
+def _mutated_lesson(tmp_path: Path, mutate, folder_name: str | None = None) -> Path:
+    lesson = CATALOG.get("print-forever-node")
+    data = yaml.safe_load((lesson.folder / "lesson.yaml").read_text(encoding="utf-8"))
+    data = mutate(data)
+    folder = tmp_path / (folder_name or lesson.folder.name)
+    folder.mkdir()
+    path = folder / "lesson.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    return path
+
+
+def _with(**changes):
+    def mutate(data):
+        data.update(changes)
+        return data
+    return mutate
+
+
+def _without(key):
+    def mutate(data):
+        data.pop(key)
+        return data
+    return mutate
+
+
+@pytest.mark.parametrize(("mutate", "field", "words"), [
+    (lambda d: {**d, "hints": d["hints"][:2]}, "hints", "at least 3"),
+    (lambda d: {**d, "hints": [*d["hints"][:3], "x"]}, "hints.3", "at least 5"),
+    (_without("grader"), "grader", "required"),
+    (_with(grader="Print-Forever"), "grader", "pattern"),
+    (_with(requires=["rclpy", "ros1"]), "requires", "ros1"),
+    (_with(hint=["typo for hints"]), "hint", "not permitted"),
+    (_with(chapters=[]), "chapters", "at least 1"),
+    (_with(reference={"command": ["colcon build"]}), "reference.command", "not permitted"),
+], ids=["two-hints", "short-hint", "no-grader", "bad-grader-name", "unknown-requirement", "extra-field",
+        "no-chapters", "reference-extra-field"])
+def test_schema_rejects_malformed_lessons(tmp_path, mutate, field, words):
+    path = _mutated_lesson(tmp_path, mutate)
+    with pytest.raises(LessonFormatError) as info:
+        load_lesson(path)
+    message = info.value.message
+    assert f"{path}: {field}: " in message, message
+    assert words in message, message
+    assert info.value.hint
+
+
+def test_schema_rejects_an_id_that_does_not_match_its_folder(tmp_path):
+    path = _mutated_lesson(tmp_path, lambda d: d, folder_name="13-print-forever")
+    with pytest.raises(LessonFormatError, match=r": id: 'print-forever-node' does not match"):
+        load_lesson(path)
+
+
+def test_schema_rejects_a_top_level_list(tmp_path):
+    folder = tmp_path / "13-print-forever-node"
+    folder.mkdir()
+    (folder / "lesson.yaml").write_text("- id: print-forever-node\n")
+    with pytest.raises(LessonFormatError, match=r"\(top level\)"):
+        load_lesson(folder / "lesson.yaml")
+
+
+def test_unmodified_copy_of_a_lesson_loads(tmp_path):
+    path = _mutated_lesson(tmp_path, lambda d: d)
+    copy = load_lesson(path)
+    original = CATALOG.get("print-forever-node")
+    assert copy.model_dump() == original.model_dump()
+    assert copy.folder == path.parent
+
+
+def test_fixture_schema_rejects_a_failing_fixture_without_fails(tmp_path, monkeypatch):
+    """load_fixtures names the file and field of a malformed fixture (via ROS2COURSE_CONTENT)."""
+    folder = tmp_path / "tests" / "fixtures" / "print-forever-node"
+    folder.mkdir(parents=True)
+    (folder / "bad.yaml").write_text("description: forgot fails\nedits: []\n")
+    monkeypatch.setenv("ROS2COURSE_CONTENT", str(tmp_path))
+    with pytest.raises(LessonFormatError) as info:
+        load_fixtures("print-forever-node")
+    assert str((folder / "bad.yaml").resolve()) in info.value.message
+    assert "fails" in info.value.message
+    shutil.rmtree(folder)
+    assert load_fixtures("print-forever-node") == []

@@ -1,0 +1,371 @@
+"""course.probes: rate maths, and the probes against real learner-side nodes.
+
+Each ROS test opens a :class:`RosSession` (private domain) and starts a tiny
+rclpy script with :class:`LearnerProcess` in that domain.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+import textwrap
+
+import pytest
+
+from course.probes import RateStats, wait_until
+
+PY = sys.executable
+
+
+# --- RateStats (no ROS) ----------------------------------------------------------
+
+
+def test_rate_stats_known_times():
+    stats = RateStats.from_times([10.0, 11.0, 13.0, 16.0])  # deltas 1, 2, 3
+    assert stats.samples == 3
+    assert stats.mean_period == pytest.approx(2.0)
+    assert stats.rate_hz == pytest.approx(0.5)
+    assert stats.min_period == pytest.approx(1.0)
+    assert stats.max_period == pytest.approx(3.0)
+    # population standard deviation (ros2 topic hz): sqrt(((1-2)^2 + 0 + (3-2)^2) / 3)
+    assert stats.std_dev == pytest.approx(math.sqrt(2.0 / 3.0))
+
+
+def test_rate_stats_regular_and_within():
+    times = [i * 0.5 for i in range(7)]
+    stats = RateStats.from_times(times)
+    assert stats.samples == 6
+    assert stats.rate_hz == pytest.approx(2.0)
+    assert stats.std_dev == pytest.approx(0.0, abs=1e-12)
+    assert stats.within(2.0, 0.15)
+    assert stats.within(2.0 * 1.1, 0.15)  # period 0.4545: |0.5 - 0.4545| = 0.045 <= 0.068
+    assert not stats.within(1.0, 0.15)
+    assert not stats.within(4.0, 0.15)
+    assert stats.describe().startswith("2.00 Hz (mean period 0.500 s")
+
+
+def test_rate_stats_edge_cases():
+    assert RateStats.from_times([]) is None
+    assert RateStats.from_times([1.0]) is None
+    same = RateStats.from_times([1.0, 1.0, 1.0])
+    assert same.rate_hz == math.inf and same.mean_period == 0.0
+
+
+# --- ROS ---------------------------------------------------------------------------
+
+@pytest.fixture
+def ros_env():
+    pytest.importorskip("rclpy")
+    from course import env as env_mod  # noqa: PLC0415
+
+    env = dict(os.environ)
+    env_mod.activate(env)
+    return env
+
+
+@pytest.fixture
+def learners(tmp_path):
+    """Start learner scripts; every one is stopped at the end of the test."""
+    from course.process import LearnerProcess  # noqa: PLC0415
+
+    started = []
+
+    def start(session, name: str, code: str, env: dict[str, str]) -> LearnerProcess:
+        script = tmp_path / f"{name}.py"
+        script.write_text(textwrap.dedent(code), encoding="utf-8")
+        proc = LearnerProcess([PY, str(script)], session.learner_env(env), tmp_path / "logs", name,
+                              ros_sigint=True)
+        started.append(proc)
+        return proc.start()
+
+    yield start
+    for proc in started:
+        proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
+    from course.process import sweep_stale_fastdds_shm  # noqa: PLC0415
+
+    sweep_stale_fastdds_shm()
+
+
+def died(proc):
+    """abort= predicate: the learner process has exited."""
+    return lambda: proc.poll() is not None
+
+
+def describe(proc) -> str:
+    return f"exit {proc.poll()}; stderr: {proc.stderr()[-1500:]}"
+
+
+TALKER = """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.node import Node
+    from std_msgs.msg import String
+
+    class Talker(Node):
+        def __init__(self):
+            super().__init__("test_talker")
+            self.pub = self.create_publisher(String, "chatter", 10)
+            self.n = 0
+            self.timer = self.create_timer(0.1, self.tick)
+
+        def tick(self):
+            self.pub.publish(String(data=f"hello {self.n}"))
+            self.n += 1
+
+    try:
+        rclpy.init()
+        rclpy.spin(Talker())
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+"""
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_topic_probe_rate(ros_env, learners):
+    from std_msgs.msg import String  # noqa: PLC0415
+
+    from course.probes import RosSession  # noqa: PLC0415
+
+    with RosSession() as session:
+        probe = session.topic("/chatter", String)
+        proc = learners(session, "talker", TALKER, ros_env)
+        assert session.wait_for_node("test_talker", 15.0, abort=died(proc)), describe(proc)
+        assert probe.wait_for_count(31, 20.0, abort=died(proc)), f"{len(probe.samples())} messages; {describe(proc)}"
+        stats = probe.rate()
+        assert stats is not None and stats.samples >= 30
+        assert stats.within(10.0, 0.10), stats.describe()
+        texts = [m.data for m in probe.messages()]
+        first = int(texts[0].split()[1])
+        assert texts[:10] == [f"hello {first + i}" for i in range(10)]  # in order, none lost
+        assert "/chatter" in session.topic_types()
+        assert session.topic_types()["/chatter"] == ["std_msgs/msg/String"]
+        assert "/test_talker" in session.node_names()
+        assert all(not name.split("/")[-1].startswith("_") for name in session.node_names())
+        report = proc.stop(sigint_timeout=5.0)
+        assert report.signal_used == "SIGINT" and report.returncode == 0, report
+
+
+NAMED_NODE = """
+    import sys
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.node import Node
+
+    try:
+        rclpy.init()
+        rclpy.spin(Node(sys.argv[1] if len(sys.argv) > 1 else "isolated_node"))
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+"""
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_two_sessions_are_isolated(ros_env, learners):
+    from course.probes import RosSession  # noqa: PLC0415
+
+    with RosSession() as one, RosSession() as two:
+        assert one.domain_id != two.domain_id
+        assert 1 <= one.domain_id <= 100 and 1 <= two.domain_id <= 100
+        assert one.learner_env({})["ROS_DOMAIN_ID"] == str(one.domain_id)
+        proc = learners(one, "isolated", NAMED_NODE, ros_env)
+        assert one.wait_for_node("isolated_node", 15.0, abort=died(proc)), describe(proc)
+        # well past discovery in the first session; never visible in the second
+        assert not two.wait_for_node("isolated_node", 3.0)
+        assert "/isolated_node" not in two.node_names()
+        assert "/isolated_node" in one.node_names()
+
+
+LOGGER = """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.node import Node
+
+    try:
+        rclpy.init()
+        node = Node("chatty")
+        node.get_logger().info("hello from the learner")
+        node.get_logger().warning("careful now")
+        timer = node.create_timer(0.2, lambda: node.get_logger().info("tick"))
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+"""
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_rosout_probe_receives_learner_records(ros_env, learners):
+    from course.probes import RosSession  # noqa: PLC0415
+
+    with RosSession() as session:
+        rosout = session.rosout()
+        proc = learners(session, "chatty", LOGGER, ros_env)
+        # the two first records were logged before the probe matched: transient local replays them
+        assert wait_until(lambda: rosout.records(node="chatty", match=lambda m: m == "careful now"), 15.0,
+                          abort=died(proc)), f"loggers seen: {rosout.loggers()}; {describe(proc)}"
+        hello = rosout.records(node="chatty", level=20, match=lambda m: m == "hello from the learner")
+        assert len(hello) == 1
+        assert hello[0].name == "chatty" and hello[0].level == 20
+        warn = rosout.records(node="chatty", match=lambda m: m == "careful now")
+        assert [r.level for r in warn] == [30]
+        assert rosout.records(node="chatty", level=30, match=lambda m: m == "hello from the learner") == []
+        assert rosout.records(node="someone_else") == []
+        assert "chatty" in rosout.loggers()
+        assert wait_until(lambda: len(rosout.records(node="chatty", match=lambda m: m == "tick")) >= 2, 10.0)
+
+
+SERVER = """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.node import Node
+    from rcl_interfaces.srv import ListParameters
+
+    def answer(request, response):
+        response.result.names = [p + "_seen" for p in request.prefixes]
+        response.result.prefixes = [str(request.depth)]
+        return response
+
+    try:
+        rclpy.init()
+        node = Node("learner_server")
+        srv = node.create_service(ListParameters, "echo_prefixes", answer)
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+"""
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_call_service_on_learner_server(ros_env, learners):
+    from rcl_interfaces.srv import ListParameters  # noqa: PLC0415
+
+    from course.probes import RosSession, call_service  # noqa: PLC0415
+
+    with RosSession() as session:
+        proc = learners(session, "server", SERVER, ros_env)
+        request = ListParameters.Request(prefixes=["alpha", "beta"], depth=7)
+        response = call_service(session, ListParameters, "/echo_prefixes", request, timeout=15.0)
+        assert list(response.result.names) == ["alpha_seen", "beta_seen"], describe(proc)
+        assert list(response.result.prefixes) == ["7"]
+        # a second call works too (the client is created and destroyed per call)
+        again = call_service(session, ListParameters, "/echo_prefixes", ListParameters.Request(prefixes=["x"]))
+        assert list(again.result.names) == ["x_seen"]
+        with pytest.raises(TimeoutError):
+            call_service(session, ListParameters, "/nobody_serves_this", ListParameters.Request(), timeout=1.0)
+
+
+CLIENT = """
+    import sys
+    import rclpy
+    from rclpy.node import Node
+    from rcl_interfaces.srv import ListParameters
+
+    rclpy.init()
+    node = Node("learner_client")
+    client = node.create_client(ListParameters, "grader_service")
+    if not client.wait_for_service(timeout_sec=20.0):
+        print("no service", flush=True)
+        sys.exit(3)
+    for i in range(3):
+        future = client.call_async(ListParameters.Request(prefixes=[f"call{i}"], depth=i))
+        rclpy.spin_until_future_complete(node, future, timeout_sec=10.0)
+        print("answer", list(future.result().result.names), flush=True)
+    node.destroy_node()
+    rclpy.shutdown()
+"""
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_stand_in_server_records_learner_calls(ros_env, learners):
+    from rcl_interfaces.srv import ListParameters  # noqa: PLC0415
+
+    from course.probes import RosSession, StandInServer  # noqa: PLC0415
+
+    def handler(request, response):
+        response.result.names = ["grader:" + p for p in request.prefixes]
+        return response
+
+    with RosSession() as session:
+        server = StandInServer(session, ListParameters, "/grader_service", handler)
+        proc = learners(session, "client", CLIENT, ros_env)
+        assert wait_until(lambda: proc.poll() is not None, 30.0), describe(proc)
+        assert proc.poll() == 0, describe(proc) + proc.stdout()
+        assert [list(r.prefixes) for _, r in server.calls] == [["call0"], ["call1"], ["call2"]]
+        assert [r.depth for _, r in server.calls] == [0, 1, 2]
+        times = [t for t, _ in server.calls]
+        assert times == sorted(times)
+        assert server.rate() is not None and server.rate().samples == 2
+        lines = [line for line in proc.stdout().splitlines() if line.startswith("answer")]
+        assert lines == ["answer ['grader:call0']", "answer ['grader:call1']", "answer ['grader:call2']"]
+        server.close()
+        assert wait_until(lambda: "/grader_service" not in dict(session.node.get_service_names_and_types()), 5.0)
+
+
+PARAM_NODE = """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from rclpy.node import Node
+
+    try:
+        rclpy.init()
+        node = Node("param_node")
+        node.declare_parameter("speed", 1.5)
+        node.declare_parameter("label", "slow")
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+"""
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_parameter_client_lists_and_sets(ros_env, learners):
+    from rclpy.parameter import Parameter  # noqa: PLC0415
+
+    from course.probes import RosSession, parameter_client, wait_future  # noqa: PLC0415
+
+    with RosSession() as session:
+        proc = learners(session, "params", PARAM_NODE, ros_env)
+        with parameter_client(session, "/param_node", timeout=15.0) as client:
+            listed = wait_future(client.list_parameters(), 5.0)
+            assert {"speed", "label"} <= set(listed.result.names), describe(proc)
+            got = wait_future(client.get_parameters(["speed", "label"]), 5.0)
+            assert got.values[0].double_value == pytest.approx(1.5)
+            assert got.values[1].string_value == "slow"
+            done = wait_future(client.set_parameters([Parameter("speed", value=2.5)]), 5.0)
+            assert [r.successful for r in done.results] == [True]
+            got = wait_future(client.get_parameters(["speed"]), 5.0)
+            assert got.values[0].double_value == pytest.approx(2.5)
+            # a type change is refused by the node (declared double)
+            refused = wait_future(client.set_parameters([Parameter("speed", value="fast")]), 5.0)
+            assert [r.successful for r in refused.results] == [False]
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_parameter_client_times_out_without_node(ros_env):
+    from course.probes import RosSession, parameter_client  # noqa: PLC0415
+
+    with RosSession() as session:
+        with pytest.raises(TimeoutError):
+            with parameter_client(session, "/no_such_node", timeout=1.0):
+                pass
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_learner_env(ros_env):
+    from course.probes import RosSession  # noqa: PLC0415
+
+    with RosSession() as session:
+        env = session.learner_env({"ROS_LOCALHOST_ONLY": "1", "ROS_DOMAIN_ID": "0", "KEEP": "me"})
+        assert env["ROS_DOMAIN_ID"] == str(session.domain_id)
+        assert env["ROS_AUTOMATIC_DISCOVERY_RANGE"] == "LOCALHOST"
+        assert "ROS_LOCALHOST_ONLY" not in env
+        assert env["KEEP"] == "me"
+        assert env["PYTHONUNBUFFERED"] == "1"
