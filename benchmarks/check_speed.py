@@ -18,6 +18,8 @@ Run from the repository root with the project's venv::
    observation window ((SAMPLES - 1) * PERIOD), is the least a check can take.
 5. ``python -m course check ... --json`` once, warm, through the real CLI
    (interpreter start, imports, overlay sourcing included).
+6. Diagnostics: interpreter start, rclpy and CLI imports, RosSession set-up in
+   a fresh process, uncached overlay sourcing, console-script entry-point lookup.
 
 Exits non-zero only when a graded result is not full marks (or the CLI run is
 not); timings are reported, never asserted. The temporary workspace is removed
@@ -28,8 +30,10 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import json
 import os
+import selectors
 import shutil
 import signal
 import statistics
@@ -131,10 +135,10 @@ def split(result: LessonResult, wall: float) -> dict[str, float]:
 
 def require_full_marks(result: LessonResult, what: str) -> None:
     if result.status != STATUS_PASSED or result.score < result.max_score:
-        failed = ", ".join(result.failed_checks()) or "none"
+        failed = "; ".join(f"{c.id}: {c.observed}" for c in result.checks if not c.passed) or "none"
         detail = f"; {result.message.splitlines()[0]}" if result.message else ""
         raise BenchmarkFailed(f"{what}: {result.status} {result.score:g}/{result.max_score:g} "
-                              f"(failed: {failed}{detail}); log: {result.log_dir}")
+                              f"(failed: {failed}{detail})")
 
 
 def learner_shell_env() -> dict[str, str]:
@@ -144,19 +148,51 @@ def learner_shell_env() -> dict[str, str]:
     return env
 
 
-def timed_run(argv: list[str], env: dict[str, str], cwd: Path, timeout: float) -> tuple[float, subprocess.CompletedProcess]:
-    """Run ``argv`` in its own session; wall seconds and the completed process. Its group dies on timeout."""
+@dataclasses.dataclass
+class Run:
+    """A finished subprocess: wall seconds, and when its stdout last carried data (seconds after start)."""
+
+    seconds: float
+    returncode: int
+    stdout: bytes
+    stderr: bytes
+    last_output: float | None
+
+
+def timed_run(argv: list[str], env: dict[str, str], cwd: Path, timeout: float) -> Run:
+    """Run ``argv`` in its own session, reading both pipes; its whole group is killed on timeout or error."""
     begin = time.monotonic()
     proc = subprocess.Popen(argv, env=env, cwd=cwd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, start_new_session=True)
+    out_fd, err_fd = proc.stdout.fileno(), proc.stderr.fileno()
+    chunks: dict[int, bytearray] = {out_fd: bytearray(), err_fd: bytearray()}
+    last_output = None
     try:
-        out, err = proc.communicate(timeout=timeout)
+        with selectors.DefaultSelector() as selector:
+            for pipe in (proc.stdout, proc.stderr):
+                selector.register(pipe, selectors.EVENT_READ)
+            while selector.get_map():
+                remaining = begin + timeout - time.monotonic()
+                if remaining <= 0:
+                    raise BenchmarkFailed(f"{' '.join(argv)} still running after {timeout:.0f} s")
+                for key, _ in selector.select(timeout=remaining):
+                    chunk = os.read(key.fd, 65536)
+                    if not chunk:
+                        selector.unregister(key.fileobj)
+                        continue
+                    chunks[key.fd] += chunk
+                    if key.fd == out_fd:
+                        last_output = time.monotonic() - begin
+        proc.wait(timeout=max(begin + timeout - time.monotonic(), 1.0))
     except BaseException:
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(proc.pid, signal.SIGKILL)
-        proc.communicate()
+        proc.wait()
         raise
-    return time.monotonic() - begin, subprocess.CompletedProcess(argv, proc.returncode, out, err)
+    finally:
+        proc.stdout.close()
+        proc.stderr.close()
+    return Run(time.monotonic() - begin, proc.returncode, bytes(chunks[out_fd]), bytes(chunks[err_fd]), last_output)
 
 
 def kill_leftovers(marker: str) -> list[int]:
@@ -251,10 +287,10 @@ def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, f
     def median_of(argv: list[str], env: dict[str, str]) -> float:
         times = []
         for _ in range(runs):
-            seconds, done = timed_run(argv, env, folder, timeout=120)
+            done = timed_run(argv, env, folder, timeout=120)
             if done.returncode != 0:
                 raise BenchmarkFailed(f"{' '.join(argv)} failed ({done.returncode}): {done.stderr.decode()[-500:]}")
-            times.append(seconds)
+            times.append(done.seconds)
         return statistics.median(times)
 
     out["python_start_reexec"] = median_of([python, "-c", "pass"], shell)
@@ -273,29 +309,34 @@ def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, f
         times.append(time.monotonic() - begin)
     out["overlay_sourcing"] = statistics.median(times)
 
-    def self_timed(what: str, code: str, env: dict[str, str]) -> float:
-        """Median of what ``code`` (a fresh interpreter) prints as its own elapsed seconds."""
-        values = []
+    def self_timed(what: str, code: str, env: dict[str, str]) -> list[float]:
+        """Medians of the numbers ``code`` (a fresh interpreter) prints on its last line, plus its exit lag.
+
+        The exit lag is the time from its last output to its exit (interpreter shutdown).
+        """
+        rows = []
         for _ in range(runs):
-            _, done = timed_run([python, "-c", "import time; t = time.perf_counter()\n" + code], env, folder,
-                                timeout=60)
-            if done.returncode != 0:
+            done = timed_run([python, "-c", "import time; t = time.perf_counter()\n" + code], env, folder,
+                             timeout=60)
+            if done.returncode != 0 or done.last_output is None:
                 raise BenchmarkFailed(f"{what} failed: {done.stderr.decode()[-500:]}")
-            values.append(float(done.stdout.decode().split()[-1]))
-        return statistics.median(values)
+            rows.append([*map(float, done.stdout.decode().splitlines()[-1].split()), done.seconds - done.last_output])
+        return [statistics.median(column) for column in zip(*rows)]
 
     out["cli_import"] = self_timed("import course.cli", "import course.cli\nprint(time.perf_counter() - t)",
-                                   dict(os.environ))
+                                   dict(os.environ))[0]
     # What the grader's ROS graph costs in a fresh process (``ros2course check``): imports, rclpy init,
-    # node (with its type description service), executor thread.
-    out["ros_session_open_fresh"] = self_timed(
+    # node (with its type description service), executor thread; then closing it, then exiting.
+    out["ros_session_open_fresh"], out["ros_session_close_fresh"], out["exit_after_ros_session"] = self_timed(
         "RosSession", "from course.probes import RosSession\ns = RosSession().__enter__()\n"
-        "print(time.perf_counter() - t)\ns.__exit__(None, None, None)", dict(os.environ))
+        "opened = time.perf_counter()\ns.__exit__(None, None, None)\n"
+        "print(opened - t, time.perf_counter() - opened, flush=True)", dict(os.environ))
+    out["exit_plain_python"] = self_timed("print", "print(0, flush=True)", dict(os.environ))[-1]
     # The console-script wrapper colcon installs looks the entry point up with importlib.metadata.
     out["entry_point_lookup"] = self_timed(
         "entry point lookup", "from importlib.metadata import distribution\n"
         "[e for e in distribution('python-package-with-a-node').entry_points]\n"
-        "print(time.perf_counter() - t)", overlay)
+        "print(time.perf_counter() - t)", overlay)[0]
     from course.process import sweep_stale_fastdds_shm  # noqa: PLC0415
 
     sweep_stale_fastdds_shm()
@@ -305,13 +346,16 @@ def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, f
 def run_cli_check(workspace: Path, folder: Path) -> dict[str, Any]:
     """``python -m course check LESSON --workspace WS --json`` once, as a learner's terminal would run it."""
     argv = [sys.executable, "-m", "course", "check", LESSON_ID, "--workspace", str(workspace), "--json"]
-    seconds, done = timed_run(argv, learner_shell_env(), folder, timeout=CLI_TIMEOUT)
+    done = timed_run(argv, learner_shell_env(), folder, timeout=CLI_TIMEOUT)
     try:
         data = json.loads(done.stdout.decode())
     except ValueError:
         data = {}
-    info = {"wall": seconds, "exit_code": done.returncode, "status": data.get("status"),
-            "score": data.get("score"), "max_score": data.get("max_score")}
+    # The JSON is written and flushed once everything is judged and cleaned up; what follows is
+    # interpreter shutdown (native destructors of rclpy / Fast DDS included).
+    exit_after_output = done.seconds - done.last_output if done.last_output is not None else 0.0
+    info = {"wall": done.seconds, "exit_after_output": exit_after_output, "exit_code": done.returncode,
+            "status": data.get("status"), "score": data.get("score"), "max_score": data.get("max_score")}
     if done.returncode != 0 or data.get("status") != STATUS_PASSED:
         raise BenchmarkFailed(f"CLI check was not full marks: exit {done.returncode}, {info}; "
                               f"stderr: {done.stderr.decode()[-800:]}")
@@ -411,7 +455,8 @@ def render(data: dict[str, Any], console: Console) -> None:
     cli = data["cli"]
     console.print(f"CLI check, warm, 1 run: {cli['wall']:.2f} s wall "
                   f"({cli['above_in_process_warm']:+.2f} s vs in-process warm median, "
-                  f"{cli['above_floor']:.2f} s above floor)", soft_wrap=True)
+                  f"{cli['above_floor']:.2f} s above floor; "
+                  f"{cli['exit_after_output']:.2f} s from its JSON to its exit)", soft_wrap=True)
     if data["warm_builds_not_cached"]:
         console.print(f"[yellow]note:[/] {data['warm_builds_not_cached']} warm run(s) ran colcon "
                       "(fingerprint cache missed)", soft_wrap=True)
@@ -430,7 +475,10 @@ def render(data: dict[str, Any], console: Console) -> None:
         ("python -m course --help (CLI start-up, wall)", "cli_help"),
         ("import course.cli, fresh process", "cli_import"),
         ("RosSession open, fresh process (imports, init, node)", "ros_session_open_fresh"),
+        ("RosSession close, fresh process", "ros_session_close_fresh"),
         ("RosSession open / close, warm process", None),
+        ("interpreter exit after a RosSession was closed", "exit_after_ros_session"),
+        ("interpreter exit, plain python", "exit_plain_python"),
         ("source install/setup.bash (overlay, uncached)", "overlay_sourcing"),
         ("console-script entry-point lookup (importlib.metadata)", "entry_point_lookup"),
         ("floor node: Popen -> node in the graph", "floor_node_in_graph"),

@@ -69,7 +69,8 @@ def find_packages(src: Path) -> dict[str, tuple[Path, object]]:
     try:
         found = catkin_find(str(src))
     except InvalidPackage as exc:
-        raise NotGradable(f"a package.xml under {src} is invalid: {str(exc).splitlines()[0]}",
+        detail = " ".join(line.strip() for line in str(exc).splitlines() if line.strip())
+        raise NotGradable(f"a package.xml under {src} is invalid: {detail[:400]}",
                           "fix package.xml (format 3; name, version, description, maintainer with a valid email, license)") from exc
     return {pkg.name: (src / rel, pkg) for rel, pkg in found.items()}
 

@@ -87,6 +87,15 @@ class Lesson(BaseModel):
         return self.folder / self.starter
 
 
+def yaml_error_text(exc: Exception) -> str:
+    """PyYAML's error on one line: ``line L, column C: problem (context)``."""
+    mark = getattr(exc, "problem_mark", None)
+    problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    context = getattr(exc, "context", None)
+    where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
+    return f"{where}{problem}" + (f" ({context})" if context else "")
+
+
 def format_validation_error(path: Path, error: ValidationError) -> str:
     """One line per problem: ``file: field: message``."""
     lines = []
@@ -104,8 +113,10 @@ def load_lesson(path: Path) -> Lesson:
     """
     try:
         data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as exc:
-        raise LessonFormatError(f"{path}: not readable as YAML: {str(exc).splitlines()[0]}",
+    except OSError as exc:
+        raise LessonFormatError(f"{path}: cannot be read: {exc.strerror}", "check the file exists and is readable") from exc
+    except yaml.YAMLError as exc:
+        raise LessonFormatError(f"{path}: not valid YAML: {yaml_error_text(exc)}",
                                 "fix the YAML syntax (indentation, quotes)") from exc
     if not isinstance(data, dict):
         raise LessonFormatError(f"{path}: (top level): expected a mapping of fields, got {type(data).__name__}",

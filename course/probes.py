@@ -136,8 +136,12 @@ class RosSession:
             rclpy.init(context=self.context, domain_id=self.domain_id,
                        signal_handler_options=SignalHandlerOptions.NO)
             self._stack.callback(self._shutdown_context)
-            self.node = rclpy.create_node(GRADER_NODE, context=self.context, enable_rosout=False,
-                                          start_parameter_services=False)
+            from rclpy.parameter import Parameter  # noqa: PLC0415
+
+            # The grader's node needs no type description service (saves ~70 ms per check).
+            self.node = rclpy.create_node(
+                GRADER_NODE, context=self.context, enable_rosout=False, start_parameter_services=False,
+                parameter_overrides=[Parameter("start_type_description_service", value=False)])
             self._executor = MultiThreadedExecutor(num_threads=2, context=self.context)
             self._executor.add_node(self.node)
             self._thread = threading.Thread(target=self._spin, daemon=True, name="ros2course-executor")

@@ -29,8 +29,8 @@ class LessonProgress(BaseModel):
     best_score: float | None = None
     max_score: float | None = None
     last_status: str | None = None
-    attempts: int = 0
-    hints_shown: int = 0
+    attempts: int = Field(default=0, ge=0)
+    hints_shown: int = Field(default=0, ge=0)
     started: bool = False
 
 
@@ -131,13 +131,24 @@ class Workspace:
         atomic_write_text(self.progress_path, progress.model_dump_json(indent=2) + "\n")
 
     def init(self) -> bool:
-        """Create ``src/`` and the progress file; returns False if it already existed."""
-        self.src.mkdir(parents=True, exist_ok=True)
-        if self.initialised:
-            return False
-        self.state_dir.mkdir(parents=True, exist_ok=True)
-        atomic_write_text(self.state_dir / ".gitignore", "backups/\n")
-        self.save_progress(Progress())
+        """Create ``src/`` and the progress file; returns False if it already existed.
+
+        Raises:
+            WorkspaceNotFound: the folder cannot be made (a file is in the way, no permission).
+        """
+        try:
+            self.src.mkdir(parents=True, exist_ok=True)
+            if self.initialised:
+                return False
+            self.state_dir.mkdir(parents=True, exist_ok=True)
+            atomic_write_text(self.state_dir / ".gitignore", "backups/\n")
+            self.save_progress(Progress())
+        except (FileExistsError, NotADirectoryError) as exc:
+            raise WorkspaceNotFound(f"cannot create a workspace at {self.root}: {exc.filename} is a file, not a folder",
+                                    "choose another folder, or move that file away") from exc
+        except PermissionError as exc:
+            raise WorkspaceNotFound(f"cannot create a workspace at {self.root}: permission denied ({exc.filename})",
+                                    "choose a folder you can write to, e.g. under your home folder") from exc
         return True
 
 

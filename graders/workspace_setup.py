@@ -6,6 +6,7 @@ Looks at the folder and asks colcon and bash, as the learner's terminal would.
 from __future__ import annotations
 
 import subprocess
+from pathlib import Path
 
 from course.build import colcon_command, overlay_env
 from course.errors import NotGradable
@@ -22,14 +23,26 @@ CHECKS = [
 ]
 
 
+def _made_by_colcon(folder: Path) -> bool:
+    """True when ``folder`` exists with something colcon put there.
+
+    ros2course itself keeps check logs in ``log/ros2course/``; that alone is
+    not evidence that the learner ran colcon.
+    """
+    return folder.is_dir() and any(entry.name not in ("ros2course", ".ros2course") for entry in folder.iterdir())
+
+
 def grade(s: GradingSession) -> None:
     """Inspect the workspace folder, then ask colcon and bash about it."""
     root = s.workspace_root
     has_src = (root / "src").is_dir()
-    entries = ", ".join(sorted(p.name + ("/" if p.is_dir() else "") for p in root.iterdir())) or "nothing"
+    listing = sorted(p.name + ("/" if p.is_dir() else "") for p in root.iterdir()
+                     if not p.name.startswith(".") and (p.name != "log" or _made_by_colcon(p)))
+    entries = ", ".join(listing) or "nothing"
     s.record("src_folder", has_src, f"{root} holds: {entries}", "a src/ folder for the packages")
 
-    proc = subprocess.run([*colcon_command(s.base_env), "list"], cwd=root, env=s.base_env, capture_output=True,
+    # --log-base /dev/null: 'colcon list' must not create log/ itself (colcon's documented way to disable logs)
+    proc = subprocess.run([*colcon_command(s.base_env), "--log-base", "/dev/null", "list"], cwd=root, env=s.base_env, capture_output=True,
                           text=True, timeout=120, check=False, stdin=subprocess.DEVNULL)
     packages = proc.stdout.strip().splitlines()
     s.record("colcon_reads", proc.returncode == 0,
@@ -37,7 +50,9 @@ def grade(s: GradingSession) -> None:
                                                           else f": {proc.stderr.strip().splitlines()[-1:]}"),
              "'colcon list' exits 0")
 
-    made = {name: (root / name).is_dir() for name in ("build", "install", "log")}
+    made = {name: _made_by_colcon(root / name) for name in ("build", "install")}
+    # colcon keeps one log folder per verb run; a build leaves log/latest_build
+    made["log"] = (root / "log" / "latest_build").exists() or any((root / "log").glob("build_*"))
     setup = (root / "install" / "setup.bash").is_file()
     missing = [name + "/" for name, ok in made.items() if not ok] + ([] if setup else ["install/setup.bash"])
     s.record("built", not missing, "missing: " + ", ".join(missing) if missing else
