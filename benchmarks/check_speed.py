@@ -45,7 +45,6 @@ import uuid
 from pathlib import Path
 from typing import Any
 
-import psutil
 from rich.console import Console
 from rich.table import Table
 
@@ -55,6 +54,7 @@ from course.errors import CourseError
 from course.grading import STATUS_PASSED, LessonResult, grade_lesson, load_grader
 from course.lesson import Lesson, load_catalog
 from course.validate import reference_workspace
+from course.process import kill_marked
 
 LESSON_ID = "print-forever-node"
 #: What "warm overhead above floor" should stay under, seconds.
@@ -197,22 +197,7 @@ def timed_run(argv: list[str], env: dict[str, str], cwd: Path, timeout: float) -
 
 def kill_leftovers(marker: str) -> list[int]:
     """SIGKILL every process (other than this one) whose environment carries this run's marker."""
-    needle = f"{BENCH_MARKER_VAR}={marker}".encode()
-    me = os.getpid()
-    found = []
-    for proc in psutil.process_iter(["pid"]):
-        if proc.pid == me:
-            continue
-        try:
-            with open(f"/proc/{proc.pid}/environ", "rb") as handle:
-                if needle not in handle.read():
-                    continue
-            proc.kill()
-            found.append(proc)
-        except (OSError, psutil.Error):
-            continue
-    psutil.wait_procs(found, timeout=3)
-    return [p.pid for p in found]
+    return kill_marked(marker, BENCH_MARKER_VAR)
 
 
 # --- the measurements ------------------------------------------------------------

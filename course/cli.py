@@ -145,7 +145,7 @@ def next_(workspace: WorkspaceOpt = None) -> None:
         out.print(f"[green]created[/] {path}")
     for path in kept:
         err.print(f"[yellow]kept your file[/] {path} (the starter version was not copied)")
-    out.print(f"When ready: [bold]ros2course check[/]   Stuck: [bold]ros2course hint[/]")
+    out.print("When ready: [bold]ros2course check[/]   Stuck: [bold]ros2course hint[/]")
 
 
 def _lesson_for(lesson_id: str | None, ws: Workspace):

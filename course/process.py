@@ -265,13 +265,13 @@ class LearnerProcess:
         sweep_stale_fastdds_shm()
 
 
-def kill_marked(marker: str) -> list[int]:
-    """SIGKILL every process whose environment carries ``marker``; returns their PIDs.
+def kill_marked(marker: str, var: str = MARKER_VAR) -> list[int]:
+    """SIGKILL every process (but this one) whose environment has ``var=marker``; returns their PIDs.
 
     Catches learner children that escaped the process group (setsid, double fork).
     """
-    needle = f"{MARKER_VAR}={marker}".encode()
-    killed = []
+    needle = f"{var}={marker}".encode()
+    killed: list[psutil.Process] = []
     me = os.getpid()
     for proc in psutil.process_iter(["pid"]):
         if proc.pid == me:
@@ -281,11 +281,11 @@ def kill_marked(marker: str) -> list[int]:
                 if needle not in handle.read():
                     continue
             proc.kill()
-            killed.append(proc.pid)
+            killed.append(proc)
         except (OSError, psutil.Error):
             continue
-    psutil.wait_procs([psutil.Process(pid) for pid in killed if psutil.pid_exists(pid)], timeout=3)
-    return killed
+    psutil.wait_procs(killed, timeout=3)
+    return [proc.pid for proc in killed]
 
 
 SHM_DIR = Path("/dev/shm")
