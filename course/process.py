@@ -144,7 +144,9 @@ class LearnerProcess:
         # SIGKILLed. Both exec into the learner's program (same PID); no preexec_fn, which is
         # unsafe in a process with threads (the executor's).
         wrapped = ["/bin/sh", "-c", "trap '' INT; exec \"$0\" \"$@\"", *argv] if ros_sigint else list(argv)
-        setpriv = shutil.which("setpriv")
+        # The kernel sends the parent-death signal when the *thread* that forked the child
+        # ends (prctl(2)), so it is only safe from the main thread.
+        setpriv = shutil.which("setpriv") if threading.current_thread() is threading.main_thread() else None
         self.argv = [setpriv, "--pdeathsig", "KILL", *wrapped] if setpriv else wrapped
         self.name = name
         self.marker = uuid.uuid4().hex
@@ -284,8 +286,17 @@ def kill_marked(marker: str, var: str = MARKER_VAR) -> list[int]:
             killed.append(proc)
         except (OSError, psutil.Error):
             continue
-    psutil.wait_procs(killed, timeout=3)
+    # Our own children are reaped by their Popen.wait(): waiting here would reap them first
+    # and Popen would report exit code 0 for a killed process.
+    psutil.wait_procs([p for p in killed if _parent_pid(p) != me], timeout=3)
     return [proc.pid for proc in killed]
+
+
+def _parent_pid(proc: psutil.Process) -> int | None:
+    try:
+        return proc.ppid()
+    except psutil.Error:
+        return None
 
 
 SHM_DIR = Path("/dev/shm")
@@ -311,7 +322,7 @@ def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR) -> list[str]:
     orphans += [p for p in shm_dir.glob("sem.fastrtps_*_mutex")
                 if not (shm_dir / f"{p.name[4:-len('_mutex')]}_el").exists()]
     if orphans:
-        used = _shm_files_in_use()
+        used = _shm_files_in_use(shm_dir)
         for path in orphans:
             if str(path) not in used:
                 with contextlib.suppress(FileNotFoundError):
@@ -337,8 +348,9 @@ def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR) -> list[str]:
     return removed
 
 
-def _shm_files_in_use() -> set[str]:
-    """Paths under /dev/shm that some process maps or holds open (as far as we may look)."""
+def _shm_files_in_use(shm_dir: Path = SHM_DIR) -> set[str]:
+    """Paths under ``shm_dir`` that some process maps or holds open (as far as we may look)."""
+    prefix = str(shm_dir).rstrip("/") + "/"
     used: set[str] = set()
     for pid in os.listdir("/proc"):
         if not pid.isdigit():
@@ -346,13 +358,13 @@ def _shm_files_in_use() -> set[str]:
         with contextlib.suppress(OSError):
             with open(f"/proc/{pid}/maps", encoding="utf-8", errors="replace") as maps:
                 for line in maps:
-                    index = line.find("/dev/shm/")
+                    index = line.find(prefix)
                     if index >= 0:
                         used.add(line[index:].strip().removesuffix(" (deleted)"))
         with contextlib.suppress(OSError):
             for fd in os.listdir(f"/proc/{pid}/fd"):
                 with contextlib.suppress(OSError):
                     target = os.readlink(f"/proc/{pid}/fd/{fd}")
-                    if target.startswith("/dev/shm/"):
+                    if target.startswith(prefix):
                         used.add(target)
     return used
