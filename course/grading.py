@@ -205,6 +205,16 @@ class GradingSession:
         """Environment for learner executables: overlay + private domain + localhost discovery."""
         return self.ros.learner_env(self.overlay())
 
+    def interface_type(self, package: str, kind: str, name: str) -> Any:
+        """A generated msg/srv class from the workspace (see :mod:`course.interfaces`).
+
+        Raises:
+            NotGradable: the interface package is not built or does not load.
+        """
+        from course.interfaces import workspace_type  # noqa: PLC0415
+
+        return workspace_type(self.overlay(), package, kind, name)
+
     def find_executable(self, package: str, executable: str) -> tuple[Path | None, str]:
         """Resolve ``package``/``executable`` the way ``ros2 run`` does.
 

@@ -119,3 +119,38 @@ def test_system_ros_is_detected_and_left_alone(monkeypatch, tmp_path):
     env = {"AMENT_PREFIX_PATH": str(prefix), "PATH": "/usr/bin"}
     env_mod.activate(env)
     assert env == {"AMENT_PREFIX_PATH": str(prefix), "PATH": "/usr/bin"}
+
+
+@pytest.mark.ros
+def test_grader_process_uses_the_workspace_interfaces(tmp_path):
+    """The grader imports the learner's generated types in-process and talks to a node with them."""
+    from course.interfaces import workspace_type
+    from course.probes import RosSession, call_service
+    from course.process import LearnerProcess
+
+    root = tmp_path / "ws"
+    shutil.copytree(DATA / "interfaces_ws", root)
+    assert build_packages(root, ["package_with_interfaces"], _env(), tmp_path / "b.log").ok
+    overlay = overlay_env(root, _env())
+    srv = workspace_type(overlay, "package_with_interfaces", "srv", "WhatIsThePoint")
+    quote = workspace_type(overlay, "package_with_interfaces", "msg", "AmazingQuote")
+    server = tmp_path / "server.py"
+    server.write_text(
+        "import rclpy\n"
+        "from package_with_interfaces.srv import WhatIsThePoint\n"
+        "def answer(request, response):\n"
+        "    response.point.x = float(request.quote.id)\n"
+        "    return response\n"
+        "rclpy.init()\n"
+        "node = rclpy.create_node('point_server')\n"
+        "node.create_service(WhatIsThePoint, '/what_is_the_point', answer)\n"
+        "rclpy.spin(node)\n")
+    with RosSession() as session:
+        proc = LearnerProcess([sys.executable, str(server)], session.learner_env(overlay), tmp_path, "server",
+                              ros_sigint=True).start()
+        try:
+            request = srv.Request(quote=quote(id=42, quote="life", philosopher_name="me"))
+            response = call_service(session, srv, "/what_is_the_point", request, timeout=20)
+            assert response.point.x == 42.0
+        finally:
+            proc.stop(sigint_timeout=3)
