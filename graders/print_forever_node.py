@@ -18,6 +18,8 @@ NODE = "print_forever"
 PERIOD = 0.5  # seconds, seed ch. 13.3
 TOLERANCE = 0.15  # on the mean period (shared/LESSONS.md)
 SAMPLES = 6  # records -> 5 intervals, the minimum LESSONS.md asks for
+#: Seconds of observation the contract needs: the first record 0.5 s after start, then 5 intervals.
+WINDOW = SAMPLES * PERIOD
 LOG = re.compile(r"^Printed (-?\d+) times\.$")
 INFO = 20  # rcl_interfaces/msg/Log.INFO
 

@@ -1,0 +1,90 @@
+"""Warm ``check`` time of every lesson beside its floor (a script, not a test).
+
+For each lesson: build its reference solution in a temporary workspace, grade
+it once cold and ``--runs`` times warm (in process, as ``check`` does), and
+print the warm median beside the lesson's observation window (``WINDOW`` in
+its grader module, seconds: the time its contract needs to watch the nodes)
+and the goal of issue 3: window + 1.5 s.
+
+    python benchmarks/all_lessons.py [--runs 3] [--json] [LESSON ...]
+
+Every graded run must get full marks; otherwise the script exits 1.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from rich.console import Console
+from rich.table import Table
+
+from course import env as env_mod
+from course.grading import STATUS_PASSED, grade_lesson, load_grader
+from course.lesson import load_catalog
+from course.validate import reference_workspace, run_commands
+
+#: issue 3: "a warm check takes at most its observation window plus 1.5 s"
+ALLOWANCE = 1.5
+
+
+def bench_lesson(lesson, runs: int) -> dict:
+    """Cold and warm wall times (seconds) of grading the lesson's reference solution."""
+    root = Path(tempfile.mkdtemp(prefix=f"ros2course-bench-{lesson.id}-"))
+    try:
+        reference_workspace(lesson, root)
+        run_commands(root, lesson.reference.commands)
+        times, ok = [], True
+        for _ in range(runs + 1):
+            begin = time.monotonic()
+            result = grade_lesson(lesson, root)
+            times.append(time.monotonic() - begin)
+            ok = ok and result.status == STATUS_PASSED
+        window = getattr(load_grader(lesson.grader), "WINDOW", None)
+        warm = statistics.median(times[1:]) if runs else times[0]
+        return {"lesson": lesson.id, "cold": times[0], "warm_median": warm,
+                "warm_max": max(times[1:]) if runs else times[0], "window": window,
+                "goal": None if window is None else window + ALLOWANCE,
+                "within_goal": None if window is None else warm <= window + ALLOWANCE, "full_marks": ok}
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("lessons", nargs="*", help="lesson ids (default: all)")
+    parser.add_argument("--runs", type=int, default=3, help="warm runs per lesson (default 3)")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    args = parser.parse_args(argv)
+    env_mod.activate()
+    catalog = load_catalog()
+    lessons = [catalog.get(i) for i in args.lessons] if args.lessons else catalog.lessons
+    err = Console(file=sys.stderr)
+    rows = []
+    for lesson in lessons:
+        err.print(f"benchmarking {lesson.id} ...")
+        rows.append(bench_lesson(lesson, args.runs))
+    if args.json:
+        print(json.dumps(rows, indent=2))
+    else:
+        table = Table(title=f"warm check vs observation window + {ALLOWANCE} s (seconds, {args.runs} warm runs)",
+                      title_justify="left")
+        for column in ("lesson", "cold", "warm median", "warm max", "window", "goal", "ok"):
+            table.add_column(column, justify="left" if column == "lesson" else "right")
+        for r in rows:
+            fmt = lambda v: "-" if v is None else f"{v:.2f}"  # noqa: E731
+            verdict = "-" if r["within_goal"] is None else ("yes" if r["within_goal"] else "NO")
+            table.add_row(r["lesson"], fmt(r["cold"]), fmt(r["warm_median"]), fmt(r["warm_max"]),
+                          fmt(r["window"]), fmt(r["goal"]), verdict if r["full_marks"] else "NOT FULL MARKS")
+        Console().print(table)
+    return 0 if all(r["full_marks"] for r in rows) else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
