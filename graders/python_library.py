@@ -1,0 +1,179 @@
+"""Grader for ``python-library`` (seed ch. 14; contract in shared/LESSONS.md).
+
+Black-box on the *installed* library: after ``colcon build``, a separate Python
+process with the workspace sourced (``s.overlay()``), started from an empty
+folder outside the source tree, imports
+``python_package_with_a_library.sample_python_library`` and calls its function
+and class with values the grader picks (negative and float ones included). The
+files must be under ``install/<pkg>/lib/python3.*/site-packages/<pkg>/sample_python_library/``:
+a library that only imports from ``src/`` would not work for other packages.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+
+from course.grading import Check, GradingSession
+from graders._packaging import (
+    install_prefix,
+    relative,
+    run_installed_python,
+    site_packages,
+)
+
+PACKAGE = "python_package_with_a_library"
+SUBPACKAGE = "sample_python_library"
+MODULE = f"{PACKAGE}.{SUBPACKAGE}"
+FUNCTION = "sample_function_for_square_of_sum"
+CLASS = "SampleClass"
+#: (a, b) pairs for the function: ints, floats, negatives, zero sum, a large value (seed ch. 14.3: (a+b)**2)
+CASES = [(1, 2), (0.5, 0.25), (-3, 1), (-1.5, -2.5), (2, -2), (0.1, 0.2), (1000, 1), (1.7, 0)]
+#: names for SampleClass(name): the second one like ch. 15's random ten letters, passed as name=...
+NAMES = ["Alice", "qyOXLBEtzZ"]
+REL_TOL = 1e-9  # the seed's a**2 + 2*a*b + b**2 differs from (a+b)**2 by float rounding only
+
+CHECKS = [
+    Check("build", "The package builds with colcon", 1),
+    Check("installed", "colcon installs the sub-package sample_python_library", 2,
+          "list every Python package in setup.py: packages=find_packages(exclude=['test']) "
+          "(packages=[package_name] installs only the top level); sample_python_library needs its own __init__.py"),
+    Check("importable", "The installed library imports from another folder with the workspace sourced", 2,
+          "from python_package_with_a_library.sample_python_library import SampleClass, "
+          "sample_function_for_square_of_sum must work after 'source install/setup.bash', from any folder"),
+    Check("square_of_sum", "sample_function_for_square_of_sum(a, b) returns (a + b)**2", 2,
+          "export the function in sample_python_library/__init__.py and return (a + b) ** 2 "
+          "(that is a**2 + 2*a*b + b**2)"),
+    Check("sample_class", "SampleClass(name).get_name() returns that name", 2,
+          "store the name in __init__ (self._name = name) and return it from get_name(); "
+          "export SampleClass in sample_python_library/__init__.py"),
+]
+
+_PROBE = """
+import importlib, json, sys
+cases, names = json.loads(@CASES@), json.loads(@NAMES@)
+out = {}
+
+
+def text(exc):
+    return f"{type(exc).__name__}: {exc}"
+
+
+def dump():
+    with open(sys.argv[1], "w") as f:
+        json.dump(out, f)
+
+
+try:
+    mod = importlib.import_module(@MODULE@)
+    out["file"] = str(getattr(mod, "__file__", None) or list(getattr(mod, "__path__", [])))
+except BaseException as exc:
+    out["import_error"] = text(exc)
+    dump()
+    sys.exit(0)
+out["names"] = sorted(n for n in dir(mod) if not n.startswith("__"))
+f = getattr(mod, @FUNCTION@, None)
+if f is not None:
+    out["calls"] = []
+    for a, b in cases:
+        try:
+            r = f(a, b)
+            ok = isinstance(r, (int, float)) and not isinstance(r, bool)
+            out["calls"].append({"a": a, "b": b, "value": float(r) if ok else None, "repr": repr(r)[:80]})
+        except BaseException as exc:
+            out["calls"].append({"a": a, "b": b, "error": text(exc)})
+cls = getattr(mod, @CLASS@, None)
+if cls is not None:
+    got = []
+    try:
+        first = cls(names[0])
+        second = cls(name=names[1])
+        got = [first.get_name(), second.get_name()]
+        out["names_returned"] = [repr(g)[:80] for g in got]
+        out["names_ok"] = got == names
+    except BaseException as exc:
+        out["class_error"] = text(exc)
+dump()
+"""
+for _key, _value in {"@CASES@": json.dumps(CASES), "@NAMES@": json.dumps(NAMES), "@MODULE@": MODULE,
+                     "@FUNCTION@": FUNCTION, "@CLASS@": CLASS}.items():
+    _PROBE = _PROBE.replace(_key, repr(_value))
+
+
+def _record_installed(s: GradingSession) -> bool:
+    """``installed``: the sub-package's ``__init__.py`` is in the install tree's site-packages."""
+    prefix = install_prefix(s, PACKAGE)
+    roots = site_packages(prefix)
+    wanted = [root / PACKAGE / SUBPACKAGE / "__init__.py" for root in roots]
+    found = [p for p in wanted if p.is_file()]
+    expected = f"install/{PACKAGE}/lib/python3.*/site-packages/{PACKAGE}/{SUBPACKAGE}/__init__.py"
+    if found:
+        files = sorted(p.name for p in found[0].parent.iterdir() if p.suffix == ".py")
+        return s.record("installed", True, f"{relative(s, found[0].parent)} holds {', '.join(files)}", expected)
+    if not roots:
+        observed = f"no {relative(s, prefix)}/lib/python3.*/site-packages folder (was the package built?)"
+    else:
+        top = roots[0] / PACKAGE
+        listing = sorted(p.name + ("/" if p.is_dir() else "") for p in top.iterdir()) if top.is_dir() else []
+        observed = (f"{relative(s, top)} holds {', '.join(listing) or 'nothing'}: no {SUBPACKAGE}/"
+                    if top.is_dir() else f"no {relative(s, top)}")
+    return s.record("installed", False, observed, expected)
+
+
+def _record_function(s: GradingSession, result: dict) -> None:
+    expected = "(a + b)**2 for " + ", ".join(f"({a}, {b})" for a, b in CASES)
+    calls = result.get("calls")
+    if calls is None:
+        s.record("square_of_sum", False, f"{MODULE} has no {FUNCTION}; it exports: "
+                 f"{', '.join(result.get('names', [])) or 'nothing'}", expected)
+        return
+    wrong = []
+    for call in calls:
+        a, b = call["a"], call["b"]
+        want = (a + b) ** 2
+        if "error" in call:
+            wrong.append(f"({a}, {b}) raised {call['error']}")
+        elif call["value"] is None:
+            wrong.append(f"({a}, {b}) returned {call['repr']}, not a number")
+        elif not math.isclose(call["value"], want, rel_tol=REL_TOL, abs_tol=1e-12):
+            wrong.append(f"({a}, {b}) returned {call['repr']} instead of {want!r}")
+    right = len(calls) - len(wrong)
+    observed = (f"correct for all {len(calls)} pairs" if not wrong
+                else f"{right}/{len(calls)} right; " + "; ".join(wrong[:3]) + (" ..." if len(wrong) > 3 else ""))
+    s.record("square_of_sum", not wrong, observed, expected)
+
+
+def _record_class(s: GradingSession, result: dict) -> None:
+    expected = (f"{CLASS}({NAMES[0]!r}).get_name() == {NAMES[0]!r} and "
+                f"{CLASS}(name={NAMES[1]!r}).get_name() == {NAMES[1]!r}, each instance keeping its own name")
+    if "names_returned" not in result and "class_error" not in result:
+        s.record("sample_class", False, f"{MODULE} has no {CLASS}; it exports: "
+                 f"{', '.join(result.get('names', [])) or 'nothing'}", expected)
+    elif "class_error" in result:
+        s.record("sample_class", False, f"creating or asking the instances raised {result['class_error']}", expected)
+    else:
+        s.record("sample_class", bool(result.get("names_ok")),
+                 f"get_name() returned {' and '.join(result['names_returned'])}", expected)
+
+
+def grade(s: GradingSession) -> None:
+    """Check the install tree, then import and exercise the installed library in a subprocess."""
+    installed = _record_installed(s)
+    result, problem = run_installed_python(s, _PROBE)
+    expected = f"from {MODULE} import {CLASS}, {FUNCTION} works from outside src/, using the installed copy"
+    if problem:
+        s.record("importable", False, problem, expected)
+        s.skip_remaining("the library could not be imported")
+        return
+    if "import_error" in result:
+        s.record("importable", False, f"import {MODULE} with the workspace sourced: {result['import_error']}"
+                 + ("" if installed else " (it is not installed, see above)"), expected)
+        s.skip_remaining("the library could not be imported")
+        return
+    where = result.get("file", "")
+    inside = str(s.workspace_root / "install") in where
+    s.record("importable", inside, f"import {MODULE} loads {where.replace(str(s.workspace_root) + '/', '')}", expected,
+             None if inside else "that is not the copy colcon installed: rebuild and source install/setup.bash")
+    _record_function(s, result)
+    _record_class(s, result)
+

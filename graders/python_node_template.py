@@ -1,0 +1,74 @@
+"""Grader for ``python-node-template`` (seed ch. 8-11; contract in shared/LESSONS.md).
+
+Runs ``sample_python_node`` the way ``ros2 run`` does (found through the ament
+index, ``lib/<package>/<executable>``, with the workspace sourced) and judges
+what it prints and how it exits. The template node uses no ROS API, so no ROS
+graph is started.
+"""
+
+from __future__ import annotations
+
+from course.grading import Check, GradingSession
+from course.probes import wait_until
+from course.process import LearnerProcess
+from graders._packaging import require_ros2_run_executable
+
+PACKAGE = "python_package_with_a_node"
+EXECUTABLE = "sample_python_node"
+GREETING = "Hi from python_package_with_a_node."  # seed ch. 10 (template output)
+EXIT_TIMEOUT = 10.0  # seconds: the program prints one line; a slow start of the interpreter fits easily
+
+CHECKS = [
+    Check("build", "The package builds with colcon", 1),
+    Check("executable", "ros2 run finds sample_python_node", 2,
+          "register 'sample_python_node = python_package_with_a_node.sample_python_node:main' in console_scripts "
+          "(setup.py), keep setup.cfg's install_scripts=$base/lib/python_package_with_a_node, then colcon build"),
+    Check("greeting", "It prints 'Hi from python_package_with_a_node.'", 3,
+          "main() prints exactly: Hi from python_package_with_a_node."),
+    Check("exit_code", "It ends by itself with exit code 0 and no traceback", 2,
+          "main() should print and return; no loop, no sys.exit() with a non-zero code"),
+]
+
+
+def _lines(text: str, limit: int = 3) -> str:
+    lines = [line.strip() for line in text.splitlines() if line.strip()]
+    shown = " | ".join(repr(line) for line in lines[:limit])
+    return shown + (f" (+{len(lines) - limit} more lines)" if len(lines) > limit else "") if lines else "nothing"
+
+
+def grade(s: GradingSession) -> None:
+    """Run the executable once, wait for it to end, judge its stdout and exit code."""
+    path = require_ros2_run_executable(s, "executable", PACKAGE, EXECUTABLE)
+    if path is None:
+        return
+    proc = LearnerProcess([str(path)], s.overlay(), s.log_dir, EXECUTABLE, cwd=s.workspace_root,
+                          deadline=EXIT_TIMEOUT + 20.0)
+    try:
+        proc.start()
+        with s.phase("run"):
+            wait_until(lambda: proc.poll() is not None, timeout=EXIT_TIMEOUT, interval=0.02)
+        ended_alone = proc.poll() is not None
+        with s.phase("stop"):
+            report = proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
+    finally:
+        proc.stop(sigint_timeout=1.0, sigterm_timeout=1.0)
+    out = proc.stdout()
+    printed = [line.strip() for line in out.splitlines()]
+    ok = GREETING in printed
+    observed = f"stdout: {_lines(out)}"
+    if not ok and GREETING.lower() in [line.lower().rstrip(".") + "." for line in printed]:
+        observed += " (close: check capitals and the final period)"
+    if not ok and proc.stderr().strip() and not report.traceback:
+        observed += f"; stderr: {_lines(proc.stderr())}"
+    if not ok and report.traceback:
+        observed += f"; it crashed: {report.traceback.strip().splitlines()[-1]}"
+    s.record("greeting", ok, observed, f"a line {GREETING!r} on stdout")
+    expected = f"exit code 0 within {EXIT_TIMEOUT:.0f} s, no traceback"
+    if not ended_alone:
+        s.record("exit_code", False, f"still running after {EXIT_TIMEOUT:.0f} s (stopped with {report.signal_used})",
+                 expected, "the template node prints once and returns from main(); it must not wait or loop")
+    elif report.traceback:
+        s.record("exit_code", False, f"exit code {report.returncode} with a traceback: "
+                 f"{report.traceback.strip().splitlines()[-1]}", expected)
+    else:
+        s.record("exit_code", report.returncode == 0, f"exit code {report.returncode}", expected)
