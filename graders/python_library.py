@@ -33,6 +33,9 @@ CASES = [(1, 2), (0.5, 0.25), (-3, 1), (-1.5, -2.5), (2, -2), (0.1, 0.2), (1000,
 NAMES = ["Alice", "qyOXLBEtzZ"]
 REL_TOL = 1e-9  # the seed's a**2 + 2*a*b + b**2 differs from (a+b)**2 by float rounding only
 
+#: No node is observed: the library is imported and called in a subprocess.
+WINDOW = 0.0
+
 CHECKS = [
     Check("build", "The package builds with colcon", 1),
     Check("installed", "colcon installs the sub-package sample_python_library", 2,

@@ -18,6 +18,9 @@ EXECUTABLE = "sample_python_node"
 GREETING = "Hi from python_package_with_a_node."  # seed ch. 10 (template output)
 EXIT_TIMEOUT = 10.0  # seconds: the program prints one line; a slow start of the interpreter fits easily
 
+#: The template executable prints once and exits: nothing to watch over time.
+WINDOW = 0.0
+
 CHECKS = [
     Check("build", "The package builds with colcon", 1),
     Check("executable", "ros2 run finds sample_python_node", 2,

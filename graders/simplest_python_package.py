@@ -26,6 +26,9 @@ from graders._packaging import (
 PACKAGE = "the_simplest_python_package"
 INDEX = "share/ament_index/resource_index/packages"
 
+#: No node is observed: the checks read the build and the installed files.
+WINDOW = 0.0
+
 CHECKS = [
     Check("build", "The package builds with colcon", 1),
     Check("package_xml", "package.xml is format 3 and names the package the_simplest_python_package", 2,

@@ -36,6 +36,9 @@ INFO = 20  # rcl_interfaces/msg/Log.INFO
 SQUARE_FORMAT = "sample_function_for_square_of_sum(a,b) returned c."
 NAME_FORMAT = "sample_class_with_random_name.get_name() returned NAME."
 
+#: Seconds of observation the contract needs: first record after one period, then 5 intervals.
+WINDOW = SAMPLES * PERIOD
+
 CHECKS = [
     Check("build", "The package and the library build with colcon", 1),
     Check("depends_library", "package.xml depends on python_package_with_a_library", 1,
