@@ -29,6 +29,21 @@ CHECK_KEYS = {"id", "name", "points", "max_points", "passed", "observed", "expec
 
 # --- helpers -----------------------------------------------------------------
 
+def next_until(ws: Path, cli, lesson_id: str) -> None:
+    """Run ``next`` until ``lesson_id`` is the current lesson (course order)."""
+    for _ in range(len(CATALOG.lessons)):
+        proc = cli("next", cwd=ws)
+        assert proc.returncode == 0, proc.stderr
+        if progress_of(ws)["current"] == lesson_id:
+            return
+    raise AssertionError(f"'next' never reached {lesson_id}")
+
+
+def first_lesson_shipping(rel: str):
+    """The first lesson (course order) whose starter has the workspace-relative file ``rel``."""
+    return next(lesson for lesson in CATALOG.lessons if Path(rel) in starter_files(lesson))
+
+
 def progress_of(root: Path) -> dict:
     return json.loads((root / ".ros2course" / "progress.json").read_text(encoding="utf-8"))
 
@@ -200,11 +215,16 @@ def test_next_keeps_the_learners_files(ws, cli):
     assert "kept your file build_and_source.sh" in proc.stderr
     assert "created build_and_source.sh" not in proc.stdout
 
+    target = first_lesson_shipping(f"{PKG}/setup.py")
+    before = CATALOG.lessons[CATALOG.ids().index(target.id) - 1]
+    if before.id != FIRST.id:
+        next_until(ws, cli, before.id)
     setup = ws / PKG / "setup.py"
     setup.parent.mkdir(parents=True)
     mine_setup = b"# my setup.py\nfrom setuptools import setup\nsetup()\n"
     setup.write_bytes(mine_setup)
     proc = cli("next", cwd=ws)
+    assert progress_of(ws)["current"] == target.id
     assert proc.returncode == 0, proc.stderr
     assert setup.read_bytes() == mine_setup
     assert f"kept your file {PKG}/setup.py" in proc.stderr
@@ -258,13 +278,16 @@ def test_hints_in_order_remembered_and_stay_on_the_last(ws, cli):
 # --- reset ---------------------------------------------------------------------
 
 def test_reset_backs_up_and_restores_the_starter(ws, cli):
-    assert cli("next", cwd=ws).returncode == 0
-    assert cli("next", cwd=ws).returncode == 0
+    next_until(ws, cli, PRINT_FOREVER)
     lesson = CATALOG.get(PRINT_FOREVER)
     node = ws / PKG / "python_package_with_a_node" / "print_forever_node.py"
     mine = b"# my attempt\nprint('hello')\n"
     node.write_bytes(mine)
     untouched = ws / PKG / "setup.py"
+    # files that differ from this lesson's starter (an earlier lesson may have shipped its own version)
+    differing = sorted(rel for rel in starter_files(lesson)
+                       if (ws / rel).is_file() and (ws / rel).read_bytes() != (lesson.starter_dir / rel).read_bytes())
+    assert node.relative_to(ws) in differing
 
     proc = cli("reset", PRINT_FOREVER, cwd=ws)
     assert proc.returncode == 0, proc.stderr
@@ -278,7 +301,7 @@ def test_reset_backs_up_and_restores_the_starter(ws, cli):
     backup = stamps[0]
     assert (backup / rel).read_bytes() == mine
     backed_up = sorted(p.relative_to(backup) for p in backup.rglob("*") if p.is_file())
-    assert backed_up == [rel], "only the modified file is backed up"
+    assert backed_up == differing, "exactly the files that differed from the starter are backed up"
     assert f"restored {rel}" in proc.stdout
     assert "".join(f"Your previous files are in {backup}".split()) in "".join(proc.stdout.split())
 
@@ -314,8 +337,7 @@ def test_check_json_on_the_reference_solution(solution_workspace, cli):
 
 @pytest.mark.ros
 def test_check_on_the_starter_fails_and_explains(ws, cli):
-    assert cli("next", cwd=ws).returncode == 0
-    assert cli("next", cwd=ws).returncode == 0
+    next_until(ws, cli, PRINT_FOREVER)
     proc = cli("check", cwd=ws)  # the current lesson
     assert proc.returncode == 1, (proc.stdout, proc.stderr)
     assert "Traceback" not in proc.stdout + proc.stderr
