@@ -1,0 +1,429 @@
+"""Start the nodes of a learner's Python launch file, with or without ``launch_ros``.
+
+Two ways, chosen by whether ``launch`` and ``launch_ros`` import
+(``course.env.probe_requirement("launch")``):
+
+* **run with launch_ros** (a system ROS 2 Jazzy is sourced): the launch file is
+  run for real in a subprocess, the way ``ros2 launch`` runs it (ros2launch's
+  ``launch_a_launch_file``: a ``LaunchService`` including the file through
+  ``AnyLaunchDescriptionSource``), and stopped with SIGINT like Ctrl+C.
+* **read statically** (the PyPI wheels have no ``launch``/``launch_ros``): the
+  file is parsed with :mod:`ast` and never executed. The ``Node(...)`` calls
+  (also ``launch_ros.actions.Node(...)``) inside ``generate_launch_description``
+  are collected with their *literal* keyword arguments (package, executable,
+  name, namespace, parameters given as lists of dicts of literals or literal
+  parameter-file paths, remappings, arguments, ros_arguments, output...).
+  Anything that is not a literal (a variable, a substitution, a function call)
+  is reported as unsupported, never guessed. Each supported node is then
+  started exactly as launch_ros starts it: the executable found like
+  ``ros2 run`` finds it, then ``--ros-args -r __node:=NAME -r __ns:=NS
+  --params-file TMP.yaml -r FROM:=TO`` with one parameters file per dict,
+  written with ``yaml.dump({FQN: {"ros__parameters": {...}}},
+  default_flow_style=False)`` (shared/ROS_ENV.md, "launch_ros Node(...)";
+  launch_ros/actions/node.py).
+
+This is not a launch system of its own: only the documented command line of
+literal ``Node`` actions is reproduced, so a launch file that needs more than
+that says so plainly instead of being graded on a guess.
+"""
+
+from __future__ import annotations
+
+import ast
+import dataclasses
+import sys
+from pathlib import Path
+from typing import Any
+
+MODE_LAUNCH_ROS = "run with launch_ros"
+MODE_STATIC = ("launch file read statically (launch_ros not installed) "
+               "and executables started as launch_ros would")
+
+#: Keyword arguments of launch_ros ``Node`` that change how the process is started and
+#: that the static reader reproduces.
+_STARTING_KWARGS = ("package", "executable", "name", "namespace", "parameters", "remappings",
+                    "arguments", "ros_arguments")
+#: Keyword arguments that only change how launch shows or supervises the process; accepted and ignored.
+_IGNORED_KWARGS = ("output", "emulate_tty", "exec_name", "respawn", "respawn_delay", "sigterm_timeout",
+                   "sigkill_timeout", "log_cmd", "output_format")
+
+#: What the subprocess runs in launch_ros mode: ros2launch's launch_a_launch_file, minus the CLI.
+_LAUNCH_SCRIPT = """\
+import sys
+import launch
+from launch.actions import IncludeLaunchDescription
+from launch.launch_description_sources import AnyLaunchDescriptionSource
+
+service = launch.LaunchService(argv=[], noninteractive=True)
+service.include_launch_description(launch.LaunchDescription([
+    IncludeLaunchDescription(AnyLaunchDescriptionSource(sys.argv[1])),
+]))
+sys.exit(service.run())
+"""
+
+
+@dataclasses.dataclass
+class NodeAction:
+    """One ``Node(...)`` call found in a launch file, with its literal arguments.
+
+    Attributes:
+        line: line number of the call in the launch file.
+        package, executable, name, namespace: the literal strings (None when not given).
+        parameters: the ``parameters=[...]`` elements in order: dicts (nested dicts
+            flattened to dotted names, as launch_ros does) or parameter-file paths (str).
+        remappings: ``(from, to)`` pairs.
+        arguments: ``arguments=[...]`` (before ``--ros-args``).
+        ros_arguments: ``ros_arguments=[...]`` (after their own ``--ros-args``).
+        unsupported: one sentence per argument that is not a literal of the right shape.
+    """
+
+    line: int
+    package: str | None = None
+    executable: str | None = None
+    name: str | None = None
+    namespace: str | None = None
+    parameters: list[dict[str, Any] | str] = dataclasses.field(default_factory=list)
+    remappings: list[tuple[str, str]] = dataclasses.field(default_factory=list)
+    arguments: list[str] = dataclasses.field(default_factory=list)
+    ros_arguments: list[str] = dataclasses.field(default_factory=list)
+    unsupported: list[str] = dataclasses.field(default_factory=list)
+
+    @property
+    def supported(self) -> bool:
+        """True when every argument was literal and package/executable are known."""
+        return not self.unsupported and bool(self.package) and bool(self.executable)
+
+    def fully_qualified_name(self) -> str | None:
+        """``/ns/name`` (``/name`` without namespace), or None when the launch file gives no name."""
+        if not self.name:
+            return None
+        namespace = (self.namespace or "").strip("/")
+        return f"/{namespace}/{self.name}" if namespace else f"/{self.name}"
+
+    def describe(self) -> str:
+        """``Node(package=..., executable=..., name=...)`` with the arguments that were given."""
+        parts = [f"{key}={getattr(self, key)!r}" for key in ("package", "executable", "name", "namespace")
+                 if getattr(self, key) is not None]
+        return f"Node({', '.join(parts)}) at line {self.line}"
+
+    def parameter_files(self) -> list[dict[str, Any] | str]:
+        """What each ``parameters`` element becomes on the command line.
+
+        A dict becomes the content of a temporary parameters file keyed by the
+        node's fully qualified name (``/**`` when the launch file gives no
+        name); a string is passed as it is, as a file path.
+        """
+        key = self.fully_qualified_name() or "/**"
+        return [{key: {"ros__parameters": item}} if isinstance(item, dict) else item for item in self.parameters]
+
+    def ros_args(self, param_paths: list[str]) -> list[str]:
+        """The arguments launch_ros passes after the executable (``param_paths``: one per parameters element)."""
+        args = list(self.arguments)
+        if self.ros_arguments:
+            args += ["--ros-args", *self.ros_arguments]
+        args.append("--ros-args")
+        if self.name:
+            args += ["-r", f"__node:={self.name}"]
+        if self.namespace:
+            args += ["-r", f"__ns:={'/' + self.namespace.lstrip('/')}"]
+        for path in param_paths:
+            args += ["--params-file", path]
+        for source, target in self.remappings:
+            args += ["-r", f"{source}:={target}"]
+        return args
+
+
+@dataclasses.dataclass
+class StaticLaunch:
+    """What :func:`read_launch_file` found.
+
+    Attributes:
+        path: the launch file read.
+        nodes: every ``Node(...)`` call inside ``generate_launch_description``, in source order.
+        problems: reasons the file cannot be launched at all (syntax error, no
+            ``generate_launch_description``, ``Node`` not imported from ``launch_ros.actions``).
+        other_calls: names of other calls in ``generate_launch_description`` that
+            the static reader does not run (e.g. ``ExecuteProcess``), for the report.
+    """
+
+    path: Path
+    nodes: list[NodeAction] = dataclasses.field(default_factory=list)
+    problems: list[str] = dataclasses.field(default_factory=list)
+    other_calls: list[str] = dataclasses.field(default_factory=list)
+
+
+def _dotted(node: ast.AST) -> str:
+    """``a.b.c`` for a Name/Attribute chain, '' otherwise."""
+    parts = []
+    while isinstance(node, ast.Attribute):
+        parts.append(node.attr)
+        node = node.value
+    if isinstance(node, ast.Name):
+        parts.append(node.id)
+        return ".".join(reversed(parts))
+    return ""
+
+
+def _node_aliases(tree: ast.Module) -> tuple[set[str], set[str]]:
+    """Names bound to ``launch_ros.actions.Node`` and names bound to the modules holding it.
+
+    Returns:
+        ``(node_names, module_prefixes)``: e.g. ``{"Node"}`` for ``from launch_ros.actions import Node``,
+        and ``{"launch_ros.actions"}`` for ``import launch_ros.actions`` so that
+        ``launch_ros.actions.Node`` is recognised.
+    """
+    names: set[str] = set()
+    prefixes: set[str] = set()
+    for stmt in ast.walk(tree):
+        if isinstance(stmt, ast.ImportFrom) and stmt.module in ("launch_ros.actions", "launch_ros.actions.node"):
+            names |= {alias.asname or alias.name for alias in stmt.names if alias.name == "Node"}
+        elif isinstance(stmt, ast.ImportFrom) and stmt.module == "launch_ros":
+            prefixes |= {f"{alias.asname or alias.name}" for alias in stmt.names if alias.name == "actions"}
+        elif isinstance(stmt, ast.Import):
+            for alias in stmt.names:
+                if alias.name in ("launch_ros", "launch_ros.actions"):
+                    prefixes.add("launch_ros.actions" if alias.asname is None else f"{alias.asname}"
+                                  + (".actions" if alias.name == "launch_ros" else ""))
+    return names, prefixes
+
+
+def _literal(value: ast.AST) -> tuple[bool, Any]:
+    """``(True, value)`` when ``value`` is a Python literal (implicitly concatenated strings included)."""
+    try:
+        return True, ast.literal_eval(value)
+    except (ValueError, TypeError, SyntaxError, MemoryError, RecursionError):
+        return False, None
+
+
+def _flatten(params: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested parameter dicts to dotted names (launch_ros ``normalize_parameters``)."""
+    flat: dict[str, Any] = {}
+    for key, value in params.items():
+        name = f"{prefix}{key}"
+        if isinstance(value, dict):
+            flat.update(_flatten(value, f"{name}."))
+        else:
+            flat[name] = value
+    return flat
+
+
+def _is_param_value(value: Any) -> bool:
+    """A value a ROS parameter can hold: bool, int, float, str or a list of one of those."""
+    if isinstance(value, (bool, int, float, str)):
+        return True
+    return isinstance(value, (list, tuple)) and all(isinstance(v, (bool, int, float, str)) for v in value)
+
+
+def _source(path_text: str, node: ast.AST) -> str:
+    """The source text of ``node`` (shortened), for messages."""
+    text = ast.get_source_segment(path_text, node) or ast.dump(node)
+    text = " ".join(text.split())
+    return text if len(text) <= 60 else text[:57] + "..."
+
+
+def _read_node_call(call: ast.Call, text: str) -> NodeAction:
+    action = NodeAction(line=call.lineno)
+    if call.args:
+        action.unsupported.append(f"line {call.lineno}: positional arguments to Node() are not supported; "
+                                  "use keywords (package=..., executable=...)")
+    for keyword in call.keywords:
+        key = keyword.arg
+        where = f"{key}= (line {keyword.value.lineno})"
+        if key is None:
+            action.unsupported.append(f"line {call.lineno}: **{_source(text, keyword.value)} is not a literal")
+            continue
+        if key in _IGNORED_KWARGS:
+            continue
+        if key not in _STARTING_KWARGS:
+            action.unsupported.append(f"{where}: the argument {key} is not supported by the static reader")
+            continue
+        ok, value = _literal(keyword.value)
+        if not ok:
+            action.unsupported.append(f"{where}: {_source(text, keyword.value)} is not a literal value")
+            continue
+        if key in ("package", "executable", "name", "namespace"):
+            if not isinstance(value, str) or not value:
+                action.unsupported.append(f"{where}: expected a non-empty string, got {value!r}")
+            else:
+                setattr(action, key, value)
+        elif key == "parameters":
+            if not isinstance(value, (list, tuple)):
+                action.unsupported.append(f"{where}: expected a list of dicts or file paths, got {value!r}")
+                continue
+            for item in value:
+                if isinstance(item, dict) and all(isinstance(k, str) for k in item):
+                    flat = _flatten(item)
+                    bad = [k for k, v in flat.items() if not _is_param_value(v)]
+                    if bad:
+                        action.unsupported.append(f"{where}: the value of {bad[0]!r} is not a parameter value "
+                                                  "(bool, int, float, str or a list of them)")
+                    else:
+                        action.parameters.append({k: list(v) if isinstance(v, tuple) else v
+                                                  for k, v in flat.items()})
+                elif isinstance(item, str):
+                    action.parameters.append(item)
+                else:
+                    action.unsupported.append(f"{where}: {item!r} is neither a dict of parameters nor a file path")
+        elif key == "remappings":
+            pairs = value if isinstance(value, (list, tuple)) else None
+            if pairs is None or not all(isinstance(p, (list, tuple)) and len(p) == 2
+                                        and all(isinstance(x, str) for x in p) for p in pairs):
+                action.unsupported.append(f"{where}: expected a list of (from, to) string pairs, got {value!r}")
+            else:
+                action.remappings = [(a, b) for a, b in pairs]
+        elif key in ("arguments", "ros_arguments"):
+            if not isinstance(value, (list, tuple)) or not all(isinstance(x, str) for x in value):
+                action.unsupported.append(f"{where}: expected a list of strings, got {value!r}")
+            else:
+                setattr(action, key, list(value))
+    for key in ("package", "executable"):
+        if getattr(action, key) is None and not any(u.startswith(f"{key}=") for u in action.unsupported):
+            action.unsupported.append(f"line {call.lineno}: Node() has no {key}=")
+    return action
+
+
+def read_launch_file(path: Path) -> StaticLaunch:
+    """Parse a Python launch file without running it and collect its literal ``Node`` actions.
+
+    Only :func:`ast.parse` and :func:`ast.literal_eval` touch the file's text:
+    no import, no ``exec``, so nothing the file would do when run happens.
+
+    Args:
+        path: the launch file (``*_launch.py``).
+
+    Returns:
+        a :class:`StaticLaunch`; never raises for problems of the file (they go to ``problems``).
+    """
+    found = StaticLaunch(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        found.problems.append(f"cannot read {path.name}: {exc}")
+        return found
+    try:
+        tree = ast.parse(text, filename=str(path))
+    except SyntaxError as exc:
+        found.problems.append(f"{path.name} line {exc.lineno}: syntax error: {exc.msg}")
+        return found
+    functions = [f for f in tree.body if isinstance(f, ast.FunctionDef) and f.name == "generate_launch_description"]
+    if not functions:
+        found.problems.append(f"{path.name} defines no generate_launch_description() function at module level")
+        return found
+    node_names, prefixes = _node_aliases(tree)
+    for call in ast.walk(functions[-1]):
+        if not isinstance(call, ast.Call):
+            continue
+        name = _dotted(call.func)
+        is_node = name in node_names or any(name == f"{prefix}.Node" for prefix in prefixes)
+        if not is_node and name.split(".")[-1] == "Node":
+            found.problems.append(f"line {call.lineno}: {name}(...) is called but Node is not imported "
+                                  "from launch_ros.actions")
+            continue
+        if is_node:
+            found.nodes.append(_read_node_call(call, text))
+        elif name and name.split(".")[-1] != "LaunchDescription":
+            found.other_calls.append(f"{name}(...) at line {call.lineno}")
+    found.nodes.sort(key=lambda n: n.line)
+    return found
+
+
+@dataclasses.dataclass
+class LaunchRun:
+    """The processes a launch file was started as.
+
+    Attributes:
+        mode: :data:`MODE_LAUNCH_ROS` or :data:`MODE_STATIC`.
+        processes: the launch service process (launch_ros mode) or one process per started node.
+        static: what the static reader found (None in launch_ros mode).
+        started: the nodes started (static mode), in order.
+        problems: why something was not started (static mode), one sentence each.
+    """
+
+    mode: str
+    processes: list[Any]
+    static: StaticLaunch | None = None
+    started: list[NodeAction] = dataclasses.field(default_factory=list)
+    problems: list[str] = dataclasses.field(default_factory=list)
+
+    def any_running(self) -> bool:
+        """True while at least one of the processes is still running."""
+        return any(p.poll() is None for p in self.processes)
+
+    def summary(self) -> str:
+        """One sentence: the mode, then what was started or why not."""
+        if self.mode == MODE_LAUNCH_ROS:
+            return MODE_LAUNCH_ROS
+        details = []
+        if self.started:
+            details.append("started " + "; ".join(n.describe() for n in self.started))
+        if self.problems:
+            details.append("not started: " + "; ".join(self.problems))
+        if not self.started and not self.problems:
+            others = self.static.other_calls if self.static else []
+            details.append("no Node(...) action found in generate_launch_description()"
+                           + (f" (other calls: {', '.join(others[:3])})" if others else ""))
+        return f"{MODE_STATIC}: " + "; ".join(details)
+
+
+def launch_ros_available() -> bool:
+    """True when ROS 2's ``launch`` and ``launch_ros`` import (not PyPI's unrelated ``launch``)."""
+    from course.env import probe_requirement  # noqa: PLC0415
+
+    return probe_requirement("launch")[0]
+
+
+def start_node_action(s: Any, action: NodeAction, label: str) -> tuple[Any | None, str]:
+    """Start one literal ``Node`` action the way launch_ros does.
+
+    Args:
+        s: the :class:`~course.grading.GradingSession`.
+        action: a supported :class:`NodeAction`.
+        label: name for the process's log files.
+
+    Returns:
+        ``(process, "")``, or ``(None, reason)`` when the executable is not found.
+    """
+    import yaml  # noqa: PLC0415
+
+    path, observed = s.find_executable(action.package, action.executable)
+    if path is None:
+        return None, f"{action.describe()}: {observed}"
+    param_paths = []
+    for index, item in enumerate(action.parameter_files()):
+        if isinstance(item, dict):
+            params_file = s.log_dir / f"{label}.params_{index}.yaml"
+            params_file.write_text(yaml.dump(item, default_flow_style=False), encoding="utf-8")
+            param_paths.append(str(params_file))
+        else:
+            param_paths.append(item)
+    return s.launch(path, label, action.ros_args(param_paths)), ""
+
+
+def start_launch_file(s: Any, launch_file: Path, label: str = "launch", force_static: bool = False) -> LaunchRun:
+    """Start ``launch_file`` with launch_ros when it is importable, else as the static reader describes.
+
+    Args:
+        s: the :class:`~course.grading.GradingSession` (processes are stopped at its end).
+        launch_file: the launch file (normally the installed one in ``share/<pkg>/launch``).
+        label: prefix of the log files.
+        force_static: read statically even where launch_ros is installed (tests).
+
+    Returns:
+        a :class:`LaunchRun`; check ``problems`` / ``started`` before waiting for nodes.
+    """
+    if not force_static and launch_ros_available():
+        proc = s.launch(Path(sys.executable), label, ["-c", _LAUNCH_SCRIPT, str(launch_file)])
+        return LaunchRun(MODE_LAUNCH_ROS, [proc])
+    static = read_launch_file(launch_file)
+    run = LaunchRun(MODE_STATIC, [], static=static, problems=list(static.problems))
+    for index, action in enumerate(static.nodes):
+        if not action.supported:
+            run.problems.append(f"{action.describe()}: " + "; ".join(action.unsupported))
+            continue
+        proc, reason = start_node_action(s, action, f"{label}.{index}.{action.executable}")
+        if proc is None:
+            run.problems.append(reason)
+        else:
+            run.processes.append(proc)
+            run.started.append(action)
+    return run

@@ -1,0 +1,254 @@
+"""graders/_launch.py: the static reader of Python launch files and the launch_ros command line it reproduces.
+
+No ROS node is started: a stand-in session records what would be launched.
+"""
+
+from __future__ import annotations
+
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+import yaml
+
+from course.lesson import content_root
+from graders import _launch
+from graders._launch import MODE_LAUNCH_ROS, MODE_STATIC, read_launch_file, start_launch_file
+
+REFERENCE = (content_root() / "solutions" / "src" / "python_package_that_uses_parameters_and_launch_files"
+             / "launch" / "peanut_butter_falcon_quote_publisher_launch.py")
+
+
+def write(tmp_path: Path, text: str, name: str = "x_launch.py") -> Path:
+    path = tmp_path / name
+    path.write_text(textwrap.dedent(text), encoding="utf-8")
+    return path
+
+
+class FakeSession:
+    """The two GradingSession methods start_launch_file uses, recording instead of running."""
+
+    def __init__(self, tmp_path: Path, executables: dict[tuple[str, str], Path] | None = None) -> None:
+        self.log_dir = tmp_path / "log"
+        self.log_dir.mkdir()
+        self.executables = executables or {}
+        self.launched: list[tuple[Path, str, list[str]]] = []
+
+    def find_executable(self, package: str, executable: str):
+        path = self.executables.get((package, executable))
+        return (path, str(path)) if path else (None, f"no executable {executable} in {package}")
+
+    def launch(self, path: Path, name: str, args: list[str] | None = None):
+        self.launched.append((path, name, list(args or [])))
+
+        class Proc:
+            def poll(self):
+                return None
+        return Proc()
+
+
+# --- reading ----------------------------------------------------------------------------
+
+def test_reference_launch_file_is_read_with_its_literal_arguments():
+    found = read_launch_file(REFERENCE)
+    assert found.problems == []
+    assert len(found.nodes) == 1
+    node = found.nodes[0]
+    assert node.supported, node.unsupported
+    assert node.package == "python_package_that_uses_parameters_and_launch_files"
+    assert node.executable == "amazing_quote_configurable_publisher_node"
+    assert node.name == "peanut_butter_falcon_quote_publisher_node"
+    assert node.fully_qualified_name() == "/peanut_butter_falcon_quote_publisher_node"
+    (params,) = node.parameters
+    assert params["topic_name"] == "truly_inspirational_quote"
+    assert params["period"] == 0.25 and isinstance(params["period"], float)
+    assert params["philosopher_name"] == "Tyler"
+    # adjacent string literals are one literal: glued exactly as Python glues them
+    assert params["quote"].startswith("Yeah, you're gonna die, it's a matter of time. That ain't the question. The")
+    assert params["quote"].endswith("when you're gone")
+
+
+def test_module_style_node_namespace_remappings_and_arguments(tmp_path):
+    path = write(tmp_path, """
+        import launch
+        import launch_ros.actions
+
+        def generate_launch_description():
+            return launch.LaunchDescription([
+                launch_ros.actions.Node(
+                    package='pkg', executable='exe', name='n', namespace='robot',
+                    parameters=[{'a': 1, 'nested': {'b': [1.0, 2.0]}}, '/tmp/extra.yaml'],
+                    remappings=[('chatter', 'talk')], arguments=['--flag'], output='screen', emulate_tty=True),
+            ])
+        """)
+    (node,) = read_launch_file(path).nodes
+    assert node.supported, node.unsupported
+    assert node.fully_qualified_name() == "/robot/n"
+    assert node.parameters == [{"a": 1, "nested.b": [1.0, 2.0]}, "/tmp/extra.yaml"]
+    files = node.parameter_files()
+    assert files[0] == {"/robot/n": {"ros__parameters": {"a": 1, "nested.b": [1.0, 2.0]}}}
+    assert files[1] == "/tmp/extra.yaml"
+    assert node.ros_args(["/tmp/p0.yaml", "/tmp/extra.yaml"]) == [
+        "--flag", "--ros-args", "-r", "__node:=n", "-r", "__ns:=/robot",
+        "--params-file", "/tmp/p0.yaml", "--params-file", "/tmp/extra.yaml", "-r", "chatter:=talk"]
+
+
+def test_aliased_import_is_recognised(tmp_path):
+    path = write(tmp_path, """
+        from launch import LaunchDescription
+        from launch_ros.actions import Node as RosNode
+
+        def generate_launch_description():
+            node = RosNode(package='p', executable='e')
+            return LaunchDescription([node])
+        """)
+    (node,) = read_launch_file(path).nodes
+    assert node.supported
+    assert node.fully_qualified_name() is None
+    assert node.parameter_files() == []
+    assert node.ros_args([]) == ["--ros-args"]
+
+
+def test_a_node_without_a_name_gets_the_wildcard_parameters_key(tmp_path):
+    path = write(tmp_path, """
+        from launch import LaunchDescription
+        from launch_ros.actions import Node
+
+        def generate_launch_description():
+            return LaunchDescription([Node(package='p', executable='e', parameters=[{'x': 'y'}])])
+        """)
+    (node,) = read_launch_file(path).nodes
+    assert node.parameter_files() == [{"/**": {"ros__parameters": {"x": "y"}}}]
+
+
+@pytest.mark.parametrize(("argument", "words"), [
+    ("name=NAME", "NAME is not a literal"),
+    ("name=f'{NAME}'", "is not a literal"),
+    ("parameters=[PARAMS]", "[PARAMS] is not a literal"),
+    ("parameters=[{'period': 0.25 * 2}]", "is not a literal"),
+    ("parameters=[{'a': object}]", "is not a literal"),
+    ("parameters={'a': 1}", "expected a list"),
+    ("parameters=[{'a': None}]", "is not a parameter value"),
+    ("remappings=[('a',)]", "(from, to) string pairs"),
+    ("condition=IfCondition('true')", "not supported"),
+    ("**KWARGS", "**KWARGS is not a literal"),
+], ids=["variable", "f-string", "list-of-variable", "arithmetic", "name-in-dict", "dict-not-list", "none-value",
+        "bad-remap", "unknown-kwarg", "double-star"])
+def test_non_literal_or_unsupported_arguments_are_reported_not_guessed(tmp_path, argument, words):
+    path = write(tmp_path, f"""
+        from launch import LaunchDescription
+        from launch_ros.actions import Node
+        NAME = 'n'
+        PARAMS = {{'a': 1}}
+        KWARGS = {{'name': 'n'}}
+
+        def generate_launch_description():
+            return LaunchDescription([Node(package='p', executable='e', {argument})])
+        """)
+    (node,) = read_launch_file(path).nodes
+    assert not node.supported
+    assert any(words in problem for problem in node.unsupported), node.unsupported
+
+
+def test_positional_arguments_and_missing_executable_are_reported(tmp_path):
+    path = write(tmp_path, """
+        from launch import LaunchDescription
+        from launch_ros.actions import Node
+
+        def generate_launch_description():
+            return LaunchDescription([Node('p', 'e'), Node(package='p')])
+        """)
+    first, second = read_launch_file(path).nodes
+    assert any("positional" in u for u in first.unsupported)
+    assert any("no executable=" in u for u in second.unsupported)
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("def generate_launch_description(:\n    pass\n", "syntax error"),
+    ("from launch_ros.actions import Node\nX = Node(package='p', executable='e')\n",
+     "no generate_launch_description"),
+    ("from somewhere import Node\ndef generate_launch_description():\n    return [Node(package='p', executable='e')]\n",
+     "not imported from launch_ros.actions"),
+], ids=["syntax-error", "no-function", "node-not-from-launch-ros"])
+def test_files_that_cannot_launch_are_problems(tmp_path, text, words):
+    found = read_launch_file(write(tmp_path, text))
+    assert found.nodes == []
+    assert any(words in p for p in found.problems), found.problems
+
+
+def test_reading_executes_nothing(tmp_path):
+    """A launch file with side effects at import and in generate_launch_description leaves no trace."""
+    marker = tmp_path / "was_executed.txt"
+    path = write(tmp_path, f"""
+        from pathlib import Path
+        Path({str(marker)!r}).write_text('module level')
+        from launch import LaunchDescription
+        from launch_ros.actions import Node
+
+        def generate_launch_description():
+            Path({str(marker)!r}).write_text('inside generate_launch_description')
+            return LaunchDescription([Node(package='p', executable='e', name=open({str(marker)!r}, 'w').name)])
+        """)
+    modules_before = set(sys.modules)
+    found = read_launch_file(path)
+    assert not marker.exists()
+    assert set(sys.modules) == modules_before, "reading imported something"
+    (node,) = found.nodes
+    assert not node.supported  # open(...) is a call, not a literal
+    assert any("open(" in u for u in node.unsupported)
+    assert any("Path(...)" in c for c in found.other_calls)
+
+
+# --- starting -----------------------------------------------------------------------------
+
+def test_static_start_writes_the_params_file_launch_ros_would(tmp_path, monkeypatch):
+    monkeypatch.setattr(_launch, "launch_ros_available", lambda: False)
+    exe = tmp_path / "amazing_quote_configurable_publisher_node"
+    session = FakeSession(tmp_path, {("python_package_that_uses_parameters_and_launch_files",
+                                      "amazing_quote_configurable_publisher_node"): exe})
+    run = start_launch_file(session, REFERENCE)
+    assert run.mode == MODE_STATIC
+    assert run.problems == []
+    assert run.summary().startswith(MODE_STATIC + ": started Node(")
+    ((path, _name, args),) = session.launched
+    assert path == exe
+    assert args[:3] == ["--ros-args", "-r", "__node:=peanut_butter_falcon_quote_publisher_node"]
+    assert args[3] == "--params-file"
+    content = yaml.safe_load(Path(args[4]).read_text(encoding="utf-8"))
+    assert content == {"/peanut_butter_falcon_quote_publisher_node": {"ros__parameters": {
+        "topic_name": "truly_inspirational_quote", "period": 0.25, "philosopher_name": "Tyler",
+        "quote": ("Yeah, you're gonna die, it's a matter of time. That ain't the question. The question's, "
+                  "whether they're gonna have a good story to tell about you when you're gone")}}}
+
+
+def test_static_start_reports_unsupported_nodes_and_missing_executables(tmp_path, monkeypatch):
+    monkeypatch.setattr(_launch, "launch_ros_available", lambda: False)
+    path = write(tmp_path, """
+        from launch import LaunchDescription
+        from launch_ros.actions import Node
+        P = 'p'
+
+        def generate_launch_description():
+            return LaunchDescription([Node(package=P, executable='e'), Node(package='p', executable='missing')])
+        """)
+    session = FakeSession(tmp_path)
+    run = start_launch_file(session, path)
+    assert session.launched == []
+    assert run.started == []
+    assert any("P is not a literal" in p for p in run.problems)
+    assert any("no executable missing" in p for p in run.problems)
+    assert "not started:" in run.summary()
+
+
+def test_with_launch_ros_the_file_is_run_as_ros2_launch_runs_it(tmp_path, monkeypatch):
+    monkeypatch.setattr(_launch, "launch_ros_available", lambda: True)
+    session = FakeSession(tmp_path)
+    run = start_launch_file(session, REFERENCE)
+    assert run.mode == MODE_LAUNCH_ROS
+    assert run.summary() == MODE_LAUNCH_ROS
+    ((path, _name, args),) = session.launched
+    assert path == Path(sys.executable)
+    assert args[0] == "-c" and "LaunchService" in args[1] and "AnyLaunchDescriptionSource" in args[1]
+    assert args[2] == str(REFERENCE)
+    compile(args[1], "<launch script>", "exec")
