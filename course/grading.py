@@ -307,8 +307,13 @@ def new_log_dir(workspace_root: Path, lesson_id: str) -> Path:
     return folder
 
 
-def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = None) -> LessonResult:
+def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = None,
+                 underlays: tuple[Path, ...] | list[Path] = ()) -> LessonResult:
     """Build the lesson's packages in ``workspace_root``, run its grader, return the result.
+
+    ``underlays`` are built workspaces sourced before building and running the
+    submission (ROS's overlay mechanism), e.g. reference interface packages an
+    instructor built once for a whole class.
 
     Never raises for problems of the submission (they become the result);
     raises :class:`~course.errors.MissingRequirement` when the machine lacks
@@ -322,6 +327,8 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     log_dir = log_dir or new_log_dir(workspace_root, lesson.id)
     base_env = dict(os.environ)
     env_mod.activate(base_env)
+    for underlay in underlays:
+        base_env = build_mod.overlay_env(Path(underlay), base_env)
     timings: dict[str, float] = {}
     build_info: dict[str, Any] = {}
 

@@ -137,14 +137,51 @@ def apply_edits(workspace_root: Path, edits: list[Edit]) -> None:
         target.write_text(text.replace(edit.replace, edit.with_), encoding="utf-8")
 
 
-def reference_workspace(lesson: Lesson, dest: Path) -> Path:
-    """Copy the lesson's packages (and their dependencies) from ``solutions/src`` into ``dest/src``."""
+def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None = None) -> Path:
+    """Copy reference packages from ``solutions/src`` into ``dest/src``.
+
+    Args:
+        packages: which ones (default: the lesson's packages and their dependencies).
+    """
     src = content_root() / "solutions" / "src"
     found = find_packages(src)
     (dest / "src").mkdir(parents=True, exist_ok=True)
-    for name in dependency_closure(lesson.packages, found):
+    for name in (dependency_closure(lesson.packages, found) if packages is None else packages):
         shutil.copytree(found[name][0], dest / "src" / found[name][0].name,
                         ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    return dest
+
+
+def lesson_dependencies(lesson: Lesson) -> list[str]:
+    """Reference packages the lesson's packages depend on but does not itself teach (e.g. interfaces)."""
+    found = find_packages(content_root() / "solutions" / "src")
+    return [name for name in dependency_closure(lesson.packages, found) if name not in lesson.packages]
+
+
+def build_underlay(lesson: Lesson, dest: Path) -> Path | None:
+    """Build the lesson's dependencies once in ``dest``, as an underlay for every validation case.
+
+    The standard ROS overlay mechanism: each case's workspace is built and
+    sourced on top of this one, so an interface package is built once per
+    lesson instead of once per case. Returns None when there is nothing to build.
+
+    Raises:
+        ValidationFailed: the reference dependencies do not build.
+    """
+    from course import env as env_mod  # noqa: PLC0415
+    from course.build import build_packages
+    from course.errors import ValidationFailed
+
+    deps = lesson_dependencies(lesson)
+    if not deps:
+        return None
+    reference_workspace(lesson, dest, deps)
+    env = dict(os.environ)
+    env_mod.activate(env)
+    built = build_packages(dest, deps, env, dest / "log" / "underlay-build.log")
+    if not built.ok:
+        raise ValidationFailed(f"the reference packages {', '.join(deps)} do not build:\n{built.excerpt}",
+                               f"see {built.log_path}")
     return dest
 
 
@@ -185,7 +222,8 @@ def _describe(result: LessonResult) -> str:
     return text
 
 
-def grade_case(lesson: Lesson, case: str, prepare, keep: bool = False) -> tuple[LessonResult, float]:
+def grade_case(lesson: Lesson, case: str, prepare, keep: bool = False,
+               underlays: tuple[Path, ...] = ()) -> tuple[LessonResult, float]:
     """Grade a throw-away workspace that ``prepare(root)`` fills; returns the result and seconds."""
     import time  # noqa: PLC0415
 
@@ -193,7 +231,7 @@ def grade_case(lesson: Lesson, case: str, prepare, keep: bool = False) -> tuple[
     begin = time.monotonic()
     try:
         prepare(root)
-        result = grade_lesson(lesson, root)
+        result = grade_lesson(lesson, root, underlays=underlays)
         return result, time.monotonic() - begin
     finally:
         if not keep:
@@ -202,13 +240,25 @@ def grade_case(lesson: Lesson, case: str, prepare, keep: bool = False) -> tuple[
 
 def validate_lesson(lesson: Lesson) -> list[Outcome]:
     """Validate one lesson: reference, starter, fixtures (see module docstring)."""
+    underlay_dir = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-underlay-"))
+    try:
+        underlay = build_underlay(lesson, underlay_dir)
+        return _validate_lesson(lesson, underlay)
+    finally:
+        shutil.rmtree(underlay_dir, ignore_errors=True)
+
+
+def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
     outcomes = []
+    deps = lesson_dependencies(lesson) if underlay is not None else []
+    own = [name for name in lesson.packages]
+    underlays = (underlay,) if underlay is not None else ()
 
     def reference(root: Path) -> None:
-        reference_workspace(lesson, root)
+        reference_workspace(lesson, root, own if underlay is not None else None)
         run_commands(root, lesson.reference.commands)
 
-    result, seconds = grade_case(lesson, "reference", reference)
+    result, seconds = grade_case(lesson, "reference", reference, underlays=underlays)
     outcomes.append(Outcome(lesson.id, "reference", result.status == STATUS_PASSED, "full marks",
                             _describe(result), seconds, result))
 
@@ -216,17 +266,21 @@ def validate_lesson(lesson: Lesson) -> list[Outcome]:
         (root / "src").mkdir(parents=True)
         copy_starter(lesson, root)
 
-    result, seconds = grade_case(lesson, "starter", starter)
+    result, seconds = grade_case(lesson, "starter", starter, underlays=underlays)
     outcomes.append(Outcome(lesson.id, "starter", result.status != STATUS_PASSED and result.score < result.max_score,
                             "not full marks", _describe(result), seconds, result))
 
     for fixture in load_fixtures(lesson.id):
-        def wrong(root: Path, fixture: Fixture = fixture) -> None:
-            reference_workspace(lesson, root)
+        # a fixture that edits a dependency builds everything itself, without the underlay
+        touched = {Path(e.file or e.delete or "").parts[1:2] for e in fixture.edits}
+        uses_underlay = underlay is not None and not any(part and part[0] in _folders(deps) for part in touched)
+
+        def wrong(root: Path, fixture: Fixture = fixture, uses_underlay: bool = uses_underlay) -> None:
+            reference_workspace(lesson, root, own if uses_underlay else None)
             apply_edits(root, fixture.edits)
             run_commands(root, lesson.reference.commands if fixture.commands is None else fixture.commands)
 
-        result, seconds = grade_case(lesson, fixture.name, wrong)
+        result, seconds = grade_case(lesson, fixture.name, wrong, underlays=underlays if uses_underlay else ())
         if fixture.expect == "full_marks":
             ok, expected = result.status == STATUS_PASSED, "full marks"
         else:
@@ -239,6 +293,12 @@ def validate_lesson(lesson: Lesson) -> list[Outcome]:
                 f" (unknown check ids: {', '.join(unknown)})" if unknown else "")
         outcomes.append(Outcome(lesson.id, fixture.name, ok, expected, _describe(result), seconds, result))
     return outcomes
+
+
+def _folders(packages: list[str]) -> set[str]:
+    """Source folder names (under solutions/src) of these packages."""
+    found = find_packages(content_root() / "solutions" / "src")
+    return {found[name][0].name for name in packages if name in found}
 
 
 def validate_course(lesson_ids: list[str] | None = None, progress: Console | None = None) -> list[Outcome]:

@@ -39,6 +39,9 @@ REQUIRED = ("period", "philosopher_name", "quote", "topic_name")
 #: A loaded quote must show within this many messages (one may be on its way: seed ch. 24.5).
 NEXT_MESSAGES = 3
 
+#: Seconds of observation the contract needs: the loaded quote in the next messages at 4 Hz.
+WINDOW = (NEXT_MESSAGES + 1) * LAUNCH_PERIOD
+
 CHECKS = [
     Check("build", "The package builds with colcon", 1),
     Check("file_present", f"The parameters file is at src/{PACKAGE}/{CONFIG}", 1,

@@ -22,12 +22,16 @@ DEFAULT_SAMPLES = 6  # messages -> 5 intervals (shared/LESSONS.md minimum)
 #: The second run's overrides: a topic of the grader's and a 4 Hz period.
 CONFIGURED_TOPIC = "ros2course_configured_quote"
 CONFIGURED_PERIOD = 0.25  # seconds
-CONFIGURED_SAMPLES = 9  # messages -> 8 intervals
+CONFIGURED_SAMPLES = 6  # messages -> 5 intervals (shared/LESSONS.md minimum)
 #: Values set at runtime (the seed's ros2 param set example, ch. 24.5, reworded).
 RUNTIME_QUOTE = "You got a good-guy heart. You can't do anything about it, that's just who you are."
 RUNTIME_PHILOSOPHER = "Zak"
 #: A changed parameter must show within this many messages (one may already be on its way: seed ch. 24.5).
-RUNTIME_MESSAGES = 3
+RUNTIME_MESSAGES = 2
+
+#: Seconds of observation the contract needs, summed over the node's two runs
+#: (defaults, then the runtime change, then the run with -p topic_name/period).
+WINDOW = DEFAULT_SAMPLES * DEFAULT_PERIOD + RUNTIME_MESSAGES * DEFAULT_PERIOD + CONFIGURED_SAMPLES * CONFIGURED_PERIOD
 
 CHECKS = [
     Check("build", "The package builds with colcon", 1),
