@@ -240,15 +240,28 @@ class GradingSession:
         listing = ", ".join(others) if others else "nothing"
         return None, f"no executable {executable} in {lib}; found: {listing}"
 
-    def launch(self, path: Path, name: str, args: list[str] | None = None) -> LearnerProcess:
+    def new_graph(self):
+        """Another private ROS graph (its own domain id) for this check, closed with it.
+
+        For running a second instance of a learner's node at the same time as the
+        first without either seeing the other (e.g. the parameters lesson's run
+        with ``-p`` overrides).
+        """
+        from course.probes import RosSession  # noqa: PLC0415
+
+        return self._stack.enter_context(RosSession())
+
+    def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:
         """Start a learner executable in the private domain; it is stopped at the end of the check.
 
         Args:
             path: the executable (from :meth:`find_executable`).
             name: label for its log files (``<name>.stdout.log``).
             args: extra arguments (e.g. ``["--ros-args", "-r", "__node:=x"]``).
+            graph: the :class:`~course.probes.RosSession` to run in (default :attr:`ros`).
         """
-        proc = LearnerProcess([str(path), *(args or [])], self.node_env(), self.log_dir, name,
+        env = (graph or self.ros).learner_env(self.overlay())
+        proc = LearnerProcess([str(path), *(args or [])], env, self.log_dir, name,
                               cwd=self.workspace_root, ros_sigint=True)
         self._processes.append(proc)
         proc.start()

@@ -104,10 +104,10 @@ def parameter_value(value_msg: Any) -> tuple[str, Any]:
     return kind, value
 
 
-def topics_seen(s: GradingSession) -> str:
-    """``/a (pkg/msg/T), /b (...)`` for the learner's topics (ROS's own ones left out)."""
+def topics_seen(s: GradingSession, graph=None) -> str:
+    """``/a (pkg/msg/T), /b (...)`` for the learner's topics in ``graph`` (default ``s.ros``; ROS's own left out)."""
     hidden = {"/rosout", "/parameter_events"}
-    topics = {name: types for name, types in s.ros.topic_types().items() if name not in hidden}
+    topics = {name: types for name, types in (graph or s.ros).topic_types().items() if name not in hidden}
     return ", ".join(f"{name} ({', '.join(types)})" for name, types in sorted(topics.items())) or "none"
 
 
