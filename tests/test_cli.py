@@ -90,7 +90,9 @@ def normalised(text: str) -> str:
 
 
 def row_of(listing: str, lesson_id: str) -> str:
-    rows = [line for line in listing.splitlines() if f" {lesson_id} " in line]
+    # the id column is the second cell: match it exactly (a title may contain another id's word)
+    rows = [line for line in listing.splitlines()
+            if len(cells := [c.strip() for c in line.split("│")]) > 2 and cells[2] == lesson_id]
     assert len(rows) == 1, listing
     return rows[0]
 
