@@ -1,0 +1,284 @@
+"""Grader for ``publisher-subscriber`` (seed ch. 18-19; contract in shared/LESSONS.md).
+
+Black-box. The **publisher** is watched like ``ros2 node info``,
+``ros2 topic echo`` and ``ros2 topic hz`` would (its own topics and their
+types, the messages' fields, the id sequence, the rate). The **subscriber**
+is driven like ``ros2 topic pub`` would: the grader publishes quotes of its
+own (texts, philosophers and ids it makes up for this check, so an echo of
+the seed's example cannot pass) and looks for them in the subscriber's
+``/rosout`` records. Each executable is graded separately (partial credit)
+and each ends with its Ctrl+C check.
+"""
+
+from __future__ import annotations
+
+import itertools
+import random
+
+from course.grading import Check, GradingSession
+from course.probes import wait_until
+from graders._common import process_state
+from graders._quote_tools import (
+    StampedTopicProbe,
+    describe_endpoints,
+    has_integer,
+    launch_node,
+    pick_endpoint,
+    record_depends,
+    record_sigint_exit,
+    require_executable,
+    skip_checks,
+    wait_for_endpoint,
+    workspace_types,
+)
+
+PACKAGE = "python_package_that_uses_the_messages"
+PUB_EXE = "amazing_quote_publisher_node"
+PUB_NODE = "amazing_quote_publisher_node"
+SUB_EXE = "amazing_quote_subscriber_node"
+SUB_NODE = "amazing_quote_subscriber_node"
+TOPIC = "/amazing_quote"
+MSG_TYPE = "package_with_interfaces/msg/AmazingQuote"
+QUOTE = "Use the force, Pikachu!"  # seed ch. 18.3
+PHILOSOPHER = "Uncle Ben"
+PERIOD = 0.5  # seconds, seed ch. 18.3
+TOLERANCE = 0.15  # on the mean period (shared/LESSONS.md)
+SAMPLES = 6  # messages -> 5 intervals, the minimum LESSONS.md asks for
+GRADER_QUOTES = 3  # quotes the grader publishes to the subscriber
+
+PUB_CHECKS = ["pub_executable", "pub_node_name", "pub_topic", "pub_contents", "pub_id_counts", "pub_rate",
+              "pub_sigint_exit"]
+SUB_CHECKS = ["sub_executable", "sub_node_name", "sub_topic", "sub_logs_quotes", "sub_logs_details",
+              "sub_sigint_exit"]
+
+#: Seconds of observation the contract needs: the publisher's 6 messages at 2 Hz, then the
+#: grader's quotes to the subscriber (one period each).
+WINDOW = SAMPLES * PERIOD + GRADER_QUOTES * PERIOD
+
+CHECKS = [
+    Check("build", "The packages build with colcon", 1),
+    Check("depends", "package.xml depends on rclpy and package_with_interfaces", 1,
+          "add <depend>rclpy</depend> and <depend>package_with_interfaces</depend> to package.xml (seed ch. 18.1)"),
+    Check("pub_executable", "ros2 run finds amazing_quote_publisher_node", 1,
+          "register 'amazing_quote_publisher_node = python_package_that_uses_the_messages."
+          "amazing_quote_publisher_node:main' in console_scripts, then colcon build"),
+    Check("pub_node_name", "A node named amazing_quote_publisher_node starts", 1,
+          "pass 'amazing_quote_publisher_node' to super().__init__()"),
+    Check("pub_topic", "It publishes /amazing_quote of type package_with_interfaces/msg/AmazingQuote", 2,
+          "self.create_publisher(msg_type=AmazingQuote, topic='/amazing_quote', qos_profile=1)"),
+    Check("pub_contents", "Each message says 'Use the force, Pikachu!' by 'Uncle Ben'", 2,
+          "set amazing_quote.quote and amazing_quote.philosopher_name before publishing (check the spelling)"),
+    Check("pub_id_counts", "The id counts up by 1 from one message to the next", 2,
+          "keep the id in an attribute (self.incremental_id), put it in each message, then add 1"),
+    Check("pub_rate", "One message every 0.5 s (2 Hz)", 2,
+          "self.create_timer(0.5, self.timer_callback), one publish per tick"),
+    Check("pub_sigint_exit", "Ctrl+C ends the publisher with exit code 0 and no traceback", 1,
+          "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"),
+    Check("sub_executable", "ros2 run finds amazing_quote_subscriber_node", 1,
+          "register 'amazing_quote_subscriber_node = python_package_that_uses_the_messages."
+          "amazing_quote_subscriber_node:main' in console_scripts, then colcon build"),
+    Check("sub_node_name", "A node named amazing_quote_subscriber_node starts", 1,
+          "pass 'amazing_quote_subscriber_node' to super().__init__()"),
+    Check("sub_topic", "It subscribes to /amazing_quote of type package_with_interfaces/msg/AmazingQuote", 2,
+          "self.create_subscription(msg_type=AmazingQuote, topic='/amazing_quote', callback=..., qos_profile=1)"),
+    Check("sub_logs_quotes", "It logs the text of each quote it receives", 3,
+          "in the subscription callback, log msg.quote with self.get_logger().info(...) "
+          "(print() does not reach /rosout)"),
+    Check("sub_logs_details", "With each quote it logs the philosopher's name and the id", 2,
+          "log msg.philosopher_name and msg.id too, e.g. in the same f-string as msg.quote"),
+    Check("sub_sigint_exit", "Ctrl+C ends the subscriber with exit code 0 and no traceback", 1,
+          "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"),
+]
+
+
+def _reliable(depth: int = 10):
+    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: PLC0415
+
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def _topics_seen(s: GradingSession) -> str:
+    """What ``ros2 topic list -t`` would show, without /rosout, /parameter_events and the grader's own probes."""
+    graph = s.ros.node
+
+    def learners(topic: str) -> bool:
+        infos = [*graph.get_publishers_info_by_topic(topic), *graph.get_subscriptions_info_by_topic(topic)]
+        return any(not info.node_name.startswith("_") for info in infos)
+
+    topics = {n: types for n, types in s.ros.topic_types().items()
+              if n not in ("/rosout", "/parameter_events") and learners(n)}
+    return describe_endpoints(topics)
+
+
+def _show(msg) -> str:
+    return f"{{id: {msg.id}, quote: {msg.quote!r}, philosopher_name: {msg.philosopher_name!r}}}"
+
+
+# --- the publisher ---------------------------------------------------------------
+
+def _grade_publisher(s: GradingSession, msg_type: type) -> None:
+    path = require_executable(s, "pub_executable", PACKAGE, PUB_EXE, PUB_CHECKS)
+    if path is None:
+        return
+    # Subscribe before the node starts: no message is missed and the rate window starts at once.
+    probes = {TOPIC: StampedTopicProbe(s, TOPIC, msg_type, _reliable())}
+    proc, node = launch_node(s, "pub_node_name", path, PUB_EXE, PUB_NODE)
+    if proc.poll() is not None:
+        skip_checks(s, PUB_CHECKS[:-1], process_state(proc))
+        record_sigint_exit(s, "pub_sigint_exit", proc)
+        return
+    with s.phase("start"):
+        found = wait_for_endpoint(s, node, "publishers", TOPIC, 3.0, abort=lambda: proc.poll() is not None) \
+            if node else {}
+    expected = f"{TOPIC} [{MSG_TYPE}]"
+    ok = MSG_TYPE in found.get(TOPIC, [])
+    s.record("pub_topic", ok, f"{node or 'the node'} publishes: {describe_endpoints(found)}"
+             + ("" if ok else f"; topics in the graph: {_topics_seen(s)}"), expected)
+    target = pick_endpoint(found, TOPIC, MSG_TYPE)
+    if target is None or MSG_TYPE not in found.get(target, []):
+        skip_checks(s, PUB_CHECKS[:-1], f"no {MSG_TYPE} topic published to listen to")
+        record_sigint_exit(s, "pub_sigint_exit", proc)
+        return
+    if target not in probes:  # grade the contents where the learner publishes them
+        probes[target] = StampedTopicProbe(s, target, msg_type, _reliable())
+    probe = probes[target]
+    where = "" if target == TOPIC else f" (on {target}, the topic your node uses)"
+    window = SAMPLES * PERIOD + 2.0
+    with s.phase("observe"):
+        probe.wait_for_count(SAMPLES, window, abort=lambda: proc.poll() is not None)
+    messages = probe.messages()[:SAMPLES]
+    if not messages:
+        skip_checks(s, PUB_CHECKS[:-1], f"no message on {target} in {window:.1f} s; {process_state(proc)}")
+        record_sigint_exit(s, "pub_sigint_exit", proc)
+        return
+
+    wrong_quote = [m for m in messages if m.quote != QUOTE]
+    wrong_name = [m for m in messages if m.philosopher_name != PHILOSOPHER]
+    share = (0.5 if not wrong_quote else 0.0) + (0.5 if not wrong_name else 0.0)
+    bad = (wrong_quote or wrong_name or messages)[0]
+    wrong = len(wrong_quote) + len(wrong_name)
+    observed = (f"all {len(messages)} messages are {_show(bad)}" if share == 1.0
+                else f"{wrong} wrong field(s) in {len(messages)} messages, e.g. {_show(bad)}")
+    s.record("pub_contents", share == 1.0, observed + where,
+             f"quote: {QUOTE!r}, philosopher_name: {PHILOSOPHER!r} in every message", fraction=share)
+
+    ids = [m.id for m in messages]
+    shown = ", ".join(map(str, ids))
+    if len(ids) < 2:
+        s.record("pub_id_counts", False, f"only one message (id {shown}) to compare", "ids n, n+1, n+2, ...")
+    else:
+        counts = all(b - a == 1 for a, b in itertools.pairwise(ids))
+        s.record("pub_id_counts", counts, f"ids {shown}" + where,
+                 f"ids {ids[0]}, {ids[0] + 1}, {ids[0] + 2}, ... (each one more than the previous)")
+
+    stats = probe.rate(SAMPLES)  # on the publisher's send stamps (see StampedTopicProbe)
+    expected_rate = f"2.00 Hz: mean period {PERIOD:.3f} s ± {TOLERANCE:.0%}, over at least {SAMPLES - 1} intervals"
+    if stats is None or stats.samples < SAMPLES - 1:
+        s.record("pub_rate", False, f"only {len(messages)} message(s) in {window:.1f} s"
+                 + (f" ({stats.describe()})" if stats else ""), expected_rate)
+    else:
+        s.record("pub_rate", stats.within(1.0 / PERIOD, TOLERANCE),
+                 stats.describe() + " (from the messages' send stamps)" + where, expected_rate)
+    record_sigint_exit(s, "pub_sigint_exit", proc)
+
+
+# --- the subscriber ----------------------------------------------------------------
+
+_WORDS = ["teapot", "lantern", "cactus", "harbour", "violin", "comet", "pebble", "marmalade", "glacier",
+          "walrus", "origami", "thunder", "velvet", "compass", "biscuit", "nebula"]
+_NAMES = ["Ada", "Grace", "Alan", "Edsger", "Barbara", "Donald", "Margaret", "Linus", "Radia", "Ken"]
+
+
+def _grader_quotes(msg_type: type) -> list:
+    """Quotes made up for this check: nobody hard-codes them (random words, names and ids)."""
+    rng = random.Random()
+    out = []
+    for _ in range(GRADER_QUOTES):
+        a, b, c = rng.sample(_WORDS, 3)
+        msg = msg_type()
+        msg.id = rng.randrange(100_000, 1_000_000)
+        msg.quote = f"A {a} in the {b} is worth two {c}s."
+        msg.philosopher_name = f"{rng.choice(_NAMES)} {rng.choice(_WORDS).capitalize()}"
+        out.append(msg)
+    return out
+
+
+def _grade_subscriber(s: GradingSession, msg_type: type) -> None:
+    path = require_executable(s, "sub_executable", PACKAGE, SUB_EXE, SUB_CHECKS)
+    if path is None:
+        return
+    rosout = s.ros.rosout()
+    proc, node = launch_node(s, "sub_node_name", path, SUB_EXE, SUB_NODE)
+    if proc.poll() is not None:
+        skip_checks(s, SUB_CHECKS[:-1], process_state(proc))
+        record_sigint_exit(s, "sub_sigint_exit", proc)
+        return
+    with s.phase("start"):
+        found = wait_for_endpoint(s, node, "subscriptions", TOPIC, 3.0, abort=lambda: proc.poll() is not None) \
+            if node else {}
+    ok = MSG_TYPE in found.get(TOPIC, [])
+    s.record("sub_topic", ok, f"{node or 'the node'} subscribes to: {describe_endpoints(found)}"
+             + ("" if ok else f"; topics in the graph: {_topics_seen(s)}"), f"{TOPIC} [{MSG_TYPE}]")
+    target = pick_endpoint(found, TOPIC, MSG_TYPE)
+    if target is None or MSG_TYPE not in found.get(target, []):
+        skip_checks(s, SUB_CHECKS[:-1], f"no {MSG_TYPE} subscription to publish to")
+        record_sigint_exit(s, "sub_sigint_exit", proc)
+        return
+    where = "" if target == TOPIC else f" (published on {target}, the topic your node uses)"
+
+    publisher = s.ros.node.create_publisher(msg_type, target, _reliable())
+    quotes = _grader_quotes(msg_type)
+    try:
+        with s.phase("observe"):
+            # Publish only once the subscriber is matched, else the first quote is lost.
+            wait_until(lambda: publisher.get_subscription_count() > 0, 3.0, abort=lambda: proc.poll() is not None)
+
+            def seen(msg) -> bool:
+                return any(msg.quote in r.msg for r in rosout.records())
+
+            for msg in quotes:
+                for _ in range(2):  # a second chance if a message was lost
+                    publisher.publish(msg)
+                    if wait_until(lambda m=msg: seen(m), 1.0, abort=lambda: proc.poll() is not None):
+                        break
+    finally:
+        s.ros.node.destroy_publisher(publisher)
+
+    records = rosout.records()
+    logged = [m for m in quotes if any(m.quote in r.msg for r in records)]
+    expected = "each quote's text in a log record of the subscriber (the grader's own quotes)"
+    if len(logged) == len(quotes):
+        s.record("sub_logs_quotes", True, f"all {len(quotes)} quotes published were logged, e.g. {quotes[0].quote!r}"
+                 + where, expected)
+    else:
+        recent = " | ".join(r.msg.strip().replace("\n", " ")[:80] for r in records[-2:]) or "no log records"
+        on_stdout = any(m.quote in proc.stdout() for m in quotes)
+        s.record("sub_logs_quotes", False,
+                 f"{len(logged)} of {len(quotes)} quotes found in the log (e.g. {quotes[0].quote!r} was published)"
+                 f"{where}; last records: {recent}"
+                 + ("; the quotes appeared on stdout only (print() instead of the logger?)" if on_stdout else "")
+                 + f"; {process_state(proc)}", expected, fraction=len(logged) / len(quotes))
+    # Details: the philosopher and the id, in any record of the node (one record or several).
+    items = [(m, what, ok) for m in logged
+             for what, ok in (("philosopher_name", any(m.philosopher_name in r.msg for r in records)),
+                              ("id", any(has_integer(r.msg, m.id) for r in records)))]
+    if not logged:
+        s.record("sub_logs_details", False, "not checked: no quote was logged", "philosopher_name and id logged too")
+    else:
+        missing = [f"{what} of {m.quote!r} ({getattr(m, what)!r})" for m, what, ok in items if not ok]
+        good = len(items) - len(missing)
+        observed = ("philosopher and id of every logged quote found" if not missing
+                    else "missing: " + "; ".join(missing[:2]))
+        s.record("sub_logs_details", not missing, observed,
+                 "each quote's philosopher_name and id in the log too", fraction=good / len(items))
+    record_sigint_exit(s, "sub_sigint_exit", proc)
+
+
+def grade(s: GradingSession) -> None:
+    """Grade the publisher (as a listener), then the subscriber (as a publisher)."""
+    record_depends(s, "depends", PACKAGE)
+    msg_type = workspace_types(s, "msg", "AmazingQuote")
+    if msg_type is None:
+        return
+    _grade_publisher(s, msg_type)
+    _grade_subscriber(s, msg_type)

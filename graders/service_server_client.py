@@ -1,0 +1,319 @@
+"""Grader for ``service-server-client`` (seed ch. 20-21; contract in shared/LESSONS.md).
+
+Black-box, and the grader plays the other side each time:
+
+* for the **server** it is the client: it calls ``/what_is_the_point`` with
+  quotes that contain "life" in several spellings (LIFE, Life, lIfE) and
+  quotes that do not (one with "Life" in the philosopher's name only), and
+  checks whether the returned point's coordinates sum to 42 (± 1e-6);
+* for the **client** it is the server: it starts the client before the
+  service exists (the client must say it waits), then offers the service
+  with answers it can recognise (distinctive points it then looks for in the
+  client's log), measures the call rate (2 Hz), and finally answers 1 s
+  late: a client that keeps its executor free (``call_async`` + a done
+  callback) still calls every 0.5 s, one that blocks on the answer
+  (``spin_until_future_complete`` or a busy wait inside its timer callback,
+  or the synchronous ``call()``) does not.
+"""
+
+from __future__ import annotations
+
+import random
+import re
+import time
+
+from course.grading import Check, GradingSession
+from course.probes import wait_until
+from graders._common import process_state
+from graders._quote_tools import (
+    DeferredServer,
+    describe_endpoints,
+    has_point,
+    launch_node,
+    pick_endpoint,
+    record_depends,
+    record_sigint_exit,
+    require_executable,
+    skip_checks,
+    wait_for_endpoint,
+    workspace_types,
+)
+
+PACKAGE = "python_package_that_uses_the_services"
+SERVER_EXE = "what_is_the_point_service_server_node"
+SERVER_NODE = "what_is_the_point_service_server"
+CLIENT_EXE = "what_is_the_point_service_client_node"
+CLIENT_NODE = "what_is_the_point_service_client"
+SERVICE = "/what_is_the_point"
+SRV_TYPE = "package_with_interfaces/srv/WhatIsThePoint"
+PERIOD = 0.5  # seconds between calls, seed ch. 20.5.6
+TOLERANCE = 0.15  # on the mean period (shared/LESSONS.md)
+CALLS = 6  # calls -> 5 intervals, the minimum LESSONS.md asks for
+SUM_TOLERANCE = 1e-6  # |x + y + z - 42|
+LATE_ANSWER = 1.0  # seconds: twice the call period, so a blocked client halves its rate
+WAITING = re.compile(r"wait|availab", re.IGNORECASE)
+
+#: (quote, philosopher, does the quote contain "life" in any case?)
+LOWERCASE_LIFE = ("what is the meaning of life, then?", "Monty Python", True)
+OTHER_CASES = [
+    ("LIFE, UH, FINDS A WAY.", "Ian Malcolm", True),
+    ("Life is like a box of chocolates.", "Forrest Gump", True),
+    ("It is a lIfE of potatoes, always potatoes.", "a young Maltese potato farmer", True),
+]
+NO_LIFE = [
+    ("So you're telling me there's a chance.", "Lloyd", False),
+    ("I dream of potatoes.", "Life Coach Larry", False),  # 'Life' only in the philosopher's name
+    ("no match", "Nobody", False),
+]
+
+SERVER_CHECKS = ["server_executable", "server_node_name", "service_name_type", "life_sum_42", "life_any_case",
+                 "no_life_not_42", "server_sigint_exit"]
+CLIENT_CHECKS = ["client_executable", "client_node_name", "client_waits", "client_calls", "client_rate",
+                 "client_logs_points", "client_keeps_calling_when_slow", "client_sigint_exit"]
+
+#: Seconds of observation the contract needs: the client's 6 calls at 2 Hz, then the late-answer
+#: phase (the stand-in server answers LATE_ANSWER s late).
+WINDOW = CALLS * PERIOD + 2 * LATE_ANSWER
+
+CHECKS = [
+    Check("build", "The packages build with colcon", 1),
+    Check("depends", "package.xml depends on rclpy and package_with_interfaces", 1,
+          "add <depend>rclpy</depend> and <depend>package_with_interfaces</depend> to package.xml (seed ch. 18.1)"),
+    Check("server_executable", "ros2 run finds what_is_the_point_service_server_node", 1,
+          "register 'what_is_the_point_service_server_node = python_package_that_uses_the_services."
+          "what_is_the_point_service_server_node:main' in console_scripts, then colcon build"),
+    Check("server_node_name", "A node named what_is_the_point_service_server starts", 1,
+          "pass 'what_is_the_point_service_server' to super().__init__()"),
+    Check("service_name_type", "It serves /what_is_the_point of type package_with_interfaces/srv/WhatIsThePoint", 2,
+          "self.create_service(srv_type=WhatIsThePoint, srv_name='/what_is_the_point', callback=...)"),
+    Check("life_sum_42", "A quote containing 'life' gets a point whose coordinates sum to 42", 2,
+          "in the callback, test request.quote.quote and make z = 42 - (x + y)"),
+    Check("life_any_case", "'LIFE', 'Life', 'lIfE' count as 'life' too", 2,
+          "compare in one case: 'life' in request.quote.quote.lower()"),
+    Check("no_life_not_42", "Any other quote gets a point whose coordinates do not sum to 42", 2,
+          "look at the quote's text (request.quote.quote), not the philosopher's name; "
+          "if a random point happens to sum to 42, move it"),
+    Check("server_sigint_exit", "Ctrl+C ends the server with exit code 0 and no traceback", 1,
+          "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"),
+    Check("client_executable", "ros2 run finds what_is_the_point_service_client_node", 1,
+          "register 'what_is_the_point_service_client_node = python_package_that_uses_the_services."
+          "what_is_the_point_service_client_node:main' in console_scripts, then colcon build"),
+    Check("client_node_name", "A node named what_is_the_point_service_client starts", 1,
+          "pass 'what_is_the_point_service_client' to super().__init__()"),
+    Check("client_waits", "Before the service exists, the client logs that it is waiting for it", 2,
+          "until self.service_client.service_is_ready() is true, log e.g. "
+          "'service /what_is_the_point not available, waiting...' (and send nothing)"),
+    Check("client_calls", "Once the service exists, the client calls /what_is_the_point", 2,
+          "create the client with srv_type=WhatIsThePoint, srv_name='/what_is_the_point' "
+          "and call self.service_client.call_async(request) in a timer callback"),
+    Check("client_rate", "It calls twice a second (every 0.5 s)", 2,
+          "self.create_timer(0.5, self.timer_callback), one call_async per tick"),
+    Check("client_logs_points", "It logs every point the server returns", 2,
+          "future.add_done_callback(self.process_response); in it, log future.result().point with the logger"),
+    Check("client_keeps_calling_when_slow",
+          "While an answer is late, it still calls every 0.5 s (call_async never blocks the executor)", 3,
+          "don't wait for the answer inside the timer callback (no spin_until_future_complete, no call(), "
+          "no loop on future.done()): return at once and let a done callback handle the response"),
+    Check("client_sigint_exit", "Ctrl+C ends the client with exit code 0 and no traceback", 1,
+          "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"),
+]
+
+
+def _point_text(point) -> str:
+    return f"({point.x:.6g}, {point.y:.6g}, {point.z:.6g})"
+
+
+# --- the server ------------------------------------------------------------------
+
+def _grade_server(s: GradingSession, srv_type: type) -> None:
+    path = require_executable(s, "server_executable", PACKAGE, SERVER_EXE, SERVER_CHECKS)
+    if path is None:
+        return
+    proc, node = launch_node(s, "server_node_name", path, SERVER_EXE, SERVER_NODE)
+    if proc.poll() is not None:
+        skip_checks(s, SERVER_CHECKS[:-1], process_state(proc))
+        record_sigint_exit(s, "server_sigint_exit", proc)
+        return
+    with s.phase("start"):
+        found = wait_for_endpoint(s, node, "services", SERVICE, 3.0, abort=lambda: proc.poll() is not None) \
+            if node else {}
+    expected = f"{SERVICE} [{SRV_TYPE}]"
+    ok = SRV_TYPE in found.get(SERVICE, [])
+    s.record("service_name_type", ok, f"{node or 'the node'} serves: {describe_endpoints(found)}", expected)
+    target = pick_endpoint(found, SERVICE, SRV_TYPE)
+    if target is None or SRV_TYPE not in found.get(target, []):
+        skip_checks(s, SERVER_CHECKS[:-1], f"no service of type {SRV_TYPE} to call")
+        record_sigint_exit(s, "server_sigint_exit", proc)
+        return
+    where = "" if target == SERVICE else f" (called at {target}, the name your server uses)"
+
+    from course.probes import call_service  # noqa: PLC0415
+
+    def ask(case: tuple[str, str, bool], quote_id: int) -> tuple[bool, str]:
+        """Call once; returns (answer as expected, description)."""
+        text, philosopher, life = case
+        request = srv_type.Request()
+        request.quote.id = quote_id
+        request.quote.quote = text
+        request.quote.philosopher_name = philosopher
+        label = f"'{text}' -- {philosopher}"
+        if proc.poll() is not None:
+            return False, f"{label}: not asked, {process_state(proc)}"
+        try:
+            response = call_service(s.ros, srv_type, target, request, timeout=3.0)
+        except TimeoutError as exc:
+            return False, f"{label}: {exc}; {process_state(proc)}"
+        total = response.point.x + response.point.y + response.point.z
+        is_42 = abs(total - 42.0) <= SUM_TOLERANCE
+        return is_42 == life, f"{label}: point {_point_text(response.point)}, sum {total:.9g}"
+
+    with s.phase("observe"):
+        ok, text = ask(LOWERCASE_LIFE, 4201)
+        s.record("life_sum_42", ok, text + where, "coordinates summing to 42 (± 1e-6)")
+        results = [ask(case, 4202 + i) for i, case in enumerate(OTHER_CASES)]
+        passed = sum(r[0] for r in results)
+        s.record("life_any_case", passed == len(results), "; ".join(r[1] for r in results) + where,
+                 "each point sums to 42 (± 1e-6): 'life' in any case", fraction=passed / len(results))
+        results = [ask(case, 4301 + i) for i, case in enumerate(NO_LIFE)]
+        passed = sum(r[0] for r in results)
+        s.record("no_life_not_42", passed == len(results), "; ".join(r[1] for r in results) + where,
+                 "no point sums to 42 (the quote text has no 'life')", fraction=passed / len(results))
+    record_sigint_exit(s, "server_sigint_exit", proc)
+
+
+# --- the client ----------------------------------------------------------------
+
+def _grade_client(s: GradingSession, srv_type: type) -> None:
+    path = require_executable(s, "client_executable", PACKAGE, CLIENT_EXE, CLIENT_CHECKS)
+    if path is None:
+        return
+    rosout = s.ros.rosout()
+    proc, _ = launch_node(s, "client_node_name", path, CLIENT_EXE, CLIENT_NODE)
+    if proc.poll() is not None:
+        skip_checks(s, CLIENT_CHECKS[:-1], process_state(proc))
+        record_sigint_exit(s, "client_sigint_exit", proc)
+        return
+
+    def waiting_records():
+        return rosout.records(match=lambda text: WAITING.search(text) is not None)
+
+    # 1. No service yet: the client must say that it waits.
+    with s.phase("observe"):
+        wait_until(lambda: bool(waiting_records()), 3.0, abort=lambda: proc.poll() is not None)
+    said = waiting_records()
+    before = rosout.records()
+    if said:
+        s.record("client_waits", True, f"logged '{said[0].msg.strip()}' while {SERVICE} did not exist",
+                 "a log record saying it waits for the service")
+    else:
+        shown = " | ".join(r.msg.strip()[:80] for r in before[:3]) or "no log records"
+        s.record("client_waits", False, f"in 3 s without the service: {shown}; {process_state(proc)}",
+                 f"a log record (e.g. 'service {SERVICE} not available, waiting...') while the service is missing")
+
+    # 2. Offer the service; answer at once with points the client's log must show.
+    rng = random.Random()
+    base = [rng.randrange(100, 900) for _ in range(3)]
+
+    def answer(index: int, request, response):
+        # Quarter steps are exact in binary and short in decimal: easy to recognise in any format.
+        response.point.x = base[0] + index + 0.25
+        response.point.y = -(base[1] + index + 0.5)
+        response.point.z = base[2] + 0.75 * ((index % 3) + 1)
+        return response
+
+    server = DeferredServer(s, srv_type, SERVICE, answer)
+    try:
+        _grade_calls(s, server, rosout, proc)
+        # Stop the client while the service still exists (what a learner would do).
+        record_sigint_exit(s, "client_sigint_exit", proc)
+    finally:
+        server.close()
+
+
+def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> None:
+    """Calls, their rate, the logged points, then calls while answers are late (seconds as named)."""
+    offered = time.monotonic()
+    with s.phase("observe"):
+        wait_until(lambda: len(server.calls) >= CALLS, CALLS * PERIOD + 2.0, abort=lambda: proc.poll() is not None)
+    calls = server.calls_since(offered)
+    expected_calls = f"calls to {SERVICE} within {CALLS * PERIOD + 2.0:.0f} s of it appearing"
+    if not calls:
+        s.record("client_calls", False, f"no call in {time.monotonic() - offered:.1f} s; {process_state(proc)}",
+                 expected_calls)
+        skip_checks(s, ["client_rate", "client_logs_points", "client_keeps_calling_when_slow"],
+                    "the client never called the service")
+        return
+    first = calls[0][0] - offered
+    s.record("client_calls", True, f"{len(calls)} call(s), the first {first:.2f} s after the service appeared",
+             expected_calls)
+
+    stats = server.rate(offered, CALLS)
+    expected_rate = f"2.00 Hz: mean period {PERIOD:.3f} s ± {TOLERANCE:.0%}, over at least {CALLS - 1} intervals"
+    if stats is None or stats.samples < CALLS - 1:
+        s.record("client_rate", False, f"only {len(calls)} call(s) in {CALLS * PERIOD + 2.0:.1f} s"
+                 + (f" ({stats.describe()})" if stats else "") + f"; {process_state(proc)}", expected_rate)
+    else:
+        s.record("client_rate", stats.within(1.0 / PERIOD, TOLERANCE),
+                 stats.describe() + " (from the requests' send stamps)", expected_rate)
+
+    # The points sent so far must show up in the client's log (give the last one a moment).
+    def points_sent():
+        return [(r.point.x, r.point.y, r.point.z) for _, r in server.answers]
+
+    def logged(point):
+        return any(has_point(rec.msg, point) for rec in rosout.records())
+
+    sent = points_sent()
+    with s.phase("observe"):
+        wait_until(lambda: all(logged(p) for p in sent), 1.0, abort=lambda: proc.poll() is not None)
+    found = [p for p in sent if logged(p)]
+    shown = ", ".join(f"({x:g}, {y:g}, {z:g})" for x, y, z in sent[:3]) + (", ..." if len(sent) > 3 else "")
+    if found == sent and sent:
+        s.record("client_logs_points", True, f"all {len(sent)} points sent were logged, e.g. "
+                 f"'{_first_line_with(rosout, sent[0])}'", "each returned point in a log record")
+    else:
+        missing = [p for p in sent if p not in found]
+        recent = " | ".join(r.msg.strip().replace("\n", " ")[:80] for r in rosout.records()[-2:]) or "none"
+        s.record("client_logs_points", False,
+                 f"{len(found)} of the {len(sent)} points sent ({shown}) found in the log; missing e.g. "
+                 f"({missing[0][0]:g}, {missing[0][1]:g}, {missing[0][2]:g}); last records: {recent}",
+                 "each returned point in a log record (the logger, not print())",
+                 fraction=len(found) / len(sent) if sent else 0.0)
+
+    # 3. Answer late: a client that does not block keeps calling every 0.5 s meanwhile.
+    server.delay = LATE_ANSWER
+    slow_begin = time.monotonic()
+    window = CALLS * PERIOD + 1.0
+    with s.phase("observe"):
+        wait_until(lambda: len(server.calls_since(slow_begin)) >= CALLS, window, abort=lambda: proc.poll() is not None)
+    late = server.calls_since(slow_begin)
+    stats = server.rate(slow_begin, CALLS)
+    expected_slow = (f"calls keep coming every {PERIOD:.1f} s (± {TOLERANCE:.0%}, over {CALLS - 1} intervals) "
+                     f"while each answer takes {LATE_ANSWER:.1f} s")
+    if stats is not None and stats.samples >= CALLS - 1 and stats.within(1.0 / PERIOD, TOLERANCE):
+        s.record("client_keeps_calling_when_slow", True, f"answers {LATE_ANSWER:.1f} s late: {stats.describe()}",
+                 expected_slow)
+    else:
+        what = stats.describe() if stats else f"{len(late)} call(s)"
+        s.record("client_keeps_calling_when_slow", False,
+                 f"with answers {LATE_ANSWER:.1f} s late: {what} in {time.monotonic() - slow_begin:.1f} s; "
+                 "the client seems to wait for each answer before calling again (a blocked executor?); "
+                 + process_state(proc), expected_slow)
+
+
+def _first_line_with(rosout, point) -> str:
+    for rec in rosout.records():
+        if has_point(rec.msg, point):
+            lines = [line.strip() for line in rec.msg.strip().splitlines() if line.strip()]
+            return " ".join(lines)[:100]
+    return ""
+
+
+def grade(s: GradingSession) -> None:
+    """Grade the server (as its client), then the client (as its server)."""
+    record_depends(s, "depends", PACKAGE)
+    srv_type = workspace_types(s, "srv", "WhatIsThePoint")
+    if srv_type is None:
+        return
+    _grade_server(s, srv_type)
+    _grade_client(s, srv_type)

@@ -1,0 +1,44 @@
+"""The topic and service graders are deterministic: the same correct submission gets the same verdicts every time.
+
+For ``publisher-subscriber`` and ``service-server-client`` the reference is
+built once into a temporary workspace (later grades reuse the build: colcon
+is skipped when the sources are unchanged), then graded 20 times. Score and
+every check's verdict and points must not vary, although the grader makes up
+new quotes (subscriber) and new points (stand-in server) each time and the
+reference server answers with random points. Under load a rate could drift,
+so a failure lists every run that differed and how.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from course.grading import STATUS_PASSED, grade_lesson
+from course.lesson import load_catalog
+from course.validate import reference_workspace
+
+RUNS = 20
+
+
+def verdicts(result) -> list[tuple[str, bool, float]]:
+    """(check id, passed, points) per check, in order."""
+    return [(c.id, c.passed, c.points) for c in result.checks]
+
+
+@pytest.mark.ros
+@pytest.mark.parametrize("lesson_id", ["publisher-subscriber", "service-server-client"])
+def test_reference_grades_identically_20_times(lesson_id, tmp_path):
+    lesson = load_catalog().get(lesson_id)
+    workspace = reference_workspace(lesson, tmp_path / "ws")
+    first = grade_lesson(lesson, workspace, log_dir=tmp_path / "log0")
+    assert first.status == STATUS_PASSED, [(c.id, c.observed) for c in first.checks if not c.passed] or first.message
+    assert first.build.get("ok") is True
+    expected = verdicts(first)
+    differences = []
+    for run in range(1, RUNS):
+        result = grade_lesson(lesson, workspace, log_dir=tmp_path / f"log{run}")
+        assert result.build.get("cached") is True, "the build is reused after the first grade"
+        if result.score != first.score or verdicts(result) != expected:
+            differences.append(f"run {run}: {result.status} {result.score}/{result.max_score}; "
+                               + "; ".join(f"{c.id}: {c.observed}" for c in result.checks if not c.passed))
+    assert not differences, "\n".join(differences)
