@@ -45,7 +45,11 @@ def bench_lesson(lesson, runs: int) -> dict:
             begin = time.monotonic()
             result = grade_lesson(lesson, root)
             times.append(time.monotonic() - begin)
-            ok = ok and result.status == STATUS_PASSED
+            if result.status != STATUS_PASSED:
+                ok = False
+                lost = "; ".join(f"{c.id}: {c.observed}" for c in result.checks if not c.passed)
+                print(f"  {lesson.id}: {result.status} {result.score:g}/{result.max_score:g}: {lost or result.message}",
+                      file=sys.stderr)
         window = getattr(load_grader(lesson.grader), "WINDOW", None)
         warm = statistics.median(times[1:]) if runs else times[0]
         return {"lesson": lesson.id, "cold": times[0], "warm_median": warm,

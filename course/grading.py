@@ -19,7 +19,7 @@ import os
 import sys
 import time
 import traceback
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -75,6 +75,26 @@ class CheckResult:
 
 
 @dataclasses.dataclass
+class Plot:
+    """Time series a grader observed, shown under the table of checks (e.g. joint positions).
+
+    Attributes:
+        title: what is plotted, e.g. ``"joints of /myrobot_1 over the graded window"``.
+        times: seconds from the start of the window, one per sample.
+        series: label -> values (same length as ``times``), e.g. ``{"joint 1": [...], ...}``.
+        unit: unit of the values, e.g. ``"deg"``.
+    """
+
+    title: str
+    times: list[float]
+    series: dict[str, list[float]]
+    unit: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"title": self.title, "times": self.times, "series": self.series, "unit": self.unit}
+
+
+@dataclasses.dataclass
 class LessonResult:
     """Everything ``check`` reports about one submission for one lesson.
 
@@ -84,6 +104,7 @@ class LessonResult:
         timings: seconds spent per phase (``build``, ``grade``, ``teardown``, ...).
         build: how the build went (``ok``, ``cached``, ``seconds``, ``log``).
         log_dir: where the build and node logs of this check are.
+        plots: time series the grader observed (:class:`Plot`), for people; not in ``to_json()``.
     """
 
     lesson: str
@@ -96,6 +117,7 @@ class LessonResult:
     timings: dict[str, float] = dataclasses.field(default_factory=dict)
     build: dict[str, Any] = dataclasses.field(default_factory=dict)
     log_dir: str = ""
+    plots: list[Plot] = dataclasses.field(default_factory=list)
 
     def to_json(self) -> dict[str, Any]:
         """The documented ``check --json`` object (plus ``message`` when not graded)."""
@@ -139,6 +161,27 @@ class GradingSession:
         self.notes: list[str] = []
         #: seconds per named phase (``start``, ``observe``, ``stop``...), see :meth:`phase`.
         self.timings: dict[str, float] = {}
+        #: time series to show under the table of checks, see :meth:`add_plot`.
+        self.plots: list[Plot] = []
+
+    def add_plot(self, title: str, times: Sequence[float], series: Mapping[str, Sequence[float]],
+                 unit: str = "") -> None:
+        """Attach observed time series to the result (rendered as sparklines by ``check``).
+
+        Args:
+            title: what is plotted.
+            times: seconds from the window start, one per sample.
+            series: label -> values, each as long as ``times``.
+            unit: unit of the values (e.g. ``"deg"``).
+
+        Raises:
+            ValueError: a series' length differs from ``times``.
+        """
+        times = [float(t) for t in times]
+        for label, values in series.items():
+            if len(values) != len(times):
+                raise ValueError(f"plot {title!r}: series {label!r} has {len(values)} values for {len(times)} times")
+        self.plots.append(Plot(title, times, {k: [float(v) for v in vs] for k, vs in series.items()}, unit))
 
     @contextlib.contextmanager
     def phase(self, name: str) -> Iterator[None]:
@@ -251,6 +294,18 @@ class GradingSession:
 
         return self._stack.enter_context(RosSession())
 
+    def in_new_graph(self) -> "GraphView":
+        """This session seen through a new private graph (:meth:`new_graph`).
+
+        The view's ``ros`` is the new graph and its ``launch`` starts processes
+        in it; everything else (``record``, ``phase``, ...) is this session's.
+        For grading a lesson's second executable: a process joining a graph
+        whose participants already know each other is discovered up to ~3 s
+        later than one joining a fresh graph (measured with Fast DDS and
+        localhost discovery), so a fresh graph keeps the check short.
+        """
+        return GraphView(self, self.new_graph())
+
     def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:
         """Start a learner executable in the private domain; it is stopped at the end of the check.
 
@@ -273,6 +328,25 @@ class GradingSession:
             proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
         self._stack.close()
         sweep_stale_fastdds_shm()
+
+
+class GraphView:
+    """A :class:`GradingSession` whose ``ros`` (and default launch graph) is another private graph.
+
+    Made by :meth:`GradingSession.in_new_graph`; every other attribute is the
+    underlying session's, so checks recorded through the view are the session's.
+    """
+
+    def __init__(self, session: GradingSession, graph: Any) -> None:
+        self._session = session
+        self.ros = graph
+
+    def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:
+        """:meth:`GradingSession.launch` in this view's graph (unless ``graph`` is given)."""
+        return self._session.launch(path, name, args, graph=graph or self.ros)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._session, name)
 
 
 @contextlib.contextmanager
@@ -390,7 +464,7 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     if status is None:
         status = STATUS_PASSED if score >= max_score else STATUS_FAILED
     result = LessonResult(lesson.id, score, max_score, status, results, message, hint, timings, build_info,
-                          str(log_dir))
+                          str(log_dir), session.plots)
     with contextlib.suppress(OSError):
         (log_dir / "result.json").write_text(json.dumps(result.to_json(), indent=2), encoding="utf-8")
     return result

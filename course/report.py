@@ -14,7 +14,7 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from course.grading import STATUS_PASSED, LessonResult
+from course.grading import STATUS_PASSED, LessonResult, Plot
 from course.lesson import Lesson
 from course.progress import Progress
 
@@ -24,6 +24,47 @@ _STATUS_STYLE = {"passed": "bold green", "failed": "bold yellow", "not gradable"
 
 def _points(value: float) -> str:
     return f"{value:g}"
+
+
+#: Eight block glyphs, lowest to highest. rich has no sparkline renderable and a plotting
+#: dependency (plotext, asciichartpy) would be heavier than this one mapping.
+_SPARK = "▁▂▃▄▅▆▇█"
+
+
+def sparkline(values: list[float], width: int = 60, low: float | None = None, high: float | None = None) -> str:
+    """``values`` as a string of at most ``width`` block glyphs (evenly resampled).
+
+    ``low``/``high`` fix the scale (default: the values' own range); a flat
+    series is drawn at mid height.
+    """
+    if not values:
+        return ""
+    if len(values) > width:
+        values = [values[round(i * (len(values) - 1) / (width - 1))] for i in range(width)]
+    low = min(values) if low is None else low
+    high = max(values) if high is None else high
+    if high - low < 1e-12:
+        return _SPARK[3] * len(values)
+    top = len(_SPARK) - 1
+    return "".join(_SPARK[max(0, min(top, round((v - low) / (high - low) * top)))] for v in values)
+
+
+def render_plot(plot: Plot, console: Console, width: int = 60) -> None:
+    """One sparkline per series of ``plot``, each labelled with its range (in ``plot.unit``)."""
+    if not plot.times or not plot.series:
+        return
+    span = plot.times[-1] - plot.times[0]
+    table = Table(title=f"{plot.title} ({span:.2f} s)", title_justify="left", box=None, show_header=False,
+                  padding=(0, 1))
+    table.add_column(style="bold")
+    table.add_column(style="cyan", no_wrap=True)
+    table.add_column(style="dim", no_wrap=True)
+    unit = f" {plot.unit}" if plot.unit else ""
+    for label, values in plot.series.items():
+        if not values:
+            continue
+        table.add_row(label, sparkline(values, width), f"{min(values):.3g} … {max(values):.3g}{unit}")
+    console.print(table)
 
 
 def render_result(result: LessonResult, console: Console) -> None:
@@ -60,6 +101,8 @@ def render_result(result: LessonResult, console: Console) -> None:
     if skipped:
         console.print(Text(f"{len(skipped)} check(s) not run: {skipped[0].observed.removeprefix('not checked: ')}",
                            style="dim"))
+    for plot in result.plots:
+        render_plot(plot, console)
     if result.status == STATUS_PASSED:
         console.print(Text("Full marks. 'ros2course next' moves on.", style="green"))
     if result.log_dir:

@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import os
+import signal
+import time
 from pathlib import Path
 
 from course.grading import GradingSession
+from course.probes import wait_until
 from course.process import LearnerProcess
 
 
@@ -42,8 +46,6 @@ def wait_for_node(s: GradingSession, check_id: str, proc: LearnerProcess, node: 
     nodes appeared without it (a misnamed node will not rename itself).
     Observed lists the nodes seen.
     """
-    import time  # noqa: PLC0415
-
     first_other: list[float] = []
 
     def give_up() -> bool:
@@ -65,21 +67,65 @@ def wait_for_node(s: GradingSession, check_id: str, proc: LearnerProcess, node: 
                     f"a node named {node} (the name passed to super().__init__)")
 
 
+def _rclpy_shutdown_race(trace: str) -> bool:
+    """True when ``trace`` ends inside rclpy's executor with a "context is not valid" RCLError."""
+    lines = [line for line in trace.strip().splitlines() if line.strip()]
+    frames = [line for line in lines if line.lstrip().startswith('File "')]
+    last = lines[-1] if lines else ""
+    return (bool(frames) and "rclpy/executors.py" in frames[-1] and "RCLError" in last
+            and ("context is not valid" in last or "context is invalid" in last))
+
+
 def record_sigint_exit(s: GradingSession, check_id: str, proc: LearnerProcess, sigint_timeout: float = 3.0) -> bool:
-    """Send SIGINT (Ctrl+C) and record ``check_id``: exit code 0, no traceback, within ``sigint_timeout`` s."""
-    with s.phase("stop"):
-        report = proc.stop(sigint_timeout=sigint_timeout, sigterm_timeout=2.0)
+    """Press Ctrl+C (SIGINT) and record ``check_id``: exit code 0, no traceback, within ``sigint_timeout`` s.
+
+    Observed says how long the exit took; fails for an exit code other than 0,
+    a traceback, or a process still running (then stopped with SIGTERM /
+    SIGKILL). Two allowances for races for races
+    inside rclpy (Jazzy 7.1) that are not the learner's doing, measured here
+    at about 1 % of SIGINTs each on nodes started the way the engine starts
+    them (SIGINT ignored at exec, so only rclpy's handler reacts):
+
+    * a node with nothing to wake it (no timer: a server, a subscriber) can
+      miss the shutdown and keep waiting; if it still runs after half the
+      timeout it gets a second Ctrl+C, as a user would press it again;
+    * ``spin()`` can raise ``RCLError: ... context is not valid`` from inside
+      rclpy's executor instead of ``ExternalShutdownException``; that exit
+      counts as clean.
+
+    A node that ignores Ctrl+C still fails (it ignores the second one too).
+    """
     expected = f"exit code 0 within {sigint_timeout:.0f} s of SIGINT (Ctrl+C), no traceback"
-    if report.signal_used is None:
+    if proc.poll() is not None:
+        report = proc.stop()
         return s.record(check_id, False, f"the process had already exited (code {report.returncode}) before SIGINT",
                         expected, "the node must keep running until Ctrl+C")
-    if report.signal_used != "SIGINT":
+    presses = 0
+    with s.phase("stop"):
+        begin = time.monotonic()
+        for wait in (sigint_timeout / 2, sigint_timeout / 2):
+            presses += 1
+            try:
+                os.killpg(proc.pid, signal.SIGINT)
+            except (ProcessLookupError, PermissionError):
+                break
+            if wait_until(lambda: proc.poll() is not None, wait, interval=0.01):
+                break
+        seconds = time.monotonic() - begin
+        exited = proc.poll() is not None
+        report = proc.stop(sigint_timeout=0.1, sigterm_timeout=2.0)
+    twice = " (after a second Ctrl+C: rclpy missed the first one)" if presses > 1 else ""
+    if not exited:
         return s.record(check_id, False,
-                        f"still running {sigint_timeout:.0f} s after SIGINT; stopped with {report.signal_used}",
-                        expected, "don't swallow Ctrl+C in a loop: let rclpy.spin() return and exit main()")
+                        f"still running {sigint_timeout:.0f} s after SIGINT (sent twice); stopped with "
+                        f"{report.signal_used or 'SIGKILL'}", expected,
+                        "don't swallow Ctrl+C in a loop: let rclpy.spin() return and exit main()")
     if report.traceback:
+        if report.returncode != 0 and _rclpy_shutdown_race(report.traceback):
+            return s.record(check_id, True, f"exit code {report.returncode}, {seconds:.2f} s after SIGINT{twice}, "
+                            "with rclpy's own shutdown race (RCLError inside rclpy.spin: not your code)", expected)
         last = report.traceback.strip().splitlines()[-1]
         return s.record(check_id, False, f"exit code {report.returncode} with a traceback: {last}", expected)
     if report.returncode != 0:
         return s.record(check_id, False, f"exit code {report.returncode} after SIGINT", expected)
-    return s.record(check_id, True, f"exit code 0, {report.seconds:.2f} s after SIGINT", expected)
+    return s.record(check_id, True, f"exit code 0, {seconds:.2f} s after SIGINT{twice}", expected)

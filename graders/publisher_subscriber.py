@@ -17,7 +17,7 @@ import random
 
 from course.grading import Check, GradingSession
 from course.probes import wait_until
-from graders._common import process_state
+from graders._common import process_state, record_sigint_exit
 from graders._quote_tools import (
     StampedTopicProbe,
     describe_endpoints,
@@ -25,7 +25,6 @@ from graders._quote_tools import (
     launch_node,
     pick_endpoint,
     record_depends,
-    record_sigint_exit,
     require_executable,
     skip_checks,
     wait_for_endpoint,
@@ -281,4 +280,5 @@ def grade(s: GradingSession) -> None:
     if msg_type is None:
         return
     _grade_publisher(s, msg_type)
-    _grade_subscriber(s, msg_type)
+    # A fresh graph: a second learner process is discovered faster there (GradingSession.in_new_graph).
+    _grade_subscriber(s.in_new_graph(), msg_type)

@@ -18,13 +18,14 @@ Black-box, and the grader plays the other side each time:
 
 from __future__ import annotations
 
+import concurrent.futures
 import random
 import re
 import time
 
 from course.grading import Check, GradingSession
 from course.probes import wait_until
-from graders._common import process_state
+from graders._common import process_state, record_sigint_exit
 from graders._quote_tools import (
     DeferredServer,
     describe_endpoints,
@@ -32,7 +33,6 @@ from graders._quote_tools import (
     launch_node,
     pick_endpoint,
     record_depends,
-    record_sigint_exit,
     require_executable,
     skip_checks,
     wait_for_endpoint,
@@ -51,6 +51,11 @@ TOLERANCE = 0.15  # on the mean period (shared/LESSONS.md)
 CALLS = 6  # calls -> 5 intervals, the minimum LESSONS.md asks for
 SUM_TOLERANCE = 1e-6  # |x + y + z - 42|
 LATE_ANSWER = 1.0  # seconds: twice the call period, so a blocked client halves its rate
+#: Seconds of extra patience for calls that were sent on time but delivered late: a reliable
+#: DDS sample lost on a loaded machine is repaired after the writer's next heartbeat (Fast DDS
+#: default period: 3 s) and holds back the samples after it. Rates use the send stamps, so
+#: waiting longer never changes a verdict; it only runs when calls are missing.
+LATE_DELIVERY_GRACE = 3.0
 WAITING = re.compile(r"wait|availab", re.IGNORECASE)
 
 #: (quote, philosopher, does the quote contain "life" in any case?)
@@ -71,9 +76,11 @@ SERVER_CHECKS = ["server_executable", "server_node_name", "service_name_type", "
 CLIENT_CHECKS = ["client_executable", "client_node_name", "client_waits", "client_calls", "client_rate",
                  "client_logs_points", "client_keeps_calling_when_slow", "client_sigint_exit"]
 
-#: Seconds of observation the contract needs: the client's 6 calls at 2 Hz, then the late-answer
-#: phase (the stand-in server answers LATE_ANSWER s late).
-WINDOW = CALLS * PERIOD + 2 * LATE_ANSWER
+#: Seconds of observation the contract needs, on the client's clock (the server half runs at the
+#: same time in a graph of its own and is shorter): its first "waiting" record (within one 0.5 s
+#: tick of starting), then twice "the next tick + 5 intervals at 2 Hz": once with prompt answers
+#: (rate, logged points), once with answers LATE_ANSWER s late (does it keep calling?).
+WINDOW = PERIOD + 2 * (PERIOD + (CALLS - 1) * PERIOD)
 
 CHECKS = [
     Check("build", "The packages build with colcon", 1),
@@ -234,9 +241,10 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
     """Calls, their rate, the logged points, then calls while answers are late (seconds as named)."""
     offered = time.monotonic()
     with s.phase("observe"):
-        wait_until(lambda: len(server.calls) >= CALLS, CALLS * PERIOD + 2.0, abort=lambda: proc.poll() is not None)
+        wait_until(lambda: len(server.calls) >= CALLS, CALLS * PERIOD + 2.0 + LATE_DELIVERY_GRACE,
+                   abort=lambda: proc.poll() is not None)
     calls = server.calls_since(offered)
-    expected_calls = f"calls to {SERVICE} within {CALLS * PERIOD + 2.0:.0f} s of it appearing"
+    expected_calls = f"calls to {SERVICE} within {CALLS * PERIOD + 2.0 + LATE_DELIVERY_GRACE:.0f} s of it appearing"
     if not calls:
         s.record("client_calls", False, f"no call in {time.monotonic() - offered:.1f} s; {process_state(proc)}",
                  expected_calls)
@@ -250,7 +258,7 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
     stats = server.rate(offered, CALLS)
     expected_rate = f"2.00 Hz: mean period {PERIOD:.3f} s ± {TOLERANCE:.0%}, over at least {CALLS - 1} intervals"
     if stats is None or stats.samples < CALLS - 1:
-        s.record("client_rate", False, f"only {len(calls)} call(s) in {CALLS * PERIOD + 2.0:.1f} s"
+        s.record("client_rate", False, f"only {len(calls)} call(s) in {time.monotonic() - offered:.1f} s"
                  + (f" ({stats.describe()})" if stats else "") + f"; {process_state(proc)}", expected_rate)
     else:
         s.record("client_rate", stats.within(1.0 / PERIOD, TOLERANCE),
@@ -265,7 +273,9 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
 
     sent = points_sent()
     with s.phase("observe"):
-        wait_until(lambda: all(logged(p) for p in sent), 1.0, abort=lambda: proc.poll() is not None)
+        # 1 s for the last answer's log record, more only while records are missing (LATE_DELIVERY_GRACE).
+        wait_until(lambda: all(logged(p) for p in sent), 1.0 + LATE_DELIVERY_GRACE,
+                   abort=lambda: proc.poll() is not None)
     found = [p for p in sent if logged(p)]
     shown = ", ".join(f"({x:g}, {y:g}, {z:g})" for x, y, z in sent[:3]) + (", ..." if len(sent) > 3 else "")
     if found == sent and sent:
@@ -283,7 +293,7 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
     # 3. Answer late: a client that does not block keeps calling every 0.5 s meanwhile.
     server.delay = LATE_ANSWER
     slow_begin = time.monotonic()
-    window = CALLS * PERIOD + 1.0
+    window = CALLS * PERIOD + 1.0 + LATE_DELIVERY_GRACE
     with s.phase("observe"):
         wait_until(lambda: len(server.calls_since(slow_begin)) >= CALLS, window, abort=lambda: proc.poll() is not None)
     late = server.calls_since(slow_begin)
@@ -310,10 +320,22 @@ def _first_line_with(rosout, point) -> str:
 
 
 def grade(s: GradingSession) -> None:
-    """Grade the server (as its client), then the client (as its server)."""
+    """Grade the server (as its client) and, at the same time, the client (as its server).
+
+    Each executable runs in a private graph of its own (so neither sees the
+    other, and neither waits for the other's discovery), which lets the two
+    halves overlap: the check takes about as long as the client's half. The
+    client is started from this (main) thread, so it gets the parent-death
+    signal; the server half runs on a worker thread.
+    """
     record_depends(s, "depends", PACKAGE)
     srv_type = workspace_types(s, "srv", "WhatIsThePoint")
     if srv_type is None:
         return
-    _grade_server(s, srv_type)
-    _grade_client(s, srv_type)
+    client_graph = s.in_new_graph()
+    with concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="ros2course-server-half") as pool:
+        server_half = pool.submit(_grade_server, s, srv_type)
+        try:
+            _grade_client(client_graph, srv_type)
+        finally:
+            server_half.result()  # re-raises a grader fault of the server half
