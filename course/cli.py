@@ -284,6 +284,47 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
         raise typer.Exit(int(ExitStatus.VALIDATION_FAILED))
 
 
+@app.command()
+@_handle_errors
+def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
+                                                      help="Folder with one entry per student: a workspace, a folder of packages, or a .zip / .tar.gz of either.")],
+          lesson: Annotated[list[str], typer.Option("--lesson", "-l", metavar="LESSON", help="Lesson to grade (repeatable).")],
+          out: Annotated[Path, typer.Option("--out", "-o", metavar="OUTDIR", help="Where the gradebook and results go.")],
+          jobs: Annotated[Optional[int], typer.Option("--jobs", "-j", help="Submissions graded at once (default: number of cores).")] = None,
+          timeout: Annotated[float, typer.Option("--timeout", help="Wall-clock limit per submission, seconds.")] = 300.0,
+          scheduler: Annotated[Optional[str], typer.Option("--scheduler", envvar="DASK_SCHEDULER_ADDRESS",
+                                                           help="Dask scheduler address: grade on that cluster instead.")] = None,
+          resume: Annotated[bool, typer.Option("--resume", help="Skip submissions already in OUTDIR/results.jsonl.")] = False,
+          memory_mb: Annotated[int, typer.Option("--memory-mb", help="Address-space limit per process of a submission, MiB (0: none).")] = 4096,
+          ) -> None:
+    """Grade a whole class: each submission isolated, in parallel, resumable; writes a gradebook."""
+    from course.batch import render_summary, run_batch  # noqa: PLC0415
+
+    err = stderr_console()
+    if memory_mb < 0:
+        raise CourseError(f"--memory-mb must be 0 or more (got {memory_mb})", "e.g. --memory-mb 4096")
+    report = run_batch(submissions, lesson, out, jobs=jobs, timeout=timeout, scheduler=scheduler, resume=resume,
+                       console=err, memory_limit=memory_mb * 1024 * 1024)
+    render_summary(report, err)
+    stdout_console().print(f"gradebook: {report.out_dir / 'gradebook.csv'}")
+
+
+@app.command()
+@_handle_errors
+def gradescope(lesson: Annotated[Optional[list[str]], typer.Option("--lesson", "-l", metavar="LESSON",
+                                                                   help="Lesson(s) to grade (default: $ROS2COURSE_LESSON or the file gradescope/lesson).")] = None,
+               submission: Annotated[Path, typer.Option("--submission", help="The student's upload.")] = Path("/autograder/submission"),
+               results: Annotated[Path, typer.Option("--results", help="Where Gradescope reads the result.")] = Path(
+                   "/autograder/results/results.json"),
+               timeout: Annotated[float, typer.Option("--timeout", help="Wall-clock limit, seconds.")] = 600.0,
+               ) -> None:
+    """Grade one submission inside a Gradescope autograder container (writes results.json)."""
+    from course.batch_gradescope import run_gradescope  # noqa: PLC0415
+
+    score = run_gradescope(lesson or [], submission, results, timeout=timeout)
+    stdout_console().print(f"score {score:g}; results in {results}")
+
+
 def main() -> None:
     """Console-script entry point: the one place that exits the process."""
     os.environ.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")

@@ -1,0 +1,654 @@
+"""``ros2course grade``: isolated, parallel, resumable grading of a whole class.
+
+One submission is one *job* (:class:`Job`), run by :func:`run_job`:
+
+1. the entry is copied or safely extracted into a fresh scratch folder
+   (:mod:`course.batch_archive`); the original is never written to;
+2. a worker subprocess (:mod:`course.batch_worker`) grades it with the same
+   :func:`course.grading.grade_lesson` as ``check``. It runs in its own
+   session, with ``RLIMIT_AS`` / ``RLIMIT_FSIZE`` limits, its output captured
+   into a capped log file, and, where the machine allows (``unshare``), in its
+   own network namespace (loopback only: no internet, no DDS cross-talk) and
+   mount namespace (a private ``/dev/shm`` for Fast DDS, and the other
+   submissions, the output folder, the submissions folder and the reference
+   solutions hidden under empty tmpfs mounts);
+3. the parent enforces the wall-clock timeout: it kills the worker's process
+   group and every process carrying the batch's run marker, then sweeps stale
+   Fast DDS shared memory;
+4. the logs are copied to ``OUTDIR/<student>/logs/`` and the scratch folder removed.
+
+:func:`run_batch` submits the jobs to one ``concurrent.futures`` executor: a
+``ThreadPoolExecutor(max_workers=jobs)`` on this machine, or a Dask
+distributed cluster's executor (``--scheduler``), whose workers run the same
+:func:`run_job` (they need this package, the ROS install and a file system
+shared with the parent for the submissions and OUTDIR). The parent alone
+writes the outputs (:mod:`course.gradebook`) as each job finishes.
+"""
+
+from __future__ import annotations
+
+import concurrent.futures as cf
+import contextlib
+import dataclasses
+import json
+import os
+import shlex
+import shutil
+import signal
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import uuid
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+from course import gradebook
+from course.batch_archive import Submission, discover, prepare
+from course.errors import CourseError, NotGradable
+
+#: Environment variable every process of a job carries (its value: the job's marker).
+BATCH_MARKER_VAR = "ROS2COURSE_BATCH_MARKER"
+#: Default wall-clock limit per submission (all its lessons), seconds.
+DEFAULT_TIMEOUT = 300.0
+#: Default address-space limit per process of a submission, bytes (rclpy + Fast DDS need ~1.5 GiB).
+DEFAULT_MEMORY_LIMIT = 4 * 1024**3
+#: Largest file a submission's processes may write, bytes.
+DEFAULT_FILE_LIMIT = 512 * 1024**2
+#: Bytes of the worker's own stdout+stderr kept in ``logs/worker.log``.
+DEFAULT_OUTPUT_CAP = 2_000_000
+
+_cancelled: set[str] = set()
+_isolation_lock = threading.Lock()
+_isolation_cache: dict[str, Any] = {}
+
+
+@dataclasses.dataclass
+class Job:
+    """Everything :func:`run_job` needs (plain data: it travels to Dask workers by pickle).
+
+    Attributes:
+        batch_id: the batch's id (cancelling a batch stops its jobs in this process).
+        student: student id (output folder name).
+        entry: the submission entry (folder or archive), absolute path.
+        problem: why the entry cannot be graded at all ("" if it may be).
+        lessons: lesson ids to grade, in order.
+        out_dir: the batch's OUTDIR (logs go to ``out_dir/<student>/logs``).
+        timeout: wall-clock seconds for the whole submission.
+        memory_limit: bytes of address space per process (0: no limit).
+        file_limit: bytes per written file (0: no limit).
+        output_cap: bytes of worker output kept.
+        hide: folders hidden from the submission (when a mount namespace is available).
+        isolate: use network/mount namespaces when the machine allows it.
+        scratch_root: where scratch folders are made (None: the system temp folder).
+    """
+
+    batch_id: str
+    student: str
+    entry: str
+    problem: str
+    lessons: list[str]
+    out_dir: str
+    timeout: float = DEFAULT_TIMEOUT
+    memory_limit: int = DEFAULT_MEMORY_LIMIT
+    file_limit: int = DEFAULT_FILE_LIMIT
+    output_cap: int = DEFAULT_OUTPUT_CAP
+    hide: list[str] = dataclasses.field(default_factory=list)
+    isolate: bool = True
+    scratch_root: str | None = None
+
+
+# --- isolation -------------------------------------------------------------------------------
+
+def _ip_command() -> str | None:
+    return shutil.which("ip") or next((p for p in ("/usr/sbin/ip", "/sbin/ip", "/usr/bin/ip") if os.access(p, os.X_OK)), None)
+
+
+def _prelude(ip: str, own: str, hide: list[str]) -> str:
+    """The shell run inside the new namespaces before the worker (``exec "$@"``)."""
+    q = shlex.quote
+    lines = ["set -e", f"{q(ip)} link set lo up",
+             "mount -t tmpfs -o mode=1777,size=1g ros2course-shm /dev/shm"]
+    if own:
+        lines += ["mkdir /dev/shm/.ros2course-own", f"mount --bind {q(own)} /dev/shm/.ros2course-own"]
+    for folder in hide:
+        lines.append(f"if [ -d {q(folder)} ]; then mount -t tmpfs -o mode=0755,size=1m ros2course-hidden {q(folder)}; fi")
+    if own:
+        lines += [f"mkdir -p {q(own)}", f"mount --move /dev/shm/.ros2course-own {q(own)}"]
+    lines.append('exec "$@"')
+    return "\n".join(lines)
+
+
+def isolation_prefix(own: str = "", hide: list[str] | None = None) -> tuple[list[str], dict[str, Any]]:
+    """The command prefix that runs a job in its own network and mount namespace, and what it gives.
+
+    Tried once per process: ``unshare --net --mount`` (root), then with
+    ``--user --map-root-user`` (unprivileged user namespaces). The probe runs
+    the same prelude (``ip link set lo up``, a private ``/dev/shm``).
+
+    Args:
+        own: the job's scratch folder (kept visible when a hidden folder contains it).
+        hide: folders to cover with an empty tmpfs inside the namespace.
+
+    Returns:
+        ``(prefix, info)``: prefix is ``[]`` when no namespace is available; info is
+        ``{"netns": bool, "mountns": bool, "reason": str}``.
+    """
+    with _isolation_lock:
+        if "variant" not in _isolation_cache:
+            _isolation_cache.update(_probe_isolation())
+    variant = _isolation_cache["variant"]
+    info = dict(_isolation_cache["info"])
+    if variant is None:
+        return [], info
+    unshare, ip = _isolation_cache["unshare"], _isolation_cache["ip"]
+    return [unshare, *variant, "/bin/sh", "-c", _prelude(ip, own, hide or []), "ros2course-ns"], info
+
+
+def _probe_isolation() -> dict[str, Any]:
+    unshare, ip = shutil.which("unshare"), _ip_command()
+    if sys.platform != "linux" or not unshare or not ip:
+        missing = "unshare" if not unshare else "ip"
+        return {"variant": None, "info": {"netns": False, "mountns": False,
+                                         "reason": f"no {missing} command (util-linux / iproute2)"}}
+    reasons = []
+    for variant in (["--net", "--mount"], ["--user", "--map-root-user", "--net", "--mount"]):
+        try:
+            proc = subprocess.run([unshare, *variant, "/bin/sh", "-c", _prelude(ip, "", []), "probe", "true"],
+                                  capture_output=True, text=True, timeout=20, stdin=subprocess.DEVNULL, check=False)
+        except (OSError, subprocess.TimeoutExpired) as exc:
+            reasons.append(f"{' '.join(variant)}: {exc}")
+            continue
+        if proc.returncode == 0:
+            how = "unshare " + " ".join(variant)
+            return {"variant": variant, "unshare": unshare, "ip": ip,
+                    "info": {"netns": True, "mountns": True,
+                             "reason": f"{how}: loopback-only network, private /dev/shm, other folders hidden"}}
+        reasons.append(f"{' '.join(variant)}: {(proc.stderr.strip().splitlines() or ['exit ' + str(proc.returncode)])[-1]}")
+    return {"variant": None, "info": {"netns": False, "mountns": False,
+                                     "reason": "unshare refused: " + "; ".join(reasons)}}
+
+
+def _hideable(folder: Path) -> bool:
+    """A folder may be hidden unless it holds what the worker itself needs (Python, this package, HOME)."""
+    from course.lesson import content_root  # noqa: PLC0415
+
+    needed = [Path(sys.prefix), Path(sys.executable).resolve(), Path(__file__).resolve().parent, content_root() / "graders",
+              content_root() / "chapters"]
+    folder = folder.resolve()
+    return folder != Path("/") and not any(p.resolve() == folder or p.resolve().is_relative_to(folder) for p in needed)
+
+
+def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
+    """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions."""
+    from course.lesson import content_root  # noqa: PLC0415
+
+    candidates = [scratch_root, submissions, out_dir, content_root() / "solutions", content_root() / "tests" / "fixtures"]
+    out: list[str] = []
+    for folder in candidates:
+        folder = folder.resolve()
+        if folder.is_dir() and _hideable(folder) and str(folder) not in out:
+            out.append(str(folder))
+    return out
+
+
+# --- one job ------------------------------------------------------------------------------------
+
+def lesson_checks(lesson_id: str) -> tuple[float, list[str]]:
+    """``(max_score, check ids)`` of a lesson's grader.
+
+    Raises:
+        UnknownLesson: no such lesson.  CourseError: its grader cannot be imported.
+    """
+    from course.grading import load_grader  # noqa: PLC0415
+    from course.lesson import load_catalog
+
+    module = load_grader(load_catalog().get(lesson_id).grader)
+    return float(sum(c.points for c in module.CHECKS)), [c.id for c in module.CHECKS]
+
+
+def _unfinished(lesson_id: str, status: str, message: str, hint: str = "") -> dict[str, Any]:
+    try:
+        max_score = lesson_checks(lesson_id)[0]
+    except CourseError:
+        max_score = 0.0
+    return {"lesson": lesson_id, "score": 0.0, "max_score": max_score, "status": status, "checks": [],
+            "message": message, "hint": hint, "timings": {}, "build": {}, "log_dir": ""}
+
+
+class _CappedDrain(threading.Thread):
+    """Copy a pipe into a file, keeping at most ``cap`` bytes (the rest is counted and dropped)."""
+
+    def __init__(self, pipe, path: Path, cap: int) -> None:
+        super().__init__(daemon=True, name=f"batch-drain-{path.parent.name}")
+        self.pipe, self.path, self.cap, self.total = pipe, path, cap, 0
+
+    def run(self) -> None:
+        with open(self.path, "wb") as out:
+            while True:
+                try:
+                    chunk = os.read(self.pipe.fileno(), 65536)
+                except OSError:
+                    break
+                if not chunk:
+                    break
+                room = self.cap - self.total
+                if room > 0:
+                    out.write(chunk[:room])
+                    out.flush()
+                self.total += len(chunk)
+            if self.total > self.cap:
+                out.write(f"\n[ros2course: output capped at {self.cap} bytes; {self.total - self.cap} more dropped]\n".encode())
+        with contextlib.suppress(OSError):
+            self.pipe.close()
+
+
+def _tree_rss(pid: int) -> int:
+    import psutil  # noqa: PLC0415
+
+    try:
+        root = psutil.Process(pid)
+        procs = [root, *root.children(recursive=True)]
+    except psutil.Error:
+        return 0
+    total = 0
+    for proc in procs:
+        with contextlib.suppress(psutil.Error):
+            total += proc.memory_info().rss
+    return total
+
+
+def _kill_job(popen: subprocess.Popen, marker: str) -> list[int]:
+    """SIGKILL the worker's process group and every process carrying the job's marker."""
+    from course.process import kill_marked  # noqa: PLC0415
+
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(popen.pid, signal.SIGKILL)
+    return kill_marked(marker, var=BATCH_MARKER_VAR)
+
+
+def _rewrite_paths(records: list[dict[str, Any]], replacements: list[tuple[str, str]]) -> list[dict[str, Any]]:
+    text = json.dumps(records)
+    for old, new in replacements:
+        if old:
+            text = text.replace(json.dumps(old)[1:-1], json.dumps(new)[1:-1])
+    return json.loads(text)
+
+
+def run_job(job: Job) -> dict[str, Any]:
+    """Prepare, grade and clean up one submission; never raises for the submission's faults.
+
+    Returns:
+        ``{"student", "records": [record per lesson], "isolation": {...},
+        "peak_rss": bytes (worker and its children, sampled every 0.5 s),
+        "seconds": wall time, "cancelled": bool}``. Records follow
+        :mod:`course.gradebook` (``check --json`` + student, timings, isolation, log_dir).
+        A cancelled job returns no records (a resumed batch grades it again).
+    """
+    from course.process import sweep_stale_fastdds_shm  # noqa: PLC0415
+
+    begin = time.monotonic()
+    student_logs = Path(job.out_dir) / job.student / "logs"
+    scratch = Path(tempfile.mkdtemp(prefix=f"ros2course-grade-{job.student[:40]}-", dir=job.scratch_root))
+    isolation: dict[str, Any] = {"netns": False, "mountns": False, "reason": "not run"}
+    peak = 0
+    cancelled = False
+    records: list[dict[str, Any]] = []
+    try:
+        try:
+            ws = prepare(Submission(job.student, Path(job.entry), job.problem), scratch)
+        except NotGradable as exc:
+            isolation = {"netns": False, "mountns": False, "reason": "not run (not gradable)"}
+            records = [_unfinished(lesson, gradebook.NOT_GRADABLE, exc.message, exc.hint) for lesson in job.lessons]
+            ws = None
+        if ws is not None:
+            records, isolation, peak, cancelled = _run_worker(job, scratch, ws)
+        if student_logs.exists():
+            shutil.rmtree(student_logs, ignore_errors=True)
+        if (scratch / "logs").is_dir():
+            shutil.copytree(scratch / "logs", student_logs, symlinks=True, dirs_exist_ok=True)
+        records = _rewrite_paths(records, [(str(scratch / "logs"), str(student_logs)),
+                                           (str(scratch / "ws"), "<submission>"), (str(scratch), "<scratch>")])
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+        if not isolation.get("mountns"):
+            sweep_stale_fastdds_shm()
+    seconds = time.monotonic() - begin
+    for record in records:
+        record["student"] = job.student
+        record["isolation"] = isolation
+        record.setdefault("timings", {})["total"] = round(seconds, 3)
+        record["peak_rss"] = peak
+    return {"student": job.student, "records": [] if cancelled else records, "isolation": isolation,
+            "peak_rss": peak, "seconds": seconds, "cancelled": cancelled}
+
+
+def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[dict[str, Any]], dict[str, Any], int, bool]:
+    logs = scratch / "logs"
+    logs.mkdir()
+    (scratch / "home").mkdir()
+    result_file = scratch / "result.json"
+    marker = uuid.uuid4().hex
+    cmd = [sys.executable, "-m", "course.batch_worker", "--workspace", str(ws), "--results", str(result_file),
+           "--logs", str(logs), "--memory-limit", str(job.memory_limit), "--file-limit", str(job.file_limit)]
+    for lesson in job.lessons:
+        cmd += ["--lesson", lesson]
+    prefix, isolation = isolation_prefix(str(scratch), job.hide) if job.isolate else (
+        [], {"netns": False, "mountns": False, "reason": "isolation turned off"})
+    isolation = {**isolation, "memory": f"RLIMIT_AS {job.memory_limit / 2**20:.0f} MiB per process" if job.memory_limit else "none"}
+    # parent-death signal: the worker dies with the thread that started it (a pool thread lives as long as
+    # the batch), so a SIGKILLed batch leaves no worker behind
+    setpriv = shutil.which("setpriv")
+    argv = ([setpriv, "--pdeathsig", "KILL"] if setpriv else []) + prefix + cmd
+    env = dict(os.environ)
+    env.update({BATCH_MARKER_VAR: marker, "HOME": str(scratch / "home"), "ROS_LOG_DIR": str(logs / "ros"),
+                "PYTHONDONTWRITEBYTECODE": "1", "RCUTILS_COLORIZED_OUTPUT": "0"})
+    popen = subprocess.Popen(argv, env=env, cwd=scratch, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,  # noqa: S603
+                             stderr=subprocess.STDOUT, start_new_session=True)
+    drain = _CappedDrain(popen.stdout, logs / "worker.log", job.output_cap)
+    drain.start()
+    deadline = time.monotonic() + job.timeout
+    peak, next_sample = 0, 0.0
+    timed_out = cancelled = False
+    while True:
+        try:
+            popen.wait(timeout=0.1)
+            break
+        except subprocess.TimeoutExpired:
+            pass
+        now = time.monotonic()
+        if now >= next_sample:
+            peak = max(peak, _tree_rss(popen.pid))
+            next_sample = now + 0.5
+        if now >= deadline:
+            timed_out = True
+        elif job.batch_id in _cancelled:
+            cancelled = True
+        if timed_out or cancelled:
+            _kill_job(popen, marker)
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                popen.wait(timeout=10)
+            break
+    killed = _kill_job(popen, marker)  # whatever is left of it (forked children, escaped sessions)
+    drain.join(timeout=5)
+    try:
+        done = json.loads(result_file.read_text(encoding="utf-8"))
+        done = [d for d in done if isinstance(d, dict) and d.get("lesson") in job.lessons]
+    except (OSError, ValueError):
+        done = []
+    finished = {d["lesson"] for d in done}
+    records = list(done)
+    tail = _tail(logs / "worker.log")
+    for lesson in job.lessons:
+        if lesson in finished:
+            continue
+        if timed_out:
+            records.append(_unfinished(lesson, gradebook.NOT_GRADABLE, f"timed out after {job.timeout:g} s",
+                                       "the submission was stopped: a node that never ends or a build that hangs?"))
+        elif not cancelled:
+            records.append(_unfinished(lesson, gradebook.GRADER_ERROR,
+                                       f"the grading worker ended with exit code {popen.returncode} before grading "
+                                       f"{lesson}" + (f": {tail}" if tail else ""),
+                                       "see logs/worker.log; a fault of the grading machine or a limit reached"))
+    order = {lesson: i for i, lesson in enumerate(job.lessons)}
+    records.sort(key=lambda r: order.get(r["lesson"], 0))
+    if killed:
+        isolation = {**isolation, "killed_after": len(killed)}
+    return records, isolation, peak, cancelled
+
+
+def _tail(path: Path, lines: int = 3) -> str:
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace").strip().splitlines()
+    except OSError:
+        return ""
+    return " | ".join(line.strip() for line in text[-lines:])[:400]
+
+
+# --- the batch -----------------------------------------------------------------------------------
+
+@dataclasses.dataclass
+class BatchReport:
+    """What a batch did.
+
+    Attributes:
+        out_dir: OUTDIR.
+        records: every record in ``results.jsonl`` after the batch (latest per student and lesson).
+        graded_now: jobs run by this invocation (skipped ones excluded).
+        skipped: students skipped by ``--resume``.
+        seconds: wall time of the batch, seconds.
+        isolation: the isolation of the first job run (or of the resumed records).
+        peak_rss: per job run now, bytes.
+    """
+
+    out_dir: Path
+    records: list[dict[str, Any]]
+    graded_now: int
+    skipped: int
+    seconds: float
+    isolation: dict[str, Any]
+    peak_rss: list[int]
+
+
+def make_executor(jobs: int, scheduler: str | None) -> tuple[cf.Executor, Any]:
+    """``(executor, client)``: a ``ThreadPoolExecutor(jobs)``, or a Dask client's executor for ``scheduler``.
+
+    Raises:
+        MissingRequirement: ``scheduler`` given but ``distributed`` not installed.
+        CourseError: the scheduler cannot be reached.
+    """
+    if not scheduler:
+        return cf.ThreadPoolExecutor(max_workers=jobs, thread_name_prefix="ros2course-grade"), None
+    try:
+        from distributed import Client  # noqa: PLC0415
+    except ImportError as exc:
+        from course.errors import MissingRequirement  # noqa: PLC0415
+
+        raise MissingRequirement("--scheduler needs Dask distributed, which is not installed",
+                                 "pip install 'ros2course[dask]'") from exc
+    try:
+        client = Client(scheduler, timeout=30)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise CourseError(f"cannot reach the Dask scheduler {scheduler}: {exc}",
+                          "check the address (tcp://HOST:8786) and that the scheduler runs") from exc
+    return client.get_executor(pure=False), client
+
+
+def _check_columns(lessons: list[str]) -> dict[str, list[str]]:
+    return {lesson: lesson_checks(lesson)[1] for lesson in lessons}
+
+
+def write_outputs(out_dir: Path, records: list[dict[str, Any]], lessons: list[str], students: list[str]) -> None:
+    """Rewrite ``gradebook.csv``, ``junit.xml`` and ``<student>/results.json`` of ``students`` (atomically)."""
+    latest = gradebook.latest(records)
+    columns = _check_columns(sorted({r["lesson"] for r in latest.values()} | set(lessons),
+                                    key=lambda x: (x not in lessons, lessons.index(x) if x in lessons else 0, x)))
+    gradebook.atomic_write(out_dir / "gradebook.csv", gradebook.gradebook_csv(latest.values(), columns))
+    gradebook.atomic_write(out_dir / "junit.xml", gradebook.junit_xml(latest.values()))
+    for student in students:
+        mine = [r for (s, _), r in latest.items() if s == student]
+        if mine:
+            gradebook.atomic_write(out_dir / student / "results.json",
+                                   json.dumps(gradebook.gradescope_json(mine), indent=2) + "\n")
+
+
+def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | None = None,
+              timeout: float = DEFAULT_TIMEOUT, scheduler: str | None = None, resume: bool = False,
+              console: Any = None, memory_limit: int = DEFAULT_MEMORY_LIMIT, isolate: bool = True,
+              executor: cf.Executor | None = None) -> BatchReport:
+    """Grade every submission in ``submissions`` for ``lessons``; write OUTDIR as each one finishes.
+
+    Args:
+        submissions: folder with one entry per student (see :mod:`course.batch_archive`).
+        lessons: lesson ids.
+        out_dir: OUTDIR (created).
+        jobs: submissions graded at once on this machine (default: number of cores).
+        timeout: wall-clock seconds per submission.
+        scheduler: a Dask scheduler address; the jobs go to that cluster instead.
+        resume: skip (student, lesson) pairs already in ``results.jsonl``.
+        console: a rich ``Console`` for the progress bar (None: no progress shown).
+        memory_limit: bytes of address space per process of a submission.
+        isolate: use namespaces where available.
+        executor: use this executor instead (tests); ``jobs``/``scheduler`` ignored.
+
+    Raises:
+        CourseError: bad input (no such folder, OUTDIR inside SUBMISSIONS or already
+            holding results without ``resume``, unknown lesson, bad numbers).
+        MissingRequirement: a lesson needs what is not installed.
+    """
+    from course import env as env_mod  # noqa: PLC0415
+    from course.lesson import load_catalog
+
+    begin = time.monotonic()
+    submissions = submissions.absolute()
+    out_dir = out_dir.absolute()
+    if not submissions.is_dir():
+        raise CourseError(f"{submissions} is not a folder", "give the folder that holds one entry per student")
+    if out_dir.resolve().is_relative_to(submissions.resolve()):
+        raise CourseError(f"OUTDIR {out_dir} is inside the submissions folder", "choose an --out folder elsewhere")
+    if not lessons:
+        raise CourseError("no lesson given", "add --lesson LESSON (ros2course list shows them)")
+    if jobs is not None and jobs < 1:
+        raise CourseError(f"--jobs must be at least 1 (got {jobs})", "e.g. --jobs 2")
+    if timeout <= 0:
+        raise CourseError(f"--timeout must be positive (got {timeout:g})", "e.g. --timeout 300")
+    catalog = load_catalog()
+    for lesson_id in lessons:
+        env_mod.require(catalog.get(lesson_id).requires, f"lesson {lesson_id}")
+        lesson_checks(lesson_id)
+    results_path = out_dir / "results.jsonl"
+    existing = gradebook.read_results(results_path)
+    if existing and not resume:
+        raise CourseError(f"{out_dir} already holds results ({results_path.name})",
+                          "add --resume to continue that batch, or choose another --out folder")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    done = set(gradebook.latest(existing))
+    entries = discover(submissions)
+    batch_id = uuid.uuid4().hex
+    scratch_root = Path(tempfile.mkdtemp(prefix="ros2course-batch-"))
+    hide = default_hidden(submissions, out_dir, scratch_root)
+    todo: list[Job] = []
+    skipped = 0
+    for entry in entries:
+        missing = [lesson for lesson in lessons if (entry.student, lesson) not in done]
+        if not missing:
+            skipped += 1
+            continue
+        todo.append(Job(batch_id, entry.student, str(entry.path), entry.problem, missing, str(out_dir), timeout,
+                        memory_limit, hide=hide, isolate=isolate, scratch_root=str(scratch_root)))
+    records = list(existing)
+    peaks: list[int] = []
+    isolation: dict[str, Any] = next((r.get("isolation", {}) for r in reversed(existing)), {})
+    if existing:
+        write_outputs(out_dir, records, lessons, sorted({r["student"] for r in existing}))
+    client = None
+    own_executor = executor is None
+    if own_executor:
+        executor, client = make_executor(jobs or os.cpu_count() or 1, scheduler)
+    progress = _progress(console)
+    try:
+        with progress or contextlib.nullcontext():
+            task = progress.add_task("grading", total=len(todo), last="") if progress else None
+            futures = {executor.submit(run_job, job): job for job in todo}
+            for future in cf.as_completed(futures):
+                job = futures[future]
+                try:
+                    outcome = future.result()
+                except Exception as exc:  # noqa: BLE001 - an infrastructure fault is this student's "grader error"
+                    outcome = {"records": [dict(_unfinished(lesson, gradebook.GRADER_ERROR,
+                                                            f"the job failed: {type(exc).__name__}: {exc}"),
+                                                student=job.student) for lesson in job.lessons],
+                               "isolation": {}, "peak_rss": 0}
+                for record in outcome["records"]:
+                    gradebook.append_record(results_path, record)
+                    records.append(record)
+                if outcome["records"]:
+                    write_outputs(out_dir, records, lessons, [job.student])
+                    isolation = outcome.get("isolation") or isolation
+                    peaks.append(int(outcome.get("peak_rss", 0)))
+                if progress:
+                    progress.update(task, advance=1, last=job.student)
+    except BaseException:
+        _cancelled.add(batch_id)  # running jobs kill their workers within 0.1 s
+        for future in futures if "futures" in locals() else ():
+            future.cancel()
+        if own_executor:
+            executor.shutdown(wait=True)
+        raise
+    finally:
+        if own_executor:
+            executor.shutdown(wait=True)
+            if client is not None:
+                client.close()
+        _cancelled.discard(batch_id)
+        shutil.rmtree(scratch_root, ignore_errors=True)
+    return BatchReport(out_dir, list(gradebook.latest(records).values()), len(todo), skipped,
+                       time.monotonic() - begin, isolation, peaks)
+
+
+def _progress(console: Any):
+    if console is None:
+        return None
+    from rich.progress import (BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn,  # noqa: PLC0415
+                               TimeRemainingColumn)
+
+    return Progress(TextColumn("[bold]grading[/]"), BarColumn(), MofNCompleteColumn(), TextColumn("elapsed"),
+                    TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
+                    TextColumn("[dim]{task.fields[last]}[/]"), console=console, transient=False)
+
+
+def render_summary(report: BatchReport, console: Any) -> None:
+    """Rich tables on ``console``: score distribution, most failed checks, not gradable reasons, isolation."""
+    from rich.table import Table  # noqa: PLC0415
+
+    records = report.records
+    console.print(f"graded {report.graded_now} submission(s) now, {report.skipped} skipped (--resume), "
+                  f"{len(records)} result(s) in {report.out_dir / 'results.jsonl'} ({report.seconds:.1f} s)")
+    graded = [r for r in records if gradebook.gradebook_status(r["status"]) == gradebook.GRADED]
+    if graded:
+        table = Table(title="score distribution (percent of max)", title_justify="left")
+        table.add_column("lesson")
+        table.add_column("range")
+        table.add_column("students", justify="right")
+        table.add_column("")
+        by_lesson: dict[str, list[float]] = {}
+        for r in graded:
+            by_lesson.setdefault(r["lesson"], []).append(100.0 * r["score"] / r["max_score"] if r["max_score"] else 0.0)
+        for lesson, scores in by_lesson.items():
+            bins = Counter(min(int(s // 20), 4) for s in scores)
+            for b in range(5):
+                low = b * 20
+                label = f"{low}-{low + 20}%" if b < 4 else "80-100%"
+                table.add_row(lesson if b == 0 else "", label, str(bins.get(b, 0)), "█" * bins.get(b, 0))
+            table.add_row("", "mean / median", f"{statistics.mean(scores):.0f}% / {statistics.median(scores):.0f}%", "")
+        console.print(table)
+        failed = Counter((r["lesson"], c["id"]) for r in graded for c in r.get("checks", []) if not c.get("passed"))
+        if failed:
+            table = Table(title="checks most often failed", title_justify="left")
+            table.add_column("lesson")
+            table.add_column("check")
+            table.add_column("failed by", justify="right")
+            for (lesson, check), count in failed.most_common(8):
+                table.add_row(lesson, check, f"{count}/{len(by_lesson[lesson])}")
+            console.print(table)
+    bad = [r for r in records if gradebook.gradebook_status(r["status"]) != gradebook.GRADED]
+    if bad:
+        table = Table(title="not graded", title_justify="left")
+        table.add_column("student")
+        table.add_column("lesson")
+        table.add_column("status")
+        table.add_column("reason", overflow="fold")
+        for r in sorted(bad, key=lambda r: (r["student"], r["lesson"])):
+            table.add_row(r["student"], r["lesson"], r["status"], (r.get("message") or "").splitlines()[0][:200]
+                          if r.get("message") else "")
+        console.print(table)
+    iso = report.isolation or {}
+    state = "[green]in effect[/]" if iso.get("netns") else "[yellow]NOT in effect[/]"
+    console.print(f"network namespace isolation: {state} ({iso.get('reason', 'no submission run')}); "
+                  f"memory limit: {iso.get('memory', 'n/a')}")
+    if report.peak_rss:
+        console.print(f"peak memory per job: max {max(report.peak_rss) / 2**20:.0f} MiB, "
+                      f"mean {statistics.mean(report.peak_rss) / 2**20:.0f} MiB")

@@ -1,0 +1,101 @@
+"""The worker process of a batch: grades one submission's workspace for one or more lessons.
+
+Run by :mod:`course.batch` as ``python -m course.batch_worker ...`` in its own
+session (and, where the machine allows, its own network and mount namespace).
+It limits its own resources first (``RLIMIT_AS``, ``RLIMIT_FSIZE``; inherited by
+colcon and the learner's nodes), then calls the same
+:func:`course.grading.grade_lesson` as ``ros2course check`` for each lesson and
+rewrites ``--results`` (a JSON list, temp file + ``os.replace``) after each one,
+so a worker killed half-way still leaves the lessons it finished.
+
+Runs ``grade_lesson`` from its main thread, so learner processes get their
+parent-death signal (see :class:`course.process.LearnerProcess`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import sys
+import time
+import traceback
+from pathlib import Path
+from typing import Any
+
+
+def result_dict(result: Any) -> dict[str, Any]:
+    """A :class:`~course.grading.LessonResult` as ``check --json`` plus ``hint``, ``timings``, ``build``, ``log_dir``."""
+    out = result.to_json()
+    out["hint"] = result.hint
+    out["timings"] = {k: round(v, 3) for k, v in result.timings.items()}
+    out["build"] = result.build
+    out["log_dir"] = result.log_dir
+    return out
+
+
+def _write(path: Path, data: Any) -> None:
+    tmp = path.with_name(path.name + ".tmp")
+    tmp.write_text(json.dumps(data, indent=1), encoding="utf-8")
+    os.replace(tmp, path)
+
+
+def _limit(kind: int, value: int) -> None:
+    if value <= 0:
+        return
+    _soft, hard = resource.getrlimit(kind)
+    new_hard = value if hard == resource.RLIM_INFINITY else min(hard, value)
+    resource.setrlimit(kind, (min(value, new_hard), new_hard))
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point; returns 0 when every lesson produced a result (whatever its score)."""
+    parser = argparse.ArgumentParser(prog="python -m course.batch_worker")
+    parser.add_argument("--lesson", action="append", required=True)
+    parser.add_argument("--workspace", required=True, type=Path)
+    parser.add_argument("--results", required=True, type=Path)
+    parser.add_argument("--logs", required=True, type=Path)
+    parser.add_argument("--memory-limit", type=int, default=0, help="bytes of address space per process (0: none)")
+    parser.add_argument("--file-limit", type=int, default=0, help="bytes per written file (0: none)")
+    args = parser.parse_args(argv)
+
+    _limit(resource.RLIMIT_AS, args.memory_limit)
+    _limit(resource.RLIMIT_FSIZE, args.file_limit)
+
+    from course import env as env_mod  # noqa: PLC0415 - after the limits
+    from course.grading import STATUS_GRADER_ERROR
+    from course.lesson import load_catalog
+
+    env_mod.activate()
+    catalog = load_catalog()
+    done: list[dict[str, Any]] = []
+    _write(args.results, done)
+    from course.grading import grade_lesson  # noqa: PLC0415
+
+    for lesson_id in args.lesson:
+        log_dir = args.logs / lesson_id
+        log_dir.mkdir(parents=True, exist_ok=True)
+        begin = time.monotonic()
+        try:
+            lesson = catalog.get(lesson_id)
+            entry = result_dict(grade_lesson(lesson, args.workspace, log_dir=log_dir))
+        except Exception as exc:  # noqa: BLE001 - any failure is this lesson's "grader error" row
+            (log_dir / "grader-error.txt").write_text(traceback.format_exc(), encoding="utf-8")
+            entry = {"lesson": lesson_id, "score": 0.0, "max_score": 0.0, "status": STATUS_GRADER_ERROR,
+                     "checks": [], "message": f"the grader failed: {type(exc).__name__}: {exc}",
+                     "hint": "a fault of the course or the grading machine, not of the submission",
+                     "timings": {}, "build": {}, "log_dir": str(log_dir)}
+        entry["seconds"] = round(time.monotonic() - begin, 3)
+        done.append(entry)
+        _write(args.results, done)
+    sys.stdout.flush()
+    return 0
+
+
+if __name__ == "__main__":
+    code = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    # rclpy / Fast DDS teardown at interpreter exit is slow and not needed (see course.cli.main)
+    os._exit(code)

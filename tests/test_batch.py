@@ -1,0 +1,220 @@
+"""Batch grading without ROS nodes: submissions and archives, gradebook exports, resume, bad input.
+
+(The tests that start real nodes are in test_batch_ros.py.)
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import shutil
+import tarfile
+import xml.etree.ElementTree as ET
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from course import gradebook
+from course.batch import run_batch
+from course.batch_archive import Submission, discover, prepare
+from course.errors import CourseError, NotGradable
+from tests.conftest import SOLUTIONS
+
+PKG = "python_package_with_a_node"
+
+
+def _workspace(root: Path) -> Path:
+    shutil.copytree(SOLUTIONS / PKG, root / "src" / PKG, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    return root
+
+
+def _zip_dir(folder: Path, archive: Path, prefix: str = "") -> Path:
+    with zipfile.ZipFile(archive, "w") as zf:
+        for path in sorted(folder.rglob("*")):
+            zf.write(path, prefix + str(path.relative_to(folder)))
+    return archive
+
+
+# --- archives and entries -------------------------------------------------------------------------
+
+def test_entries_and_student_ids(tmp_path: Path) -> None:
+    subs = tmp_path / "subs"
+    _workspace(subs / "alice")
+    (subs / "bob.zip").write_bytes(b"x")
+    (subs / "carol.tar.gz").write_bytes(b"x")
+    (subs / "notes.txt").write_text("hi")
+    (subs / ".DS_Store").write_text("")
+    found = {s.student: s for s in discover(subs)}
+    assert sorted(found) == ["alice", "bob", "carol", "notes.txt"]
+    assert found["notes.txt"].problem and not found["alice"].problem
+
+
+def test_zip_and_tar_gz_and_folder_of_packages(tmp_path: Path) -> None:
+    ws = _workspace(tmp_path / "alice")
+    _zip_dir(ws, tmp_path / "zipped.zip", prefix="alice/")  # wrapped in a folder: descended into
+    with tarfile.open(tmp_path / "tarred.tar.gz", "w:gz") as tf:
+        tf.add(ws / "src", arcname="src")
+    packages = tmp_path / "pkgs"
+    shutil.copytree(ws / "src", packages)  # a folder of packages, no src/
+    for name, entry in (("z", tmp_path / "zipped.zip"), ("t", tmp_path / "tarred.tar.gz"), ("p", packages)):
+        root = prepare(Submission(name, entry), tmp_path / f"scratch-{name}")
+        assert (root / "src" / PKG / "package.xml").is_file(), name
+        assert (root / "src" / PKG / "setup.py").is_file(), name
+
+
+def test_unreadable_and_unsafe_archives_are_not_gradable(tmp_path: Path) -> None:
+    (tmp_path / "garbage.zip").write_bytes(b"not a zip")
+    (tmp_path / "garbage.tar.gz").write_bytes(b"not a tar")
+    with zipfile.ZipFile(tmp_path / "traversal.zip", "w") as zf:
+        zf.writestr("src/ok.txt", "fine")
+        zf.writestr("../../escaped.txt", "evil")
+    with tarfile.open(tmp_path / "absolute.tar.gz", "w:gz") as tf:
+        info = tarfile.TarInfo("/tmp/ros2course-escaped.txt")
+        info.size = 4
+        tf.addfile(info, io.BytesIO(b"evil"))
+    with tarfile.open(tmp_path / "link.tar.gz", "w:gz") as tf:
+        info = tarfile.TarInfo("src/passwd")
+        info.type = tarfile.SYMTYPE
+        info.linkname = "../../../etc/passwd"
+        tf.addfile(info)
+    (tmp_path / "empty").mkdir()
+    reasons = {}
+    for name in ("garbage.zip", "garbage.tar.gz", "traversal.zip", "absolute.tar.gz", "link.tar.gz", "empty"):
+        with pytest.raises(NotGradable) as err:
+            prepare(Submission(name, tmp_path / name), tmp_path / f"scratch-{name}")
+        reasons[name] = err.value.message
+    assert "unreadable .zip" in reasons["garbage.zip"]
+    assert "unreadable .tar.gz" in reasons["garbage.tar.gz"]
+    assert "unsafe archive member" in reasons["traversal.zip"] and "escaping" in reasons["traversal.zip"]
+    assert "absolute path" in reasons["absolute.tar.gz"]
+    assert "outside the archive" in reasons["link.tar.gz"]
+    assert "no src/ folder" in reasons["empty"]
+    assert not (tmp_path.parent / "escaped.txt").exists() and not Path("/tmp/ros2course-escaped.txt").exists()
+
+
+# --- gradebook exports ----------------------------------------------------------------------------
+
+def _record(student: str, status: str, checks: list[tuple[str, float, float, bool]], message: str = "") -> dict:
+    out = {"student": student, "lesson": "print-forever-node", "status": status,
+           "score": sum(c[1] for c in checks), "max_score": 4.0,
+           "checks": [{"id": i, "name": f"check {i}", "points": p, "max_points": m, "passed": ok,
+                       "observed": f"saw {i}", "expected": f"want {i}", "hint": "" if ok else f"fix {i}"}
+                      for i, p, m, ok in checks], "timings": {"total": 2.5}}
+    if message:
+        out["message"] = message
+    return out
+
+
+RECORDS = [
+    _record("alice", "passed", [("a", 2, 2, True), ("b", 2, 2, True)]),
+    _record("bob", "failed", [("a", 2, 2, True), ("b", 0, 2, False)]),
+    _record("carol", "grader error", [("a", 0, 2, False), ("b", 0, 2, False)], "the grader failed: boom"),
+    _record("dave", "not gradable", [], "colcon build failed\nline 2"),
+]
+
+
+def test_gradebook_csv_columns() -> None:
+    rows = list(csv.DictReader(io.StringIO(gradebook.gradebook_csv(RECORDS, {"print-forever-node": ["a", "b"]}))))
+    assert list(rows[0]) == ["student", "lesson", "score", "max_score", "status", "reason", "a", "b"]
+    by = {r["student"]: r for r in rows}
+    assert by["alice"]["status"] == "graded" and by["alice"]["score"] == "4" and by["alice"]["b"] == "2"
+    assert by["bob"]["b"] == "0"
+    assert by["carol"]["status"] == "grader error"
+    assert by["dave"]["status"] == "not gradable" and by["dave"]["reason"] == "colcon build failed"
+    assert by["dave"]["a"] == ""
+
+
+def test_jsonl_truncated_last_line(tmp_path: Path) -> None:
+    path = tmp_path / "results.jsonl"
+    gradebook.append_record(path, RECORDS[0])
+    with open(path, "a", encoding="utf-8") as handle:
+        handle.write(json.dumps(RECORDS[1])[:40])  # a batch killed mid-write
+    assert [r["student"] for r in gradebook.read_results(path)] == ["alice"]
+    gradebook.append_record(path, RECORDS[2])
+    assert [r["student"] for r in gradebook.read_results(path)] == ["alice", "carol"]
+    lines = path.read_text().splitlines()
+    assert json.loads(lines[-1])["student"] == "carol"
+
+
+def test_gradescope_json_schema() -> None:
+    data = gradebook.gradescope_json([RECORDS[1]])
+    assert data["score"] == 2 and set(data) >= {"score", "output", "tests", "visibility", "execution_time"}
+    for test in data["tests"]:
+        assert set(test) >= {"name", "score", "max_score", "output", "visibility"}
+    assert data["tests"][1]["score"] == 0 and "fix b" in data["tests"][1]["output"]
+    broken = gradebook.gradescope_json([RECORDS[3]])
+    assert broken["score"] == 0 and broken["tests"][0]["max_score"] == 4.0
+    assert "colcon build failed" in broken["tests"][0]["output"]
+
+
+def test_junit_failure_versus_error() -> None:
+    root = ET.fromstring(gradebook.junit_xml(RECORDS))
+    suites = {s.get("name"): s for s in root.iter("testsuite")}
+    assert len(suites) == 4
+    bob = suites["bob.print-forever-node"]
+    assert bob.get("failures") == "1" and bob.get("errors") == "0" and bob.get("tests") == "2"
+    assert [c.get("name") for c in bob.iter("testcase") if c.find("failure") is not None] == ["b"]
+    carol = suites["carol.print-forever-node"]
+    assert carol.get("errors") == "2" and carol.find(".//failure") is None
+    dave = suites["dave.print-forever-node"]
+    assert dave.get("failures") == "1" and dave.find(".//failure").get("message") == "colcon build failed"
+
+
+# --- resume and bad input (a lesson without nodes: workspace-setup) ----------------------------------
+
+def test_resume_skips_finished_and_tolerates_truncated_line(tmp_path: Path) -> None:
+    subs = tmp_path / "subs"
+    for name in ("alice", "bob"):
+        (subs / name / "src").mkdir(parents=True)
+    out = tmp_path / "out"
+    out.mkdir()
+    earlier = dict(_record("alice", "failed", [("src_folder", 1, 1, True)]), lesson="workspace-setup", score=1.0,
+                   max_score=5.0)
+    (out / "results.jsonl").write_text(json.dumps(earlier) + "\n" + json.dumps(earlier).replace("alice", "bob")[:30])
+    with pytest.raises(CourseError, match="already holds results"):
+        run_batch(subs, ["workspace-setup"], out, jobs=1)
+    report = run_batch(subs, ["workspace-setup"], out, jobs=1, resume=True)
+    assert report.skipped == 1 and report.graded_now == 1
+    records = gradebook.read_results(out / "results.jsonl")
+    assert [r["student"] for r in records] == ["alice", "bob"]
+    assert records[0] == earlier  # untouched
+    assert records[1]["status"] == "failed" and records[1]["max_score"] == 5.0
+    rows = list(csv.DictReader(open(out / "gradebook.csv", encoding="utf-8")))
+    assert [r["student"] for r in rows] == ["alice", "bob"]
+    assert (out / "bob" / "results.json").is_file() and (out / "bob" / "logs").is_dir()
+
+
+def test_cli_bad_input_is_one_line(tmp_path: Path, cli) -> None:
+    proc = cli("grade", str(tmp_path / "missing"), "--lesson", "workspace-setup", "--out", str(tmp_path / "o"))
+    assert proc.returncode == 5 and "Traceback" not in proc.stderr
+    assert "error:" in proc.stderr and "hint:" in proc.stderr
+    (tmp_path / "subs").mkdir()
+    proc = cli("grade", str(tmp_path / "subs"), "--lesson", "no-such-lesson", "--out", str(tmp_path / "o"))
+    assert proc.returncode == 5 and "Traceback" not in proc.stderr
+    proc = cli("grade", str(tmp_path / "subs"), "--lesson", "workspace-setup", "--out", str(tmp_path / "subs" / "o"))
+    assert proc.returncode == 5 and "inside the submissions folder" in proc.stderr
+
+
+def test_cli_grade_and_gradescope(tmp_path: Path, cli) -> None:
+    """The two commands end to end on a lesson without nodes (workspace-setup)."""
+    subs = tmp_path / "subs"
+    (subs / "alice" / "src").mkdir(parents=True)
+    (subs / "bob.zip").write_bytes(b"broken")
+    proc = cli("grade", str(subs), "--lesson", "workspace-setup", "--out", str(tmp_path / "out"), "--jobs", "2")
+    assert proc.returncode == 0, proc.stderr
+    assert "score distribution" in proc.stderr and "not graded" in proc.stderr and "isolation" in proc.stderr
+    rows = list(csv.DictReader(open(tmp_path / "out" / "gradebook.csv", encoding="utf-8")))
+    assert [(r["student"], r["status"]) for r in rows] == [("alice", "graded"), ("bob", "not gradable")]
+
+    upload = tmp_path / "autograder" / "submission"
+    (upload / "src").mkdir(parents=True)
+    results = tmp_path / "autograder" / "results" / "results.json"
+    proc = cli("gradescope", "--submission", str(upload), "--results", str(results),
+               env={"ROS2COURSE_LESSON": "workspace-setup"})
+    assert proc.returncode == 0, proc.stderr
+    data = json.loads(results.read_text())
+    assert data["score"] >= 1 and [t["name"] for t in data["tests"]][0] == "The workspace has a src/ folder"
+    proc = cli("gradescope", "--lesson", "no-such-lesson", "--submission", str(upload), "--results", str(results))
+    assert proc.returncode == 5 and "Traceback" not in proc.stderr
