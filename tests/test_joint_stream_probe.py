@@ -1,0 +1,109 @@
+"""graders._joint_stream: the 500 Hz joint-state probe of the sas-robot-driver lesson keeps up.
+
+A known publisher (a small rclpy script, like a sas driver: ``JointState``
+every 2 ms on a history-depth-1 publisher) runs in a private domain. It
+schedules each publication on absolute 2 ms deadlines (``time.sleep`` to the
+next one, so the mean period does not drift), stamps every message with its
+wall-clock publication time and numbers it in ``header.frame_id``. Its own
+rate is therefore known from its stamps and sequence numbers, whatever the
+probe receives: (last seq - first seq) / (last stamp - first stamp).
+
+The probe must measure that rate within 2 % (the rate the grader judges, over
+the DDS source timestamps as ``ros2 topic hz`` computes it, over 1 s) and
+must not lose messages on the way.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import textwrap
+import time
+
+import pytest
+
+PY = sys.executable
+PERIOD = 0.002  # seconds: the seed's thread_sampling_time_sec (500 Hz)
+SPAN = 1.0  # seconds of stream measured, as graders/sas_robot_driver.py does
+
+PUBLISHER = f"""
+    import time
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from sensor_msgs.msg import JointState
+
+    try:
+        rclpy.init()
+        node = rclpy.create_node("known_500hz_publisher")
+        pub = node.create_publisher(JointState, "/myrobot_1/get/joint_states", 1)
+        msg = JointState()
+        msg.position = [0.0] * 6
+        seq = 0
+        deadline = time.monotonic()
+        while rclpy.ok():
+            deadline += {PERIOD}
+            delay = deadline - time.monotonic()
+            if delay > 0:
+                time.sleep(delay)
+            now = time.time_ns()
+            msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(now, 1_000_000_000)
+            msg.header.frame_id = str(seq)
+            msg.position[0] = seq * 1e-3
+            pub.publish(msg)
+            seq += 1
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+"""
+
+
+@pytest.fixture
+def ros_env():
+    pytest.importorskip("rclpy")
+    from course import env as env_mod  # noqa: PLC0415
+
+    env = dict(os.environ)
+    env_mod.activate(env)
+    return env
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(90)
+def test_probe_measures_a_known_500hz_publisher_within_2_percent(ros_env, tmp_path):
+    from course.probes import RateStats, RosSession  # noqa: PLC0415
+    from course.process import LearnerProcess, sweep_stale_fastdds_shm
+    from graders._joint_stream import JointStreamProbe, arrival_rate, source_rate
+
+    script = tmp_path / "known_500hz_publisher.py"
+    script.write_text(textwrap.dedent(PUBLISHER), encoding="utf-8")
+    with RosSession() as session:
+        probe = JointStreamProbe(session.context, "/myrobot_1/get/joint_states")
+        proc = LearnerProcess([PY, str(script)], session.learner_env(ros_env), tmp_path / "logs", "publisher",
+                              ros_sigint=True)
+        try:
+            proc.start()
+            assert probe.wait_for(lambda got: len(got) > 0, 20.0, abort=lambda: proc.poll() is not None), \
+                f"no message from the publisher: exit {proc.poll()}; {proc.stderr()[-1500:]}"
+            time.sleep(0.3)  # past discovery and the publisher's first scheduling hiccups
+            since = time.monotonic()
+            window = probe.wait_for_span(SPAN, SPAN + 5.0, since=since)
+        finally:
+            proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
+            probe.close()
+    sweep_stale_fastdds_shm()
+
+    assert len(window) >= 2 and window[-1].source - window[0].source >= SPAN, f"only {len(window)} messages"
+    seqs = [int(x.frame_id) for x in window]
+    lost = (seqs[-1] - seqs[0] + 1) - len(seqs)
+    assert seqs == sorted(seqs)
+    # The publisher's own rate, from its stamps and sequence numbers (independent of what was received).
+    own_hz = (seqs[-1] - seqs[0]) / (window[-1].stamp - window[0].stamp)
+    measured = source_rate(window)
+    arrival = arrival_rate(window)
+    stamped = RateStats.from_times([x.stamp for x in window])
+    report = (f"publisher {own_hz:.1f} Hz (stamps); probe {measured.describe()} (source timestamps); "
+              f"arrival {arrival.describe()}; header stamps {stamped.describe()}; {lost} lost of "
+              f"{seqs[-1] - seqs[0] + 1}")
+    print(report)
+    assert abs(own_hz - 1 / PERIOD) <= 0.05 / PERIOD, "the known publisher itself is not at 500 Hz: " + report
+    assert abs(measured.rate_hz - own_hz) <= 0.02 * own_hz, report
+    assert lost <= 0.01 * len(seqs), report

@@ -1,0 +1,45 @@
+"""The sas-robot-driver grader on the seed's C++ driver (ch. 31), where SmartArmStack is installed.
+
+``tests/data/sas_cpp/sas_robot_driver_myrobot`` holds the seed's C++ package
+(driver class, node, launch file, client script on the sas Python bindings).
+Built on the real ``sas`` packages it must get full marks from the same
+black-box grader as the lesson's Python package. Skipped where ``sas`` is not
+installed (it is not on PyPI: ``sudo apt install ros-jazzy-sas-*``, seed ch. 30).
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+
+
+def _sas_installed() -> bool:
+    try:
+        from ament_index_python.packages import get_package_prefix  # noqa: PLC0415
+
+        get_package_prefix("sas_robot_driver")
+        return True
+    except Exception:  # noqa: BLE001 - no ament index, no package: not installed
+        return False
+
+
+pytestmark = [
+    pytest.mark.ros,
+    pytest.mark.skipif(not _sas_installed(), reason="SmartArmStack (sas_robot_driver) is not installed: "
+                       "ament_index_python does not find the package; install ros-jazzy-sas-* (seed ch. 30)"),
+]
+
+
+@pytest.mark.timeout(900)
+def test_grader_gives_the_seeds_cpp_driver_full_marks(tmp_path: Path):
+    from course.grading import grade_lesson  # noqa: PLC0415
+    from course.lesson import load_catalog
+
+    source = Path(__file__).parent / "data" / "sas_cpp" / "sas_robot_driver_myrobot"
+    shutil.copytree(source, tmp_path / "src" / "sas_robot_driver_myrobot")
+    lesson = load_catalog().get("sas-robot-driver")
+    result = grade_lesson(lesson, tmp_path)
+    failed = [f"{c.id}: {c.observed} (expected {c.expected})" for c in result.checks if not c.passed]
+    assert result.status == "passed", result.message + "\n" + "\n".join(failed)
