@@ -47,6 +47,7 @@ from pathlib import Path
 from typing import Any
 
 from course import gradebook
+from course.process import OutputDrain
 from course.batch_archive import Submission, discover, prepare
 from course.errors import CourseError, NotGradable
 
@@ -219,33 +220,6 @@ def _unfinished(lesson_id: str, status: str, message: str, hint: str = "") -> di
             "message": message, "hint": hint, "timings": {}, "build": {}, "log_dir": ""}
 
 
-class _CappedDrain(threading.Thread):
-    """Copy a pipe into a file, keeping at most ``cap`` bytes (the rest is counted and dropped)."""
-
-    def __init__(self, pipe, path: Path, cap: int) -> None:
-        super().__init__(daemon=True, name=f"batch-drain-{path.parent.name}")
-        self.pipe, self.path, self.cap, self.total = pipe, path, cap, 0
-
-    def run(self) -> None:
-        with open(self.path, "wb") as out:
-            while True:
-                try:
-                    chunk = os.read(self.pipe.fileno(), 65536)
-                except OSError:
-                    break
-                if not chunk:
-                    break
-                room = self.cap - self.total
-                if room > 0:
-                    out.write(chunk[:room])
-                    out.flush()
-                self.total += len(chunk)
-            if self.total > self.cap:
-                out.write(f"\n[ros2course: output capped at {self.cap} bytes; {self.total - self.cap} more dropped]\n".encode())
-        with contextlib.suppress(OSError):
-            self.pipe.close()
-
-
 def _tree_rss(pid: int) -> int:
     import psutil  # noqa: PLC0415
 
@@ -348,7 +322,7 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[dict[str, Any]]
                 "PYTHONDONTWRITEBYTECODE": "1", "RCUTILS_COLORIZED_OUTPUT": "0"})
     popen = subprocess.Popen(argv, env=env, cwd=scratch, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,  # noqa: S603
                              stderr=subprocess.STDOUT, start_new_session=True)
-    drain = _CappedDrain(popen.stdout, logs / "worker.log", job.output_cap)
+    drain = OutputDrain(popen.stdout, logs / "worker.log", job.output_cap)
     drain.start()
     deadline = time.monotonic() + job.timeout
     peak, next_sample = 0, 0.0

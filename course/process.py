@@ -60,7 +60,7 @@ class ExitReport:
     traceback: str
 
 
-class _Drain(threading.Thread):
+class OutputDrain(threading.Thread):
     """Copy a pipe into a log file up to ``cap`` bytes, keep a tail in memory, count the rest."""
 
     def __init__(self, pipe, log_path: Path, cap: int) -> None:
@@ -156,7 +156,7 @@ class LearnerProcess:
         self.cwd = cwd or log_dir
         self.popen: subprocess.Popen | None = None
         self.started_at = 0.0
-        self._drains: list[_Drain] = []
+        self._drains: list[OutputDrain] = []
         self.report: ExitReport | None = None
         self.deadline = deadline
         self.deadline_hit = False
@@ -177,8 +177,8 @@ class LearnerProcess:
         self.popen = subprocess.Popen(  # noqa: S603 - runs the learner's own executable, by design
             self.argv, env=self.env, cwd=self.cwd, stdin=subprocess.DEVNULL,
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
-        self._drains = [_Drain(self.popen.stdout, self.stdout_log, self.output_cap),
-                        _Drain(self.popen.stderr, self.stderr_log, self.output_cap)]
+        self._drains = [OutputDrain(self.popen.stdout, self.stdout_log, self.output_cap),
+                        OutputDrain(self.popen.stderr, self.stderr_log, self.output_cap)]
         for drain in self._drains:
             drain.start()
         if self.deadline is not None:
