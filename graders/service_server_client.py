@@ -56,6 +56,9 @@ LATE_ANSWER = 1.0  # seconds: twice the call period, so a blocked client halves 
 #: default period: 3 s) and holds back the samples after it. Rates use the send stamps, so
 #: waiting longer never changes a verdict; it only runs when calls are missing.
 LATE_DELIVERY_GRACE = 3.0
+#: A log record saying the client gave up on a late answer (the seed's client: "Service Future
+#: canceled. The Node took too long to process the service call...").
+CANCELLED = re.compile(r"cancel|too long|took more than|timed? ?out", re.IGNORECASE)
 WAITING = re.compile(r"wait|availab", re.IGNORECASE)
 
 #: (quote, philosopher, does the quote contain "life" in any case?)
@@ -265,30 +268,42 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
                  stats.describe() + " (from the requests' send stamps)", expected_rate)
 
     # The points sent so far must show up in the client's log (give the last one a moment).
+    # A client that cancels a call still unanswered at its next tick (the seed's client does,
+    # and logs it) legitimately never logs an answer that reached it late on a loaded machine:
+    # each such cancel it logged excuses one missing point.
     def points_sent():
         return [(r.point.x, r.point.y, r.point.z) for _, r in server.answers]
 
     def logged(point):
         return any(has_point(rec.msg, point) for rec in rosout.records())
 
+    def cancels():
+        return rosout.records(match=lambda text: CANCELLED.search(text) is not None)
+
     sent = points_sent()
     with s.phase("observe"):
         # 1 s for the last answer's log record, more only while records are missing (LATE_DELIVERY_GRACE).
-        wait_until(lambda: all(logged(p) for p in sent), 1.0 + LATE_DELIVERY_GRACE,
+        wait_until(lambda: sum(not logged(p) for p in sent) <= len(cancels()), 1.0 + LATE_DELIVERY_GRACE,
                    abort=lambda: proc.poll() is not None)
     found = [p for p in sent if logged(p)]
+    missing = [p for p in sent if p not in found]
+    cancelled = cancels()
+    excused = min(len(missing), len(cancelled))
     shown = ", ".join(f"({x:g}, {y:g}, {z:g})" for x, y, z in sent[:3]) + (", ..." if len(sent) > 3 else "")
-    if found == sent and sent:
-        s.record("client_logs_points", True, f"all {len(sent)} points sent were logged, e.g. "
-                 f"'{_first_line_with(rosout, sent[0])}'", "each returned point in a log record")
+    expected_logs = ("each returned point in a log record (the logger, not print()); an answer the client "
+                     "cancelled as late, and said so in its log, may be missing")
+    if found and len(missing) == excused:
+        late = (f"; {excused} answer(s) came late and the client cancelled them "
+                f"('{cancelled[0].msg.strip()[:80]}')" if excused else "")
+        s.record("client_logs_points", True, f"{len(found)} of the {len(sent)} points sent were logged, e.g. "
+                 f"'{_first_line_with(rosout, found[0])}'{late}", expected_logs)
     else:
-        missing = [p for p in sent if p not in found]
         recent = " | ".join(r.msg.strip().replace("\n", " ")[:80] for r in rosout.records()[-2:]) or "none"
+        first = missing[0] if missing else (0.0, 0.0, 0.0)
         s.record("client_logs_points", False,
                  f"{len(found)} of the {len(sent)} points sent ({shown}) found in the log; missing e.g. "
-                 f"({missing[0][0]:g}, {missing[0][1]:g}, {missing[0][2]:g}); last records: {recent}",
-                 "each returned point in a log record (the logger, not print())",
-                 fraction=len(found) / len(sent) if sent else 0.0)
+                 f"({first[0]:g}, {first[1]:g}, {first[2]:g}); last records: {recent}",
+                 expected_logs, fraction=len(found) / len(sent) if sent else 0.0)
 
     # 3. Answer late: a client that does not block keeps calling every 0.5 s meanwhile.
     server.delay = LATE_ANSWER
