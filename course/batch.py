@@ -47,6 +47,7 @@ from pathlib import Path
 from typing import Any
 
 from course import gradebook
+from course.progress import atomic_write_text
 from course.process import OutputDrain
 from course.batch_archive import Submission, discover, prepare
 from course.errors import CourseError, NotGradable
@@ -440,12 +441,12 @@ def write_outputs(out_dir: Path, records: list[dict[str, Any]], lessons: list[st
     latest = gradebook.latest(records)
     columns = _check_columns(sorted({r["lesson"] for r in latest.values()} | set(lessons),
                                     key=lambda x: (x not in lessons, lessons.index(x) if x in lessons else 0, x)))
-    gradebook.atomic_write(out_dir / "gradebook.csv", gradebook.gradebook_csv(latest.values(), columns))
-    gradebook.atomic_write(out_dir / "junit.xml", gradebook.junit_xml(latest.values()))
+    atomic_write_text(out_dir / "gradebook.csv", gradebook.gradebook_csv(latest.values(), columns))
+    atomic_write_text(out_dir / "junit.xml", gradebook.junit_xml(latest.values()))
     for student in students:
         mine = [r for (s, _), r in latest.items() if s == student]
         if mine:
-            gradebook.atomic_write(out_dir / student / "results.json",
+            atomic_write_text(out_dir / student / "results.json",
                                    json.dumps(gradebook.gradescope_json(mine), indent=2) + "\n")
 
 

@@ -22,6 +22,7 @@ import uuid
 from pathlib import Path
 
 from course import gradebook
+from course.progress import atomic_write_text
 from course.batch import Job, default_hidden, lesson_checks, run_job
 from course.batch_archive import ARCHIVE_SUFFIXES
 from course.errors import CourseError
@@ -92,5 +93,5 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
     job = Job(uuid.uuid4().hex, "submission", str(entry.absolute()), "", lessons, str(results.parent), timeout, hide=hide)
     outcome = run_job(job)
     data = gradebook.gradescope_json(outcome["records"])
-    gradebook.atomic_write(results, json.dumps(data, indent=2) + "\n")
+    atomic_write_text(results, json.dumps(data, indent=2) + "\n")
     return float(data["score"])

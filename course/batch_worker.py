@@ -24,6 +24,8 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+from course.progress import atomic_write_text
+
 
 def result_dict(result: Any) -> dict[str, Any]:
     """A :class:`~course.grading.LessonResult` as ``check --json`` plus ``hint``, ``timings``, ``build``, ``log_dir``."""
@@ -33,12 +35,6 @@ def result_dict(result: Any) -> dict[str, Any]:
     out["build"] = result.build
     out["log_dir"] = result.log_dir
     return out
-
-
-def _write(path: Path, data: Any) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1), encoding="utf-8")
-    os.replace(tmp, path)
 
 
 def _limit(kind: int, value: int) -> None:
@@ -70,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
     env_mod.activate()
     catalog = load_catalog()
     done: list[dict[str, Any]] = []
-    _write(args.results, done)
+    atomic_write_text(args.results, json.dumps(done, indent=1))
     from course.grading import grade_lesson  # noqa: PLC0415
 
     for lesson_id in args.lesson:
@@ -88,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
                      "timings": {}, "build": {}, "log_dir": str(log_dir)}
         entry["seconds"] = round(time.monotonic() - begin, 3)
         done.append(entry)
-        _write(args.results, done)
+        atomic_write_text(args.results, json.dumps(done, indent=1))
     sys.stdout.flush()
     return 0
 

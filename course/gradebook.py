@@ -27,8 +27,6 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from course.progress import atomic_write_text
-
 #: Gradebook status of a submission that was graded (passed or failed checks).
 GRADED = "graded"
 NOT_GRADABLE = "not gradable"
@@ -38,11 +36,6 @@ GRADER_ERROR = "grader error"
 def gradebook_status(engine_status: str) -> str:
     """``passed`` / ``failed`` -> ``graded``; ``not gradable`` and ``grader error`` stay."""
     return engine_status if engine_status in (NOT_GRADABLE, GRADER_ERROR) else GRADED
-
-
-def atomic_write(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` (temp file + fsync + ``os.replace``): readers see the old or the new file."""
-    atomic_write_text(path, text)
 
 
 def append_record(path: Path, record: dict[str, Any]) -> None:

@@ -283,6 +283,16 @@ class GradingSession:
         listing = ", ".join(others) if others else "nothing"
         return None, f"no executable {executable} in {lib}; found: {listing}"
 
+    def find_share(self, package: str) -> Path | None:
+        """``install/<package>/share/<package>`` as ``ros2 launch`` finds it (ament index), or None."""
+        from ament_index_python.packages import PackageNotFoundError, get_package_share_directory  # noqa: PLC0415
+
+        with patched_environ(self.overlay()):
+            try:
+                return Path(get_package_share_directory(package))
+            except (PackageNotFoundError, OSError, ValueError):
+                return None
+
     def new_graph(self):
         """Another private ROS graph (its own domain id) for this check, closed with it.
 

@@ -187,6 +187,16 @@ def _node_aliases(tree: ast.Module) -> tuple[set[str], set[str]]:
     return names, prefixes
 
 
+def describe_launch_folder(share: Path | None, package: str) -> str:
+    """What ``share/<package>/launch`` holds, for a check that did not find a launch file there."""
+    if share is None:
+        return f"package {package} is not installed"
+    if (share / "launch").is_dir():
+        return (f"share/{package}/launch holds: "
+                + (", ".join(sorted(p.name for p in (share / "launch").iterdir())) or "nothing"))
+    return f"share/{package} has no launch folder"
+
+
 def _literal(value: ast.AST) -> tuple[bool, Any]:
     """``(True, value)`` when ``value`` is a Python literal (implicitly concatenated strings included)."""
     try:
@@ -195,13 +205,17 @@ def _literal(value: ast.AST) -> tuple[bool, Any]:
         return False, None
 
 
-def _flatten(params: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    """Nested parameter dicts to dotted names (launch_ros ``normalize_parameters``)."""
+def flatten_parameters(params: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    """Nested parameter mappings to dotted names, e.g. ``{"a": {"b": 1}}`` -> ``{"a.b": 1}``.
+
+    The rule of launch_ros ``normalize_parameters`` and of ``ros2 param load``
+    (rclpy ``_unpack_parameter_dict``).
+    """
     flat: dict[str, Any] = {}
     for key, value in params.items():
         name = f"{prefix}{key}"
         if isinstance(value, dict):
-            flat.update(_flatten(value, f"{name}."))
+            flat.update(flatten_parameters(value, f"{name}."))
         else:
             flat[name] = value
     return flat
@@ -252,7 +266,7 @@ def _read_node_call(call: ast.Call, text: str) -> NodeAction:
                 continue
             for item in value:
                 if isinstance(item, dict) and all(isinstance(k, str) for k in item):
-                    flat = _flatten(item)
+                    flat = flatten_parameters(item)
                     bad = [k for k, v in flat.items() if not _is_param_value(v)]
                     if bad:
                         action.unsupported.append(f"{where}: the value of {bad[0]!r} is not a parameter value "

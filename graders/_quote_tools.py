@@ -43,6 +43,15 @@ def skip_checks(s: GradingSession, check_ids: Iterable[str], reason: str) -> Non
             s.record(check_id, False, f"not checked: {reason}", "(depends on the failed check above)")
 
 
+def give_up(s: GradingSession, checks: list[str], reason: str, proc) -> None:
+    """Stop grading one executable: skip its ``checks`` but the last (with ``reason``), which is its
+    SIGINT-exit check, recorded by pressing Ctrl+C on ``proc`` (``graders._common.record_sigint_exit``)."""
+    from graders._common import record_sigint_exit  # noqa: PLC0415
+
+    skip_checks(s, checks[:-1], reason)
+    record_sigint_exit(s, checks[-1], proc)
+
+
 def require_executable(s: GradingSession, check_id: str, package: str, executable: str,
                        dependents: Iterable[str]) -> Path | None:
     """Record ``check_id`` on whether ``ros2 run package executable`` finds it (ros2run's lookup).

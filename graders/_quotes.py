@@ -140,12 +140,4 @@ def package_source(s: GradingSession) -> Path | None:
 
 def package_share(s: GradingSession) -> Path | None:
     """``share/<package>`` of the installed package, found the way ``ros2 launch`` finds it."""
-    from ament_index_python.packages import PackageNotFoundError, get_package_share_directory  # noqa: PLC0415
-
-    from course.grading import patched_environ  # noqa: PLC0415
-
-    with patched_environ(s.overlay()):
-        try:
-            return Path(get_package_share_directory(PACKAGE))
-        except (PackageNotFoundError, OSError, ValueError):
-            return None
+    return s.find_share(PACKAGE)

@@ -14,7 +14,7 @@ import time
 
 from course.grading import Check, GradingSession
 from graders._common import process_state
-from graders._launch import MODE_LAUNCH_ROS, LaunchRun, start_launch_file
+from graders._launch import MODE_LAUNCH_ROS, LaunchRun, describe_launch_folder, start_launch_file
 from graders._quotes import (EXECUTABLE, LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER, LAUNCH_QUOTE,
                              LAUNCH_TOPIC, PACKAGE, amazing_quote, first_difference, package_share, package_source,
                              record_rate, short, topics_seen)
@@ -55,13 +55,7 @@ def _find_launch_file(s: GradingSession):
         return installed
     source = package_source(s)
     in_source = source / "launch" / LAUNCH_FILE if source else None
-    if share is None:
-        where = f"package {PACKAGE} is not installed"
-    elif (share / "launch").is_dir():
-        where = (f"share/{PACKAGE}/launch holds: "
-                 + (", ".join(sorted(p.name for p in (share / "launch").iterdir())) or "nothing"))
-    else:
-        where = f"share/{PACKAGE} has no launch folder"
+    where = describe_launch_folder(share, PACKAGE)
     if in_source is not None and in_source.is_file():
         where += (f"; src/.../launch/{LAUNCH_FILE} exists but setup.py does not install it "
                   "(the remaining checks run that source file)")

@@ -27,7 +27,7 @@ from typing import Any
 from course.grading import Check, GradingSession
 from course.probes import parameter_client, wait_future, wait_until
 from graders._common import process_state
-from graders._launch import NodeAction, start_node_action
+from graders._launch import NodeAction, flatten_parameters, start_node_action
 from graders._quotes import (EXECUTABLE, LAUNCH_NODE, LAUNCH_PARAMETERS, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER,
                              LAUNCH_QUOTE, LAUNCH_TOPIC, PACKAGE, amazing_quote, package_source, parameter_value,
                              python_type_name, short, topics_seen)
@@ -61,18 +61,6 @@ CHECKS = [
     Check("observed_quote", f"After loading, /{LAUNCH_TOPIC} carries the file's quote and philosopher", 2,
           "the node must read quote and philosopher_name on every publish (parameters lesson)"),
 ]
-
-
-def _flatten(params: dict[str, Any], prefix: str = "") -> dict[str, Any]:
-    """Nested mappings to dotted names, as ``ros2 param load`` (rclpy ``_unpack_parameter_dict``) does."""
-    flat: dict[str, Any] = {}
-    for key, value in params.items():
-        name = f"{prefix}{key}"
-        if isinstance(value, dict):
-            flat.update(_flatten(value, f"{name}."))
-        else:
-            flat[name] = value
-    return flat
 
 
 def _read_file(s: GradingSession) -> tuple[Path | None, dict[str, Any] | None]:
@@ -127,7 +115,7 @@ def _read_file(s: GradingSession) -> tuple[Path | None, dict[str, Any] | None]:
                  expected_key)
         return path, None
     s.record("node_key", True, f"{NODE_KEY}: ros__parameters with {len(params)} entries", expected_key)
-    return path, _flatten(params)
+    return path, flatten_parameters(params)
 
 
 def _start_node(s: GradingSession, probe) -> Any | None:

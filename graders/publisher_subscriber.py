@@ -23,6 +23,7 @@ from graders._quote_tools import (
     describe_endpoints,
     has_integer,
     launch_node,
+    give_up,
     pick_endpoint,
     record_depends,
     require_executable,
@@ -123,8 +124,7 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
     probes = {TOPIC: StampedTopicProbe(s, TOPIC, msg_type, _reliable())}
     proc, node = launch_node(s, "pub_node_name", path, PUB_EXE, PUB_NODE)
     if proc.poll() is not None:
-        skip_checks(s, PUB_CHECKS[:-1], process_state(proc))
-        record_sigint_exit(s, "pub_sigint_exit", proc)
+        give_up(s, PUB_CHECKS, process_state(proc), proc)
         return
     with s.phase("start"):
         found = wait_for_endpoint(s, node, "publishers", TOPIC, 3.0, abort=lambda: proc.poll() is not None) \
@@ -135,8 +135,7 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
              + ("" if ok else f"; topics in the graph: {_topics_seen(s)}"), expected)
     target = pick_endpoint(found, TOPIC, MSG_TYPE)
     if target is None or MSG_TYPE not in found.get(target, []):
-        skip_checks(s, PUB_CHECKS[:-1], f"no {MSG_TYPE} topic published to listen to")
-        record_sigint_exit(s, "pub_sigint_exit", proc)
+        give_up(s, PUB_CHECKS, f"no {MSG_TYPE} topic published to listen to", proc)
         return
     if target not in probes:  # grade the contents where the learner publishes them
         probes[target] = StampedTopicProbe(s, target, msg_type, _reliable())
@@ -147,8 +146,7 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
         probe.wait_for_count(SAMPLES, window, abort=lambda: proc.poll() is not None)
     messages = probe.messages()[:SAMPLES]
     if not messages:
-        skip_checks(s, PUB_CHECKS[:-1], f"no message on {target} in {window:.1f} s; {process_state(proc)}")
-        record_sigint_exit(s, "pub_sigint_exit", proc)
+        give_up(s, PUB_CHECKS, f"no message on {target} in {window:.1f} s; {process_state(proc)}", proc)
         return
 
     wrong_quote = [m for m in messages if m.quote != QUOTE]
@@ -209,8 +207,7 @@ def _grade_subscriber(s: GradingSession, msg_type: type) -> None:
     rosout = s.ros.rosout()
     proc, node = launch_node(s, "sub_node_name", path, SUB_EXE, SUB_NODE)
     if proc.poll() is not None:
-        skip_checks(s, SUB_CHECKS[:-1], process_state(proc))
-        record_sigint_exit(s, "sub_sigint_exit", proc)
+        give_up(s, SUB_CHECKS, process_state(proc), proc)
         return
     with s.phase("start"):
         found = wait_for_endpoint(s, node, "subscriptions", TOPIC, 3.0, abort=lambda: proc.poll() is not None) \
@@ -220,8 +217,7 @@ def _grade_subscriber(s: GradingSession, msg_type: type) -> None:
              + ("" if ok else f"; topics in the graph: {_topics_seen(s)}"), f"{TOPIC} [{MSG_TYPE}]")
     target = pick_endpoint(found, TOPIC, MSG_TYPE)
     if target is None or MSG_TYPE not in found.get(target, []):
-        skip_checks(s, SUB_CHECKS[:-1], f"no {MSG_TYPE} subscription to publish to")
-        record_sigint_exit(s, "sub_sigint_exit", proc)
+        give_up(s, SUB_CHECKS, f"no {MSG_TYPE} subscription to publish to", proc)
         return
     where = "" if target == TOPIC else f" (published on {target}, the topic your node uses)"
 

@@ -42,7 +42,7 @@ from graders._joint_stream import (
     arrival_rate,
     source_rate,
 )
-from graders._launch import NodeAction, read_launch_file, start_node_action
+from graders._launch import NodeAction, describe_launch_folder, read_launch_file, start_node_action
 
 PACKAGE = "sas_robot_driver_myrobot"
 DRIVER_EXECUTABLE = "sas_robot_driver_myrobot_node"
@@ -169,21 +169,6 @@ def _topics_seen(graph) -> str:
     return ", ".join(f"{n} ({', '.join(t)})" for n, t in sorted(topics.items())) or "none"
 
 
-def _package_share(s: GradingSession) -> Path | None:
-    from ament_index_python.packages import (  # noqa: PLC0415
-        PackageNotFoundError,
-        get_package_share_directory,
-    )
-
-    from course.grading import patched_environ  # noqa: PLC0415
-
-    with patched_environ(s.overlay()):
-        try:
-            return Path(get_package_share_directory(PACKAGE))
-        except (PackageNotFoundError, OSError, ValueError):
-            return None
-
-
 def _driver_action() -> NodeAction:
     """The seed's launch file ``Node`` action (ch. 31.7), as the grader starts it."""
     return NodeAction(line=0, package=PACKAGE, executable=DRIVER_EXECUTABLE, name=NODE,
@@ -208,19 +193,15 @@ def _add_plot(s: GradingSession, title: str, times: list[float], series: dict[st
 
 def _check_launch_file(s: GradingSession) -> None:
     """Record ``launch_file``: installed, and its Node action is the seed's (read statically, never run)."""
-    share = _package_share(s)
+    share = s.find_share(PACKAGE)
     expected = (f"install/{PACKAGE}/share/{PACKAGE}/launch/{LAUNCH_FILE} with Node(package='{PACKAGE}', "
                 f"executable='{DRIVER_EXECUTABLE}', name='{NODE}', parameters=[{{ip, joint_limits_min, "
                 "joint_limits_max (degrees, ch. 31.7), thread_sampling_time_sec: 0.002}])")
     installed = share / "launch" / LAUNCH_FILE if share else None
     if installed is None or not installed.is_file():
-        if share is None:
-            where = f"package {PACKAGE} is not installed"
-        elif (share / "launch").is_dir():
-            where = (f"share/{PACKAGE}/launch holds: "
-                     + (", ".join(sorted(p.name for p in (share / "launch").iterdir())) or "nothing"))
-        else:
-            where = f"share/{PACKAGE} has no launch folder (is it in setup.py's data_files?)"
+        where = describe_launch_folder(share, PACKAGE)
+        if share is not None and not (share / "launch").is_dir():
+            where += " (is it in setup.py's data_files?)"
         s.record("launch_file", False, where, expected)
         return
     found = read_launch_file(installed)

@@ -31,6 +31,7 @@ from graders._quote_tools import (
     describe_endpoints,
     has_point,
     launch_node,
+    give_up,
     pick_endpoint,
     record_depends,
     require_executable,
@@ -141,8 +142,7 @@ def _grade_server(s: GradingSession, srv_type: type) -> None:
         return
     proc, node = launch_node(s, "server_node_name", path, SERVER_EXE, SERVER_NODE)
     if proc.poll() is not None:
-        skip_checks(s, SERVER_CHECKS[:-1], process_state(proc))
-        record_sigint_exit(s, "server_sigint_exit", proc)
+        give_up(s, SERVER_CHECKS, process_state(proc), proc)
         return
     with s.phase("start"):
         found = wait_for_endpoint(s, node, "services", SERVICE, 3.0, abort=lambda: proc.poll() is not None) \
@@ -152,8 +152,7 @@ def _grade_server(s: GradingSession, srv_type: type) -> None:
     s.record("service_name_type", ok, f"{node or 'the node'} serves: {describe_endpoints(found)}", expected)
     target = pick_endpoint(found, SERVICE, SRV_TYPE)
     if target is None or SRV_TYPE not in found.get(target, []):
-        skip_checks(s, SERVER_CHECKS[:-1], f"no service of type {SRV_TYPE} to call")
-        record_sigint_exit(s, "server_sigint_exit", proc)
+        give_up(s, SERVER_CHECKS, f"no service of type {SRV_TYPE} to call", proc)
         return
     where = "" if target == SERVICE else f" (called at {target}, the name your server uses)"
 
@@ -200,8 +199,7 @@ def _grade_client(s: GradingSession, srv_type: type) -> None:
     rosout = s.ros.rosout()
     proc, _ = launch_node(s, "client_node_name", path, CLIENT_EXE, CLIENT_NODE)
     if proc.poll() is not None:
-        skip_checks(s, CLIENT_CHECKS[:-1], process_state(proc))
-        record_sigint_exit(s, "client_sigint_exit", proc)
+        give_up(s, CLIENT_CHECKS, process_state(proc), proc)
         return
 
     def waiting_records():

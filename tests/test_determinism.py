@@ -1,9 +1,14 @@
-"""The parameters grader is deterministic: the same correct submission gets the same verdicts every time.
+"""The topic, service and parameter graders are deterministic: the same correct submission gets the same
+verdicts every time (issue 3).
 
-The reference is built once into a temporary workspace (later grades reuse the
-build: colcon is skipped when the sources are unchanged), then graded 20
-times; score and every check's verdict and points must not vary. Under load a
-rate could drift, so a failure lists every run that differed and how.
+For ``publisher-subscriber``, ``service-server-client`` and ``parameters`` the reference is
+built once into a temporary workspace (later grades reuse the build: colcon
+is skipped when the sources are unchanged), then graded 20 times. Score and
+every check's verdict and points must not vary, although the grader makes up
+new quotes (subscriber) and new points (stand-in server) each time and the
+reference server answers with random points, and the parameters grader changes
+parameters at runtime. Under load a rate could drift,
+so a failure lists every run that differed and how.
 """
 
 from __future__ import annotations
@@ -23,8 +28,9 @@ def verdicts(result) -> list[tuple[str, bool, float]]:
 
 
 @pytest.mark.ros
-def test_parameters_reference_grades_identically_20_times(tmp_path):
-    lesson = load_catalog().get("parameters")
+@pytest.mark.parametrize("lesson_id", ["publisher-subscriber", "service-server-client", "parameters"])
+def test_reference_grades_identically_20_times(lesson_id, tmp_path):
+    lesson = load_catalog().get(lesson_id)
     workspace = reference_workspace(lesson, tmp_path / "ws")
     first = grade_lesson(lesson, workspace, log_dir=tmp_path / "log0")
     assert first.status == STATUS_PASSED, [(c.id, c.observed) for c in first.checks if not c.passed] or first.message
