@@ -292,46 +292,6 @@ def has_point(text: str, point: tuple[float, float, float], tolerance: float = 0
     return all(any(abs(v - c) <= tolerance for v in found) for c in point)
 
 
-# --- a topic probe that keeps the publisher's send stamps ---------------------
-
-class StampedTopicProbe:
-    """Messages received on one topic, with arrival time and the publisher's send stamp.
-
-    Like :class:`course.probes.TopicProbe`, but the rclpy callback also takes
-    the ``MessageInfo`` (a two-argument callback, rclpy >= Jazzy), whose
-    ``source_timestamp`` is when the publisher wrote the message. A rate over
-    those stamps judges the publisher's timer, not the delivery delays of a
-    loaded machine (as the print-forever grader uses /rosout record stamps).
-    """
-
-    def __init__(self, s: GradingSession, topic: str, msg_type: type, qos: Any) -> None:
-        self.topic = topic
-        self._lock = threading.Lock()
-        self._samples: list[tuple[float, float, Any]] = []
-        self._sub = s.ros.node.create_subscription(msg_type, topic, self._on_message, qos)
-
-    def _on_message(self, msg: Any, info: Any) -> None:
-        now = time.monotonic()
-        stamp = info.get("source_timestamp", 0) * 1e-9 if isinstance(info, dict) else 0.0
-        with self._lock:
-            self._samples.append((now, stamp or time.time(), msg))
-
-    def messages(self) -> list[Any]:
-        """Messages so far, oldest first."""
-        with self._lock:
-            return [m for _, _, m in self._samples]
-
-    def wait_for_count(self, count: int, timeout: float, abort: Callable[[], bool] | None = None) -> bool:
-        """Wait until ``count`` messages arrived (or ``timeout`` seconds)."""
-        return wait_until(lambda: len(self._samples) >= count, timeout, abort=abort)
-
-    def rate(self, count: int | None = None) -> RateStats | None:
-        """Rate over the send stamps of the first ``count`` messages (``ros2 topic hz``'s formula)."""
-        with self._lock:
-            stamps = [stamp for _, stamp, _ in self._samples]
-        return RateStats.from_times(stamps[:count] if count else stamps)
-
-
 # --- a service server the grader plays ----------------------------------------
 
 class DeferredServer:

@@ -113,7 +113,11 @@ def topics_seen(s: GradingSession, graph=None) -> str:
 
 def record_rate(s: GradingSession, check_id: str, times: list[float], period: float, needed: int,
                 waited: float) -> bool:
-    """Record ``check_id`` on the mean period of arrival ``times`` (seconds), like ``ros2 topic hz``.
+    """Record ``check_id`` on the mean period of the messages' send stamps ``times`` (seconds).
+
+    The formula is ``ros2 topic hz``'s (1 / mean delta); the times are the
+    publisher's send stamps (:meth:`course.probes.TopicProbe.send_stamps`), so
+    a loaded machine delivering two messages at once does not change the verdict.
 
     Args:
         period: expected seconds between messages; ±:data:`TOLERANCE` on the mean.
@@ -127,7 +131,7 @@ def record_rate(s: GradingSession, check_id: str, times: list[float], period: fl
         return s.record(check_id, False, f"only {len(times)} message(s) within {waited:.1f} s"
                         + (f" ({stats.describe()})" if stats else ""), expected)
     return s.record(check_id, stats.within(1.0 / period, TOLERANCE),
-                    stats.describe() + " (arrival times, as ros2 topic hz measures them)", expected)
+                    stats.describe() + " (from the messages' send stamps)", expected)
 
 
 def package_source(s: GradingSession) -> Path | None:

@@ -140,7 +140,7 @@ def grade(s: GradingSession) -> None:
         return
     s.record("topic", True, f"{len(samples)} AmazingQuote message(s) on /{LAUNCH_TOPIC} ({mode})",
              f"AmazingQuote messages on /{LAUNCH_TOPIC}")
-    record_rate(s, "rate", [t for t, _ in samples], LAUNCH_PERIOD, SAMPLES, timeout)
+    record_rate(s, "rate", probe.send_stamps(), LAUNCH_PERIOD, SAMPLES, timeout)
     wrong = [m for _, m in samples if m.quote != LAUNCH_QUOTE or m.philosopher_name != LAUNCH_PHILOSOPHER]
     expected = f"quote {short(LAUNCH_QUOTE)} (ch. 22.9), philosopher_name {LAUNCH_PHILOSOPHER!r}"
     if not wrong:

@@ -121,7 +121,7 @@ def _check_default_messages(s: GradingSession, probe, proc, began: float) -> Non
              f"{len(samples)} message(s); " + (f"e.g. quote {short(first.quote)}, philosopher_name "
                                                 f"{short(first.philosopher_name)}" if odd else "all with the defaults"),
              expected)
-    record_rate(s, "default_rate", [t for t, _ in samples], DEFAULT_PERIOD, DEFAULT_SAMPLES, timeout)
+    record_rate(s, "default_rate", probe.send_stamps(), DEFAULT_PERIOD, DEFAULT_SAMPLES, timeout)
 
 
 def _check_runtime_change(s: GradingSession, client, probe, proc) -> None:
@@ -194,7 +194,7 @@ def _check_configured_run(s: GradingSession, graph, proc, probe, began: float) -
     else:
         s.record("configured_topic", True, f"started with {shown}: {len(samples)} message(s) on /{CONFIGURED_TOPIC}",
                  expected_topic)
-        record_rate(s, "configured_rate", [t for t, _ in samples], CONFIGURED_PERIOD, CONFIGURED_SAMPLES, timeout)
+        record_rate(s, "configured_rate", probe.send_stamps(), CONFIGURED_PERIOD, CONFIGURED_SAMPLES, timeout)
     with s.phase("stop"):
         proc.stop(sigint_timeout=2.0, sigterm_timeout=1.0)
 

@@ -19,7 +19,6 @@ from course.grading import Check, GradingSession
 from course.probes import wait_until
 from graders._common import process_state, record_sigint_exit
 from graders._quote_tools import (
-    StampedTopicProbe,
     describe_endpoints,
     has_integer,
     launch_node,
@@ -121,7 +120,7 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
     if path is None:
         return
     # Subscribe before the node starts: no message is missed and the rate window starts at once.
-    probes = {TOPIC: StampedTopicProbe(s, TOPIC, msg_type, _reliable())}
+    probes = {TOPIC: s.ros.topic(TOPIC, msg_type, _reliable())}
     proc, node = launch_node(s, "pub_node_name", path, PUB_EXE, PUB_NODE)
     if proc.poll() is not None:
         give_up(s, PUB_CHECKS, process_state(proc), proc)
@@ -138,7 +137,7 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
         give_up(s, PUB_CHECKS, f"no {MSG_TYPE} topic published to listen to", proc)
         return
     if target not in probes:  # grade the contents where the learner publishes them
-        probes[target] = StampedTopicProbe(s, target, msg_type, _reliable())
+        probes[target] = s.ros.topic(target, msg_type, _reliable())
     probe = probes[target]
     where = "" if target == TOPIC else f" (on {target}, the topic your node uses)"
     window = SAMPLES * PERIOD + 2.0
@@ -168,7 +167,7 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
         s.record("pub_id_counts", counts, f"ids {shown}" + where,
                  f"ids {ids[0]}, {ids[0] + 1}, {ids[0] + 2}, ... (each one more than the previous)")
 
-    stats = probe.rate(SAMPLES)  # on the publisher's send stamps (see StampedTopicProbe)
+    stats = probe.rate(SAMPLES)  # on the publisher's send stamps (see course.probes.TopicProbe)
     expected_rate = f"2.00 Hz: mean period {PERIOD:.3f} s ± {TOLERANCE:.0%}, over at least {SAMPLES - 1} intervals"
     if stats is None or stats.samples < SAMPLES - 1:
         s.record("pub_rate", False, f"only {len(messages)} message(s) in {window:.1f} s"
