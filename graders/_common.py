@@ -5,6 +5,7 @@ from __future__ import annotations
 import os
 import signal
 import time
+from collections.abc import Iterable
 from pathlib import Path
 
 from course.grading import GradingSession
@@ -39,32 +40,38 @@ def process_state(proc: LearnerProcess) -> str:
 
 
 def wait_for_node(s: GradingSession, check_id: str, proc: LearnerProcess, node: str,
-                  timeout: float = 10.0, grace: float = 3.0) -> bool:
+                  timeout: float = 10.0, grace: float = 3.0, before: Iterable[str] = ()) -> bool:
     """Record ``check_id`` on whether a node called ``node`` appears within ``timeout`` seconds.
 
     Stops waiting early if the process dies, or ``grace`` seconds after other
     nodes appeared without it (a misnamed node will not rename itself).
-    Observed lists the nodes seen.
+    Nodes named in ``before`` (those in the graph before ``proc`` started)
+    are ignored: a node stopped a moment ago can linger in the graph until
+    its DDS participant's lease expires, and must neither end the wait early
+    nor be listed as this process's. Observed lists the (new) nodes seen.
     """
+    ignored = set(before)
     first_other: list[float] = []
+
+    def new_nodes() -> list[str]:
+        return [n for n in s.ros.node_names() if n not in ignored]
 
     def give_up() -> bool:
         if proc.poll() is not None:
             return True
-        if not first_other and s.ros.node_names():
+        if not first_other and new_nodes():
             first_other.append(time.monotonic())
         return bool(first_other) and time.monotonic() - first_other[0] > grace
 
     begin = time.monotonic()
     with s.phase("start"):
-        found = s.ros.wait_for_node(node, timeout, abort=give_up)
+        found = wait_until(lambda: f"/{node}" in new_nodes(), timeout, interval=0.05, abort=give_up)
     waited = time.monotonic() - begin
-    seen = ", ".join(s.ros.node_names()) or "none"
     if found:
         return s.record(check_id, True, f"node /{node} is running", f"a node named {node}")
-    state = process_state(proc)
-    return s.record(check_id, False, f"no node named {node} after {waited:.1f} s; nodes seen: {seen}; {state}",
-                    f"a node named {node} (the name passed to super().__init__)")
+    seen = ", ".join(new_nodes()) or "none"
+    return s.record(check_id, False, f"no node named {node} after {waited:.1f} s; nodes seen: {seen}; "
+                    f"{process_state(proc)}", f"a node named {node} (the name passed to super().__init__)")
 
 
 def _rclpy_shutdown_race(trace: str) -> bool:

@@ -9,9 +9,7 @@ stand-in service server that can answer late without blocking any executor.
 
 from __future__ import annotations
 
-import os
 import re
-import sys
 import threading
 import time
 from collections.abc import Callable, Iterable
@@ -110,46 +108,21 @@ def launch_node(s: GradingSession, check_id: str, path: Path, executable: str, n
                 timeout: float = 10.0, grace: float = 3.0):
     """Start ``executable`` and record ``check_id`` on whether a node called ``node`` appears.
 
-    Like ``graders._common.wait_for_node`` (gives up early when the process
-    dies, or ``grace`` seconds after another *new* node appeared without the
-    expected one), except that nodes already in the graph before the launch
-    are ignored: a node stopped a moment ago can linger in the graph until
-    its DDS participant's lease expires, and must neither end the wait early
-    nor be mistaken for this process's node. Later processes of a check can
-    take about 3 s to be discovered (Fast DDS announcement period), hence the
-    timeout of ``timeout`` seconds.
+    :func:`graders._common.wait_for_node`, ignoring the nodes already in the
+    graph before the launch. Later processes of a check can take about 3 s to
+    be discovered (Fast DDS announcement period), hence ``timeout`` seconds.
 
     Returns:
         ``(process, name)``: the LearnerProcess, and the node name to inspect
         (``node``, else the only new node, e.g. a misnamed one, else None).
     """
-    from graders._common import process_state  # noqa: PLC0415
+    from graders._common import wait_for_node  # noqa: PLC0415
 
     before = set(s.ros.node_names())
     proc = s.launch(path, executable)
-    first_other: list[float] = []
-
-    def new_nodes() -> list[str]:
-        return [n for n in s.ros.node_names() if n not in before]
-
-    def give_up() -> bool:
-        if proc.poll() is not None:
-            return True
-        if not first_other and new_nodes():
-            first_other.append(time.monotonic())
-        return bool(first_other) and time.monotonic() - first_other[0] > grace
-
-    begin = time.monotonic()
-    with s.phase("start"):
-        found = wait_until(lambda: f"/{node}" in new_nodes(), timeout, interval=0.05, abort=give_up)
-    waited = time.monotonic() - begin
-    if found:
-        s.record(check_id, True, f"node /{node} is running", f"a node named {node}")
+    if wait_for_node(s, check_id, proc, node, timeout, grace, before=before):
         return proc, node
-    fresh = new_nodes()
-    s.record(check_id, False, f"no node named {node} after {waited:.1f} s; nodes seen: {', '.join(fresh) or 'none'}; "
-             f"{process_state(proc)}", f"a node named {node} (the name passed to super().__init__)")
-    plain = [n for n in fresh if n.count("/") == 1]
+    plain = [n for n in s.ros.node_names() if n not in before and n.count("/") == 1]
     return proc, (plain[0].lstrip("/") if len(plain) == 1 else None)
 
 
@@ -220,52 +193,10 @@ def pick_endpoint(found: dict[str, list[str]], name: str, type_name: str) -> str
 def interface_type(s: GradingSession, kind: str, name: str) -> Any:
     """``package_with_interfaces.<kind>.<name>`` of this workspace (see :mod:`course.interfaces`).
 
-    ``course.interfaces`` loads the package once per process. When a later
-    check grades another workspace (``dev validate`` grades many throw-away
-    workspaces in one process), the first one may be deleted already. So:
-    a build imported from another prefix is forgotten and imported again
-    from this one (:func:`_forget_other_build`), and this workspace's
-    ``lib`` folder goes first in ``LD_LIBRARY_PATH``, where rosidl's
-    typesupport dispatch looks libraries up when a type is first used.
-
     Raises:
-        NotGradable: the package is not installed in this workspace.
+        NotGradable: the package is not installed in this workspace, or does not load.
     """
-    from course.errors import NotGradable  # noqa: PLC0415
-
-    for entry in s.overlay().get("AMENT_PREFIX_PATH", "").split(os.pathsep):
-        marker = Path(entry, "share", "ament_index", "resource_index", "packages", INTERFACES)
-        if entry and marker.is_file():
-            prefix = Path(entry)
-            break
-    else:
-        # Checked here too: an import cached from another workspace would hide it.
-        raise NotGradable(f"interface package {INTERFACES} is not installed in the workspace",
-                          f"build it: colcon build --packages-up-to {INTERFACES}")
-    lib = str(prefix / "lib")
-    paths = [p for p in os.environ.get("LD_LIBRARY_PATH", "").split(os.pathsep) if p and p != lib]
-    os.environ["LD_LIBRARY_PATH"] = os.pathsep.join([lib, *paths])
-    _forget_other_build(prefix)
     return s.interface_type(INTERFACES, kind, name)
-
-
-def _forget_other_build(prefix: Path) -> None:
-    """Drop ``package_with_interfaces`` modules imported from another install prefix.
-
-    Its Python package lives in that prefix: once the prefix is deleted (the
-    throw-away workspaces of ``dev validate``), submodules not imported yet
-    (``.srv`` after ``.msg``) cannot be found any more. Importing again from
-    this workspace loads its own copy of the generated libraries.
-    """
-    cached = sys.modules.get(INTERFACES)
-    if cached is None:
-        return
-    here = prefix.resolve()
-    folders = [Path(p) for p in getattr(cached, "__path__", [])]
-    if any(f.is_dir() and f.resolve().is_relative_to(here) for f in folders):
-        return
-    for module in [m for m in sys.modules if m == INTERFACES or m.startswith(INTERFACES + ".")]:
-        del sys.modules[module]
 
 
 # --- text matching -------------------------------------------------------------

@@ -26,7 +26,6 @@ from graders._quote_tools import (
     pick_endpoint,
     record_depends,
     require_executable,
-    skip_checks,
     wait_for_endpoint,
     workspace_types,
 )
