@@ -302,7 +302,14 @@ def _parent_pid(proc: psutil.Process) -> int | None:
 SHM_DIR = Path("/dev/shm")
 
 
-def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR) -> list[str]:
+#: Seconds a Fast DDS file must have existed before a sweep may judge it stale. A
+#: participant creates a segment, then its ``_el`` lock file, then takes the lock;
+#: a file younger than this may be half-way through that and is left for a second pass.
+SHM_MIN_AGE = 1.0
+
+
+def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR, min_age: float = SHM_MIN_AGE,
+                            wait: bool = True) -> list[str]:
     """Remove Fast DDS shared-memory files whose owners are gone; returns the names removed.
 
     A segment ``fastrtps_X`` has a lock file ``fastrtps_X_el`` that live users
@@ -313,10 +320,39 @@ def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR) -> list[str]:
     A ``fastrtps_*`` segment (or its ``sem.*_mutex``) left without any ``_el``
     lock file (a writer re-created a port whose listener had died) is removed
     only if no process maps it or holds it open (/proc/*/maps and /proc/*/fd).
+
+    An unused file younger than ``min_age`` seconds is not removed: another
+    participant (a check running beside this one) may be creating it and not
+    hold its lock yet. With ``wait`` (the default), when such young files were
+    seen the sweep waits ``min_age`` seconds once and sweeps again, so a node
+    killed right after it started leaves nothing behind either.
     """
+    removed, young = _sweep_once(shm_dir, min_age)
+    if young and wait:
+        time.sleep(min_age)
+        removed += _sweep_once(shm_dir, min_age)[0]
+    return removed
+
+
+def _sweep_once(shm_dir: Path, min_age: float) -> tuple[list[str], bool]:
+    """One pass of :func:`sweep_stale_fastdds_shm`: (names removed, whether unused young files were left)."""
     removed: list[str] = []
+    young = False
     if not shm_dir.is_dir():
-        return removed
+        return removed, young
+    now = time.time()
+
+    def too_young(path: Path) -> bool:
+        nonlocal young
+        try:
+            info = path.stat()
+        except FileNotFoundError:
+            return False  # gone already: nothing to protect
+        if now - min(info.st_mtime, info.st_ctime) < min_age:
+            young = True
+            return True
+        return False
+
     orphans = [p for p in shm_dir.glob("fastrtps_*") if not p.name.endswith("_el")
                and not (shm_dir / f"{p.name}_el").exists()]
     orphans += [p for p in shm_dir.glob("sem.fastrtps_*_mutex")
@@ -324,7 +360,7 @@ def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR) -> list[str]:
     if orphans:
         used = _shm_files_in_use(shm_dir)
         for path in orphans:
-            if str(path) not in used:
+            if str(path) not in used and not too_young(path):
                 with contextlib.suppress(FileNotFoundError):
                     path.unlink()
                     removed.append(path.name)
@@ -339,13 +375,15 @@ def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR) -> list[str]:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except OSError:
                 continue  # in use
+            if too_young(lock) or too_young(shm_dir / base):
+                continue  # maybe not locked by its creator yet
             for name in (base, f"sem.{base}_mutex", lock.name):
                 with contextlib.suppress(FileNotFoundError):
                     (shm_dir / name).unlink()
                     removed.append(name)
         finally:
             os.close(fd)
-    return removed
+    return removed, young
 
 
 def _shm_files_in_use(shm_dir: Path = SHM_DIR) -> set[str]:

@@ -19,6 +19,20 @@ SOLUTIONS = ROOT / "solutions" / "src"
 
 env_mod.activate()
 
+#: Test modules whose tests each take a minute or more (the validation of every lesson,
+#: 20 grades in a row). They are collected first so that, with pytest-xdist's work
+#: stealing, the longest tests start first and the short ones fill the gaps at the end.
+LONG_MODULES = ("test_determinism.py", "test_validate.py", "test_batch_ros.py")
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Run the long tests first (stable order otherwise); see :data:`LONG_MODULES`."""
+    def rank(item: pytest.Item) -> int:
+        name = item.path.name
+        return LONG_MODULES.index(name) if name in LONG_MODULES else len(LONG_MODULES)
+
+    items.sort(key=rank)
+
 
 @pytest.fixture
 def catalog():

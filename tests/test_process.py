@@ -622,3 +622,23 @@ def test_sweep_after_sigkilled_rclpy_node(tmp_path):
         assert sentinel.exists(), "the sweep removed a file that is not Fast DDS's"
     finally:
         sentinel.unlink(missing_ok=True)
+
+
+def test_sweep_leaves_young_files_for_a_second_pass(tmp_path):
+    # A participant beside us may be creating a segment and not hold its lock yet.
+    files = fake_segment(tmp_path, "fastrtps_young")
+    orphan = touch(tmp_path / "fastrtps_young_orphan")
+    assert sweep_stale_fastdds_shm(shm_dir=tmp_path, min_age=30.0, wait=False) == []
+    assert all(p.exists() for p in [*files, orphan])
+    # once old enough (and still unlocked, unused), they are stale
+    time.sleep(0.3)
+    removed = sweep_stale_fastdds_shm(shm_dir=tmp_path, min_age=0.2, wait=False)
+    assert sorted(removed) == sorted(p.name for p in [*files, orphan])
+
+
+def test_sweep_waits_once_for_young_stale_files(tmp_path):
+    files = fake_segment(tmp_path, "fastrtps_fresh")
+    began = time.monotonic()
+    removed = sweep_stale_fastdds_shm(shm_dir=tmp_path, min_age=0.3)
+    assert sorted(removed) == sorted(p.name for p in files)
+    assert time.monotonic() - began >= 0.3
