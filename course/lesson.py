@@ -54,6 +54,9 @@ class Lesson(BaseModel):
         hints: ordered from gentle to nearly the answer; ``hint`` shows them one at a time.
         grader: module name under ``graders/`` exposing ``CHECKS`` and ``grade``.
         starter: folder (relative to the lesson folder) copied into the workspace by ``next``.
+        starter_includes: ids of earlier lessons whose starter files this lesson offers too
+            (e.g. launch-files builds on the parameters package); its own ``starter``
+            files win where both have the same path.
         reference: how ``dev validate`` readies the reference solution.
     """
 
@@ -68,10 +71,13 @@ class Lesson(BaseModel):
     hints: list[Annotated[str, Field(min_length=5)]] = Field(min_length=3)
     grader: Annotated[str, Field(pattern=r"^[a-z_][a-z0-9_]*$")]
     starter: str = "starter"
+    starter_includes: list[Annotated[str, Field(pattern=_ID)]] = Field(default_factory=list)
     reference: ReferenceSolution = Field(default_factory=ReferenceSolution)
 
     #: The lesson's folder; set by the loader, not read from YAML.
     folder: Path = Field(default=Path("."), exclude=True)
+    #: Starter folders of ``starter_includes`` (oldest first); set by :class:`Catalog`.
+    included_starters: list[Path] = Field(default_factory=list, exclude=True)
 
     @field_validator("requires")
     @classmethod
@@ -85,6 +91,11 @@ class Lesson(BaseModel):
     def starter_dir(self) -> Path:
         """Absolute path of the starter folder (may not exist for lessons without files)."""
         return self.folder / self.starter
+
+    @property
+    def starter_layers(self) -> list[Path]:
+        """Starter folders in the order they are laid down: included lessons' first, this lesson's last."""
+        return [*self.included_starters, self.starter_dir]
 
 
 def yaml_error_text(exc: Exception) -> str:
@@ -153,6 +164,26 @@ class Catalog:
             if lesson.id in seen:
                 raise LessonFormatError(f"{lesson.folder}: id: duplicate lesson id {lesson.id!r}", "ids must be unique")
             seen.add(lesson.id)
+        self._resolve_starter_includes()
+
+    def _resolve_starter_includes(self) -> None:
+        """Set each lesson's ``included_starters`` from its ``starter_includes`` (earlier lessons only).
+
+        Raises:
+            LessonFormatError: an include names no lesson, or a lesson that does not come earlier.
+        """
+        by_id = {lesson.id: lesson for lesson in self.lessons}
+        for index, lesson in enumerate(self.lessons):
+            earlier = {other.id for other in self.lessons[:index]}
+            layers: list[Path] = []
+            for included in lesson.starter_includes:
+                if included not in earlier:
+                    problem = "no such lesson" if included not in by_id else "it does not come earlier in the course"
+                    raise LessonFormatError(f"{lesson.folder / 'lesson.yaml'}: starter_includes: {included!r}: "
+                                            f"{problem}", "name lessons that come before this one")
+                # earlier lessons are resolved already, so their own includes come with them
+                layers += [p for p in by_id[included].starter_layers if p not in layers]
+            lesson.included_starters = layers
 
     def get(self, lesson_id: str) -> Lesson:
         """The lesson with this id.

@@ -9,12 +9,25 @@ from pathlib import Path
 from course.lesson import Lesson
 
 
+def starter_sources(lesson: Lesson) -> dict[Path, Path]:
+    """Workspace-relative path -> the file it is copied from, over every starter layer.
+
+    Layers are :attr:`course.lesson.Lesson.starter_layers`: the starters of
+    ``starter_includes`` first, the lesson's own last (a later layer's file
+    wins on the same path).
+    """
+    sources: dict[Path, Path] = {}
+    for root in lesson.starter_layers:
+        if root.is_dir():
+            for path in root.rglob("*"):
+                if path.is_file() and "__pycache__" not in path.parts:
+                    sources[path.relative_to(root)] = path
+    return dict(sorted(sources.items()))
+
+
 def starter_files(lesson: Lesson) -> list[Path]:
-    """The lesson's starter files, relative to its starter folder (sorted)."""
-    root = lesson.starter_dir
-    if not root.is_dir():
-        return []
-    return sorted(p.relative_to(root) for p in root.rglob("*") if p.is_file() and "__pycache__" not in p.parts)
+    """The lesson's starter files, workspace-relative (sorted)."""
+    return list(starter_sources(lesson))
 
 
 def copy_starter(lesson: Lesson, workspace_root: Path) -> tuple[list[Path], list[Path]]:
@@ -25,13 +38,13 @@ def copy_starter(lesson: Lesson, workspace_root: Path) -> tuple[list[Path], list
         learner already had (left untouched: a conflict, listed to the learner).
     """
     copied, kept = [], []
-    for rel in starter_files(lesson):
+    for rel, source in starter_sources(lesson).items():
         target = workspace_root / rel
         if target.exists() or target.is_symlink():
             kept.append(rel)
             continue
         target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(lesson.starter_dir / rel, target)
+        shutil.copy2(source, target)
         copied.append(rel)
     return copied, kept
 
@@ -46,15 +59,15 @@ def reset_starter(lesson: Lesson, workspace_root: Path, backups_root: Path) -> t
     backup = backups_root / lesson.id / stamp
     used_backup = False
     restored = []
-    for rel in starter_files(lesson):
+    for rel, source in starter_sources(lesson).items():
         target = workspace_root / rel
         if target.exists():
-            if target.read_bytes() == (lesson.starter_dir / rel).read_bytes():
+            if target.read_bytes() == source.read_bytes():
                 continue
             (backup / rel).parent.mkdir(parents=True, exist_ok=True)
             shutil.copy2(target, backup / rel)  # copy first: the learner's file is safe before we touch it
             used_backup = True
         target.parent.mkdir(parents=True, exist_ok=True)
-        shutil.copy2(lesson.starter_dir / rel, target)
+        shutil.copy2(source, target)
         restored.append(rel)
     return (backup if used_backup else None), restored

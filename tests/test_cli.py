@@ -15,7 +15,7 @@ import pytest
 import yaml
 
 from course.lesson import content_root, load_catalog
-from course.starter import starter_files
+from course.starter import starter_files, starter_sources
 
 ROOT = content_root()
 CATALOG = load_catalog()
@@ -191,8 +191,9 @@ def test_next_renders_instructions_and_copies_starters(ws, cli):
     assert "Why a workspace?" in out  # a heading of the lesson's markdown instructions
     files = starter_files(FIRST)
     assert files, "the first lesson has starter files"
+    sources = starter_sources(FIRST)
     for rel in files:
-        assert (ws / rel).read_bytes() == (FIRST.starter_dir / rel).read_bytes()
+        assert (ws / rel).read_bytes() == sources[rel].read_bytes()
         assert f"created {rel}" in proc.stdout
     assert progress_of(ws)["current"] == FIRST.id
     assert progress_of(ws)["lessons"][FIRST.id]["started"] is True
@@ -202,8 +203,8 @@ def test_next_renders_instructions_and_copies_starters(ws, cli):
     second = CATALOG.after(FIRST.id)
     assert f"lesson id: {second.id}" in proc.stdout
     assert f"lesson {FIRST.id} is not done yet" in proc.stderr
-    for rel in starter_files(second):
-        assert (ws / rel).read_bytes() == (second.starter_dir / rel).read_bytes()
+    for rel, source in starter_sources(second).items():
+        assert (ws / rel).read_bytes() == source.read_bytes()
         assert f"created {rel}" in proc.stdout
     assert progress_of(ws)["current"] == second.id
 
@@ -287,16 +288,17 @@ def test_reset_backs_up_and_restores_the_starter(ws, cli):
     node.write_bytes(mine)
     untouched = ws / PKG / "setup.py"
     # files that differ from this lesson's starter (an earlier lesson may have shipped its own version)
-    differing = sorted(rel for rel in starter_files(lesson)
-                       if (ws / rel).is_file() and (ws / rel).read_bytes() != (lesson.starter_dir / rel).read_bytes())
+    sources = starter_sources(lesson)
+    differing = sorted(rel for rel, source in sources.items()
+                       if (ws / rel).is_file() and (ws / rel).read_bytes() != source.read_bytes())
     assert node.relative_to(ws) in differing
 
     proc = cli("reset", PRINT_FOREVER, cwd=ws)
     assert proc.returncode == 0, proc.stderr
     rel = node.relative_to(ws)
-    starter = (lesson.starter_dir / rel).read_bytes()
+    starter = sources[rel].read_bytes()
     assert node.read_bytes() == starter != mine
-    assert untouched.read_bytes() == (lesson.starter_dir / untouched.relative_to(ws)).read_bytes()
+    assert untouched.read_bytes() == sources[untouched.relative_to(ws)].read_bytes()
 
     stamps = list((ws / ".ros2course" / "backups" / PRINT_FOREVER).iterdir())
     assert len(stamps) == 1

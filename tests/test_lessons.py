@@ -17,7 +17,7 @@ from course.build import find_packages
 from course.errors import LessonFormatError
 from course.grading import Check, load_grader
 from course.lesson import content_root, load_catalog, load_lesson
-from course.starter import copy_starter, starter_files
+from course.starter import copy_starter, starter_files, starter_sources
 from course.validate import apply_edits, fixtures_dir, load_fixtures, reference_workspace
 
 ROOT = content_root()
@@ -268,3 +268,64 @@ def test_fixture_schema_rejects_a_failing_fixture_without_fails(tmp_path, monkey
     assert "fails" in info.value.message
     shutil.rmtree(folder)
     assert load_fixtures("print-forever-node") == []
+
+
+# --- starters that build on an earlier lesson's (starter_includes) ----------------
+
+def _tiny_lesson(chapters: Path, folder: str, extra: str = "", files: dict[str, str] | None = None) -> None:
+    lesson_id = folder.split("-", 1)[1]
+    (chapters / folder).mkdir(parents=True)
+    (chapters / folder / "lesson.yaml").write_text(
+        f"id: {lesson_id}\ntitle: Lesson {lesson_id}\nchapters: [1]\ngrader: print_forever_node\n"
+        "instructions: |\n  Twenty characters of instructions at least.\n"
+        "hints: [first hint, second hint, third hint]\n" + extra)
+    for rel, text in (files or {}).items():
+        path = chapters / folder / "starter" / rel
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text)
+
+
+def test_starter_includes_lay_earlier_starters_under_the_lessons_own(tmp_path):
+    from course.lesson import Catalog  # noqa: PLC0415
+
+    chapters = tmp_path / "chapters"
+    _tiny_lesson(chapters, "01-alpha", files={"src/p/node.py": "alpha", "src/p/setup.py": "alpha"})
+    _tiny_lesson(chapters, "02-beta", "starter_includes: [alpha]\n", files={"src/p/launch/x.py": "beta"})
+    _tiny_lesson(chapters, "03-gamma", "starter_includes: [beta]\n", files={"src/p/setup.py": "gamma"})
+    catalog = Catalog(chapters)
+    gamma = catalog.get("gamma")
+    assert [p.parent.name for p in gamma.starter_layers] == ["01-alpha", "02-beta", "03-gamma"]
+    assert {str(rel): src.read_text() for rel, src in starter_sources(gamma).items()} == {
+        "src/p/launch/x.py": "beta", "src/p/node.py": "alpha", "src/p/setup.py": "gamma"}  # its own file wins
+    ws = tmp_path / "ws"
+    (ws / "src/p").mkdir(parents=True)
+    (ws / "src/p/node.py").write_text("the learner's")
+    copied, kept = copy_starter(gamma, ws)
+    assert [str(p) for p in kept] == ["src/p/node.py"] and (ws / "src/p/node.py").read_text() == "the learner's"
+    assert sorted(map(str, copied)) == ["src/p/launch/x.py", "src/p/setup.py"]
+    assert (ws / "src/p/setup.py").read_text() == "gamma"
+
+
+@pytest.mark.parametrize("include, problem", [("delta", "no such lesson"),
+                                              ("gamma", "does not come earlier")])
+def test_starter_includes_must_name_an_earlier_lesson(tmp_path, include, problem):
+    from course.lesson import Catalog  # noqa: PLC0415
+
+    chapters = tmp_path / "chapters"
+    _tiny_lesson(chapters, "01-alpha")
+    _tiny_lesson(chapters, "02-beta", f"starter_includes: [{include}]\n")
+    _tiny_lesson(chapters, "03-gamma")
+    with pytest.raises(LessonFormatError) as info:
+        Catalog(chapters)
+    assert f"{chapters / '02-beta' / 'lesson.yaml'}: starter_includes: '{include}': " in info.value.message
+    assert problem in info.value.message and info.value.hint
+
+
+def test_course_starters_that_build_on_earlier_ones():
+    # launch-files and param-dump-load hand out the parameters lesson's package plus their own new file
+    params = set(starter_files(CATALOG.get("parameters")))
+    launch = set(starter_files(CATALOG.get("launch-files")))
+    dump = set(starter_files(CATALOG.get("param-dump-load")))
+    assert params < launch < dump
+    assert {p.parts[-2] for p in launch - params} == {"launch"}
+    assert {p.parts[-2] for p in dump - launch} == {"config"}
