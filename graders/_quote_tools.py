@@ -87,7 +87,10 @@ def record_depends(s: GradingSession, check_id: str, package: str,
 
 
 def workspace_types(s: GradingSession, kind: str, name: str) -> Any | None:
-    """:func:`interface_type`, or None after skipping every unrecorded check when the interfaces are not built.
+    """``package_with_interfaces.<kind>.<name>`` of this workspace, or None when it is not built.
+
+    Loaded through ``GradingSession.interface_type``; when it fails, every
+    unrecorded check is skipped.
 
     The learner's nodes could not import them either; the depends check
     (recorded before) tells why.
@@ -95,7 +98,7 @@ def workspace_types(s: GradingSession, kind: str, name: str) -> Any | None:
     from course.errors import NotGradable  # noqa: PLC0415
 
     try:
-        return interface_type(s, kind, name)
+        return s.interface_type(INTERFACES, kind, name)
     except NotGradable as exc:
         s.skip_remaining(f"{exc.message} (colcon build --packages-up-to builds it only when package.xml "
                          f"depends on {INTERFACES})")
@@ -189,15 +192,6 @@ def pick_endpoint(found: dict[str, list[str]], name: str, type_name: str) -> str
 
 
 # --- the workspace's interface types -------------------------------------------
-
-def interface_type(s: GradingSession, kind: str, name: str) -> Any:
-    """``package_with_interfaces.<kind>.<name>`` of this workspace (see :mod:`course.interfaces`).
-
-    Raises:
-        NotGradable: the package is not installed in this workspace, or does not load.
-    """
-    return s.interface_type(INTERFACES, kind, name)
-
 
 # --- text matching -------------------------------------------------------------
 
@@ -309,15 +303,15 @@ class DeferredServer:
         with self._lock:
             return [c for c in self.calls if c[0] >= begin]
 
-    def rate(self, begin: float = 0.0, count: int | None = None) -> RateStats | None:
-        """Call rate over the send times of the first ``count`` calls arriving after ``begin``.
-
-        Computed like ``ros2 topic hz`` (1 / mean interval), on the client's
-        send stamps rather than arrival times.
-        """
+    def send_stamps(self, begin: float = 0.0, count: int | None = None) -> list[float]:
+        """The client's send stamps (seconds) of the first ``count`` calls arriving after ``begin``."""
         with self._lock:
             stamps = [sent for (arrived, _), sent in zip(self.calls, self.sent, strict=True) if arrived >= begin]
-        return RateStats.from_times(stamps[:count] if count else stamps)
+        return stamps[:count] if count else stamps
+
+    def rate(self, begin: float = 0.0, count: int | None = None) -> RateStats | None:
+        """Call rate over :meth:`send_stamps` (``ros2 topic hz``'s 1 / mean interval), not arrival times."""
+        return RateStats.from_times(self.send_stamps(begin, count))
 
     def close(self) -> None:
         """Stop answering and remove the service from the graph."""

@@ -11,7 +11,6 @@ from pathlib import Path
 from typing import Any
 
 from course.grading import GradingSession
-from course.probes import RateStats
 
 PACKAGE = "python_package_that_uses_parameters_and_launch_files"
 EXECUTABLE = "amazing_quote_configurable_publisher_node"
@@ -41,7 +40,6 @@ LAUNCH_PARAMETERS: dict[str, Any] = {
     "philosopher_name": LAUNCH_PHILOSOPHER,
 }
 
-TOLERANCE = 0.15  # on the mean period (shared/LESSONS.md)
 
 #: rcl_interfaces/msg/ParameterType values -> the words ``ros2 param describe`` uses.
 PARAMETER_TYPES = {0: "not set", 1: "boolean", 2: "integer", 3: "double", 4: "string", 5: "byte array",
@@ -109,29 +107,6 @@ def topics_seen(s: GradingSession, graph=None) -> str:
     hidden = {"/rosout", "/parameter_events"}
     topics = {name: types for name, types in (graph or s.ros).topic_types().items() if name not in hidden}
     return ", ".join(f"{name} ({', '.join(types)})" for name, types in sorted(topics.items())) or "none"
-
-
-def record_rate(s: GradingSession, check_id: str, times: list[float], period: float, needed: int,
-                waited: float) -> bool:
-    """Record ``check_id`` on the mean period of the messages' send stamps ``times`` (seconds).
-
-    The formula is ``ros2 topic hz``'s (1 / mean delta); the times are the
-    publisher's send stamps (:meth:`course.probes.TopicProbe.send_stamps`), so
-    a loaded machine delivering two messages at once does not change the verdict.
-
-    Args:
-        period: expected seconds between messages; ±:data:`TOLERANCE` on the mean.
-        needed: messages needed (``needed - 1`` intervals, at least 5 per shared/LESSONS.md).
-        waited: seconds the grader waited, for the message when too few arrived.
-    """
-    stats = RateStats.from_times(times)
-    expected = (f"{1.0 / period:.2f} Hz: mean period {period:.3f} s ± {TOLERANCE:.0%}, "
-                f"over at least {needed - 1} intervals")
-    if stats is None or stats.samples < needed - 1:
-        return s.record(check_id, False, f"only {len(times)} message(s) within {waited:.1f} s"
-                        + (f" ({stats.describe()})" if stats else ""), expected)
-    return s.record(check_id, stats.within(1.0 / period, TOLERANCE),
-                    stats.describe() + " (from the messages' send stamps)", expected)
 
 
 def package_source(s: GradingSession) -> Path | None:

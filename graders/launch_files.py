@@ -13,11 +13,11 @@ from __future__ import annotations
 import time
 
 from course.grading import Check, GradingSession
-from graders._common import process_state
+from graders._common import process_state, record_rate
 from graders._launch import MODE_LAUNCH_ROS, LaunchRun, describe_launch_folder, start_launch_file
 from graders._quotes import (EXECUTABLE, LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER, LAUNCH_QUOTE,
                              LAUNCH_TOPIC, PACKAGE, amazing_quote, first_difference, package_share, package_source,
-                             record_rate, short, topics_seen)
+                             short, topics_seen)
 
 SAMPLES = 6  # messages -> 5 intervals at 4 Hz (the minimum shared/LESSONS.md asks for)
 NODE_TIMEOUT = 10.0  # seconds for the node to appear (launch_ros start-up included)
@@ -140,7 +140,8 @@ def grade(s: GradingSession) -> None:
         return
     s.record("topic", True, f"{len(samples)} AmazingQuote message(s) on /{LAUNCH_TOPIC} ({mode})",
              f"AmazingQuote messages on /{LAUNCH_TOPIC}")
-    record_rate(s, "rate", probe.send_stamps(), LAUNCH_PERIOD, SAMPLES, timeout)
+    record_rate(s, "rate", probe.send_stamps(), period=LAUNCH_PERIOD, needed=SAMPLES, waited=timeout,
+                noun="message", source="the messages' send stamps")
     wrong = [m for _, m in samples if m.quote != LAUNCH_QUOTE or m.philosopher_name != LAUNCH_PHILOSOPHER]
     expected = f"quote {short(LAUNCH_QUOTE)} (ch. 22.9), philosopher_name {LAUNCH_PHILOSOPHER!r}"
     if not wrong:

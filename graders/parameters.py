@@ -12,9 +12,9 @@ import time
 
 from course.grading import Check, GradingSession
 from course.probes import parameter_client, wait_future, wait_until
-from graders._common import process_state, record_sigint_exit, require_executable, wait_for_node
+from graders._common import process_state, record_rate, record_sigint_exit, require_executable, wait_for_node
 from graders._quotes import (DEFAULTS, EXECUTABLE, NODE, PACKAGE, amazing_quote, parameter_value,
-                             record_rate, short, topics_seen)
+                             short, topics_seen)
 
 DEFAULT_TOPIC = "/amazing_quote"
 DEFAULT_PERIOD = 0.5  # seconds (seed ch. 22.3)
@@ -121,7 +121,8 @@ def _check_default_messages(s: GradingSession, probe, proc, began: float) -> Non
              f"{len(samples)} message(s); " + (f"e.g. quote {short(first.quote)}, philosopher_name "
                                                 f"{short(first.philosopher_name)}" if odd else "all with the defaults"),
              expected)
-    record_rate(s, "default_rate", probe.send_stamps(), DEFAULT_PERIOD, DEFAULT_SAMPLES, timeout)
+    record_rate(s, "default_rate", probe.send_stamps(), period=DEFAULT_PERIOD, needed=DEFAULT_SAMPLES,
+                waited=timeout, noun="message", source="the messages' send stamps")
 
 
 def _check_runtime_change(s: GradingSession, client, probe, proc) -> None:
@@ -194,7 +195,8 @@ def _check_configured_run(s: GradingSession, graph, proc, probe, began: float) -
     else:
         s.record("configured_topic", True, f"started with {shown}: {len(samples)} message(s) on /{CONFIGURED_TOPIC}",
                  expected_topic)
-        record_rate(s, "configured_rate", probe.send_stamps(), CONFIGURED_PERIOD, CONFIGURED_SAMPLES, timeout)
+        record_rate(s, "configured_rate", probe.send_stamps(), period=CONFIGURED_PERIOD, needed=CONFIGURED_SAMPLES,
+                    waited=timeout, noun="message", source="the messages' send stamps")
     with s.phase("stop"):
         proc.stop(sigint_timeout=2.0, sigterm_timeout=1.0)
 

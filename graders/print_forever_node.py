@@ -9,14 +9,13 @@ from __future__ import annotations
 import re
 
 from course.grading import Check, GradingSession
-from course.probes import RateStats, stamp_seconds, wait_until
-from graders._common import process_state, record_sigint_exit, require_executable, wait_for_node
+from course.probes import stamp_seconds, wait_until
+from graders._common import process_state, record_rate, record_sigint_exit, require_executable, wait_for_node
 
 PACKAGE = "python_package_with_a_node"
 EXECUTABLE = "print_forever_node"
 NODE = "print_forever"
 PERIOD = 0.5  # seconds, seed ch. 13.3
-TOLERANCE = 0.15  # on the mean period (shared/LESSONS.md)
 SAMPLES = 6  # records -> 5 intervals, the minimum LESSONS.md asks for
 #: Seconds of observation the contract needs: the first record 0.5 s after start, then 5 intervals.
 WINDOW = SAMPLES * PERIOD
@@ -98,12 +97,6 @@ def grade(s: GradingSession) -> None:
     shown = ", ".join(map(str, counts[:8])) + (", ..." if len(counts) > 8 else "")
     s.record("counts_from_zero", counts == list(range(len(counts))), f"N = {shown}",
              "N = " + ", ".join(map(str, range(min(len(counts), 8)))) + ", ...")
-    stats = RateStats.from_times([stamp_seconds(r.stamp) for r in mine])
-    expected = f"2.00 Hz: mean period {PERIOD:.3f} s ± {TOLERANCE:.0%}, over at least {SAMPLES - 1} intervals"
-    if stats is None or stats.samples < SAMPLES - 1:
-        s.record("rate", False, f"only {len(mine)} record(s) within {SAMPLES * PERIOD + 3.0:.1f} s"
-                 + (f" ({stats.describe()})" if stats else ""), expected)
-    else:
-        s.record("rate", stats.within(1.0 / PERIOD, TOLERANCE), stats.describe() + " (from the records' stamps)",
-                 expected)
+    record_rate(s, "rate", [stamp_seconds(r.stamp) for r in mine], period=PERIOD, needed=SAMPLES,
+                waited=SAMPLES * PERIOD + 3.0, noun="record", source="the records' stamps")
     record_sigint_exit(s, "sigint_exit", proc)

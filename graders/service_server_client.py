@@ -25,7 +25,7 @@ import time
 
 from course.grading import Check, GradingSession
 from course.probes import wait_until
-from graders._common import process_state, record_sigint_exit
+from graders._common import RATE_TOLERANCE, process_state, record_rate, record_sigint_exit
 from graders._quote_tools import (
     DeferredServer,
     describe_endpoints,
@@ -48,7 +48,6 @@ CLIENT_NODE = "what_is_the_point_service_client"
 SERVICE = "/what_is_the_point"
 SRV_TYPE = "package_with_interfaces/srv/WhatIsThePoint"
 PERIOD = 0.5  # seconds between calls, seed ch. 20.5.6
-TOLERANCE = 0.15  # on the mean period (shared/LESSONS.md)
 CALLS = 6  # calls -> 5 intervals, the minimum LESSONS.md asks for
 SUM_TOLERANCE = 1e-6  # |x + y + z - 42|
 LATE_ANSWER = 1.0  # seconds: twice the call period, so a blocked client halves its rate
@@ -256,14 +255,9 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
     s.record("client_calls", True, f"{len(calls)} call(s), the first {first:.2f} s after the service appeared",
              expected_calls)
 
-    stats = server.rate(offered, CALLS)
-    expected_rate = f"2.00 Hz: mean period {PERIOD:.3f} s ± {TOLERANCE:.0%}, over at least {CALLS - 1} intervals"
-    if stats is None or stats.samples < CALLS - 1:
-        s.record("client_rate", False, f"only {len(calls)} call(s) in {time.monotonic() - offered:.1f} s"
-                 + (f" ({stats.describe()})" if stats else "") + f"; {process_state(proc)}", expected_rate)
-    else:
-        s.record("client_rate", stats.within(1.0 / PERIOD, TOLERANCE),
-                 stats.describe() + " (from the requests' send stamps)", expected_rate)
+    record_rate(s, "client_rate", server.send_stamps(offered, CALLS), period=PERIOD, needed=CALLS,
+                waited=time.monotonic() - offered, noun="call", source="the requests' send stamps",
+                few_note=f"; {process_state(proc)}")
 
     # The points sent so far must show up in the client's log (give the last one a moment).
     # A client that cancels a call still unanswered at its next tick (the seed's client does,
@@ -311,9 +305,9 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
         wait_until(lambda: len(server.calls_since(slow_begin)) >= CALLS, window, abort=lambda: proc.poll() is not None)
     late = server.calls_since(slow_begin)
     stats = server.rate(slow_begin, CALLS)
-    expected_slow = (f"calls keep coming every {PERIOD:.1f} s (± {TOLERANCE:.0%}, over {CALLS - 1} intervals) "
+    expected_slow = (f"calls keep coming every {PERIOD:.1f} s (± {RATE_TOLERANCE:.0%}, over {CALLS - 1} intervals) "
                      f"while each answer takes {LATE_ANSWER:.1f} s")
-    if stats is not None and stats.samples >= CALLS - 1 and stats.within(1.0 / PERIOD, TOLERANCE):
+    if stats is not None and stats.samples >= CALLS - 1 and stats.within(1.0 / PERIOD, RATE_TOLERANCE):
         s.record("client_keeps_calling_when_slow", True, f"answers {LATE_ANSWER:.1f} s late: {stats.describe()}",
                  expected_slow)
     else:

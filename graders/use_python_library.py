@@ -12,8 +12,8 @@ Only ``package.xml`` is read, for the dependency on the library the contract nam
 from __future__ import annotations
 
 from course.grading import Check, GradingSession
-from course.probes import RateStats, stamp_seconds, wait_until
-from graders._common import process_state, record_sigint_exit, wait_for_node
+from course.probes import stamp_seconds, wait_until
+from graders._common import process_state, record_rate, record_sigint_exit, wait_for_node
 from graders._packaging import (
     classify,
     is_ten_letters,
@@ -30,7 +30,6 @@ LIBRARY = "python_package_with_a_library"
 EXECUTABLE = "node_that_uses_the_library"
 NODE = "node_that_uses_the_library"
 PERIOD = 0.5  # seconds, seed ch. 15.1
-TOLERANCE = 0.15  # on the mean period (shared/LESSONS.md)
 SAMPLES = 6  # square records -> 5 intervals, the minimum LESSONS.md asks for
 INFO = 20  # rcl_interfaces/msg/Log.INFO
 SQUARE_FORMAT = "sample_function_for_square_of_sum(a,b) returned c."
@@ -136,14 +135,8 @@ def grade(s: GradingSession) -> None:
     # this node's records of either kind, in order (other lines it may log are ignored)
     ordered = [r for r in rosout.records(node=main, level=INFO) if classify(r.msg) != "other"]
     _judge_names(s, ordered)
-    stats = RateStats.from_times([stamp_seconds(r.stamp) for r in mine])
-    expected = f"2.00 Hz: mean period {PERIOD:.3f} s ± {TOLERANCE:.0%}, over at least {SAMPLES - 1} intervals"
-    if stats is None or stats.samples < SAMPLES - 1:
-        s.record("rate", False, f"only {len(mine)} record(s) within {SAMPLES * PERIOD + 3.0:.1f} s"
-                 + (f" ({stats.describe()})" if stats else ""), expected)
-    else:
-        s.record("rate", stats.within(1.0 / PERIOD, TOLERANCE), stats.describe() + " (from the records' stamps)",
-                 expected)
+    record_rate(s, "rate", [stamp_seconds(r.stamp) for r in mine], period=PERIOD, needed=SAMPLES,
+                waited=SAMPLES * PERIOD + 3.0, noun="record", source="the records' stamps")
     record_sigint_exit(s, "sigint_exit", proc)
 
 
