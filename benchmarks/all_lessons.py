@@ -26,7 +26,8 @@ from rich.console import Console
 from rich.table import Table
 
 from course import env as env_mod
-from course.grading import STATUS_PASSED, grade_lesson, load_grader
+from course.grading import grade_lesson, load_grader
+from course.results import Status
 from course.lesson import load_catalog
 from course.validate import reference_workspace, run_commands
 
@@ -45,7 +46,7 @@ def bench_lesson(lesson, runs: int) -> dict:
             begin = time.monotonic()
             result = grade_lesson(lesson, root)
             times.append(time.monotonic() - begin)
-            if result.status != STATUS_PASSED:
+            if result.status != Status.PASSED:
                 ok = False
                 lost = "; ".join(f"{c.id}: {c.observed}" for c in result.checks if not c.passed)
                 print(f"  {lesson.id}: {result.status} {result.score:g}/{result.max_score:g}: {lost or result.message}",

@@ -7,8 +7,14 @@ one job (worker + colcon + the learner's nodes, RSS sampled every 0.5 s) and
 whether any verdict changed between the two runs. A script, not a timed test::
 
     python benchmarks/batch_speed.py [--lesson print-forever-node] [--count 20] [--jobs 2]
+    python benchmarks/batch_speed.py --overhead [--count 6]
 
 Goal on the 2-core machine: speedup >= 1.7 with 2 jobs, no verdict changed.
+
+``--overhead`` grades the class with ``--jobs 1`` twice instead, with every
+protection of :mod:`course.sandbox` (namespaces, submission uid, pids cgroup,
+read-only mounts) and with ``isolate=False``, and prints the cost of the
+isolation per submission (seconds) and whether any verdict changed.
 """
 
 from __future__ import annotations
@@ -55,11 +61,14 @@ def main() -> int:
     parser.add_argument("--lesson", default="print-forever-node")
     parser.add_argument("--count", type=int, default=20)
     parser.add_argument("--jobs", type=int, default=2)
+    parser.add_argument("--overhead", action="store_true", help="isolated vs not isolated, one job at a time")
     args = parser.parse_args()
     env_mod.activate()
     root = Path(tempfile.mkdtemp(prefix="ros2course-bench-batch-"))
     try:
         make_class(args.lesson, args.count, root / "subs")
+        if args.overhead:
+            return overhead(root, args.lesson, args.count)
         runs = {}
         for jobs in (1, args.jobs):
             begin = time.monotonic()
@@ -79,6 +88,26 @@ def main() -> int:
         return 1 if changed else 0
     finally:
         shutil.rmtree(root, ignore_errors=True)
+
+
+def overhead(root: Path, lesson: str, count: int) -> int:
+    """Grade the class one job at a time with and without isolation; print seconds per submission."""
+    runs = {}
+    for isolate in (False, True, False, True):  # interleaved: a warm-up effect favours neither
+        begin = time.monotonic()
+        report = run_batch(root / "subs", [lesson], root / f"out-{isolate}-{len(runs)}", jobs=1, isolate=isolate)
+        seconds = time.monotonic() - begin
+        verdicts = {r["student"]: (r["status"], tuple(c["id"] for c in r["checks"] if not c["passed"]))
+                    for r in report.records}
+        runs.setdefault(isolate, []).append((seconds / count, verdicts, report.isolation))
+        print(f"isolate={isolate}: {seconds / count:.2f} s per submission "
+              f"({report.isolation.get('reason', '')[:120]})", flush=True)
+    plain = statistics.mean(r[0] for r in runs[False])
+    walled = statistics.mean(r[0] for r in runs[True])
+    changed = sorted(s for s in runs[False][0][1] if any(r[1][s] != runs[False][0][1][s] for r in runs[True]))
+    print(f"isolation overhead: {walled - plain:+.2f} s per submission ({plain:.2f} s without, {walled:.2f} s with)")
+    print(f"verdicts changed by isolation: {changed or 'none'}")
+    return 1 if changed else 0
 
 
 if __name__ == "__main__":

@@ -51,7 +51,8 @@ from rich.table import Table
 from course import build as build_mod
 from course import env as env_mod
 from course.errors import CourseError
-from course.grading import STATUS_PASSED, LessonResult, grade_lesson, load_grader
+from course.grading import grade_lesson, load_grader
+from course.results import LessonResult, Status
 from course.lesson import Lesson, load_catalog
 from course.validate import reference_workspace
 from course.process import kill_marked
@@ -134,7 +135,7 @@ def split(result: LessonResult, wall: float) -> dict[str, float]:
 
 
 def require_full_marks(result: LessonResult, what: str) -> None:
-    if result.status != STATUS_PASSED or result.score < result.max_score:
+    if result.status != Status.PASSED or result.score < result.max_score:
         failed = "; ".join(f"{c.id}: {c.observed}" for c in result.checks if not c.passed) or "none"
         detail = f"; {result.message.splitlines()[0]}" if result.message else ""
         raise BenchmarkFailed(f"{what}: {result.status} {result.score:g}/{result.max_score:g} "
@@ -341,7 +342,7 @@ def run_cli_check(workspace: Path, folder: Path) -> dict[str, Any]:
     exit_after_output = done.seconds - done.last_output if done.last_output is not None else 0.0
     info = {"wall": done.seconds, "exit_after_output": exit_after_output, "exit_code": done.returncode,
             "status": data.get("status"), "score": data.get("score"), "max_score": data.get("max_score")}
-    if done.returncode != 0 or data.get("status") != STATUS_PASSED:
+    if done.returncode != 0 or data.get("status") != Status.PASSED:
         raise BenchmarkFailed(f"CLI check was not full marks: exit {done.returncode}, {info}; "
                               f"stderr: {done.stderr.decode()[-800:]}")
     return info

@@ -32,7 +32,6 @@ import contextlib
 import dataclasses
 import json
 import os
-import shlex
 import shutil
 import signal
 import statistics
@@ -46,7 +45,8 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-from course import gradebook
+from course import gradebook, sandbox
+from course.results import LessonResult, Status
 from course.progress import atomic_write_text
 from course.process import OutputDrain
 from course.batch_archive import Submission, discover, prepare
@@ -84,8 +84,12 @@ class Job:
         file_limit: bytes per written file (0: no limit).
         output_cap: bytes of worker output kept.
         hide: folders hidden from the submission (when a mount namespace is available).
-        isolate: use network/mount namespaces when the machine allows it.
+        isolate: use the protections of :mod:`course.sandbox` the machine allows.
         scratch_root: where scratch folders are made (None: the system temp folder).
+        pids_limit: tasks (processes + threads) the submission may have at once.
+        trusted_interfaces: a built workspace of the course's own interface packages, which the
+            grader imports instead of the submission's (its generated code is submission code).
+        require_isolation: grade only with every protection in effect (else a "grader error" row).
     """
 
     batch_id: str
@@ -101,78 +105,12 @@ class Job:
     hide: list[str] = dataclasses.field(default_factory=list)
     isolate: bool = True
     scratch_root: str | None = None
+    pids_limit: int = sandbox.DEFAULT_PIDS_LIMIT
+    trusted_interfaces: str = ""
+    require_isolation: bool = False
 
 
-# --- isolation -------------------------------------------------------------------------------
-
-def _ip_command() -> str | None:
-    return shutil.which("ip") or next((p for p in ("/usr/sbin/ip", "/sbin/ip", "/usr/bin/ip") if os.access(p, os.X_OK)), None)
-
-
-def _prelude(ip: str, own: str, hide: list[str]) -> str:
-    """The shell run inside the new namespaces before the worker (``exec "$@"``)."""
-    q = shlex.quote
-    lines = ["set -e", f"{q(ip)} link set lo up",
-             "mount -t tmpfs -o mode=1777,size=1g ros2course-shm /dev/shm"]
-    if own:
-        lines += ["mkdir /dev/shm/.ros2course-own", f"mount --bind {q(own)} /dev/shm/.ros2course-own"]
-    for folder in hide:
-        lines.append(f"if [ -d {q(folder)} ]; then mount -t tmpfs -o mode=0755,size=1m ros2course-hidden {q(folder)}; fi")
-    if own:
-        lines += [f"mkdir -p {q(own)}", f"mount --move /dev/shm/.ros2course-own {q(own)}"]
-    lines.append('exec "$@"')
-    return "\n".join(lines)
-
-
-def isolation_prefix(own: str = "", hide: list[str] | None = None) -> tuple[list[str], dict[str, Any]]:
-    """The command prefix that runs a job in its own network and mount namespace, and what it gives.
-
-    Tried once per process: ``unshare --net --mount`` (root), then with
-    ``--user --map-root-user`` (unprivileged user namespaces). The probe runs
-    the same prelude (``ip link set lo up``, a private ``/dev/shm``).
-
-    Args:
-        own: the job's scratch folder (kept visible when a hidden folder contains it).
-        hide: folders to cover with an empty tmpfs inside the namespace.
-
-    Returns:
-        ``(prefix, info)``: prefix is ``[]`` when no namespace is available; info is
-        ``{"netns": bool, "mountns": bool, "reason": str}``.
-    """
-    with _isolation_lock:
-        if "variant" not in _isolation_cache:
-            _isolation_cache.update(_probe_isolation())
-    variant = _isolation_cache["variant"]
-    info = dict(_isolation_cache["info"])
-    if variant is None:
-        return [], info
-    unshare, ip = _isolation_cache["unshare"], _isolation_cache["ip"]
-    return [unshare, *variant, "/bin/sh", "-c", _prelude(ip, own, hide or []), "ros2course-ns"], info
-
-
-def _probe_isolation() -> dict[str, Any]:
-    unshare, ip = shutil.which("unshare"), _ip_command()
-    if sys.platform != "linux" or not unshare or not ip:
-        missing = "unshare" if not unshare else "ip"
-        return {"variant": None, "info": {"netns": False, "mountns": False,
-                                         "reason": f"no {missing} command (util-linux / iproute2)"}}
-    reasons = []
-    for variant in (["--net", "--mount"], ["--user", "--map-root-user", "--net", "--mount"]):
-        try:
-            proc = subprocess.run([unshare, *variant, "/bin/sh", "-c", _prelude(ip, "", []), "probe", "true"],
-                                  capture_output=True, text=True, timeout=20, stdin=subprocess.DEVNULL, check=False)
-        except (OSError, subprocess.TimeoutExpired) as exc:
-            reasons.append(f"{' '.join(variant)}: {exc}")
-            continue
-        if proc.returncode == 0:
-            how = "unshare " + " ".join(variant)
-            return {"variant": variant, "unshare": unshare, "ip": ip,
-                    "info": {"netns": True, "mountns": True,
-                             "reason": f"{how}: loopback-only network, private /dev/shm, other folders hidden"}}
-        reasons.append(f"{' '.join(variant)}: {(proc.stderr.strip().splitlines() or ['exit ' + str(proc.returncode)])[-1]}")
-    return {"variant": None, "info": {"netns": False, "mountns": False,
-                                     "reason": "unshare refused: " + "; ".join(reasons)}}
-
+# --- isolation (course.sandbox) -------------------------------------------------------------
 
 def _hideable(folder: Path) -> bool:
     """A folder may be hidden unless it holds what the worker itself needs (Python, this package, HOME)."""
@@ -197,6 +135,54 @@ def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list
     return out
 
 
+def refuse_without_isolation(isolate: bool = True) -> None:
+    """Raise unless this machine gives a job every protection of :mod:`course.sandbox`.
+
+    Raises:
+        CourseError: one line naming each missing protection and why.
+    """
+    missing = (sandbox.capabilities().missing if isolate
+               else {name: "isolation turned off" for name in sandbox.PROTECTIONS})
+    if missing:
+        raise CourseError("refusing to grade (--require-isolation): missing "
+                          + "; ".join(f"{name} ({why})" for name, why in missing.items()),
+                          "run as root on Linux with util-linux, iproute2 and dumb-init, or drop --require-isolation")
+
+
+def build_trusted_interfaces(lessons: list[Any]) -> Path | None:
+    """Build the course's own copies of the packages the lessons depend on (interfaces), once per batch.
+
+    The grader imports generated message types in its own process; a
+    submission's build of them is code the submission controls, so under
+    isolation the grader imports these reference builds instead (same
+    definitions as the contract in shared/LESSONS.md, so the same wire types).
+
+    Returns:
+        the built workspace (``install/`` inside), or None when no lesson depends on another package.
+
+    Raises:
+        CourseError: the reference packages do not build (a fault of the course or machine).
+    """
+    from course import env as env_mod  # noqa: PLC0415
+    from course.build import build_packages
+    from course.validate import lesson_dependencies, reference_workspace
+
+    deps = list(dict.fromkeys(dep for lesson in lessons for dep in lesson_dependencies(lesson)))
+    if not deps:
+        return None
+    dest = Path(tempfile.mkdtemp(prefix="ros2course-trusted-")) / "ws"
+    dest.parent.chmod(0o755)
+    reference_workspace(lessons[0], dest, deps)
+    env = dict(os.environ)
+    env_mod.activate(env)
+    built = build_packages(dest, deps, env, dest / "log" / "build.log")
+    if not built.ok:
+        shutil.rmtree(dest.parent, ignore_errors=True)
+        raise CourseError(f"the course's own packages {', '.join(deps)} do not build:\n{built.excerpt}",
+                          "run ros2course doctor; see the build log above")
+    return dest
+
+
 # --- one job ------------------------------------------------------------------------------------
 
 def lesson_checks(lesson_id: str) -> tuple[float, list[str]]:
@@ -212,13 +198,12 @@ def lesson_checks(lesson_id: str) -> tuple[float, list[str]]:
     return float(sum(c.points for c in module.CHECKS)), [c.id for c in module.CHECKS]
 
 
-def _unfinished(lesson_id: str, status: str, message: str, hint: str = "") -> dict[str, Any]:
+def _unfinished(lesson_id: str, status: Status, message: str, hint: str = "") -> LessonResult:
     try:
         max_score = lesson_checks(lesson_id)[0]
     except CourseError:
         max_score = 0.0
-    return {"lesson": lesson_id, "score": 0.0, "max_score": max_score, "status": status, "checks": [],
-            "message": message, "hint": hint, "timings": {}, "build": {}, "log_dir": ""}
+    return LessonResult.unfinished(lesson_id, status, message, hint, max_score)
 
 
 def _tree_rss(pid: int) -> int:
@@ -245,22 +230,23 @@ def _kill_job(popen: subprocess.Popen, marker: str) -> list[int]:
     return kill_marked(marker, var=BATCH_MARKER_VAR)
 
 
-def _rewrite_paths(records: list[dict[str, Any]], replacements: list[tuple[str, str]]) -> list[dict[str, Any]]:
-    text = json.dumps(records)
+def _rewrite_paths(results: list[LessonResult], replacements: list[tuple[str, str]]) -> list[LessonResult]:
+    """The results with the worker's paths (scratch folder) replaced by what the instructor sees."""
+    text = json.dumps([r.to_record() for r in results])
     for old, new in replacements:
         if old:
             text = text.replace(json.dumps(old)[1:-1], json.dumps(new)[1:-1])
-    return json.loads(text)
+    return [LessonResult.from_record(r) for r in json.loads(text)]
 
 
 def run_job(job: Job) -> dict[str, Any]:
     """Prepare, grade and clean up one submission; never raises for the submission's faults.
 
     Returns:
-        ``{"student", "records": [record per lesson], "isolation": {...},
+        ``{"student", "records": [LessonResult per lesson], "isolation": {...},
         "peak_rss": bytes (worker and its children, sampled every 0.5 s),
-        "seconds": wall time, "cancelled": bool}``. Records follow
-        :mod:`course.gradebook` (``check --json`` + student, timings, isolation, log_dir).
+        "seconds": wall time, "cancelled": bool}``. Each result carries the student, the isolation,
+        ``timings["total"]`` and the peak memory.
         A cancelled job returns no records (a resumed batch grades it again).
     """
     from course.process import sweep_stale_fastdds_shm  # noqa: PLC0415
@@ -268,23 +254,25 @@ def run_job(job: Job) -> dict[str, Any]:
     begin = time.monotonic()
     student_logs = Path(job.out_dir) / job.student / "logs"
     scratch = Path(tempfile.mkdtemp(prefix=f"ros2course-grade-{job.student[:40]}-", dir=job.scratch_root))
+    scratch.chmod(0o711)  # the submission's uid may pass through to its own ws/, home/ and logs/ros/, nothing else
     isolation: dict[str, Any] = {"netns": False, "mountns": False, "reason": "not run"}
     peak = 0
     cancelled = False
-    records: list[dict[str, Any]] = []
+    records: list[LessonResult] = []
     try:
         try:
             ws = prepare(Submission(job.student, Path(job.entry), job.problem), scratch)
         except NotGradable as exc:
             isolation = {"netns": False, "mountns": False, "reason": "not run (not gradable)"}
-            records = [_unfinished(lesson, gradebook.NOT_GRADABLE, exc.message, exc.hint) for lesson in job.lessons]
+            records = [_unfinished(lesson, Status.NOT_GRADABLE, exc.message, exc.hint) for lesson in job.lessons]
             ws = None
         if ws is not None:
             records, isolation, peak, cancelled = _run_worker(job, scratch, ws)
         if student_logs.exists():
             shutil.rmtree(student_logs, ignore_errors=True)
         if (scratch / "logs").is_dir():
-            shutil.copytree(scratch / "logs", student_logs, symlinks=True, dirs_exist_ok=True)
+            # never as links: the submission's uid could write links into logs/ros
+            sandbox.copy_logs(scratch / "logs", student_logs)
         records = _rewrite_paths(records, [(str(scratch / "logs"), str(student_logs)),
                                            (str(scratch / "ws"), "<submission>"), (str(scratch), "<scratch>")])
     finally:
@@ -293,27 +281,102 @@ def run_job(job: Job) -> dict[str, Any]:
             sweep_stale_fastdds_shm()
     seconds = time.monotonic() - begin
     for record in records:
-        record["student"] = job.student
-        record["isolation"] = isolation
-        record.setdefault("timings", {})["total"] = round(seconds, 3)
-        record["peak_rss"] = peak
+        record.student = job.student
+        record.isolation = isolation
+        record.timings["total"] = round(seconds, 3)
+        record.peak_rss = peak
     return {"student": job.student, "records": [] if cancelled else records, "isolation": isolation,
             "peak_rss": peak, "seconds": seconds, "cancelled": cancelled}
 
 
-def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[dict[str, Any]], dict[str, Any], int, bool]:
+def _chown_tree(folder: Path, uid: int) -> None:
+    """Give ``folder`` and everything under it (never following links) to ``uid``."""
+    os.chown(folder, uid, uid, follow_symlinks=False)
+    for root, dirs, files in os.walk(folder):
+        for name in dirs + files:
+            os.chown(os.path.join(root, name), uid, uid, follow_symlinks=False)
+
+
+def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Isolation, sandbox.PidsCgroup | None]:
+    """What one job runs inside: ``(command prefix, worker arguments, isolation, pids cgroup)``.
+
+    The prefix is ``unshare`` (network, mount and PID namespaces) + ``dumb-init`` +
+    the mount plan (:class:`course.sandbox.MountPlan`), or ``[]``; the worker
+    arguments give it the submission's uid, process limit and cgroup. The
+    scratch folder's ``ws/``, ``home/`` and ``logs/ros/`` go to that uid.
+    """
+    (scratch / "home").mkdir(exist_ok=True)
+    (scratch / "logs" / "ros").mkdir(parents=True, exist_ok=True)
+    if not job.isolate:
+        why = "isolation turned off"
+        return [], [], sandbox.Isolation({}, {name: why for name in sandbox.PROTECTIONS}), None
+    caps = sandbox.capabilities()
+    missing = dict(caps.missing)
+    protections: dict[str, str | None] = {}
+    prefix: list[str] = []
+    if caps.unshare:
+        read_only = sandbox.read_only_paths() + ([job.trusted_interfaces] if job.trusted_interfaces else [])
+        plan = sandbox.MountPlan(caps.tools["ip"], own=str(scratch), hide=job.hide, read_only=read_only, keep=[],
+                                 private_tmp=sandbox.PRIVATE_TMP, hidden_home=sandbox.grader_home())
+        init = [caps.tools["dumb-init"], "--"] if caps.pidns else []
+        prefix = [caps.tools["unshare"], *caps.unshare, *init, "/bin/sh", "-c", plan.script(), "ros2course-ns"]
+        protections[sandbox.NETWORK] = "loopback only: no internet, no DDS traffic between submissions"
+        protections[sandbox.MOUNTS] = (f"private /dev/shm and {', '.join(sandbox.PRIVATE_TMP)}; "
+                                       f"{len(job.hide) + 1} folders hidden (other submissions, OUTDIR, solutions, "
+                                       f"the grader's home); course, venv, Python and ROS read-only")
+        if caps.pidns:
+            protections[sandbox.PIDNS] = "dumb-init is PID 1: every process of the submission ends with the job"
+    worker_args: list[str] = []
+    uid = None
+    cgroup = None
+    via = []
+    if caps.pids_root:
+        try:
+            cgroup = sandbox.PidsCgroup(caps.pids_root, job.pids_limit)
+            worker_args += ["--pids-cgroup", cgroup.procs]
+            via.append("cgroup pids")
+        except OSError as exc:
+            missing.setdefault(sandbox.PIDS_LIMIT, f"cannot make a pids cgroup: {exc.strerror}")
+    if caps.uid_drop:
+        uid = sandbox.new_uid()
+        for folder in (scratch / "ws", scratch / "home", scratch / "logs" / "ros"):
+            _chown_tree(folder, uid)
+        (scratch / "home").chmod(0o700)
+        # with a cgroup, RLIMIT_NPROC is the backstop just above it (the cgroup counts what it refuses)
+        nproc = job.pids_limit + (32 if cgroup is not None else 0)
+        worker_args += ["--run-as", f"{uid}:{uid}", "--nproc", str(nproc)]
+        protections[sandbox.UID] = f"uid {uid}, no groups, no capabilities, no_new_privs; writes only its scratch copy"
+    if uid is not None:
+        via.append("RLIMIT_NPROC")
+    if via:
+        missing.pop(sandbox.PIDS_LIMIT, None)
+        protections[sandbox.PIDS_LIMIT] = f"{job.pids_limit} tasks at once ({' + '.join(via)})"
+    if job.trusted_interfaces and uid is not None:
+        worker_args += ["--trusted-interfaces", job.trusted_interfaces]
+    isolation = sandbox.Isolation(protections, missing, uid, job.pids_limit if via else None, " + ".join(via))
+    return prefix, worker_args, isolation, cgroup
+
+
+def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], dict[str, Any], int, bool]:
     logs = scratch / "logs"
     logs.mkdir()
-    (scratch / "home").mkdir()
-    result_file = scratch / "result.json"
+    result_file = scratch / "result.json"  # in the root-owned scratch folder: out of the submission's reach
     marker = uuid.uuid4().hex
+    prefix, worker_args, walls, cgroup = job_walls(job, scratch)
+    if job.require_isolation and walls.missing:
+        if cgroup is not None:
+            cgroup.close()
+        why = "; ".join(f"{name} ({reason})" for name, reason in walls.missing.items())
+        return ([_unfinished(lesson, Status.GRADER_ERROR, f"not graded: --require-isolation and missing {why}",
+                             "grade on a machine that gives every protection (root, Linux, util-linux, dumb-init)")
+                 for lesson in job.lessons], walls.to_json(), 0, False)
     cmd = [sys.executable, "-m", "course.batch_worker", "--workspace", str(ws), "--results", str(result_file),
-           "--logs", str(logs), "--memory-limit", str(job.memory_limit), "--file-limit", str(job.file_limit)]
+           "--logs", str(logs), "--memory-limit", str(job.memory_limit), "--file-limit", str(job.file_limit),
+           *worker_args]
     for lesson in job.lessons:
         cmd += ["--lesson", lesson]
-    prefix, isolation = isolation_prefix(str(scratch), job.hide) if job.isolate else (
-        [], {"netns": False, "mountns": False, "reason": "isolation turned off"})
-    isolation = {**isolation, "memory": f"RLIMIT_AS {job.memory_limit / 2**20:.0f} MiB per process" if job.memory_limit else "none"}
+    isolation = {**walls.to_json(),
+                 "memory": f"RLIMIT_AS {job.memory_limit / 2**20:.0f} MiB per process" if job.memory_limit else "none"}
     # parent-death signal: the worker dies with the thread that started it (a pool thread lives as long as
     # the batch), so a SIGKILLed batch leaves no worker behind
     setpriv = shutil.which("setpriv")
@@ -321,8 +384,20 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[dict[str, Any]]
     env = dict(os.environ)
     env.update({BATCH_MARKER_VAR: marker, "HOME": str(scratch / "home"), "ROS_LOG_DIR": str(logs / "ros"),
                 "PYTHONDONTWRITEBYTECODE": "1", "RCUTILS_COLORIZED_OUTPUT": "0"})
-    popen = subprocess.Popen(argv, env=env, cwd=scratch, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,  # noqa: S603
-                             stderr=subprocess.STDOUT, start_new_session=True)
+    if walls.uid is not None:
+        # Fast DDS's shared-memory segments are made 0644 by their creator, so a grader (root)
+        # and a node (the submission's uid) cannot both write them and discovery stalls. DDS
+        # over UDP only, inside the job's loopback-only network namespace, works between users.
+        profile = scratch / "fastdds-udp-only.xml"
+        profile.write_text(sandbox.FASTDDS_UDP_ONLY, encoding="utf-8")
+        env.update({"FASTRTPS_DEFAULT_PROFILES_FILE": str(profile), "ROS2COURSE_DISCOVERY_RANGE": "SUBNET"})
+    try:
+        popen = subprocess.Popen(argv, env=env, cwd=scratch, stdin=subprocess.DEVNULL,  # noqa: S603
+                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, start_new_session=True)
+    except BaseException:
+        if cgroup is not None:
+            cgroup.close()
+        raise
     drain = OutputDrain(popen.stdout, logs / "worker.log", job.output_cap)
     drain.start()
     deadline = time.monotonic() + job.timeout
@@ -348,28 +423,31 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[dict[str, Any]]
                 popen.wait(timeout=10)
             break
     killed = _kill_job(popen, marker)  # whatever is left of it (forked children, escaped sessions)
+    if cgroup is not None:
+        isolation.update({f"pids_{k}": v for k, v in cgroup.stats().items()})
+        cgroup.close()  # kills anything still in it (none, with a PID namespace), then removes it
     drain.join(timeout=5)
     try:
-        done = json.loads(result_file.read_text(encoding="utf-8"))
-        done = [d for d in done if isinstance(d, dict) and d.get("lesson") in job.lessons]
-    except (OSError, ValueError):
+        done = [LessonResult.from_record(d) for d in json.loads(result_file.read_text(encoding="utf-8"))
+                if isinstance(d, dict) and d.get("lesson") in job.lessons]
+    except (OSError, ValueError, TypeError):
         done = []
-    finished = {d["lesson"] for d in done}
+    finished = {d.lesson for d in done}
     records = list(done)
     tail = _tail(logs / "worker.log")
     for lesson in job.lessons:
         if lesson in finished:
             continue
         if timed_out:
-            records.append(_unfinished(lesson, gradebook.NOT_GRADABLE, f"timed out after {job.timeout:g} s",
+            records.append(_unfinished(lesson, Status.NOT_GRADABLE, f"timed out after {job.timeout:g} s",
                                        "the submission was stopped: a node that never ends or a build that hangs?"))
         elif not cancelled:
-            records.append(_unfinished(lesson, gradebook.GRADER_ERROR,
+            records.append(_unfinished(lesson, Status.GRADER_ERROR,
                                        f"the grading worker ended with exit code {popen.returncode} before grading "
                                        f"{lesson}" + (f": {tail}" if tail else ""),
                                        "see logs/worker.log; a fault of the grading machine or a limit reached"))
     order = {lesson: i for i, lesson in enumerate(job.lessons)}
-    records.sort(key=lambda r: order.get(r["lesson"], 0))
+    records.sort(key=lambda r: order.get(r.lesson, 0))
     if killed:
         isolation = {**isolation, "killed_after": len(killed)}
     return records, isolation, peak, cancelled
@@ -400,7 +478,7 @@ class BatchReport:
     """
 
     out_dir: Path
-    records: list[dict[str, Any]]
+    records: list[LessonResult]
     graded_now: int
     skipped: int
     seconds: float
@@ -436,10 +514,10 @@ def _check_columns(lessons: list[str]) -> dict[str, list[str]]:
     return {lesson: lesson_checks(lesson)[1] for lesson in lessons}
 
 
-def write_outputs(out_dir: Path, records: list[dict[str, Any]], lessons: list[str], students: list[str]) -> None:
+def write_outputs(out_dir: Path, records: list[LessonResult], lessons: list[str], students: list[str]) -> None:
     """Rewrite ``gradebook.csv``, ``junit.xml`` and ``<student>/results.json`` of ``students`` (atomically)."""
     latest = gradebook.latest(records)
-    columns = _check_columns(sorted({r["lesson"] for r in latest.values()} | set(lessons),
+    columns = _check_columns(sorted({r.lesson for r in latest.values()} | set(lessons),
                                     key=lambda x: (x not in lessons, lessons.index(x) if x in lessons else 0, x)))
     atomic_write_text(out_dir / "gradebook.csv", gradebook.gradebook_csv(latest.values(), columns))
     atomic_write_text(out_dir / "junit.xml", gradebook.junit_xml(latest.values()))
@@ -453,7 +531,8 @@ def write_outputs(out_dir: Path, records: list[dict[str, Any]], lessons: list[st
 def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | None = None,
               timeout: float = DEFAULT_TIMEOUT, scheduler: str | None = None, resume: bool = False,
               console: Any = None, memory_limit: int = DEFAULT_MEMORY_LIMIT, isolate: bool = True,
-              executor: cf.Executor | None = None) -> BatchReport:
+              executor: cf.Executor | None = None, pids_limit: int = sandbox.DEFAULT_PIDS_LIMIT,
+              require_isolation: bool = False) -> BatchReport:
     """Grade every submission in ``submissions`` for ``lessons``; write OUTDIR as each one finishes.
 
     Args:
@@ -466,12 +545,16 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
         resume: skip (student, lesson) pairs already in ``results.jsonl``.
         console: a rich ``Console`` for the progress bar (None: no progress shown).
         memory_limit: bytes of address space per process of a submission.
-        isolate: use namespaces where available.
+        isolate: use the protections of :mod:`course.sandbox` where the machine allows them.
         executor: use this executor instead (tests); ``jobs``/``scheduler`` ignored.
+        pids_limit: tasks (processes + threads) each submission may have at once.
+        require_isolation: refuse to grade unless every protection is in effect
+            (checked here and again by each job, wherever it runs).
 
     Raises:
         CourseError: bad input (no such folder, OUTDIR inside SUBMISSIONS or already
-            holding results without ``resume``, unknown lesson, bad numbers).
+            holding results without ``resume``, unknown lesson, bad numbers), or
+            ``require_isolation`` and a protection is missing.
         MissingRequirement: a lesson needs what is not installed.
     """
     from course import env as env_mod  # noqa: PLC0415
@@ -490,6 +573,10 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
         raise CourseError(f"--jobs must be at least 1 (got {jobs})", "e.g. --jobs 2")
     if timeout <= 0:
         raise CourseError(f"--timeout must be positive (got {timeout:g})", "e.g. --timeout 300")
+    if pids_limit < 16:
+        raise CourseError(f"--pids-limit must be at least 16 (got {pids_limit})", "e.g. --pids-limit 256")
+    if require_isolation:
+        refuse_without_isolation(isolate)
     catalog = load_catalog()
     for lesson_id in lessons:
         env_mod.require(catalog.get(lesson_id).requires, f"lesson {lesson_id}")
@@ -504,7 +591,15 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     entries = discover(submissions)
     batch_id = uuid.uuid4().hex
     scratch_root = Path(tempfile.mkdtemp(prefix="ros2course-batch-"))
+    scratch_root.chmod(0o711)
     hide = default_hidden(submissions, out_dir, scratch_root)
+    trusted = None
+    if isolate and sandbox.capabilities().uid_drop and entries:
+        try:
+            trusted = build_trusted_interfaces([catalog.get(lesson) for lesson in lessons])
+        except BaseException:
+            shutil.rmtree(scratch_root, ignore_errors=True)
+            raise
     todo: list[Job] = []
     skipped = 0
     for entry in entries:
@@ -513,12 +608,14 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
             skipped += 1
             continue
         todo.append(Job(batch_id, entry.student, str(entry.path), entry.problem, missing, str(out_dir), timeout,
-                        memory_limit, hide=hide, isolate=isolate, scratch_root=str(scratch_root)))
+                        memory_limit, hide=hide, isolate=isolate, scratch_root=str(scratch_root),
+                        pids_limit=pids_limit, trusted_interfaces=str(trusted or ""),
+                        require_isolation=require_isolation))
     records = list(existing)
     peaks: list[int] = []
-    isolation: dict[str, Any] = next((r.get("isolation", {}) for r in reversed(existing)), {})
+    isolation: dict[str, Any] = next((r.isolation for r in reversed(existing)), {})
     if existing:
-        write_outputs(out_dir, records, lessons, sorted({r["student"] for r in existing}))
+        write_outputs(out_dir, records, lessons, sorted({r.student for r in existing}))
     client = None
     own_executor = executor is None
     if own_executor:
@@ -533,10 +630,11 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
                 try:
                     outcome = future.result()
                 except Exception as exc:  # noqa: BLE001 - an infrastructure fault is this student's "grader error"
-                    outcome = {"records": [dict(_unfinished(lesson, gradebook.GRADER_ERROR,
-                                                            f"the job failed: {type(exc).__name__}: {exc}"),
-                                                student=job.student) for lesson in job.lessons],
-                               "isolation": {}, "peak_rss": 0}
+                    failed = [_unfinished(lesson, Status.GRADER_ERROR, f"the job failed: {type(exc).__name__}: {exc}")
+                              for lesson in job.lessons]
+                    for result in failed:
+                        result.student = job.student
+                    outcome = {"records": failed, "isolation": {}, "peak_rss": 0}
                 for record in outcome["records"]:
                     gradebook.append_record(results_path, record)
                     records.append(record)
@@ -560,6 +658,8 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
                 client.close()
         _cancelled.discard(batch_id)
         shutil.rmtree(scratch_root, ignore_errors=True)
+        if trusted is not None:
+            shutil.rmtree(trusted.parent, ignore_errors=True)
     return BatchReport(out_dir, list(gradebook.latest(records).values()), len(todo), skipped,
                        time.monotonic() - begin, isolation, peaks)
 
@@ -582,7 +682,7 @@ def render_summary(report: BatchReport, console: Any) -> None:
     records = report.records
     console.print(f"graded {report.graded_now} submission(s) now, {report.skipped} skipped (--resume), "
                   f"{len(records)} result(s) in {report.out_dir / 'results.jsonl'} ({report.seconds:.1f} s)")
-    graded = [r for r in records if gradebook.gradebook_status(r["status"]) == gradebook.GRADED]
+    graded = [r for r in records if r.status.graded]
     if graded:
         table = Table(title="score distribution (percent of max)", title_justify="left")
         table.add_column("lesson")
@@ -591,7 +691,7 @@ def render_summary(report: BatchReport, console: Any) -> None:
         table.add_column("")
         by_lesson: dict[str, list[float]] = {}
         for r in graded:
-            by_lesson.setdefault(r["lesson"], []).append(100.0 * r["score"] / r["max_score"] if r["max_score"] else 0.0)
+            by_lesson.setdefault(r.lesson, []).append(100.0 * r.score / r.max_score if r.max_score else 0.0)
         for lesson, scores in by_lesson.items():
             bins = Counter(min(int(s // 20), 4) for s in scores)
             for b in range(5):
@@ -600,7 +700,7 @@ def render_summary(report: BatchReport, console: Any) -> None:
                 table.add_row(lesson if b == 0 else "", label, str(bins.get(b, 0)), "█" * bins.get(b, 0))
             table.add_row("", "mean / median", f"{statistics.mean(scores):.0f}% / {statistics.median(scores):.0f}%", "")
         console.print(table)
-        failed = Counter((r["lesson"], c["id"]) for r in graded for c in r.get("checks", []) if not c.get("passed"))
+        failed = Counter((r.lesson, c.id) for r in graded for c in r.checks if not c.passed)
         if failed:
             table = Table(title="checks most often failed", title_justify="left")
             table.add_column("lesson")
@@ -609,21 +709,30 @@ def render_summary(report: BatchReport, console: Any) -> None:
             for (lesson, check), count in failed.most_common(8):
                 table.add_row(lesson, check, f"{count}/{len(by_lesson[lesson])}")
             console.print(table)
-    bad = [r for r in records if gradebook.gradebook_status(r["status"]) != gradebook.GRADED]
+    bad = [r for r in records if not r.status.graded]
     if bad:
         table = Table(title="not graded", title_justify="left")
         table.add_column("student")
         table.add_column("lesson")
         table.add_column("status")
         table.add_column("reason", overflow="fold")
-        for r in sorted(bad, key=lambda r: (r["student"], r["lesson"])):
-            table.add_row(r["student"], r["lesson"], r["status"], (r.get("message") or "").splitlines()[0][:200]
-                          if r.get("message") else "")
+        for r in sorted(bad, key=lambda r: (r.student, r.lesson)):
+            table.add_row(r.student, r.lesson, r.status.value, r.message.splitlines()[0][:200] if r.message else "")
         console.print(table)
     iso = report.isolation or {}
-    state = "[green]in effect[/]" if iso.get("netns") else "[yellow]NOT in effect[/]"
-    console.print(f"network namespace isolation: {state} ({iso.get('reason', 'no submission run')}); "
-                  f"memory limit: {iso.get('memory', 'n/a')}")
+    table = Table(title="isolation of each submission", title_justify="left")
+    table.add_column("protection")
+    table.add_column("")
+    table.add_column("how, or why missing", overflow="fold")
+    protections, missing = iso.get("protections") or {}, iso.get("missing") or {}
+    for name in sandbox.PROTECTIONS:
+        if protections.get(name):
+            table.add_row(name, "[green]in effect[/]", protections[name])
+        else:
+            table.add_row(name, "[yellow]MISSING[/]", missing.get(name) or iso.get("reason", "no submission run"))
+    table.add_row("memory limit", "[green]in effect[/]" if iso.get("memory", "none") != "none" else "[yellow]none[/]",
+                  iso.get("memory", "n/a"))
+    console.print(table)
     if report.peak_rss:
         console.print(f"peak memory per job: max {max(report.peak_rss) / 2**20:.0f} MiB, "
                       f"mean {statistics.mean(report.peak_rss) / 2**20:.0f} MiB")

@@ -17,13 +17,15 @@ from __future__ import annotations
 
 import json
 import os
+import shutil
 import tempfile
 import uuid
 from pathlib import Path
 
 from course import gradebook
 from course.progress import atomic_write_text
-from course.batch import Job, default_hidden, lesson_checks, run_job
+from course import sandbox
+from course.batch import Job, build_trusted_interfaces, default_hidden, lesson_checks, refuse_without_isolation, run_job
 from course.batch_archive import ARCHIVE_SUFFIXES
 from course.errors import CourseError
 
@@ -64,7 +66,8 @@ def submission_entry(folder: Path) -> Path:
     return folder
 
 
-def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout: float = 600.0) -> float:
+def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout: float = 600.0,
+                   pids_limit: int = sandbox.DEFAULT_PIDS_LIMIT, require_isolation: bool = False) -> float:
     """Grade ``submission`` for ``lessons`` and write Gradescope's ``results.json`` to ``results``.
 
     Args:
@@ -72,16 +75,21 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
         submission: the upload folder (``/autograder/submission``).
         results: the results file (``/autograder/results/results.json``); logs go beside it under ``submission/logs``.
         timeout: wall-clock seconds for the whole grading.
+        pids_limit: tasks (processes + threads) the submission may have at once.
+        require_isolation: refuse unless every protection of :mod:`course.sandbox` is in effect.
 
     Returns:
         the total score.
 
     Raises:
-        CourseError: no lesson configured, unknown lesson, missing submission folder.
+        CourseError: no lesson configured, unknown lesson, missing submission folder,
+            or ``require_isolation`` and a protection is missing.
     """
     from course.lesson import load_catalog  # noqa: PLC0415
 
     lessons = configured_lessons(lessons)
+    if require_isolation:
+        refuse_without_isolation()
     catalog = load_catalog()
     for lesson_id in lessons:
         catalog.get(lesson_id)
@@ -90,8 +98,15 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
     results.parent.mkdir(parents=True, exist_ok=True)
     hide = default_hidden(Path(tempfile.gettempdir()) / "ros2course-none", results.parent,
                           Path(tempfile.gettempdir()) / "ros2course-none")
-    job = Job(uuid.uuid4().hex, "submission", str(entry.absolute()), "", lessons, str(results.parent), timeout, hide=hide)
-    outcome = run_job(job)
+    trusted = (build_trusted_interfaces([catalog.get(lesson_id) for lesson_id in lessons])
+               if sandbox.capabilities().uid_drop else None)
+    job = Job(uuid.uuid4().hex, "submission", str(entry.absolute()), "", lessons, str(results.parent), timeout, hide=hide,
+              pids_limit=pids_limit, trusted_interfaces=str(trusted or ""), require_isolation=require_isolation)
+    try:
+        outcome = run_job(job)
+    finally:
+        if trusted is not None:
+            shutil.rmtree(trusted.parent, ignore_errors=True)
     data = gradebook.gradescope_json(outcome["records"])
     atomic_write_text(results, json.dumps(data, indent=2) + "\n")
     return float(data["score"])

@@ -3,7 +3,10 @@
 Run by :mod:`course.batch` as ``python -m course.batch_worker ...`` in its own
 session (and, where the machine allows, its own network and mount namespace).
 It limits its own resources first (``RLIMIT_AS``, ``RLIMIT_FSIZE``; inherited by
-colcon and the learner's nodes), then calls the same
+colcon and the learner's nodes), configures the submission's identity
+(``--run-as``: every command that runs submission code goes through
+:func:`course.sandbox.command`, so the worker stays the only root process
+in the job), then calls the same
 :func:`course.grading.grade_lesson` as ``ros2course check`` for each lesson and
 rewrites ``--results`` (a JSON list, temp file + ``os.replace``) after each one,
 so a worker killed half-way still leaves the lessons it finished.
@@ -24,17 +27,9 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+from course import sandbox
 from course.progress import atomic_write_text
-
-
-def result_dict(result: Any) -> dict[str, Any]:
-    """A :class:`~course.grading.LessonResult` as ``check --json`` plus ``hint``, ``timings``, ``build``, ``log_dir``."""
-    out = result.to_json()
-    out["hint"] = result.hint
-    out["timings"] = {k: round(v, 3) for k, v in result.timings.items()}
-    out["build"] = result.build
-    out["log_dir"] = result.log_dir
-    return out
+from course.results import LessonResult, Status
 
 
 def _limit(kind: int, value: int) -> None:
@@ -54,16 +49,23 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--logs", required=True, type=Path)
     parser.add_argument("--memory-limit", type=int, default=0, help="bytes of address space per process (0: none)")
     parser.add_argument("--file-limit", type=int, default=0, help="bytes per written file (0: none)")
+    parser.add_argument("--run-as", default="", help="UID:GID the submission's code runs as (course.sandbox)")
+    parser.add_argument("--nproc", type=int, default=0, help="RLIMIT_NPROC of that uid (tasks at once)")
+    parser.add_argument("--pids-cgroup", default="", help="cgroup.procs file of the job's pids cgroup")
+    parser.add_argument("--trusted-interfaces", type=Path, default=None,
+                        help="built workspace of the course's interface packages, imported instead of the submission's")
     args = parser.parse_args(argv)
 
     _limit(resource.RLIMIT_AS, args.memory_limit)
     _limit(resource.RLIMIT_FSIZE, args.file_limit)
 
     from course import env as env_mod  # noqa: PLC0415 - after the limits
-    from course.grading import STATUS_GRADER_ERROR
     from course.lesson import load_catalog
 
     env_mod.activate()
+    if args.run_as:
+        uid, _, gid = args.run_as.partition(":")
+        sandbox.configure(sandbox.SubmissionIdentity(int(uid), int(gid or uid), args.nproc or 256, args.pids_cgroup))
     catalog = load_catalog()
     done: list[dict[str, Any]] = []
     atomic_write_text(args.results, json.dumps(done, indent=1))
@@ -75,15 +77,16 @@ def main(argv: list[str] | None = None) -> int:
         begin = time.monotonic()
         try:
             lesson = catalog.get(lesson_id)
-            entry = result_dict(grade_lesson(lesson, args.workspace, log_dir=log_dir))
+            result = grade_lesson(lesson, args.workspace, log_dir=log_dir,
+                                  trusted_interfaces=args.trusted_interfaces)
         except Exception as exc:  # noqa: BLE001 - any failure is this lesson's "grader error" row
             (log_dir / "grader-error.txt").write_text(traceback.format_exc(), encoding="utf-8")
-            entry = {"lesson": lesson_id, "score": 0.0, "max_score": 0.0, "status": STATUS_GRADER_ERROR,
-                     "checks": [], "message": f"the grader failed: {type(exc).__name__}: {exc}",
-                     "hint": "a fault of the course or the grading machine, not of the submission",
-                     "timings": {}, "build": {}, "log_dir": str(log_dir)}
-        entry["seconds"] = round(time.monotonic() - begin, 3)
-        done.append(entry)
+            result = LessonResult.unfinished(lesson_id, Status.GRADER_ERROR,
+                                             f"the grader failed: {type(exc).__name__}: {exc}",
+                                             "a fault of the course or the grading machine, not of the submission",
+                                             log_dir=str(log_dir))
+        result.seconds = time.monotonic() - begin
+        done.append(result.to_record())
         atomic_write_text(args.results, json.dumps(done, indent=1))
     sys.stdout.flush()
     return 0

@@ -24,6 +24,7 @@ import sys
 import time
 from pathlib import Path
 
+from course import sandbox
 from course.errors import NotGradable
 from course.progress import atomic_write_text
 
@@ -164,8 +165,9 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
         log.write(f"$ {' '.join(command)}\n".encode())
         log.flush()
         try:
-            proc = subprocess.run(command, cwd=workspace_root, env=env, stdout=log, stderr=subprocess.STDOUT,
-                                  stdin=subprocess.DEVNULL, timeout=timeout, start_new_session=True, check=False)
+            # colcon runs the submission's setup.py and CMake code: as the submission (course.sandbox)
+            proc = sandbox.run(command, cwd=workspace_root, env=env, stdout=log, stderr=subprocess.STDOUT,
+                               stdin=subprocess.DEVNULL, timeout=timeout, start_new_session=True, check=False)
             ok = proc.returncode == 0
         except subprocess.TimeoutExpired:
             ok = False
@@ -211,8 +213,9 @@ def overlay_env(workspace_root: Path, base_env: dict[str, str]) -> dict[str, str
     cached = _overlay_cache.get(key)
     if cached is not None:
         return dict(cached)
-    proc = subprocess.run(["bash", "-c", 'source "$1" >/dev/null 2>&1 && env -0', "bash", str(setup)],
-                          capture_output=True, env=base_env, cwd=workspace_root, timeout=60, check=False)
+    # the workspace's setup.bash is the submission's code too (course.sandbox)
+    proc = sandbox.run(["bash", "-c", 'source "$1" >/dev/null 2>&1 && env -0', "bash", str(setup)],
+                       capture_output=True, env=base_env, cwd=workspace_root, timeout=60, check=False)
     if proc.returncode != 0:
         raise NotGradable(f"sourcing {setup} failed (exit {proc.returncode})",
                           "rebuild the workspace: rm -rf build install log && colcon build")

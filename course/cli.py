@@ -165,21 +165,25 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
           as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON on stdout, nothing else.")] = False,
           ) -> None:
     """Build the lesson's packages, run your nodes, grade them. Exit 0 only on full marks."""
-    from course.grading import STATUS_GRADER_ERROR, STATUS_NOT_GRADABLE, STATUS_PASSED, grade_lesson  # noqa: PLC0415
+    from course.grading import grade_lesson  # noqa: PLC0415
     from course.report import render_result, result_json
+    from course.results import Status
 
     ws = _workspace(workspace)
     lesson = _lesson_for(lesson_id, ws)
     if ws.initialised:
         ws.load_progress()  # a corrupt progress file is reported before, not after, a long check
     err = stderr_console()
+    # the sas lesson's C++ path: build SmartArmStack once, on demand (minutes; course.env)
+    env_mod.ensure_components_for(ws.root, lesson.packages,
+                                  progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
     with err.status(f"grading {lesson.id} in {ws.root} ...") if not as_json and err.is_terminal else _null():
         result = grade_lesson(lesson, ws.root)
     if ws.initialised:
         progress = ws.load_progress()
         record = progress.lesson(lesson.id)
         record.attempts += 1
-        record.last_status = result.status
+        record.last_status = result.status.value
         record.max_score = result.max_score
         if record.best_score is None or result.score > record.best_score:
             record.best_score = result.score
@@ -189,8 +193,8 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
         sys.stdout.flush()
     else:
         render_result(result, stdout_console())
-    codes = {STATUS_PASSED: ExitStatus.OK, STATUS_NOT_GRADABLE: ExitStatus.NOT_GRADABLE,
-             STATUS_GRADER_ERROR: ExitStatus.GRADER_ERROR}
+    codes = {Status.PASSED: ExitStatus.OK, Status.NOT_GRADABLE: ExitStatus.NOT_GRADABLE,
+             Status.GRADER_ERROR: ExitStatus.GRADER_ERROR}
     code = codes.get(result.status, ExitStatus.CHECK_FAILED)
     if code:
         raise typer.Exit(int(code))
@@ -246,12 +250,16 @@ def reset(lesson_id: Annotated[str, typer.Argument(metavar="LESSON")],
 
 @app.command()
 @_handle_errors
-def doctor(fix: Annotated[bool, typer.Option("--fix", help="Repair what the ROS wheels need (idempotent).")] = False,
+def doctor(fix: Annotated[bool, typer.Option("--fix", help="Repair the ROS wheels and build the missing ROS 2 "
+                                                            "pieces (ros2 CLI, launch, rclcpp); idempotent.")] = False,
+           sources: Annotated[Optional[Path], typer.Option("--sources", metavar="DIR", file_okay=False,
+                                                           help="Folder of the pinned source archives (see 'env').")
+                              ] = None,
            ) -> None:
-    """Report what is installed (rclpy, RMW, colcon, cmake, C++, rclcpp, launch) and repair with --fix."""
+    """Report what is installed (rclpy, RMW, colcon, cmake, C++, rclcpp, launch, ros2) and repair with --fix."""
     from rich.table import Table  # noqa: PLC0415
 
-    rows = env_mod.doctor(fix=fix)
+    rows = env_mod.doctor(fix=fix, sources=sources)
     table = Table(title="ros2course doctor", title_justify="left")
     table.add_column("component")
     table.add_column("")
@@ -263,6 +271,46 @@ def doctor(fix: Annotated[bool, typer.Option("--fix", help="Repair what the ROS 
     essential = {"ROS 2", "rclpy", "colcon"}
     if any(not row.ok for row in rows if row.component in essential):
         raise typer.Exit(int(ExitStatus.MISSING_REQUIREMENT))
+
+
+@app.command("env")
+@_handle_errors
+def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of the setup script to source.")] = False,
+         build: Annotated[bool, typer.Option("--build", help="Build the ROS 2 underlay (ros2 CLI, launch, rclcpp) "
+                                                            "unless it is up to date.")] = False,
+         sources: Annotated[Optional[Path], typer.Option("--sources", metavar="DIR", file_okay=False,
+                                                         help="Folder of the pinned source archives "
+                                                              "(default: $ROS2COURSE_ROS_SOURCES, ../shared/ros-src "
+                                                              "beside the project, else GitHub).")] = None,
+         rebuild: Annotated[bool, typer.Option("--rebuild", help="With --build: build even when up to date.")] = False,
+         with_: Annotated[Optional[list[str]], typer.Option("--with", metavar="COMPONENT",
+                                                            help="With --build: also build an optional component "
+                                                                 "(sas: SmartArmStack C++ for the sas lesson, "
+                                                                 "about 6 min on 2 cores).")] = None,
+         ) -> None:
+    """The learner's ROS 2 environment: source "$(ros2course env --path)" in a terminal."""
+    from course import underlay  # noqa: PLC0415
+
+    if not (path or build):
+        raise CourseError("say what to do: --path or --build", 'e.g. source "$(ros2course env --path)"')
+    extra = []
+    for name in with_ or []:
+        if name not in underlay.COMPONENTS or name == "jazzy":
+            raise CourseError(f"unknown component {name!r}", "the optional component is: sas")
+        extra.append(underlay.COMPONENTS[name])
+    if build:
+        install = env_mod.detect()
+        if install.kind == "system":
+            stderr_console().print(f"a system ROS 2 {install.distro} is sourced ({install.prefix}): nothing to build")
+        else:
+            err = stderr_console()
+            for component in (underlay.JAZZY_COMPONENT, *extra):
+                made, built = underlay.build(sources, force=rebuild, component=component,
+                                             progress=lambda line: err.print(line, markup=False))
+                state = f"built in {made.stamp.get('seconds', 0):.0f} s" if built else "up to date"
+                err.print(f"{component.what}: {state}: {made.prefix}", markup=False)
+    if path:
+        sys.stdout.write(f"{env_mod.write_setup_script()}\n")
 
 
 @dev_app.command()
@@ -296,6 +344,9 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
                                                            help="Dask scheduler address: grade on that cluster instead.")] = None,
           resume: Annotated[bool, typer.Option("--resume", help="Skip submissions already in OUTDIR/results.jsonl.")] = False,
           memory_mb: Annotated[int, typer.Option("--memory-mb", help="Address-space limit per process of a submission, MiB (0: none).")] = 4096,
+          pids_limit: Annotated[int, typer.Option("--pids-limit", help="Processes + threads a submission may have at once.")] = 256,
+          require_isolation: Annotated[bool, typer.Option("--require-isolation",
+                                                          help="Refuse to grade unless every protection (namespaces, unprivileged uid, process limit) is in effect.")] = False,
           ) -> None:
     """Grade a whole class: each submission isolated, in parallel, resumable; writes a gradebook."""
     from course.batch import render_summary, run_batch  # noqa: PLC0415
@@ -304,7 +355,8 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
     if memory_mb < 0:
         raise CourseError(f"--memory-mb must be 0 or more (got {memory_mb})", "e.g. --memory-mb 4096")
     report = run_batch(submissions, lesson, out, jobs=jobs, timeout=timeout, scheduler=scheduler, resume=resume,
-                       console=err, memory_limit=memory_mb * 1024 * 1024)
+                       console=err, memory_limit=memory_mb * 1024 * 1024, pids_limit=pids_limit,
+                       require_isolation=require_isolation)
     render_summary(report, err)
     stdout_console().print(f"gradebook: {report.out_dir / 'gradebook.csv'}")
 
@@ -317,11 +369,15 @@ def gradescope(lesson: Annotated[Optional[list[str]], typer.Option("--lesson", "
                results: Annotated[Path, typer.Option("--results", help="Where Gradescope reads the result.")] = Path(
                    "/autograder/results/results.json"),
                timeout: Annotated[float, typer.Option("--timeout", help="Wall-clock limit, seconds.")] = 600.0,
+               pids_limit: Annotated[int, typer.Option("--pids-limit", help="Processes + threads the submission may have at once.")] = 256,
+               require_isolation: Annotated[bool, typer.Option("--require-isolation",
+                                                               help="Refuse to grade unless every protection is in effect.")] = False,
                ) -> None:
     """Grade one submission inside a Gradescope autograder container (writes results.json)."""
     from course.batch_gradescope import run_gradescope  # noqa: PLC0415
 
-    score = run_gradescope(lesson or [], submission, results, timeout=timeout)
+    score = run_gradescope(lesson or [], submission, results, timeout=timeout, pids_limit=pids_limit,
+                           require_isolation=require_isolation)
     stdout_console().print(f"score {score:g}; results in {results}")
 
 

@@ -5,10 +5,11 @@ written, flushed and fsync'd (a batch killed at any moment leaves at most a
 truncated last line, which :func:`read_results` skips); every other file is
 rewritten whole through a temporary file and ``os.replace``.
 
-A *record* is one line of ``results.jsonl``: the ``check --json`` object of one
-student and lesson (``lesson, score, max_score, status, checks[...]``,
-``message``) plus ``student``, ``timings`` (seconds), ``isolation`` and
-``log_dir``.
+A *record* is one line of ``results.jsonl``: a :class:`~course.results.LessonResult`
+of one student and lesson as :meth:`~course.results.LessonResult.to_record` writes it
+(the ``check --json`` object plus ``student``, ``timings`` (seconds), ``isolation``,
+``log_dir``...). Every format is rendered by the result itself; this module only
+chooses, orders and writes.
 
 JUnit XML is written with the standard library's ``xml.etree`` rather than the
 ``junit-xml`` package: that package has had no release since 2020, and the
@@ -27,24 +28,17 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-#: Gradebook status of a submission that was graded (passed or failed checks).
-GRADED = "graded"
-NOT_GRADABLE = "not gradable"
-GRADER_ERROR = "grader error"
+from course.results import LessonResult
 
 
-def gradebook_status(engine_status: str) -> str:
-    """``passed`` / ``failed`` -> ``graded``; ``not gradable`` and ``grader error`` stay."""
-    return engine_status if engine_status in (NOT_GRADABLE, GRADER_ERROR) else GRADED
 
-
-def append_record(path: Path, record: dict[str, Any]) -> None:
-    """Append ``record`` as one JSON line to ``path``, flushed and fsync'd.
+def append_record(path: Path, result: LessonResult) -> None:
+    """Append ``result`` (:meth:`~course.results.LessonResult.to_record`) as one JSON line, flushed and fsync'd.
 
     A previous run killed mid-line left a truncated last line: a newline is
     written first so the new record starts on a line of its own.
     """
-    line = json.dumps(record, separators=(",", ":"), ensure_ascii=False) + "\n"
+    line = json.dumps(result.to_record(), separators=(",", ":"), ensure_ascii=False) + "\n"
     with open(path, "ab+") as handle:
         if handle.tell() > 0:
             handle.seek(-1, os.SEEK_END)
@@ -55,9 +49,9 @@ def append_record(path: Path, record: dict[str, Any]) -> None:
         os.fsync(handle.fileno())
 
 
-def read_results(path: Path) -> list[dict[str, Any]]:
+def read_results(path: Path) -> list[LessonResult]:
     """Every complete record of a ``results.jsonl`` (missing file: none; broken lines are skipped)."""
-    out: list[dict[str, Any]] = []
+    out: list[LessonResult] = []
     with contextlib.suppress(FileNotFoundError):
         with open(path, encoding="utf-8", errors="replace") as handle:
             for line in handle:
@@ -66,26 +60,26 @@ def read_results(path: Path) -> list[dict[str, Any]]:
                     continue
                 try:
                     record = json.loads(line)
+                    if isinstance(record, dict) and "student" in record:
+                        out.append(LessonResult.from_record(record))
                 except ValueError:
                     continue
-                if isinstance(record, dict) and "student" in record and "lesson" in record:
-                    out.append(record)
     return out
 
 
-def latest(records: Iterable[dict[str, Any]]) -> dict[tuple[str, str], dict[str, Any]]:
-    """The last record per (student, lesson), in first-seen order."""
-    out: dict[tuple[str, str], dict[str, Any]] = {}
-    for record in records:
-        out[(record["student"], record["lesson"])] = record
+def latest(results: Iterable[LessonResult]) -> dict[tuple[str, str], LessonResult]:
+    """The last result per (student, lesson), in first-seen order."""
+    out: dict[tuple[str, str], LessonResult] = {}
+    for result in results:
+        out[(result.student, result.lesson)] = result
     return out
 
 
-def gradebook_csv(records: Iterable[dict[str, Any]], check_columns: dict[str, list[str]]) -> str:
+def gradebook_csv(results: Iterable[LessonResult], check_columns: dict[str, list[str]]) -> str:
     """The gradebook: one row per student and lesson, sorted by student then lesson.
 
     Args:
-        records: results (the last one per student and lesson counts).
+        results: results (the last one per student and lesson counts).
         check_columns: lesson id -> its check ids, in grader order. With one
             lesson the check columns are the check ids; with several,
             ``<lesson>:<check>``.
@@ -94,31 +88,17 @@ def gradebook_csv(records: Iterable[dict[str, Any]], check_columns: dict[str, li
     when the check has no result, e.g. not gradable).
     """
     multi = len(check_columns) > 1
-    columns = [(lesson, check, f"{lesson}:{check}" if multi else check)
-               for lesson, checks in check_columns.items() for check in checks]
+    columns = [(lesson, check) for lesson, checks in check_columns.items() for check in checks]
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(["student", "lesson", "score", "max_score", "status", "reason", *[c[2] for c in columns]])
-    rows = sorted(latest(records).values(), key=lambda r: (r["student"], r["lesson"]))
-    for record in rows:
-        points = {c["id"]: c["points"] for c in record.get("checks", [])}
-        status = gradebook_status(record["status"])
-        reason = record.get("message", "").splitlines()[0] if status != GRADED and record.get("message") else ""
-        cells = [f"{points[check]:g}" if lesson == record["lesson"] and check in points else ""
-                 for lesson, check, _ in columns]
-        writer.writerow([record["student"], record["lesson"], f"{record['score']:g}",
-                         f"{record['max_score']:g}", status, reason, *cells])
+    writer.writerow(["student", "lesson", "score", "max_score", "status", "reason",
+                     *[f"{lesson}:{check}" if multi else check for lesson, check in columns]])
+    for result in sorted(latest(results).values(), key=lambda r: (r.student, r.lesson)):
+        writer.writerow(result.gradebook_cells(columns))
     return buffer.getvalue()
 
 
-def _check_output(check: dict[str, Any]) -> str:
-    lines = [f"observed: {check.get('observed', '')}", f"expected: {check.get('expected', '')}"]
-    if check.get("hint") and not check.get("passed"):
-        lines.append(f"hint: {check['hint']}")
-    return "\n".join(lines)
-
-
-def gradescope_json(records: list[dict[str, Any]]) -> dict[str, Any]:
+def gradescope_json(results: list[LessonResult]) -> dict[str, Any]:
     """The Gradescope autograder ``results.json`` of one student (all their lessons).
 
     Fields: ``score`` (total points), ``output`` (one line per lesson),
@@ -129,68 +109,24 @@ def gradescope_json(records: list[dict[str, Any]]) -> dict[str, Any]:
     """
     tests: list[dict[str, Any]] = []
     lines: list[str] = []
-    seconds = 0.0
-    multi = len(records) > 1
-    for record in records:
-        seconds += float(record.get("timings", {}).get("total", 0.0))
-        lesson = record["lesson"]
-        lines.append(f"{lesson}: {record['status']} {record['score']:g}/{record['max_score']:g}")
-        if record.get("message"):
-            lines.append(record["message"])
-        if record["status"] in (NOT_GRADABLE, GRADER_ERROR) and not record.get("checks"):
-            tests.append({"name": f"{lesson}: {record['status']}", "score": 0.0,
-                          "max_score": record["max_score"], "output": record.get("message", ""),
-                          "visibility": "visible", "status": "failed"})
-            continue
-        for check in record.get("checks", []):
-            tests.append({"name": f"{lesson}: {check['name']}" if multi else check["name"],
-                          "score": check["points"], "max_score": check["max_points"],
-                          "output": _check_output(check), "visibility": "visible",
-                          "status": "passed" if check.get("passed") else "failed"})
-    return {"score": round(sum(r["score"] for r in records), 3), "output": "\n".join(lines),
+    for result in results:
+        lines.append(f"{result.lesson}: {result.status.value} {result.score:g}/{result.max_score:g}")
+        if result.message:
+            lines.append(result.message)
+        tests += result.gradescope_tests(prefix=len(results) > 1)
+    seconds = sum(float(r.timings.get("total", 0.0)) for r in results)
+    return {"score": round(sum(r.score for r in results), 3), "output": "\n".join(lines),
             "visibility": "visible", "stdout_visibility": "hidden", "execution_time": int(seconds + 0.5),
             "tests": tests}
 
 
-def junit_xml(records: Iterable[dict[str, Any]]) -> str:
-    """JUnit XML: one ``<testsuite>`` per student and lesson, one ``<testcase>`` per check.
-
-    A check the learner lost is a ``<failure>``; a check that could not be judged
-    because the grader or the grading machine failed (status ``grader error``,
-    e.g. a crashed worker) is an ``<error>``. A submission that is not gradable
-    (its build failed, it timed out) is one ``<failure>`` test case.
-    """
+def junit_xml(results: Iterable[LessonResult]) -> str:
+    """JUnit XML: one ``<testsuite>`` per student and lesson (:meth:`~course.results.LessonResult.junit_suite`)."""
     root = ET.Element("testsuites", name="ros2course")
-    rows = sorted(latest(records).values(), key=lambda r: (r["student"], r["lesson"]))
     totals = {"tests": 0, "failures": 0, "errors": 0}
-    for record in rows:
-        suite = ET.SubElement(root, "testsuite", name=f"{record['student']}.{record['lesson']}")
-        counts = {"tests": 0, "failures": 0, "errors": 0}
-        grader_error = record["status"] == GRADER_ERROR
-        seconds = float(record.get("timings", {}).get("total", 0.0))
-        cases = record.get("checks") or [None]
-        for check in cases:
-            counts["tests"] += 1
-            if check is None:
-                case = ET.SubElement(suite, "testcase", classname=f"{record['student']}.{record['lesson']}",
-                                     name=record["status"], time=f"{seconds:.3f}")
-                kind = "error" if grader_error else "failure"
-                node = ET.SubElement(case, kind, message=(record.get("message") or record["status"]).splitlines()[0][:500])
-                node.text = record.get("message", "")
-                counts["errors" if grader_error else "failures"] += 1
-                continue
-            case = ET.SubElement(suite, "testcase", classname=f"{record['student']}.{record['lesson']}",
-                                 name=check["id"], time="0")
-            if check.get("passed"):
-                continue
-            kind = "error" if grader_error else "failure"
-            node = ET.SubElement(case, kind, message=str(check.get("observed", ""))[:500])
-            node.text = _check_output(check)
-            counts["errors" if grader_error else "failures"] += 1
-        for key, value in counts.items():
-            suite.set(key, str(value))
+    for result in sorted(latest(results).values(), key=lambda r: (r.student, r.lesson)):
+        for key, value in result.junit_suite(root).items():
             totals[key] += value
-        suite.set("time", f"{seconds:.3f}")
     for key, value in totals.items():
         root.set(key, str(value))
     ET.indent(root)

@@ -25,15 +25,11 @@ from typing import Any
 
 from course import build as build_mod
 from course import env as env_mod
+from course import index as ament_index
 from course.errors import CourseError, NotGradable
 from course.lesson import Lesson, content_root
 from course.process import LearnerProcess, sweep_stale_fastdds_shm
-
-STATUS_PASSED = "passed"
-STATUS_FAILED = "failed"
-STATUS_NOT_GRADABLE = "not gradable"
-STATUS_GRADER_ERROR = "grader error"
-
+from course.results import CheckResult, LessonResult, Plot, Status
 
 @dataclasses.dataclass(frozen=True)
 class Check:
@@ -52,88 +48,6 @@ class Check:
     hint: str = ""
 
 
-@dataclasses.dataclass
-class CheckResult:
-    """The verdict on one :class:`Check` (the JSON shape of ``check --json``)."""
-
-    id: str
-    name: str
-    points: float
-    max_points: float
-    passed: bool
-    observed: str
-    expected: str
-    hint: str
-    #: not judged because an earlier check failed (not part of the JSON shape).
-    skipped: bool = False
-
-    def to_dict(self) -> dict[str, Any]:
-        """The documented JSON fields."""
-        out = dataclasses.asdict(self)
-        out.pop("skipped")
-        return out
-
-
-@dataclasses.dataclass
-class Plot:
-    """Time series a grader observed, shown under the table of checks (e.g. joint positions).
-
-    Attributes:
-        title: what is plotted, e.g. ``"joints of /myrobot_1 over the graded window"``.
-        times: seconds from the start of the window, one per sample.
-        series: label -> values (same length as ``times``), e.g. ``{"joint 1": [...], ...}``.
-        unit: unit of the values, e.g. ``"deg"``.
-    """
-
-    title: str
-    times: list[float]
-    series: dict[str, list[float]]
-    unit: str = ""
-
-    def to_dict(self) -> dict[str, Any]:
-        return {"title": self.title, "times": self.times, "series": self.series, "unit": self.unit}
-
-
-@dataclasses.dataclass
-class LessonResult:
-    """Everything ``check`` reports about one submission for one lesson.
-
-    Attributes:
-        status: ``passed`` (full marks), ``failed``, ``not gradable`` or ``grader error``.
-        message: for not gradable / grader error, what happened (e.g. the build log excerpt).
-        timings: seconds spent per phase (``build``, ``grade``, ``teardown``, ...).
-        build: how the build went (``ok``, ``cached``, ``seconds``, ``log``).
-        log_dir: where the build and node logs of this check are.
-        plots: time series the grader observed (:class:`Plot`), for people; not in ``to_json()``.
-    """
-
-    lesson: str
-    score: float
-    max_score: float
-    status: str
-    checks: list[CheckResult]
-    message: str = ""
-    hint: str = ""
-    timings: dict[str, float] = dataclasses.field(default_factory=dict)
-    build: dict[str, Any] = dataclasses.field(default_factory=dict)
-    log_dir: str = ""
-    plots: list[Plot] = dataclasses.field(default_factory=list)
-
-    def to_json(self) -> dict[str, Any]:
-        """The documented ``check --json`` object (plus ``message`` when not graded)."""
-        out: dict[str, Any] = {
-            "lesson": self.lesson, "score": self.score, "max_score": self.max_score, "status": self.status,
-            "checks": [c.to_dict() for c in self.checks],
-        }
-        if self.message:
-            out["message"] = self.message
-        return out
-
-    def failed_checks(self) -> list[str]:
-        """Ids of the checks that did not get full points."""
-        return [c.id for c in self.checks if not c.passed]
-
-
 class GradingSession:
     """What a grader's ``grade()`` works with.
 
@@ -146,13 +60,14 @@ class GradingSession:
     """
 
     def __init__(self, lesson: Lesson, checks: list[Check], workspace_root: Path, log_dir: Path,
-                 base_env: dict[str, str]) -> None:
+                 base_env: dict[str, str], trusted_interfaces: Path | None = None) -> None:
         self.lesson = lesson
         self.checks = {c.id: c for c in checks}
         self._order = [c.id for c in checks]
         self.workspace_root = workspace_root
         self.log_dir = log_dir
         self.base_env = base_env
+        self.trusted_interfaces = trusted_interfaces
         self.results: dict[str, CheckResult] = {}
         self._processes: list[LearnerProcess] = []
         self._stack = contextlib.ExitStack()
@@ -251,30 +166,38 @@ class GradingSession:
     def interface_type(self, package: str, kind: str, name: str) -> Any:
         """A generated msg/srv class from the workspace (see :mod:`course.interfaces`).
 
+        With ``trusted_interfaces`` (batch grading) the class comes from the
+        course's own build of the package, never from the submission's: its
+        generated Python and C code would run inside the grader.
+
         Raises:
             NotGradable: the interface package is not built or does not load.
+            CourseError: submission code runs sandboxed and the course has no build of ``package``.
         """
-        from course.interfaces import workspace_type  # noqa: PLC0415
+        from course import sandbox  # noqa: PLC0415
+        from course.interfaces import workspace_type
 
+        if self.trusted_interfaces is not None:
+            return workspace_type(build_mod.overlay_env(self.trusted_interfaces, self.base_env), package, kind, name)
+        if sandbox.current() is not None:
+            raise CourseError(f"the grader needs {package} types but the batch built no trusted copy of {package}",
+                              "a fault of the course: list the package as a dependency of the lesson's packages")
         return workspace_type(self.overlay(), package, kind, name)
 
     def find_executable(self, package: str, executable: str) -> tuple[Path | None, str]:
         """Resolve ``package``/``executable`` the way ``ros2 run`` does.
 
-        ``ament_index_python.get_package_prefix(package)`` under the workspace
-        overlay, then ``<prefix>/lib/<package>/<executable>`` (ros2run source).
+        The package's prefix in the workspace overlay's ament index
+        (:func:`course.index.package_prefix`, as ``get_package_prefix``), then
+        ``<prefix>/lib/<package>/<executable>`` (ros2run source).
 
         Returns:
             ``(path, observed)``: the path (None when not found) and a sentence
             saying what was found, for the check's "observed".
         """
-        from ament_index_python.packages import PackageNotFoundError, get_package_prefix  # noqa: PLC0415
-
-        with patched_environ(self.overlay()):
-            try:
-                prefix = Path(get_package_prefix(package))
-            except (PackageNotFoundError, OSError, ValueError):
-                return None, f"package {package} is not in the ament index (was it built and installed?)"
+        prefix = ament_index.package_prefix(package, self.overlay())
+        if prefix is None:
+            return None, f"package {package} is not in the ament index (was it built and installed?)"
         lib = prefix / "lib" / package
         candidate = lib / executable
         if candidate.is_file() and os.access(candidate, os.X_OK):
@@ -285,13 +208,7 @@ class GradingSession:
 
     def find_share(self, package: str) -> Path | None:
         """``install/<package>/share/<package>`` as ``ros2 launch`` finds it (ament index), or None."""
-        from ament_index_python.packages import PackageNotFoundError, get_package_share_directory  # noqa: PLC0415
-
-        with patched_environ(self.overlay()):
-            try:
-                return Path(get_package_share_directory(package))
-            except (PackageNotFoundError, OSError, ValueError):
-                return None
+        return ament_index.package_share(package, self.overlay())
 
     def new_graph(self):
         """Another private ROS graph (its own domain id) for this check, closed with it.
@@ -359,19 +276,6 @@ class GraphView:
         return getattr(self._session, name)
 
 
-@contextlib.contextmanager
-def patched_environ(env: dict[str, str]) -> Iterator[None]:
-    """Temporarily replace ``os.environ`` (for libraries that read it, like ament_index_python)."""
-    saved = dict(os.environ)
-    os.environ.clear()
-    os.environ.update(env)
-    try:
-        yield
-    finally:
-        os.environ.clear()
-        os.environ.update(saved)
-
-
 def load_grader(name: str):
     """Import ``graders.<name>``; it must define ``CHECKS`` and ``grade``.
 
@@ -405,12 +309,15 @@ def new_log_dir(workspace_root: Path, lesson_id: str) -> Path:
 
 
 def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = None,
-                 underlays: tuple[Path, ...] | list[Path] = ()) -> LessonResult:
+                 underlays: tuple[Path, ...] | list[Path] = (), trusted_interfaces: Path | None = None) -> LessonResult:
     """Build the lesson's packages in ``workspace_root``, run its grader, return the result.
 
     ``underlays`` are built workspaces sourced before building and running the
     submission (ROS's overlay mechanism), e.g. reference interface packages an
-    instructor built once for a whole class.
+    instructor built once for a whole class. ``trusted_interfaces`` is a built
+    workspace of the course's own interface packages: when given, the grader
+    imports message types from it instead of from the submission (batch
+    grading: generated code is code the submission controls).
 
     Never raises for problems of the submission (they become the result);
     raises :class:`~course.errors.MissingRequirement` when the machine lacks
@@ -430,7 +337,7 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     build_info: dict[str, Any] = {}
 
     def not_gradable(message: str, hint: str) -> LessonResult:
-        return LessonResult(lesson.id, 0.0, max_score, STATUS_NOT_GRADABLE, [], message, hint, timings,
+        return LessonResult(lesson.id, 0.0, max_score, Status.NOT_GRADABLE, [], message, hint, timings,
                             build_info, str(log_dir))
 
     if lesson.packages:
@@ -444,7 +351,7 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
         if not built.ok:
             return not_gradable(f"colcon build failed for {', '.join(lesson.packages)}:\n{built.excerpt}",
                                 f"fix the build error; full log: {built.log_path}")
-    session = GradingSession(lesson, checks, workspace_root, log_dir, base_env)
+    session = GradingSession(lesson, checks, workspace_root, log_dir, base_env, trusted_interfaces)
     if lesson.packages and "build" in session.checks:
         session.record("build", True, "colcon built " + ", ".join(lesson.packages)
                        + (" (unchanged since the last build)" if build_info.get("cached") else ""),
@@ -464,7 +371,7 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     except NotGradable as exc:
         return not_gradable(exc.message, exc.hint)
     except Exception as exc:  # noqa: BLE001 - any grader crash becomes a visible "grader error"
-        status = STATUS_GRADER_ERROR
+        status = Status.GRADER_ERROR
         trace = traceback.format_exc()
         (log_dir / "grader-error.txt").write_text(trace, encoding="utf-8")
         message = f"the grader failed: {type(exc).__name__}: {exc}"
@@ -472,7 +379,7 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     results = session.ordered_results()
     score = round(sum(r.points for r in results), 3)
     if status is None:
-        status = STATUS_PASSED if score >= max_score else STATUS_FAILED
+        status = Status.PASSED if score >= max_score else Status.FAILED
     result = LessonResult(lesson.id, score, max_score, status, results, message, hint, timings, build_info,
                           str(log_dir), session.plots)
     with contextlib.suppress(OSError):

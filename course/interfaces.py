@@ -33,13 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from course.errors import NotGradable
-
-
-def _package_prefix(package: str, overlay: dict[str, str]) -> Path | None:
-    for prefix in overlay.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
-        if prefix and Path(prefix, "share", "ament_index", "resource_index", "packages", package).is_file():
-            return Path(prefix)
-    return None
+from course.index import package_prefix
 
 
 def _preload(lib_dir: Path, package: str) -> None:
@@ -88,7 +82,7 @@ def workspace_type(overlay: dict[str, str], package: str, kind: str, name: str) 
         NotGradable: the package is not installed in the workspace, or its types do not load.
     """
     module_name = f"{package}.{kind}"
-    prefix = _package_prefix(package, overlay)
+    prefix = package_prefix(package, overlay)
     if prefix is None:
         # Checked before the module cache: a build imported from another workspace would hide it.
         raise NotGradable(f"interface package {package} is not installed in the workspace",

@@ -24,6 +24,10 @@ from typing import Any
 
 #: Our own node is hidden (leading underscore), so "nodes seen" lists stay the learner's.
 GRADER_NODE = "_ros2course_grader"
+#: Seconds a reliable sample may be late: a DDS sample lost on a loaded machine is repaired
+#: after the writer's next heartbeat (Fast DDS's default heartbeat period is 3 s) and holds
+#: back the samples behind it. Graders wait this long only while messages are missing.
+LATE_DELIVERY = 3.5
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,6 +96,18 @@ def _domain_selector() -> Callable[[], int]:
     return select
 
 
+def discovery_range() -> str:
+    """``ROS_AUTOMATIC_DISCOVERY_RANGE`` for the grader and learner nodes: ``LOCALHOST`` (REP 2009, Jazzy).
+
+    Batch grading under a submission uid sets ``ROS2COURSE_DISCOVERY_RANGE=SUBNET``:
+    rmw_fastrtps's LOCALHOST mode forces Fast DDS's shared-memory transport,
+    whose segments a grader and a node of two different users cannot both
+    write; the job's network namespace has only loopback, so its "subnet" is
+    the namespace itself (see :mod:`course.sandbox`).
+    """
+    return os.environ.get("ROS2COURSE_DISCOVERY_RANGE", "LOCALHOST")
+
+
 class RosSession:
     """One check's private ROS graph.
 
@@ -116,7 +132,7 @@ class RosSession:
         """``base`` plus this session's domain id and localhost-only discovery."""
         env = dict(base)
         env["ROS_DOMAIN_ID"] = str(self.domain_id)
-        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery_range()
         env.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy, prints a warning
         env.setdefault("RCUTILS_LOGGING_BUFFERED_STREAM", "1")
         env["PYTHONUNBUFFERED"] = "1"
@@ -130,7 +146,7 @@ class RosSession:
 
         try:
             self.domain_id = self._stack.enter_context(domain_coordinator.domain_id(_domain_selector()))
-            os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
+            os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery_range()
             os.environ.pop("ROS_LOCALHOST_ONLY", None)
             self.context = rclpy.Context()
             rclpy.init(context=self.context, domain_id=self.domain_id,
@@ -251,6 +267,43 @@ class TopicProbe:
     def wait_for_count(self, count: int, timeout: float, abort: Callable[[], bool] | None = None) -> bool:
         """Wait until ``count`` messages arrived (or ``timeout`` seconds)."""
         return wait_until(lambda: len(self._samples) >= count, timeout, abort=abort)
+
+    def observe(self, count: int, period: float, start_timeout: float,
+                abort: Callable[[], bool] | None = None) -> float:
+        """Wait for a stream of ``count`` messages expected every ``period`` seconds; returns seconds waited.
+
+        The window is counted from the first message, not from when the
+        wait began: a node that took long to start on a loaded machine
+        still gets ``count * period`` seconds, plus :data:`LATE_DELIVERY`
+        for a sample that DDS must repair. The first message may take up to
+        ``start_timeout`` seconds. Waiting longer never changes a verdict
+        (rates use the send stamps); it only costs time while messages are
+        missing, and returns as soon as ``count`` arrived.
+        """
+        begin = time.monotonic()
+        if not wait_until(lambda: bool(self._samples), start_timeout, abort=abort):
+            return time.monotonic() - begin
+        with self._lock:
+            first = self._samples[0][0]
+        remaining = first + count * period + LATE_DELIVERY - time.monotonic()
+        self.wait_for_count(count, max(0.0, remaining), abort=abort)
+        return time.monotonic() - begin
+
+    def sent_after(self, wall_time: float) -> list[Any]:
+        """Messages the publisher sent after ``wall_time`` (``time.time()`` seconds), by their send stamps.
+
+        "After a parameter change" must be judged where the message was
+        written: a message sent before the change can arrive after it on a
+        loaded machine (CI saw the old quote "after" a change on arrival times).
+        """
+        with self._lock:
+            return [msg for _, stamp, msg in self._samples if stamp > wall_time]
+
+    def wait_sent_after(self, wall_time: float, count: int, period: float,
+                        abort: Callable[[], bool] | None = None) -> list[Any]:
+        """Wait up to ``count * period + LATE_DELIVERY`` s for ``count`` messages sent after ``wall_time``."""
+        wait_until(lambda: len(self.sent_after(wall_time)) >= count, count * period + LATE_DELIVERY, abort=abort)
+        return self.sent_after(wall_time)
 
     def rate(self, count: int | None = None) -> RateStats | None:
         """Rate over the send stamps of the first ``count`` messages (``ros2 topic hz``'s formula)."""

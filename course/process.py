@@ -32,6 +32,8 @@ from pathlib import Path
 
 import psutil
 
+from course import sandbox
+
 #: Environment variable carrying the per-run marker (see module docstring).
 MARKER_VAR = "ROS2COURSE_RUN_MARKER"
 #: Default cap of captured output per stream, bytes.
@@ -146,11 +148,18 @@ class LearnerProcess:
         wrapped = ["/bin/sh", "-c", "trap '' INT; exec \"$0\" \"$@\"", *argv] if ros_sigint else list(argv)
         # The kernel sends the parent-death signal when the *thread* that forked the child
         # ends (prctl(2)), so it is only safe from the main thread.
-        setpriv = shutil.which("setpriv") if threading.current_thread() is threading.main_thread() else None
-        self.argv = [setpriv, "--pdeathsig", "KILL", *wrapped] if setpriv else wrapped
+        main_thread = threading.current_thread() is threading.main_thread()
         self.name = name
         self.marker = uuid.uuid4().hex
         self.env = {**env, MARKER_VAR: self.marker}
+        # In batch grading the submission's own uid runs it (course.sandbox); the
+        # drop and the parent-death signal are then set by one setpriv.
+        if sandbox.current() is not None:
+            self.argv, self._popen_env = sandbox.command(wrapped, self.env, pdeathsig=main_thread)
+        else:
+            setpriv = shutil.which("setpriv") if main_thread else None
+            self.argv = [setpriv, "--pdeathsig", "KILL", *wrapped] if setpriv else wrapped
+            self._popen_env = self.env
         self.log_dir = log_dir
         self.output_cap = output_cap
         self.cwd = cwd or log_dir
@@ -175,7 +184,7 @@ class LearnerProcess:
         self.log_dir.mkdir(parents=True, exist_ok=True)
         self.started_at = time.monotonic()
         self.popen = subprocess.Popen(  # noqa: S603 - runs the learner's own executable, by design
-            self.argv, env=self.env, cwd=self.cwd, stdin=subprocess.DEVNULL,
+            self.argv, env=self._popen_env, cwd=self.cwd, stdin=subprocess.DEVNULL,
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
         self._drains = [OutputDrain(self.popen.stdout, self.stdout_log, self.output_cap),
                         OutputDrain(self.popen.stderr, self.stderr_log, self.output_cap)]

@@ -14,12 +14,12 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from course.grading import STATUS_PASSED, LessonResult, Plot
+from course.results import LessonResult, Plot, Status
 from course.lesson import Lesson
 from course.progress import Progress
 
-_STATUS_STYLE = {"passed": "bold green", "failed": "bold yellow", "not gradable": "bold red",
-                 "grader error": "bold magenta"}
+_STATUS_STYLE = {Status.PASSED: "bold green", Status.FAILED: "bold yellow", Status.NOT_GRADABLE: "bold red",
+                 Status.GRADER_ERROR: "bold magenta"}
 
 
 def _points(value: float) -> str:
@@ -70,7 +70,7 @@ def render_plot(plot: Plot, console: Console, width: int = 60) -> None:
 def render_result(result: LessonResult, console: Console) -> None:
     """Print the table of checks; under it, for each failed check, observed / expected / hint."""
     style = _STATUS_STYLE.get(result.status, "bold")
-    title = Text.assemble((f"{result.lesson}: ", "bold"), (result.status, style),
+    title = Text.assemble((f"{result.lesson}: ", "bold"), (result.status.value, style),
                           f"  {_points(result.score)}/{_points(result.max_score)} points")
     if result.checks:
         table = Table(title=title, title_justify="left", show_lines=False, expand=False)
@@ -86,7 +86,7 @@ def render_result(result: LessonResult, console: Console) -> None:
     else:
         console.print(title)
     if result.message:
-        console.print(Panel(Text(result.message), title=result.status, border_style=style, expand=False))
+        console.print(Panel(Text(result.message), title=result.status.value, border_style=style, expand=False))
     if result.hint:
         console.print(Text.assemble(("hint: ", "bold cyan"), result.hint))
     skipped = [c for c in result.checks if c.skipped]
@@ -103,7 +103,7 @@ def render_result(result: LessonResult, console: Console) -> None:
                            style="dim"))
     for plot in result.plots:
         render_plot(plot, console)
-    if result.status == STATUS_PASSED:
+    if result.status is Status.PASSED:
         console.print(Text("Full marks. 'ros2course next' moves on.", style="green"))
     if result.log_dir:
         console.print(Text(f"logs: {result.log_dir}", style="dim"))

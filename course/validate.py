@@ -36,7 +36,8 @@ from rich.table import Table
 
 from course.build import dependency_closure, find_packages
 from course.errors import LessonFormatError
-from course.grading import STATUS_PASSED, LessonResult, grade_lesson
+from course.grading import grade_lesson
+from course.results import LessonResult, Status
 from course.lesson import Lesson, content_root, format_validation_error, load_catalog
 from course.starter import copy_starter
 
@@ -217,7 +218,7 @@ class Outcome:
 def _describe(result: LessonResult) -> str:
     failed = ", ".join(result.failed_checks()) or "none"
     text = f"{result.status} {result.score:g}/{result.max_score:g}; failed: {failed}"
-    if result.message and result.status != STATUS_PASSED:
+    if result.message and result.status != Status.PASSED:
         text += f"; {result.message.splitlines()[0]}"
     return text
 
@@ -259,7 +260,7 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
         run_commands(root, lesson.reference.commands)
 
     result, seconds = grade_case(lesson, "reference", reference, underlays=underlays)
-    outcomes.append(Outcome(lesson.id, "reference", result.status == STATUS_PASSED, "full marks",
+    outcomes.append(Outcome(lesson.id, "reference", result.status == Status.PASSED, "full marks",
                             _describe(result), seconds, result))
 
     def starter(root: Path) -> None:
@@ -267,7 +268,7 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
         copy_starter(lesson, root)
 
     result, seconds = grade_case(lesson, "starter", starter, underlays=underlays)
-    outcomes.append(Outcome(lesson.id, "starter", result.status != STATUS_PASSED and result.score < result.max_score,
+    outcomes.append(Outcome(lesson.id, "starter", result.status != Status.PASSED and result.score < result.max_score,
                             "not full marks", _describe(result), seconds, result))
 
     for fixture in load_fixtures(lesson.id):
@@ -282,17 +283,38 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
 
         result, seconds = grade_case(lesson, fixture.name, wrong, underlays=underlays if uses_underlay else ())
         if fixture.expect == "full_marks":
-            ok, expected = result.status == STATUS_PASSED, "full marks"
+            ok, expected = result.status == Status.PASSED, "full marks"
         else:
-            by_id = {c.id: c for c in result.checks}
-            unknown = [c for c in fixture.fails if result.checks and c not in by_id]
-            lost = [c for c in fixture.fails if c in by_id and by_id[c].points < by_id[c].max_points]
-            ok = (not unknown and result.score < result.max_score
-                  and (len(lost) == len(fixture.fails) or not result.checks))
-            expected = "loses the points of " + ", ".join(fixture.fails) + (
-                f" (unknown check ids: {', '.join(unknown)})" if unknown else "")
+            ok, expected = judge_fixture(fixture.fails, result)
         outcomes.append(Outcome(lesson.id, fixture.name, ok, expected, _describe(result), seconds, result))
     return outcomes
+
+
+#: The check a fixture names when its bug is that the workspace does not build (grading.grade_lesson).
+BUILD_CHECK = "build"
+
+
+def judge_fixture(fails: list[str], result: LessonResult) -> tuple[bool, str]:
+    """Whether a wrong solution failed for its stated reason: ``(ok, expected text)``.
+
+    It must lose the points of every check in ``fails`` (ids the grader
+    declares). A submission that is not gradable at all has no checks: that is
+    its stated reason only when ``fails`` names the build (a fixture whose bug
+    is a runtime behaviour must build, or it proves nothing about that check).
+    """
+    expected = "loses the points of " + ", ".join(fails)
+    if not result.checks:
+        if set(fails) == {BUILD_CHECK} and result.status == Status.NOT_GRADABLE:
+            return True, expected
+        runtime = [c for c in fails if c != BUILD_CHECK]
+        return False, expected + (f" (but it was {result.status} before any check ran, so {', '.join(runtime)} "
+                                  "were never judged: the fixture must build)" if runtime else "")
+    by_id = {c.id: c for c in result.checks}
+    unknown = [c for c in fails if c not in by_id]
+    lost = [c for c in fails if c in by_id and by_id[c].points < by_id[c].max_points]
+    if unknown:
+        expected += f" (unknown check ids: {', '.join(unknown)})"
+    return not unknown and result.score < result.max_score and len(lost) == len(fails), expected
 
 
 def _folders(packages: list[str]) -> set[str]:

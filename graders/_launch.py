@@ -1,30 +1,22 @@
-"""Start the nodes of a learner's Python launch file, with or without ``launch_ros``.
+"""Run a learner's Python launch file with the real ``launch_ros``; read it statically for feedback.
 
-Two ways, chosen by whether ``launch`` and ``launch_ros`` import
-(``course.env.probe_requirement("launch")``):
-
-* **run with launch_ros** (a system ROS 2 Jazzy is sourced): the launch file is
-  run for real in a subprocess, the way ``ros2 launch`` runs it (ros2launch's
-  ``launch_a_launch_file``: a ``LaunchService`` including the file through
-  ``AnyLaunchDescriptionSource``), and stopped with SIGINT like Ctrl+C.
-* **read statically** (the PyPI wheels have no ``launch``/``launch_ros``): the
-  file is parsed with :mod:`ast` and never executed. The ``Node(...)`` calls
-  (also ``launch_ros.actions.Node(...)``) inside ``generate_launch_description``
-  are collected with their *literal* keyword arguments (package, executable,
-  name, namespace, parameters given as lists of dicts of literals or literal
-  parameter-file paths, remappings, arguments, ros_arguments, output...).
-  Anything that is not a literal (a variable, a substitution, a function call)
-  is reported as unsupported, never guessed. Each supported node is then
-  started exactly as launch_ros starts it: the executable found like
-  ``ros2 run`` finds it, then ``--ros-args -r __node:=NAME -r __ns:=NS
-  --params-file TMP.yaml -r FROM:=TO`` with one parameters file per dict,
-  written with ``yaml.dump({FQN: {"ros__parameters": {...}}},
-  default_flow_style=False)`` (shared/ROS_ENV.md, "launch_ros Node(...)";
-  launch_ros/actions/node.py).
-
-This is not a launch system of its own: only the documented command line of
-literal ``Node`` actions is reproduced, so a launch file that needs more than
-that says so plainly instead of being graded on a guess.
+* **run**: the launch file is run in a subprocess the way ``ros2 launch`` runs
+  it (ros2launch's ``launch_a_launch_file``: a ``LaunchService`` including the
+  file through ``AnyLaunchDescriptionSource``), started and stopped like every
+  learner process (``GradingSession.launch``: course.process.LearnerProcess,
+  SIGINT like Ctrl+C). ``launch``/``launch_ros`` come from a sourced system ROS
+  or from the source-built underlay (course/underlay.py); the verdict is what
+  that real launch started.
+* **read**: the file is also parsed with :mod:`ast`, never executed, to say in
+  the feedback which ``Node(...)`` actions it holds (their *literal* keyword
+  arguments; anything else is reported as not literal, never guessed). The
+  same reader gives the sas grader the seed's launch parameters.
+* :func:`start_node_action` starts one ``Node`` action with the command line
+  launch_ros gives it (``--ros-args -r __node:=NAME -r __ns:=NS --params-file
+  TMP.yaml -r FROM:=TO``, the parameters file written with ``yaml.dump({FQN:
+  {"ros__parameters": {...}}}, default_flow_style=False)``; shared/ROS_ENV.md,
+  launch_ros/actions/node.py): graders use it for their own harness (a node
+  started with known parameters), never to stand in for a learner's launch file.
 """
 
 from __future__ import annotations
@@ -36,8 +28,6 @@ from pathlib import Path
 from typing import Any
 
 MODE_LAUNCH_ROS = "run with launch_ros"
-MODE_STATIC = ("launch file read statically (launch_ros not installed) "
-               "and executables started as launch_ros would")
 
 #: Keyword arguments of launch_ros ``Node`` that change how the process is started and
 #: that the static reader reproduces.
@@ -343,40 +333,41 @@ def read_launch_file(path: Path) -> StaticLaunch:
 
 @dataclasses.dataclass
 class LaunchRun:
-    """The processes a launch file was started as.
+    """A launch file started with launch_ros.
 
     Attributes:
-        mode: :data:`MODE_LAUNCH_ROS` or :data:`MODE_STATIC`.
-        processes: the launch service process (launch_ros mode) or one process per started node.
-        static: what the static reader found (None in launch_ros mode).
-        started: the nodes started (static mode), in order.
-        problems: why something was not started (static mode), one sentence each.
+        mode: :data:`MODE_LAUNCH_ROS`.
+        processes: the launch service process (one element).
+        static: what the static reader found in the file, for feedback only.
     """
 
     mode: str
     processes: list[Any]
     static: StaticLaunch | None = None
-    started: list[NodeAction] = dataclasses.field(default_factory=list)
-    problems: list[str] = dataclasses.field(default_factory=list)
 
     def any_running(self) -> bool:
         """True while at least one of the processes is still running."""
         return any(p.poll() is None for p in self.processes)
 
     def summary(self) -> str:
-        """One sentence: the mode, then what was started or why not."""
-        if self.mode == MODE_LAUNCH_ROS:
-            return MODE_LAUNCH_ROS
-        details = []
-        if self.started:
-            details.append("started " + "; ".join(n.describe() for n in self.started))
-        if self.problems:
-            details.append("not started: " + "; ".join(self.problems))
-        if not self.started and not self.problems:
-            others = self.static.other_calls if self.static else []
-            details.append("no Node(...) action found in generate_launch_description()"
-                           + (f" (other calls: {', '.join(others[:3])})" if others else ""))
-        return f"{MODE_STATIC}: " + "; ".join(details)
+        """One sentence: how the file was run."""
+        return self.mode
+
+    def file_contents(self) -> str:
+        """What the static reader saw in the file, one sentence (for feedback when launch started too little)."""
+        if self.static is None:
+            return ""
+        parts = []
+        if self.static.nodes:
+            parts.append("its Node actions: " + "; ".join(
+                n.describe() + (f" ({'; '.join(n.unsupported)})" if n.unsupported else "") for n in self.static.nodes))
+        if self.static.problems:
+            parts.append("; ".join(self.static.problems))
+        if not parts:
+            others = self.static.other_calls
+            parts.append("no Node(...) action found in generate_launch_description()"
+                         + (f" (other calls: {', '.join(others[:3])})" if others else ""))
+        return "the file read statically: " + "; ".join(parts)
 
 
 def launch_ros_available() -> bool:
@@ -413,31 +404,29 @@ def start_node_action(s: Any, action: NodeAction, label: str) -> tuple[Any | Non
     return s.launch(path, label, action.ros_args(param_paths)), ""
 
 
-def start_launch_file(s: Any, launch_file: Path, label: str = "launch", force_static: bool = False) -> LaunchRun:
-    """Start ``launch_file`` with launch_ros when it is importable, else as the static reader describes.
+def start_launch_file(s: Any, launch_file: Path, label: str = "launch") -> LaunchRun:
+    """Run ``launch_file`` with launch_ros, as ``ros2 launch`` does; read it statically for feedback.
 
     Args:
-        s: the :class:`~course.grading.GradingSession` (processes are stopped at its end).
+        s: the :class:`~course.grading.GradingSession` (it starts the process,
+            a course.process.LearnerProcess, and stops it at its end).
         launch_file: the launch file (normally the installed one in ``share/<pkg>/launch``).
         label: prefix of the log files.
-        force_static: read statically even where launch_ros is installed (tests).
 
     Returns:
-        a :class:`LaunchRun`; check ``problems`` / ``started`` before waiting for nodes.
+        a :class:`LaunchRun` holding the launch process.
+
+    Raises:
+        MissingRequirement: ``launch``/``launch_ros`` are not installed (``ros2course
+            doctor --fix`` builds them).
     """
-    if not force_static and launch_ros_available():
-        proc = s.launch(Path(sys.executable), label, ["-c", _LAUNCH_SCRIPT, str(launch_file)])
-        return LaunchRun(MODE_LAUNCH_ROS, [proc])
-    static = read_launch_file(launch_file)
-    run = LaunchRun(MODE_STATIC, [], static=static, problems=list(static.problems))
-    for index, action in enumerate(static.nodes):
-        if not action.supported:
-            run.problems.append(f"{action.describe()}: " + "; ".join(action.unsupported))
-            continue
-        proc, reason = start_node_action(s, action, f"{label}.{index}.{action.executable}")
-        if proc is None:
-            run.problems.append(reason)
-        else:
-            run.processes.append(proc)
-            run.started.append(action)
-    return run
+    if not launch_ros_available():
+        from course.env import require  # noqa: PLC0415
+
+        require(["launch"], f"running {launch_file.name}")
+    proc = s.launch(Path(sys.executable), label, ["-c", _LAUNCH_SCRIPT, str(launch_file)])
+    try:
+        static = read_launch_file(launch_file)
+    except Exception:  # noqa: BLE001 - the reader is only feedback; launch itself says what is wrong
+        static = None
+    return LaunchRun(MODE_LAUNCH_ROS, [proc], static=static)

@@ -16,10 +16,11 @@ import re
 import shutil
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 from typing import Any
 
+from course import index as ament_index
+from course import sandbox
 from course.grading import GradingSession
 
 # --- package.xml and setup.cfg ------------------------------------------------------
@@ -132,10 +133,10 @@ def setup_py_arguments(s: GradingSession, folder: Path, timeout: float = 30.0) -
     Returns:
         ``(arguments, problem)``: ``problem`` is a sentence when the script could not be run.
     """
-    with tempfile.TemporaryDirectory(prefix="ros2course-setup-") as tmp:
-        out = Path(tmp) / "setup.json"
+    with sandbox.private_dir("ros2course-setup-") as tmp:
+        out = tmp / "setup.json"
         try:
-            proc = subprocess.run([colcon_python(s), "-c", _SETUP_ARGS, str(out)], cwd=folder, env=s.base_env,
+            proc = sandbox.run([colcon_python(s), "-c", _SETUP_ARGS, str(out)], cwd=folder, env=s.base_env,
                                   stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=timeout,
                                   check=False)
         except subprocess.TimeoutExpired:
@@ -188,14 +189,9 @@ def relative(s: GradingSession, path: Path) -> str:
 def ament_index_packages(s: GradingSession) -> dict[str, str]:
     """Package name -> prefix, as ``ros2 pkg list`` sees them with the workspace sourced.
 
-    ``ament_index_python.get_packages_with_prefixes()`` reads ``AMENT_PREFIX_PATH`` at call time.
+    Read from the overlay itself (:mod:`course.index`), not the process environment.
     """
-    from ament_index_python.packages import get_packages_with_prefixes
-
-    from course.grading import patched_environ
-
-    with patched_environ(s.overlay()):
-        return dict(get_packages_with_prefixes())
+    return {name: str(prefix) for name, prefix in ament_index.packages_with_prefixes(s.overlay()).items()}
 
 
 def run_installed_python(s: GradingSession, code: str, timeout: float = 20.0) -> tuple[dict[str, Any], str]:
@@ -208,12 +204,12 @@ def run_installed_python(s: GradingSession, code: str, timeout: float = 20.0) ->
         ``(result, problem)``: the decoded JSON (``{}`` if none) and, when the run itself
         failed (timeout, crash before writing), a sentence saying so.
     """
-    with tempfile.TemporaryDirectory(prefix="ros2course-import-") as folder:
-        out = Path(folder) / "result.json"
+    with sandbox.private_dir("ros2course-import-") as folder:
+        out = folder / "result.json"
         env = s.overlay()
         env["PYTHONDONTWRITEBYTECODE"] = "1"
         try:
-            proc = subprocess.run([sys.executable, "-c", code, str(out)], cwd=folder, env=env,
+            proc = sandbox.run([sys.executable, "-c", code, str(out)], cwd=folder, env=env,
                                   stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=timeout,
                                   check=False)
         except subprocess.TimeoutExpired:

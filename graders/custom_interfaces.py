@@ -18,6 +18,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from course import sandbox
 from course.grading import Check, GradingSession
 
 PACKAGE = "package_with_interfaces"
@@ -78,7 +79,7 @@ print(json.dumps(out))
 def _inspect_types(s: GradingSession) -> dict:
     """Fields of the generated types, as a fresh ``python3`` in the sourced workspace sees them."""
     try:
-        proc = subprocess.run([sys.executable, "-c", _PROBE], env=s.overlay(), cwd=s.workspace_root,
+        proc = sandbox.run([sys.executable, "-c", _PROBE], env=s.overlay(), cwd=s.workspace_root,
                               capture_output=True, text=True, timeout=60, check=False)
     except subprocess.TimeoutExpired:
         return {"message_error": "importing the generated types took more than 60 s",

@@ -1,11 +1,11 @@
 """Grader for ``launch-files`` (seed ch. 22.7-22.11 and 23; contract in shared/LESSONS.md).
 
 The launch file is taken from where ``ros2 launch`` takes it: the installed
-``share/<pkg>/launch/`` folder. It is run with launch_ros where that is
-installed, else read statically and its literal ``Node`` actions started as
-launch_ros would start them (see :mod:`graders._launch`); every result says
-which of the two happened. Then the graph is watched, black-box: node name,
-topic, rate and message contents.
+``share/<pkg>/launch/`` folder, and run with the real launch_ros as ``ros2
+launch`` runs it (see :mod:`graders._launch`; on the PyPI install launch_ros
+comes from the source-built underlay). Then the graph is watched, black-box:
+node name, topic, rate and message contents. The file is also read statically,
+only to say which ``Node(...)`` actions it holds when launch started too little.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from __future__ import annotations
 import time
 
 from course.grading import Check, GradingSession
+from course.probes import LATE_DELIVERY
 from graders._common import process_state, record_rate
 from graders._launch import MODE_LAUNCH_ROS, LaunchRun, describe_launch_folder, start_launch_file
 from graders._quotes import (EXECUTABLE, LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER, LAUNCH_QUOTE,
@@ -67,29 +68,22 @@ def _find_launch_file(s: GradingSession):
     return None
 
 
-def _record_start(s: GradingSession, run: LaunchRun, node_found: bool | None = None) -> bool:
-    """Record ``launch_starts``; True when the launch file started the configurable publisher.
+def _record_start(s: GradingSession, run: LaunchRun, node_found: bool) -> bool:
+    """Record ``launch_starts`` after waiting for the node; True when launch started the configurable publisher.
 
-    Static mode: judged on the Node actions read and started (before waiting).
-    launch_ros mode: judged after waiting for the node (``node_found``), on launch's
-    own "process started" report for the executable or on the node being there.
+    Judged on launch's own "process started" report for the executable, or on the node being there.
     """
     expected = f"the launch file starts {PACKAGE}/{EXECUTABLE}"
-    if run.mode == MODE_LAUNCH_ROS:
-        proc = run.processes[0]
-        output = proc.stdout() + "\n" + proc.stderr()
-        reported = f"[{EXECUTABLE}-" in output and "process started" in output
-        if reported or node_found:
-            return s.record("launch_starts", True, f"{MODE_LAUNCH_ROS}: launch started {EXECUTABLE}", expected)
-        tail = " | ".join(output.strip().splitlines()[-3:])
-        return s.record("launch_starts", False, f"{MODE_LAUNCH_ROS}: launch did not report starting {EXECUTABLE}; "
-                        f"{process_state(proc)}" + (f"; last output: {tail}" if tail else ""), expected)
-    ours = [n for n in run.started if n.package == PACKAGE and n.executable == EXECUTABLE]
-    unsupported = any("literal" in p or "not supported" in p for p in run.problems)
-    return s.record("launch_starts", bool(ours), run.summary(), expected,
-                    "the static reader only understands Node(...) with literal keyword values (strings, numbers, "
-                    "lists, dicts); write them out, or run the check where a system ROS 2 with launch_ros is sourced"
-                    if unsupported and not ours else None)
+    proc = run.processes[0]
+    output = proc.stdout() + "\n" + proc.stderr()
+    reported = f"[{EXECUTABLE}-" in output and "process started" in output
+    if reported or node_found:
+        return s.record("launch_starts", True, f"{MODE_LAUNCH_ROS}: launch started {EXECUTABLE}", expected)
+    tail = " | ".join(output.strip().splitlines()[-3:])
+    contents = run.file_contents()
+    return s.record("launch_starts", False, f"{MODE_LAUNCH_ROS}: launch did not report starting {EXECUTABLE}; "
+                    f"{process_state(proc)}" + (f"; last output: {tail}" if tail else "")
+                    + (f"; {contents}" if contents else ""), expected)
 
 
 def grade(s: GradingSession) -> None:
@@ -100,12 +94,7 @@ def grade(s: GradingSession) -> None:
     probe = s.ros.topic(f"/{LAUNCH_TOPIC}", amazing_quote(s))
     with s.phase("start"):
         run = start_launch_file(s, launch_file)
-    mode = MODE_LAUNCH_ROS if run.mode == MODE_LAUNCH_ROS else "read statically"
-    if run.mode != MODE_LAUNCH_ROS:
-        _record_start(s, run)
-        if not run.processes:
-            s.skip_remaining("the launch file started nothing")
-            return
+    mode = MODE_LAUNCH_ROS
     began = time.monotonic()
     first_other: list[float] = []
 
@@ -119,8 +108,7 @@ def grade(s: GradingSession) -> None:
 
     with s.phase("start"):
         found = s.ros.wait_for_node(LAUNCH_NODE, NODE_TIMEOUT, abort=give_up)
-    if run.mode == MODE_LAUNCH_ROS:
-        _record_start(s, run, found)
+    _record_start(s, run, found)
     seen = ", ".join(s.ros.node_names()) or "none"
     states = "; ".join(f"{p.name}: {process_state(p)}" for p in run.processes)
     s.record("node_name", found, f"node /{LAUNCH_NODE} is running ({mode})" if found else
@@ -129,9 +117,8 @@ def grade(s: GradingSession) -> None:
     if not run.any_running():
         s.skip_remaining(f"nothing the launch file started is running: {states}")
         return
-    timeout = SAMPLES * LAUNCH_PERIOD + 4.0
     with s.phase("observe"):
-        probe.wait_for_count(SAMPLES, timeout=timeout, abort=lambda: not run.any_running())
+        timeout = probe.observe(SAMPLES, LAUNCH_PERIOD, 4.0 + LATE_DELIVERY, abort=lambda: not run.any_running())
     samples = probe.samples()
     if not samples:
         s.record("topic", False, f"no message on /{LAUNCH_TOPIC} within {timeout:.1f} s ({mode}); "

@@ -25,7 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from course.grading import Check, GradingSession
-from course.probes import parameter_client, wait_future, wait_until
+from course.probes import LATE_DELIVERY, parameter_client, wait_future
 from graders._common import process_state
 from graders._launch import NodeAction, flatten_parameters, start_node_action
 from graders._quotes import (EXECUTABLE, LAUNCH_NODE, LAUNCH_PARAMETERS, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER,
@@ -132,7 +132,7 @@ def _start_node(s: GradingSession, probe) -> Any | None:
     with s.phase("start"):
         found = s.ros.wait_for_node(LAUNCH_NODE, 10.0, abort=lambda: proc.poll() is not None)
         if found:
-            probe.wait_for_count(1, timeout=3.0, abort=lambda: proc.poll() is not None)
+            probe.wait_for_count(1, timeout=3.0 + LATE_DELIVERY, abort=lambda: proc.poll() is not None)
     samples = probe.samples()
     if not found or not samples:
         seen = ", ".join(s.ros.node_names()) or "none"
@@ -208,7 +208,7 @@ def _check_types(s: GradingSession, params: dict[str, Any] | None, node: dict[st
 
 def _load(s: GradingSession, client, path: Path, params: dict[str, Any] | None,
           node: dict[str, tuple[str, Any, bool]]) -> float | None:
-    """``load``: ``ros2 param load`` for this node; returns the time the answer came (or None)."""
+    """``load``: ``ros2 param load`` for this node; returns the wall-clock time (time.time() s) the answer came, or None."""
     from rclpy.parameter import parameter_dict_from_yaml_file  # noqa: PLC0415
 
     expected = "every parameter set successfully (read-only ones like start_type_description_service excepted)"
@@ -226,7 +226,7 @@ def _load(s: GradingSession, client, path: Path, params: dict[str, Any] | None,
         return None
     messages = list(loaded.values())
     response = wait_future(client.set_parameters(messages), 5.0)
-    done = time.monotonic()
+    done = time.time()  # wall clock, as the send stamps the next messages are judged by
     lines, failed = [], []
     for message, result in zip(messages, response.results):
         text = f"Set parameter {message.name} {'successful' if result.successful else 'failed'}"
@@ -252,13 +252,8 @@ def _observe(s: GradingSession, probe, proc, params: dict[str, Any] | None, load
         s.record("observed_quote", False, "not checked: nothing was loaded", expected)
         return
 
-    def after() -> list:
-        return [m for t, m in probe.samples() if t > loaded_at]
-
     with s.phase("observe"):
-        wait_until(lambda: len(after()) >= NEXT_MESSAGES, timeout=NEXT_MESSAGES * LAUNCH_PERIOD + 2.0,
-                   abort=lambda: proc.poll() is not None)
-    later = after()
+        later = probe.wait_sent_after(loaded_at, NEXT_MESSAGES, LAUNCH_PERIOD, abort=lambda: proc.poll() is not None)
     if not later:
         s.record("observed_quote", False, f"no message on /{LAUNCH_TOPIC} after the load; {process_state(proc)}",
                  expected)

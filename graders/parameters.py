@@ -11,7 +11,7 @@ from __future__ import annotations
 import time
 
 from course.grading import Check, GradingSession
-from course.probes import parameter_client, wait_future, wait_until
+from course.probes import parameter_client, wait_future
 from graders._common import process_state, record_rate, record_sigint_exit, require_executable, wait_for_node
 from graders._quotes import (DEFAULTS, EXECUTABLE, NODE, PACKAGE, amazing_quote, parameter_value,
                              short, topics_seen)
@@ -28,6 +28,8 @@ RUNTIME_QUOTE = "You got a good-guy heart. You can't do anything about it, that'
 RUNTIME_PHILOSOPHER = "Zak"
 #: A changed parameter must show within this many messages (one may already be on its way: seed ch. 24.5).
 RUNTIME_MESSAGES = 2
+#: Seconds from a run's start to its first message (a Python node starts in about 1 s; a loaded machine is slower).
+START_TIMEOUT = 10.0
 
 #: Seconds of observation the contract needs: the defaults run (messages, then the runtime
 #: change); the run with -p topic_name/period overlaps it in a graph of its own.
@@ -103,10 +105,9 @@ def _defaults_text() -> str:
 
 def _check_default_messages(s: GradingSession, probe, proc, began: float) -> None:
     """``default_messages`` and ``default_rate`` from the messages on /amazing_quote."""
-    timeout = DEFAULT_SAMPLES * DEFAULT_PERIOD + 3.0
     with s.phase("observe"):
-        probe.wait_for_count(DEFAULT_SAMPLES, timeout=max(0.5, timeout - (time.monotonic() - began)),
-                             abort=lambda: proc.poll() is not None)
+        timeout = probe.observe(DEFAULT_SAMPLES, DEFAULT_PERIOD, max(0.5, START_TIMEOUT - (time.monotonic() - began)),
+                                abort=lambda: proc.poll() is not None)
     samples = probe.samples()
     expected = (f"AmazingQuote messages on {DEFAULT_TOPIC} with quote {DEFAULTS['quote']!r} "
                 f"and philosopher_name {DEFAULTS['philosopher_name']!r}")
@@ -141,15 +142,10 @@ def _check_runtime_change(s: GradingSession, client, probe, proc) -> None:
     if failed:
         s.record("runtime_change", False, "set_parameters failed: " + "; ".join(failed), expected)
         return
-    changed_at = time.monotonic()
-
-    def after() -> list:
-        return [m for t, m in probe.samples() if t > changed_at]
-
+    changed_at = time.time()  # the node applied the change before it answered: later send stamps are after it
     with s.phase("observe"):
-        wait_until(lambda: len(after()) >= RUNTIME_MESSAGES, timeout=RUNTIME_MESSAGES * DEFAULT_PERIOD + 2.0,
-                   abort=lambda: proc.poll() is not None)
-    later = after()
+        later = probe.wait_sent_after(changed_at, RUNTIME_MESSAGES, DEFAULT_PERIOD,
+                                      abort=lambda: proc.poll() is not None)
     if not later:
         s.record("runtime_change", False, f"no message after the change; {process_state(proc)}", expected)
         return
@@ -181,10 +177,10 @@ def _start_configured_run(s: GradingSession, path):
 def _check_configured_run(s: GradingSession, graph, proc, probe, began: float) -> None:
     """``configured_topic`` and ``configured_rate`` from the second instance's messages."""
     shown = f"-p topic_name:={CONFIGURED_TOPIC} -p period:={CONFIGURED_PERIOD}"
-    timeout = CONFIGURED_SAMPLES * CONFIGURED_PERIOD + 5.0
     with s.phase("observe"):
-        probe.wait_for_count(CONFIGURED_SAMPLES, timeout=max(0.5, timeout - (time.monotonic() - began)),
-                             abort=lambda: proc.poll() is not None)
+        probe.observe(CONFIGURED_SAMPLES, CONFIGURED_PERIOD, max(0.5, START_TIMEOUT - (time.monotonic() - began)),
+                      abort=lambda: proc.poll() is not None)
+    timeout = time.monotonic() - began
     samples = probe.samples()
     expected_topic = f"AmazingQuote messages on /{CONFIGURED_TOPIC} when started with {shown}"
     if not samples:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 
 from course.grading import Check, GradingSession
-from course.probes import stamp_seconds, wait_until
+from course.probes import LATE_DELIVERY, stamp_seconds, wait_until
 from graders._common import process_state, record_rate, record_sigint_exit, require_executable, wait_for_node
 
 PACKAGE = "python_package_with_a_node"
@@ -22,48 +22,81 @@ WINDOW = SAMPLES * PERIOD
 LOG = re.compile(r"^Printed (-?\d+) times\.$")
 INFO = 20  # rcl_interfaces/msg/Log.INFO
 
-CHECKS = [
-    Check("build", "The package builds with colcon", 1),
-    Check("depends_rclpy", "package.xml declares the rclpy dependency", 1,
-          "add <depend>rclpy</depend> to package.xml (seed ch. 12.1)"),
-    Check("executable", "ros2 run finds print_forever_node", 2,
-          "add 'print_forever_node = python_package_with_a_node.print_forever_node:main' to console_scripts in setup.py, then colcon build"),
-    Check("node_name", "A node named print_forever starts", 2,
-          "pass 'print_forever' to super().__init__() in your Node subclass"),
-    Check("log_format", "It logs 'Printed N times.' on /rosout", 2,
-          "use self.get_logger().info(f'Printed {self.print_count} times.') in the timer callback; print() does not reach /rosout"),
-    Check("counts_from_zero", "N counts 0, 1, 2, ...", 2,
-          "start the counter at 0 in __init__ and add 1 after each log"),
-    Check("rate", "One record every 0.5 s (2 Hz)", 2,
-          "create the timer with create_timer(0.5, self.timer_callback)"),
-    Check("sigint_exit", "Ctrl+C ends it with exit code 0 and no traceback", 2,
-          "in Jazzy rclpy.spin() may raise ExternalShutdownException on Ctrl+C: catch it together with KeyboardInterrupt"),
-]
 
 
-def _check_package_xml(s: GradingSession) -> None:
+def make_checks(client_library: str = "rclpy", package: str = PACKAGE, node: str = NODE) -> list[Check]:
+    """The print-forever checks for a node in ``package`` named ``node`` written with ``client_library``.
+
+    The same black-box checks grade the Python node (``print-forever-node``) and
+    its C++ twin (``cpp-node``, graders/cpp_node.py; shared/LESSONS.md).
+    """
+    python = client_library == "rclpy"
+    return [
+        Check("build", "The package builds with colcon", 1),
+        Check("depends_rclpy" if python else "depends_client", f"package.xml declares the {client_library} dependency",
+              1, f"add <depend>{client_library}</depend> to package.xml"
+              + (" (seed ch. 12.1)" if python else " (seed ch. 25)")),
+        Check("executable", "ros2 run finds print_forever_node", 2,
+              f"add 'print_forever_node = {package}.print_forever_node:main' to console_scripts in setup.py, "
+              "then colcon build" if python else
+              "add_executable(print_forever_node src/print_forever_node.cpp) and install(TARGETS print_forever_node "
+              "DESTINATION lib/${PROJECT_NAME}) in CMakeLists.txt, then colcon build"),
+        Check("node_name", f"A node named {node} starts", 2,
+              f"pass '{node}' to super().__init__() in your Node subclass" if python else
+              f"pass \"{node}\" to the rclcpp::Node constructor"),
+        Check("log_format", "It logs 'Printed N times.' on /rosout", 2,
+              "use self.get_logger().info(f'Printed {self.print_count} times.') in the timer callback; "
+              "print() does not reach /rosout" if python else
+              "use RCLCPP_INFO(get_logger(), \"Printed %d times.\", count_) in the timer callback; "
+              "std::cout does not reach /rosout"),
+        Check("counts_from_zero", "N counts 0, 1, 2, ...", 2,
+              "start the counter at 0 in __init__ and add 1 after each log" if python else
+              "start the counter at 0 in the constructor and add 1 after each log"),
+        Check("rate", "One record every 0.5 s (2 Hz)", 2,
+              "create the timer with create_timer(0.5, self.timer_callback)" if python else
+              "create the timer with create_wall_timer(500ms, ...)"),
+        Check("sigint_exit", "Ctrl+C ends it with exit code 0 and no traceback", 2,
+              "in Jazzy rclpy.spin() may raise ExternalShutdownException on Ctrl+C: catch it together with "
+              "KeyboardInterrupt" if python else
+              "let rclcpp::spin return on Ctrl+C, then call rclcpp::shutdown() and return 0"),
+    ]
+
+
+CHECKS = make_checks()
+
+
+def _check_package_xml(s: GradingSession, check: str, package: str, client_library: str) -> None:
     from course.build import find_packages  # noqa: PLC0415
 
-    found = find_packages(s.workspace_root / "src").get(PACKAGE)
+    found = find_packages(s.workspace_root / "src").get(package)
     if found is None:
-        s.record("depends_rclpy", False, f"no package {PACKAGE} in src/", "<depend>rclpy</depend> in package.xml")
+        s.record(check, False, f"no package {package} in src/", f"<depend>{client_library}</depend> in package.xml")
         return
     pkg = found[1]
     deps = {d.name for d in (*pkg.exec_depends, *pkg.build_depends)}
-    s.record("depends_rclpy", "rclpy" in deps,
+    s.record(check, client_library in deps,
              f"package.xml run dependencies: {', '.join(sorted(deps)) or 'none'}",
-             "rclpy among them (<depend>rclpy</depend>)")
+             f"{client_library} among them (<depend>{client_library}</depend>)")
 
 
 def grade(s: GradingSession) -> None:
     """Run print_forever_node, read its /rosout records, then Ctrl+C it."""
-    _check_package_xml(s)
-    path = require_executable(s, "executable", PACKAGE, EXECUTABLE)
+    grade_node(s, PACKAGE, NODE, "rclpy")
+
+
+def grade_node(s: GradingSession, package: str, node: str, client_library: str) -> None:
+    """The print-forever checks (:func:`make_checks`) of ``package``'s ``print_forever_node`` named ``node``.
+
+    Black-box: the node's /rosout records and exit; the language only shows in
+    the ``package.xml`` dependency checked (``rclpy`` or ``rclcpp``).
+    """
+    _check_package_xml(s, "depends_rclpy" if client_library == "rclpy" else "depends_client", package, client_library)
+    path = require_executable(s, "executable", package, EXECUTABLE)
     if path is None:
         return
     rosout = s.ros.rosout()
     proc = s.launch(path, EXECUTABLE)
-    if not wait_for_node(s, "node_name", proc, NODE):
+    if not wait_for_node(s, "node_name", proc, node):
         if proc.poll() is not None:
             s.skip_remaining(process_state(proc))
             record_sigint_exit(s, "sigint_exit", proc)
@@ -73,7 +106,7 @@ def grade(s: GradingSession) -> None:
         return [r for r in rosout.records(level=INFO) if LOG.match(r.msg)]
 
     with s.phase("observe"):
-        wait_until(lambda: len(counted()) >= SAMPLES, timeout=SAMPLES * PERIOD + 3.0,
+        wait_until(lambda: len(counted()) >= SAMPLES, timeout=SAMPLES * PERIOD + 3.0 + LATE_DELIVERY,
                    abort=lambda: proc.poll() is not None)
     records = counted()
     everything = rosout.records()

@@ -33,6 +33,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from course.env import foreign_python_prefix
 from course.grading import Check, GradingSession
 from course.probes import wait_until
 from graders._common import process_state, record_sigint_exit, wait_for_node
@@ -637,15 +638,23 @@ def grade(s: GradingSession) -> None:
     s.record("executable", driver_path is not None, observed,
              f"ros2 run {PACKAGE} {DRIVER_EXECUTABLE} finds install/{PACKAGE}/lib/{PACKAGE}/{DRIVER_EXECUTABLE}")
     client_path, observed = s.find_executable(PACKAGE, CLIENT_EXECUTABLE)
+    if client_path is None:  # the seed installs it as joint_interface_example.py (LESSONS.md: both names)
+        with_suffix, also = s.find_executable(PACKAGE, CLIENT_EXECUTABLE + ".py")
+        if with_suffix is not None:
+            client_path, observed = with_suffix, also
     s.record("client_executable", client_path is not None, observed,
-             f"ros2 run {PACKAGE} {CLIENT_EXECUTABLE} finds install/{PACKAGE}/lib/{PACKAGE}/{CLIENT_EXECUTABLE}")
+             f"ros2 run {PACKAGE} {CLIENT_EXECUTABLE} (or {CLIENT_EXECUTABLE}.py) finds "
+             f"install/{PACKAGE}/lib/{PACKAGE}/{CLIENT_EXECUTABLE}")
     client = stand_in = None
     if client_path is not None:
         # The client starts now, in a graph of its own, and waits for a driver there while the real
         # driver is graded: its start-up overlaps the driver's, and the two never see each other.
         graph = s.new_graph()
         stand_in = _StandInDriver(graph)
-        client = s.launch(client_path, CLIENT_EXECUTABLE, graph=graph)
+        # the seed's #!/usr/bin/python3 is the system Python on a pip install: use ours (course.env)
+        interpreter = foreign_python_prefix(client_path)
+        client = (s.launch(Path(interpreter[0]), CLIENT_EXECUTABLE, [str(client_path)], graph=graph) if interpreter
+                  else s.launch(client_path, CLIENT_EXECUTABLE, graph=graph))
     else:
         _skip(s, CLIENT_CHECKS, f"there is no {CLIENT_EXECUTABLE} executable to run")
     if driver_path is not None:

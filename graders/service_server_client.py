@@ -24,7 +24,7 @@ import re
 import time
 
 from course.grading import Check, GradingSession
-from course.probes import wait_until
+from course.probes import LATE_DELIVERY, wait_until
 from graders._common import RATE_TOLERANCE, process_state, record_rate, record_sigint_exit
 from graders._quote_tools import (
     DeferredServer,
@@ -55,7 +55,7 @@ LATE_ANSWER = 1.0  # seconds: twice the call period, so a blocked client halves 
 #: DDS sample lost on a loaded machine is repaired after the writer's next heartbeat (Fast DDS
 #: default period: 3 s) and holds back the samples after it. Rates use the send stamps, so
 #: waiting longer never changes a verdict; it only runs when calls are missing.
-LATE_DELIVERY_GRACE = 3.0
+LATE_DELIVERY_GRACE = LATE_DELIVERY
 #: A log record saying the client gave up on a late answer (the seed's client: "Service Future
 #: canceled. The Node took too long to process the service call...").
 CANCELLED = re.compile(r"cancel|too long|took more than|timed? ?out", re.IGNORECASE)

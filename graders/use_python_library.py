@@ -12,7 +12,7 @@ Only ``package.xml`` is read, for the dependency on the library the contract nam
 from __future__ import annotations
 
 from course.grading import Check, GradingSession
-from course.probes import stamp_seconds, wait_until
+from course.probes import LATE_DELIVERY, stamp_seconds, wait_until
 from graders._common import process_state, record_rate, record_sigint_exit, wait_for_node
 from graders._packaging import (
     classify,
@@ -109,7 +109,7 @@ def grade(s: GradingSession) -> None:
         return (count >= SAMPLES and (names >= SAMPLES or count > SAMPLES)) or (count == 0 and names >= SAMPLES)
 
     with s.phase("observe"):
-        wait_until(enough, timeout=SAMPLES * PERIOD + 3.0, abort=lambda: proc.poll() is not None)
+        wait_until(enough, timeout=SAMPLES * PERIOD + 3.0 + LATE_DELIVERY, abort=lambda: proc.poll() is not None)
     records = squares()
     if not records:
         everything = rosout.records()

@@ -5,9 +5,12 @@ Looks at the folder and asks colcon and bash, as the learner's terminal would.
 
 from __future__ import annotations
 
+import ast
+import re
 import subprocess
 from pathlib import Path
 
+from course import sandbox
 from course.build import colcon_command, overlay_env
 from course.errors import NotGradable
 from course.grading import Check, GradingSession
@@ -19,8 +22,8 @@ CHECKS = [
     Check("src_folder", "The workspace has a src/ folder", 1, "mkdir -p ros2_tutorial_workspace/src"),
     Check("colcon_reads", "colcon can read the workspace", 1,
           "run 'colcon list' in the workspace and fix what it complains about"),
-    Check("built", "colcon build was run (build/, install/, log/)", 2,
-          "cd into the workspace folder (not src/) and run 'colcon build'"),
+    Check("built", "colcon build ran and succeeded (build/, install/, log/)", 2,
+          "cd into the workspace folder (not src/) and run 'colcon build' until it reports no failed package"),
     Check("sourceable", "install/setup.bash sources cleanly and adds the workspace", 1,
           "run 'source install/setup.bash' from the workspace folder; rebuild if it fails"),
 ]
@@ -35,6 +38,32 @@ def _made_by_colcon(folder: Path) -> bool:
     return folder.is_dir() and any(entry.name not in ("ros2course", ".ros2course") for entry in folder.iterdir())
 
 
+#: One line of colcon's ``log/<verb>_<time>/events.log``: ``[time] (package) JobEnded: {'identifier': ..., 'rc': N}``
+#: (colcon_core's log event handler writes each event's repr).
+_JOB_ENDED = re.compile(r"\((?P<package>[^)]*)\) JobEnded: (?P<data>\{.*\})\s*$")
+
+
+def failed_packages(events: Path) -> list[str]:
+    """``"name (exit code N)"`` for each package whose job in colcon's ``events.log`` ended with rc != 0."""
+    try:
+        text = events.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return []
+    failed = []
+    for line in text.splitlines():
+        match = _JOB_ENDED.search(line)
+        if not match:
+            continue
+        try:
+            data = ast.literal_eval(match.group("data"))
+        except (ValueError, SyntaxError):
+            continue
+        rc = data.get("rc") if isinstance(data, dict) else None
+        if rc not in (0, None):
+            failed.append(f"{match.group('package')} (exit code {rc})")
+    return failed
+
+
 def grade(s: GradingSession) -> None:
     """Inspect the workspace folder, then ask colcon and bash about it."""
     root = s.workspace_root
@@ -45,8 +74,9 @@ def grade(s: GradingSession) -> None:
     s.record("src_folder", has_src, f"{root} holds: {entries}", "a src/ folder for the packages")
 
     # --log-base /dev/null: 'colcon list' must not create log/ itself (colcon's documented way to disable logs)
-    proc = subprocess.run([*colcon_command(s.base_env), "--log-base", "/dev/null", "list"], cwd=root, env=s.base_env, capture_output=True,
-                          text=True, timeout=120, check=False, stdin=subprocess.DEVNULL)
+    # colcon list runs each setup.py: the submission's code (course.sandbox)
+    proc = sandbox.run([*colcon_command(s.base_env), "--log-base", "/dev/null", "list"], cwd=root, env=s.base_env,
+                       capture_output=True, text=True, timeout=120, check=False, stdin=subprocess.DEVNULL)
     packages = proc.stdout.strip().splitlines()
     s.record("colcon_reads", proc.returncode == 0,
              f"'colcon list' exited {proc.returncode}" + (f", {len(packages)} package(s)" if proc.returncode == 0
@@ -58,8 +88,16 @@ def grade(s: GradingSession) -> None:
     made["log"] = (root / "log" / "latest_build").exists() or any((root / "log").glob("build_*"))
     setup = (root / "install" / "setup.bash").is_file()
     missing = [name + "/" for name, ok in made.items() if not ok] + ([] if setup else ["install/setup.bash"])
-    s.record("built", not missing, "missing: " + ", ".join(missing) if missing else
-             "build/, install/, log/ and install/setup.bash exist", "what 'colcon build' creates in the workspace folder")
+    failed = failed_packages(root / "log" / "latest_build" / "events.log")
+    if missing:
+        observed = "missing: " + ", ".join(missing)
+    elif failed:
+        observed = ("build/, install/, log/ exist, but the last colcon build failed for " + ", ".join(failed)
+                    + " (see log/latest_build/)")
+    else:
+        observed = "build/, install/, log/ and install/setup.bash exist; the last colcon build succeeded"
+    s.record("built", not missing and not failed, observed,
+             "what a successful 'colcon build' creates in the workspace folder (LESSONS.md: the build succeeds)")
     if not setup:
         s.skip_remaining("install/setup.bash does not exist")
         return

@@ -8,6 +8,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 import shutil
 import tarfile
 import xml.etree.ElementTree as ET
@@ -20,6 +21,7 @@ from course import gradebook
 from course.batch import run_batch
 from course.batch_archive import Submission, discover, prepare
 from course.errors import CourseError, NotGradable
+from course.results import LessonResult
 from tests.conftest import SOLUTIONS
 
 PKG = "python_package_with_a_node"
@@ -97,6 +99,7 @@ def test_unreadable_and_unsafe_archives_are_not_gradable(tmp_path: Path) -> None
 # --- gradebook exports ----------------------------------------------------------------------------
 
 def _record(student: str, status: str, checks: list[tuple[str, float, float, bool]], message: str = "") -> dict:
+    """One ``results.jsonl`` line, as a batch writes it."""
     out = {"student": student, "lesson": "print-forever-node", "status": status,
            "score": sum(c[1] for c in checks), "max_score": 4.0,
            "checks": [{"id": i, "name": f"check {i}", "points": p, "max_points": m, "passed": ok,
@@ -107,12 +110,21 @@ def _record(student: str, status: str, checks: list[tuple[str, float, float, boo
     return out
 
 
-RECORDS = [
+RECORDS = [LessonResult.from_record(r) for r in (
     _record("alice", "passed", [("a", 2, 2, True), ("b", 2, 2, True)]),
     _record("bob", "failed", [("a", 2, 2, True), ("b", 0, 2, False)]),
     _record("carol", "grader error", [("a", 0, 2, False), ("b", 0, 2, False)], "the grader failed: boom"),
     _record("dave", "not gradable", [], "colcon build failed\nline 2"),
-]
+)]
+
+
+def test_a_record_round_trips_through_results_jsonl() -> None:
+    """from_record(to_record(x)) == x, and the check --json shape is unchanged."""
+    for result in RECORDS:
+        assert LessonResult.from_record(json.loads(json.dumps(result.to_record()))) == result
+    shape = RECORDS[1].to_json()
+    assert list(shape) == ["lesson", "score", "max_score", "status", "checks"] and shape["status"] == "failed"
+    assert list(shape["checks"][0]) == ["id", "name", "points", "max_points", "passed", "observed", "expected", "hint"]
 
 
 def test_gradebook_csv_columns() -> None:
@@ -130,10 +142,10 @@ def test_jsonl_truncated_last_line(tmp_path: Path) -> None:
     path = tmp_path / "results.jsonl"
     gradebook.append_record(path, RECORDS[0])
     with open(path, "a", encoding="utf-8") as handle:
-        handle.write(json.dumps(RECORDS[1])[:40])  # a batch killed mid-write
-    assert [r["student"] for r in gradebook.read_results(path)] == ["alice"]
+        handle.write(json.dumps(RECORDS[1].to_record())[:40])  # a batch killed mid-write
+    assert [r.student for r in gradebook.read_results(path)] == ["alice"]
     gradebook.append_record(path, RECORDS[2])
-    assert [r["student"] for r in gradebook.read_results(path)] == ["alice", "carol"]
+    assert [r.student for r in gradebook.read_results(path)] == ["alice", "carol"]
     lines = path.read_text().splitlines()
     assert json.loads(lines[-1])["student"] == "carol"
 
@@ -178,9 +190,9 @@ def test_resume_skips_finished_and_tolerates_truncated_line(tmp_path: Path) -> N
     report = run_batch(subs, ["workspace-setup"], out, jobs=1, resume=True)
     assert report.skipped == 1 and report.graded_now == 1
     records = gradebook.read_results(out / "results.jsonl")
-    assert [r["student"] for r in records] == ["alice", "bob"]
-    assert records[0] == earlier  # untouched
-    assert records[1]["status"] == "failed" and records[1]["max_score"] == 5.0
+    assert [r.student for r in records] == ["alice", "bob"]
+    assert records[0] == LessonResult.from_record(earlier)  # untouched
+    assert records[1].status == "failed" and records[1].max_score == 5.0
     rows = list(csv.DictReader(open(out / "gradebook.csv", encoding="utf-8")))
     assert [r["student"] for r in rows] == ["alice", "bob"]
     assert (out / "bob" / "results.json").is_file() and (out / "bob" / "logs").is_dir()
@@ -218,3 +230,103 @@ def test_cli_grade_and_gradescope(tmp_path: Path, cli) -> None:
     assert data["score"] >= 1 and [t["name"] for t in data["tests"]][0] == "The workspace has a src/ folder"
     proc = cli("gradescope", "--lesson", "no-such-lesson", "--submission", str(upload), "--results", str(results))
     assert proc.returncode == 5 and "Traceback" not in proc.stderr
+
+
+# --- isolation (course.sandbox) --------------------------------------------------------------
+
+
+def test_command_is_unchanged_without_a_submission_identity() -> None:
+    from course import sandbox
+
+    assert sandbox.current() is None
+    assert sandbox.command(["/bin/true"], {"A": "1"}) == (["/bin/true"], {"A": "1"})
+
+
+def test_command_drops_to_the_identity_and_keeps_the_learner_env_away_from_root() -> None:
+    """The root side gets only PATH; LD_PRELOAD & co. reach the program only after the uid drop."""
+    from course import sandbox
+
+    sandbox.configure(sandbox.SubmissionIdentity(1_900_000_123, 1_900_000_123, 99, "/sys/fs/cgroup/pids/x/cgroup.procs"))
+    try:
+        argv, env = sandbox.command(["/bin/prog", "--x"], {"LD_PRELOAD": "/ws/evil.so", "-bad": "1", "ROS_DOMAIN_ID": "7"},
+                                    pdeathsig=True)
+    finally:
+        sandbox.configure(None)
+    assert "LD_PRELOAD" not in env and set(env) <= {"PATH", "LANG"}
+    drop = argv.index(next(a for a in argv if a.endswith("setpriv")))
+    env_i = argv.index("-i")
+    assert argv[drop:env_i] == [argv[drop], "--reuid=1900000123", "--regid=1900000123", "--clear-groups",
+                                "--no-new-privs", "--inh-caps=-all", "--bounding-set=-all", "--pdeathsig", "KILL", "--",
+                                "/usr/bin/env"]
+    assert "--nproc=99:99" in argv[:drop] and "/sys/fs/cgroup/pids/x/cgroup.procs" in argv[:drop]
+    assert argv[env_i + 1:] == ["LD_PRELOAD=/ws/evil.so", "ROS_DOMAIN_ID=7", "/bin/prog", "--x"]
+
+
+def test_mount_plan_keeps_what_a_hidden_folder_holds_read_only(tmp_path: Path) -> None:
+    from course import sandbox
+
+    home = tmp_path / "home"
+    python = home / ".pyenv" / "3.11"
+    python.mkdir(parents=True)
+    plan = sandbox.MountPlan("/sbin/ip", own=str(tmp_path / "scratch"), hide=[str(tmp_path / "subs")],
+                             read_only=[str(python)], keep=[], private_tmp=["/tmp"], hidden_home=str(home))
+    script = plan.script()
+    lines = script.splitlines()
+    assert lines[0] == "set -e" and lines[-1] == 'exec "$@"'
+    hide_home = next(i for i, line in enumerate(lines) if f"ros2course-hidden {home}" in line)
+    restore = lines.index(f"mount --move /dev/shm/.ros2course-hold/1 {python}")
+    assert restore > hide_home and lines[restore + 1] == f"mount -o remount,bind,ro {python}"
+    assert "mount --bind /dev/null /etc/shadow" in script
+
+
+def test_copy_logs_never_copies_links_or_fifos(tmp_path: Path) -> None:
+    from course import sandbox
+
+    src, dest = tmp_path / "logs", tmp_path / "out"
+    (src / "ros").mkdir(parents=True)
+    (src / "node.log").write_text("hello")
+    secret = tmp_path / "secret.txt"
+    secret.write_text("grader secret")
+    (src / "ros" / "link.log").symlink_to(secret)
+    (src / "dirlink").symlink_to(tmp_path)
+    os.mkfifo(src / "ros" / "pipe")
+    skipped = sandbox.copy_logs(src, dest)
+    assert (dest / "node.log").read_text() == "hello"
+    assert not (dest / "ros" / "link.log").exists() and not (dest / "dirlink").exists()
+    assert not (dest / "ros" / "pipe").exists()
+    assert not any(p.is_symlink() for p in dest.rglob("*"))
+    assert sorted(skipped) == ["dirlink: symbolic link", "ros/link.log: symbolic link", "ros/pipe: not a regular file"]
+    assert "ros/link.log" in (dest / "ros2course-not-copied.txt").read_text()
+
+
+def test_require_isolation_refuses_with_the_missing_protections(tmp_path: Path, monkeypatch) -> None:
+    from course import batch, sandbox
+
+    (tmp_path / "subs" / "alice" / "src").mkdir(parents=True)
+    with pytest.raises(CourseError, match="missing network namespace .isolation turned off"):
+        batch.run_batch(tmp_path / "subs", ["workspace-setup"], tmp_path / "out", isolate=False, require_isolation=True)
+    caps = sandbox.Capabilities([], False, False, "", {sandbox.UID: "not root: test"}, {})
+    monkeypatch.setattr(sandbox, "_caps", caps)
+    with pytest.raises(CourseError, match=r"unprivileged uid \(not root: test\)"):
+        batch.run_batch(tmp_path / "subs", ["workspace-setup"], tmp_path / "out", require_isolation=True)
+    # the job itself refuses too (a Dask worker may be another machine): a grader error row, nothing run
+    job = batch.Job("b", "alice", str(tmp_path / "subs" / "alice"), "", ["workspace-setup"], str(tmp_path / "out2"),
+                    require_isolation=True)
+    outcome = batch.run_job(job)
+    record = outcome["records"][0]
+    assert record.status == "grader error" and "not root: test" in record.message
+    assert record.isolation["missing"] == {sandbox.UID: "not root: test"}
+
+
+def test_summary_lists_each_protection(tmp_path: Path) -> None:
+    from rich.console import Console
+
+    from course import batch, sandbox
+
+    iso = sandbox.Isolation({sandbox.NETWORK: "loopback only"}, {sandbox.UID: "not root"}).to_json()
+    report = batch.BatchReport(tmp_path, [], 0, 0, 0.0, iso, [])
+    console = Console(file=io.StringIO(), width=160)
+    batch.render_summary(report, console)
+    text = console.file.getvalue()
+    assert "network namespace" in text and "loopback only" in text
+    assert "unprivileged uid" in text and "MISSING" in text and "not root" in text

@@ -154,3 +154,31 @@ def test_grader_process_uses_the_workspace_interfaces(tmp_path):
             assert response.point.x == 42.0
         finally:
             proc.stop(sigint_timeout=3)
+
+
+def test_ament_index_lookups_match_ament_index_python_without_touching_os_environ() -> None:
+    """course.index answers as ament_index_python does, from an explicit environment."""
+    pytest.importorskip("ament_index_python")
+    from ament_index_python.packages import get_package_prefix, get_packages_with_prefixes
+
+    from course import index
+
+    env = dict(os.environ)
+    env_mod.activate(env)
+    before = dict(os.environ)
+    saved = os.environ.get("AMENT_PREFIX_PATH")
+    os.environ["AMENT_PREFIX_PATH"] = env.get("AMENT_PREFIX_PATH", "")
+    try:
+        expected = {name: str(prefix) for name, prefix in get_packages_with_prefixes().items()}
+        rclpy_prefix = get_package_prefix("rclpy")
+    finally:
+        if saved is None:
+            os.environ.pop("AMENT_PREFIX_PATH")
+        else:
+            os.environ["AMENT_PREFIX_PATH"] = saved
+    ours = {name: str(prefix) for name, prefix in index.packages_with_prefixes(env).items()}
+    assert ours == expected and "rclpy" in ours
+    assert str(index.package_prefix("rclpy", env)) == rclpy_prefix
+    assert index.package_share("rclpy", env) == index.package_prefix("rclpy", env) / "share" / "rclpy"
+    assert index.package_prefix("no_such_package_xyz", env) is None
+    assert dict(os.environ) == before

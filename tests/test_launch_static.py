@@ -1,4 +1,5 @@
-"""graders/_launch.py: the static reader of Python launch files and the launch_ros command line it reproduces.
+"""graders/_launch.py: the static reader of Python launch files (feedback, the sas grader's parameters),
+the launch_ros command line start_node_action gives a node, and how a learner's launch file is run.
 
 No ROS node is started: a stand-in session records what would be launched.
 """
@@ -14,7 +15,7 @@ import yaml
 
 from course.lesson import content_root
 from graders import _launch
-from graders._launch import MODE_LAUNCH_ROS, MODE_STATIC, read_launch_file, start_launch_file
+from graders._launch import MODE_LAUNCH_ROS, read_launch_file, start_launch_file, start_node_action
 
 REFERENCE = (content_root() / "solutions" / "src" / "python_package_that_uses_parameters_and_launch_files"
              / "launch" / "peanut_butter_falcon_quote_publisher_launch.py")
@@ -202,15 +203,13 @@ def test_reading_executes_nothing(tmp_path):
 
 # --- starting -----------------------------------------------------------------------------
 
-def test_static_start_writes_the_params_file_launch_ros_would(tmp_path, monkeypatch):
-    monkeypatch.setattr(_launch, "launch_ros_available", lambda: False)
+def test_node_action_starts_with_the_params_file_launch_ros_would_write(tmp_path):
     exe = tmp_path / "amazing_quote_configurable_publisher_node"
     session = FakeSession(tmp_path, {("python_package_that_uses_parameters_and_launch_files",
                                       "amazing_quote_configurable_publisher_node"): exe})
-    run = start_launch_file(session, REFERENCE)
-    assert run.mode == MODE_STATIC
-    assert run.problems == []
-    assert run.summary().startswith(MODE_STATIC + ": started Node(")
+    (action,) = read_launch_file(REFERENCE).nodes
+    proc, reason = start_node_action(session, action, "x")
+    assert proc is not None and reason == ""
     ((path, _name, args),) = session.launched
     assert path == exe
     assert args[:3] == ["--ros-args", "-r", "__node:=peanut_butter_falcon_quote_publisher_node"]
@@ -222,23 +221,30 @@ def test_static_start_writes_the_params_file_launch_ros_would(tmp_path, monkeypa
                   "whether they're gonna have a good story to tell about you when you're gone")}}}
 
 
-def test_static_start_reports_unsupported_nodes_and_missing_executables(tmp_path, monkeypatch):
-    monkeypatch.setattr(_launch, "launch_ros_available", lambda: False)
+def test_node_action_reports_a_missing_executable(tmp_path):
     path = write(tmp_path, """
         from launch import LaunchDescription
         from launch_ros.actions import Node
-        P = 'p'
 
         def generate_launch_description():
-            return LaunchDescription([Node(package=P, executable='e'), Node(package='p', executable='missing')])
+            return LaunchDescription([Node(package='p', executable='missing')])
         """)
     session = FakeSession(tmp_path)
-    run = start_launch_file(session, path)
+    (action,) = read_launch_file(path).nodes
+    proc, reason = start_node_action(session, action, "x")
+    assert proc is None and "no executable missing" in reason
     assert session.launched == []
-    assert run.started == []
-    assert any("P is not a literal" in p for p in run.problems)
-    assert any("no executable missing" in p for p in run.problems)
-    assert "not started:" in run.summary()
+
+
+def test_without_launch_ros_a_launch_file_is_not_gradable_and_nothing_starts(tmp_path, monkeypatch):
+    from course.errors import MissingRequirement
+
+    monkeypatch.setattr(_launch, "launch_ros_available", lambda: False)
+    monkeypatch.setattr("course.env.probe_requirement", lambda name: (False, "launch/launch_ros not importable"))
+    session = FakeSession(tmp_path)
+    with pytest.raises(MissingRequirement, match="needs launch"):
+        start_launch_file(session, REFERENCE)
+    assert session.launched == []
 
 
 def test_with_launch_ros_the_file_is_run_as_ros2_launch_runs_it(tmp_path, monkeypatch):
@@ -252,3 +258,5 @@ def test_with_launch_ros_the_file_is_run_as_ros2_launch_runs_it(tmp_path, monkey
     assert args[0] == "-c" and "LaunchService" in args[1] and "AnyLaunchDescriptionSource" in args[1]
     assert args[2] == str(REFERENCE)
     compile(args[1], "<launch script>", "exec")
+    # the static reading is kept for feedback only
+    assert "Node(package='python_package_that_uses_parameters_and_launch_files'" in run.file_contents()

@@ -574,6 +574,8 @@ def _owned_lock_names(pid: int) -> set[str]:
 
 
 @pytest.mark.ros
+@pytest.mark.usefixtures("cpu_exclusive")  # not beside the ros2 CLI tests' participants in /dev/shm (conftest)
+@pytest.mark.timeout(1200)
 def test_sweep_after_sigkilled_rclpy_node(tmp_path):
     pytest.importorskip("rclpy")
     domain_coordinator = pytest.importorskip("domain_coordinator")

@@ -9,7 +9,8 @@ import math
 import pytest
 from rich.console import Console
 
-from course.grading import CheckResult, GradingSession, LessonResult, Plot
+from course.grading import GradingSession
+from course.results import CheckResult, LessonResult, Plot
 from course.report import render_result, result_json, sparkline
 
 

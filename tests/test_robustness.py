@@ -17,7 +17,8 @@ from pathlib import Path
 import psutil
 import pytest
 
-from course.grading import STATUS_FAILED, STATUS_GRADER_ERROR, STATUS_PASSED, LessonResult, grade_lesson
+from course.grading import grade_lesson
+from course.results import LessonResult, Status
 from course.lesson import load_catalog
 from course.process import DEFAULT_OUTPUT_CAP, MARKER_VAR
 from course.validate import Edit, apply_edits, reference_workspace
@@ -157,7 +158,7 @@ def workspace_with(lesson, root: Path, edits: list[Edit]) -> Path:
 def grade(lesson, root: Path) -> LessonResult:
     with leaves_nothing_behind(root):
         result = grade_lesson(lesson, root)
-    assert result.status != STATUS_GRADER_ERROR, f"{result.message}\n{result.hint}"
+    assert result.status != Status.GRADER_ERROR, f"{result.message}\n{result.hint}"
     from graders.print_forever_node import CHECKS  # noqa: PLC0415
 
     assert [c.id for c in result.checks] == [c.id for c in CHECKS]  # every check has a verdict
@@ -181,7 +182,7 @@ def test_syntax_error(lesson, tmp_path):
         Edit(file=NODE_FILE, replace="def timer_callback(self) -> None:", with_="def timer_callback(self) -> None")])
     result = grade(lesson, root)
     by_id = checks(result)
-    assert result.status == STATUS_FAILED, describe(result)
+    assert result.status == Status.FAILED, describe(result)
     assert by_id["build"][0] and by_id["executable"][0], describe(result)
     passed, observed = by_id["node_name"]
     assert not passed
@@ -198,7 +199,7 @@ def test_hangs_in_init_before_the_node_exists(lesson, tmp_path):
              with_="        import time\n        time.sleep(1000)\n        super().__init__('print_forever')\n")])
     result = grade(lesson, root)
     by_id = checks(result)
-    assert result.status == STATUS_FAILED, describe(result)
+    assert result.status == Status.FAILED, describe(result)
     passed, observed = by_id["node_name"]
     assert not passed
     assert "no node named print_forever" in observed, observed
@@ -217,7 +218,7 @@ def test_floods_stdout(lesson, tmp_path):
     result = grade(lesson, root)
     by_id = checks(result)
     assert by_id["node_name"][0] and by_id["log_format"][0] and by_id["counts_from_zero"][0], describe(result)
-    assert result.status == STATUS_PASSED, describe(result)
+    assert result.status == Status.PASSED, describe(result)
     log = Path(result.log_dir) / "print_forever_node.stdout.log"
     size = log.stat().st_size
     assert DEFAULT_OUTPUT_CAP < size < DEFAULT_OUTPUT_CAP + 200, size
@@ -240,7 +241,7 @@ def test_forks_an_escaping_child(lesson, tmp_path):
         result = grade(lesson, root)
         assert pidfile.is_file(), describe(result)
         child = int(pidfile.read_text())
-        assert result.status == STATUS_PASSED, describe(result)
+        assert result.status == Status.PASSED, describe(result)
         # the child is gone (a zombie only until init reaps it)
         deadline = time.monotonic() + 10.0
         while psutil.pid_exists(child) and time.monotonic() < deadline:
@@ -263,7 +264,7 @@ def test_reference_grading_is_deterministic(lesson, tmp_path):
     for _ in range(3):
         result = grade(lesson, root)
         verdicts.append((result.status, result.score, [(c.id, c.passed, c.points) for c in result.checks]))
-    assert verdicts[0][0] == STATUS_PASSED, verdicts[0]
+    assert verdicts[0][0] == Status.PASSED, verdicts[0]
     assert verdicts[0][1] == 14.0
     assert verdicts[1] == verdicts[0]
     assert verdicts[2] == verdicts[0]

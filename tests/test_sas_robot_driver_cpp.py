@@ -1,10 +1,13 @@
-"""The sas-robot-driver grader on the seed's C++ driver (ch. 31), where SmartArmStack is installed.
+"""The sas-robot-driver grader on the seed's C++ driver (ch. 31), built on the real SmartArmStack.
 
 ``tests/data/sas_cpp/sas_robot_driver_myrobot`` holds the seed's C++ package
-(driver class, node, launch file, client script on the sas Python bindings).
-Built on the real ``sas`` packages it must get full marks from the same
-black-box grader as the lesson's Python package. Skipped where ``sas`` is not
-installed (it is not on PyPI: ``sudo apt install ros-jazzy-sas-*``, seed ch. 30).
+(driver class, node, launch file, and the client script installed as the seed
+does: ``joint_interface_example.py`` with ``#!/usr/bin/python3``). Built on the
+real ``sas`` packages it must get full marks from the same black-box grader as
+the lesson's Python package. sas is not on PyPI: on the pip install it is the
+optional underlay component (``ros2course env --build --with sas``,
+course/underlay.py); with a system ROS, ``ros-jazzy-sas-*``. Skipped where
+neither is installed.
 """
 
 from __future__ import annotations
@@ -27,8 +30,11 @@ def _sas_installed() -> bool:
 
 pytestmark = [
     pytest.mark.ros,
+    # they compile C++: never beside the determinism tests (conftest.cpu_exclusive), which may wait for them
+    pytest.mark.usefixtures("cpu_exclusive"),
+    pytest.mark.timeout(1200),
     pytest.mark.skipif(not _sas_installed(), reason="SmartArmStack (sas_robot_driver) is not installed: "
-                       "ament_index_python does not find the package; install ros-jazzy-sas-* (seed ch. 30)"),
+                       "build it with 'ros2course env --build --with sas' (or install ros-jazzy-sas-*)"),
 ]
 
 

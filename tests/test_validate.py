@@ -23,3 +23,22 @@ def test_dev_validate(lesson_id, cli):
     bad = [f"{o['case']}: expected {o['expected']}, got {o['got']}" for o in outcomes if not o["ok"]]
     assert not bad, "\n".join(bad)
     assert proc.returncode == 0
+
+
+def test_a_fixture_that_does_not_build_fails_only_for_the_build() -> None:
+    """A not-gradable result (no checks ran) proves a fixture's bug only when the fixture names the build."""
+    from course.results import CheckResult, LessonResult
+    from course.validate import judge_fixture
+
+    broken = LessonResult("l", 0.0, 10.0, "not gradable", [], "colcon build failed")
+    assert judge_fixture(["build"], broken)[0]
+    ok, expected = judge_fixture(["rate"], broken)
+    assert not ok and "never judged" in expected and "rate" in expected
+    assert not judge_fixture(["build", "rate"], broken)[0]
+    graded = LessonResult("l", 8.0, 10.0, "failed", [
+        CheckResult("build", "b", 1, 1, True, "", "", ""),
+        CheckResult("rate", "r", 0, 2, False, "", "", ""),
+        CheckResult("log", "g", 7, 7, True, "", "", "")])
+    assert judge_fixture(["rate"], graded)[0]
+    assert not judge_fixture(["rate", "log"], graded)[0]
+    assert "unknown check ids: nope" in judge_fixture(["nope"], graded)[1]

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Build the workspace and source its overlay (lesson workspace-setup).
 # Usage: source build_and_source.sh   (from the workspace folder)
-set -e
+# No 'set -e' here: this file is sourced, and 'set -e' would then close your
+# terminal at the next command that fails.
 
 # TODO 1: go to the workspace folder, the one that contains src/
 #         (hint: this script lives there: cd "$(dirname "${BASH_SOURCE[0]}")")

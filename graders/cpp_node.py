@@ -1,0 +1,27 @@
+"""Grader for ``cpp-node`` (seed ch. 25-26; contract in shared/LESSONS.md).
+
+The C++ twin of ``print-forever-node``: package ``cpp_package_with_a_node``,
+executable ``print_forever_node``, node ``print_forever_node``, logging
+``Printed N times.`` every 0.5 s. Graded by the same black-box checks
+(graders/print_forever_node.py); only the ``package.xml`` dependency differs
+(``rclcpp``). Needs rclcpp: on the PyPI install, the source-built underlay
+(course/underlay.py).
+"""
+
+from __future__ import annotations
+
+from course.grading import GradingSession
+from graders import print_forever_node
+from graders.print_forever_node import grade_node, make_checks
+
+PACKAGE = "cpp_package_with_a_node"
+NODE = "print_forever_node"
+#: Seconds of observation the contract needs (benchmarks/check_speed.py reads it): the Python twin's.
+WINDOW = print_forever_node.WINDOW
+
+CHECKS = make_checks("rclcpp", PACKAGE, NODE)
+
+
+def grade(s: GradingSession) -> None:
+    """Run the C++ print_forever_node, read its /rosout records, then Ctrl+C it."""
+    grade_node(s, PACKAGE, NODE, "rclcpp")
