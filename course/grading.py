@@ -40,12 +40,47 @@ class Check:
         name: one line, what is checked, in the learner's terms.
         points: points for passing (partial credit is spread over checks).
         hint: default learner-facing hint shown when it fails.
+        needs: ids of earlier checks this one depends on. When one of them
+            fails (or was itself not checked), the engine records this check
+            as "not checked" with the reason, whatever the grader does.
+        part: the independent part of the lesson it belongs to (e.g. one of two
+            executables; see :meth:`GradingSession.part`); "" for the whole lesson.
     """
 
     id: str
     name: str
     points: float
     hint: str = ""
+    needs: tuple[str, ...] = ()
+    part: str = ""
+
+
+class Unmet(Exception):  # noqa: N818 - a grading outcome, not an error of the course
+    """A check that later steps depend on did not pass: the current part of the grader ends.
+
+    Raised by :meth:`GradingSession.require` and by grader-kit steps that
+    return a value the rest of the part needs (an executable, a node). Caught
+    by :meth:`GradingSession.part` (and by the engine around ``grade()``),
+    which then runs the part's closing actions; the checks left unrecorded
+    become "not checked" with the reason.
+    """
+
+
+def check_dependencies(checks: Sequence[Check]) -> None:
+    """Validate ``needs``: every id names an earlier check of the same list.
+
+    Raises:
+        CourseError: a duplicate id, or a need that is unknown or not earlier (a cycle).
+    """
+    seen: set[str] = set()
+    for check in checks:
+        if check.id in seen:
+            raise CourseError(f"check id {check.id!r} is declared twice", "check ids are unique within a lesson")
+        for need in check.needs:
+            if need not in seen:
+                raise CourseError(f"check {check.id!r} needs {need!r}, which is not an earlier check",
+                                  "list a check's needs before it in CHECKS")
+        seen.add(check.id)
 
 
 class GradingSession:
@@ -62,8 +97,11 @@ class GradingSession:
     def __init__(self, lesson: Lesson, checks: list[Check], workspace_root: Path, log_dir: Path,
                  base_env: dict[str, str], trusted_interfaces: Path | None = None) -> None:
         self.lesson = lesson
+        check_dependencies(checks)
         self.checks = {c.id: c for c in checks}
         self._order = [c.id for c in checks]
+        #: closing actions of the open parts, innermost last (see :meth:`part`).
+        self._closers: list[list[Any]] = [[]]
         self.workspace_root = workspace_root
         self.log_dir = log_dir
         self.base_env = base_env
@@ -123,23 +161,94 @@ class GradingSession:
             KeyError: ``check_id`` is not declared in the grader's ``CHECKS``.
         """
         check = self.checks[check_id]
+        blocker = self.unmet_need(check_id)
+        if blocker is not None:
+            self._not_checked(check_id, blocker)
+            return False
         share = (1.0 if passed else 0.0) if fraction is None else max(0.0, min(1.0, fraction))
         self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
                                              passed, observed, expected,
                                              "" if passed else (hint if hint is not None else check.hint))
         return passed
 
+    def unmet_need(self, check_id: str) -> str | None:
+        """Why ``check_id`` cannot be judged: a sentence naming the first of its needs that did not pass.
+
+        None while every need passed or is still to be judged. Needs are
+        followed through: a need that was itself not checked blocks too.
+        """
+        for need in self.checks[check_id].needs:
+            result = self.results.get(need)
+            if result is not None and not result.passed:
+                return (f"'{self.checks[need].name}' was not checked" if result.skipped
+                        else f"'{self.checks[need].name}' failed")
+            if result is None and self.unmet_need(need) is not None:
+                return self.unmet_need(need)
+        return None
+
+    def _not_checked(self, check_id: str, reason: str) -> None:
+        check = self.checks[check_id]
+        self.results[check_id] = CheckResult(check.id, check.name, 0.0, check.points, False,
+                                             f"not checked: {reason}", "(depends on the failed check above)",
+                                             check.hint, skipped=True)
+
+    def require(self, *check_ids: str) -> None:
+        """Go on only if every check in ``check_ids`` passed.
+
+        Raises:
+            Unmet: one of them failed or is not recorded; the current :meth:`part` ends.
+        """
+        for check_id in check_ids:
+            result = self.results.get(check_id)
+            if result is None or not result.passed:
+                raise Unmet(self.unmet_need(check_id) or f"'{self.checks[check_id].name}' did not pass")
+
+    @contextlib.contextmanager
+    def part(self, name: str = "") -> Iterator[None]:
+        """Grade one independent part of a lesson (e.g. one of two executables).
+
+        :class:`Unmet` raised inside ends only this part. On the way out the
+        part's closing actions (:meth:`on_close`, e.g. judging Ctrl+C of a
+        node it started) run, newest first, whatever happened.
+        """
+        self._closers.append([])
+        try:
+            yield
+        except Unmet as stop:
+            self._run_closers(self._closers.pop())
+            self.stop_part(name, str(stop))
+        else:
+            self._run_closers(self._closers.pop())
+
+    def stop_part(self, name: str, reason: str) -> None:
+        """Record every unrecorded check of part ``name`` ("" = every part) as not checked because of ``reason``.
+
+        A check whose own needs failed gets that reason instead.
+        """
+        for check_id in self._order:
+            if check_id not in self.results and (not name or self.checks[check_id].part == name):
+                self._not_checked(check_id, self.unmet_need(check_id) or reason)
+
+    def on_close(self, action: Any) -> None:
+        """Run ``action()`` when the current :meth:`part` (or ``grade()``) ends, even after :class:`Unmet`."""
+        self._closers[-1].append(action)
+
+    def _run_closers(self, closers: list[Any]) -> None:
+        for action in reversed(closers):
+            with contextlib.suppress(Unmet):
+                action()
+
     def skip_remaining(self, reason: str) -> None:
         """Mark every check not recorded yet as failed because of ``reason`` (e.g. no node)."""
         for check_id in self._order:
             if check_id not in self.results:
-                check = self.checks[check_id]
-                self.results[check_id] = CheckResult(check.id, check.name, 0.0, check.points, False,
-                                                     f"not checked: {reason}", "(depends on the failed check above)",
-                                                     check.hint, skipped=True)
+                self._not_checked(check_id, reason)
 
     def ordered_results(self) -> list[CheckResult]:
-        self.skip_remaining("the grader stopped before this check")
+        """Every declared check's result, in declaration order; unrecorded ones become "not checked"."""
+        for check_id in self._order:
+            if check_id not in self.results:
+                self._not_checked(check_id, self.unmet_need(check_id) or "the grader stopped before this check")
         return [self.results[c] for c in self._order]
 
     # --- environment and processes ----------------------------------------
@@ -361,7 +470,8 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     message = hint = ""
     try:
         try:
-            module.grade(session)
+            with session.part():  # Unmet in grade(): the unrecorded checks become "not checked" with its reason
+                module.grade(session)
         finally:
             graded = time.monotonic()
             timings["grade"] = graded - begin

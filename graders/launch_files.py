@@ -2,7 +2,7 @@
 
 The launch file is taken from where ``ros2 launch`` takes it: the installed
 ``share/<pkg>/launch/`` folder, and run with the real launch_ros as ``ros2
-launch`` runs it (see :mod:`graders._launch`; on the PyPI install launch_ros
+launch`` runs it (see :mod:`graders.kit.launch`; on the PyPI install launch_ros
 comes from the source-built underlay). Then the graph is watched, black-box:
 node name, topic, rate and message contents. The file is also read statically,
 only to say which ``Node(...)`` actions it holds when launch started too little.
@@ -15,8 +15,8 @@ import time
 from course.grading import Check, GradingSession
 from course.probes import LATE_DELIVERY
 from graders._common import process_state, record_rate
-from graders._launch import MODE_LAUNCH_ROS, LaunchRun, describe_launch_folder, start_launch_file
-from graders._quotes import (EXECUTABLE, LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER, LAUNCH_QUOTE,
+from graders.kit.launch import MODE_LAUNCH_ROS, LaunchRun, describe_launch_folder, start_launch_file
+from graders.kit.quotes import (EXECUTABLE, LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER, LAUNCH_QUOTE,
                              LAUNCH_TOPIC, PACKAGE, amazing_quote, first_difference, package_share, package_source,
                              short, topics_seen)
 

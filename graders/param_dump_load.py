@@ -9,7 +9,7 @@ The learner keeps a parameters file in the ``ros2 param dump`` format at
    ``ros2 param dump`` writes: ``yaml.dump({"/node": {"ros__parameters": {...}}})``,
    shared/ROS_ENV.md);
 2. starts the configurable publisher as the launch-files lesson's launch file
-   starts it (node name, parameters), with :func:`graders._launch.start_node_action`;
+   starts it (node name, parameters), with :func:`graders.kit.launch.start_node_action`;
 3. compares the file's parameters with the ones the running node declares
    (names and types, through its parameter services);
 4. loads the file into the running node as ``ros2 param load`` does
@@ -27,8 +27,8 @@ from typing import Any
 from course.grading import Check, GradingSession
 from course.probes import LATE_DELIVERY, parameter_client, wait_future
 from graders._common import process_state
-from graders._launch import NodeAction, flatten_parameters, start_node_action
-from graders._quotes import (EXECUTABLE, LAUNCH_NODE, LAUNCH_PARAMETERS, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER,
+from graders.kit.launch import NodeAction, flatten_parameters, start_node_action
+from graders.kit.quotes import (EXECUTABLE, LAUNCH_NODE, LAUNCH_PARAMETERS, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER,
                              LAUNCH_QUOTE, LAUNCH_TOPIC, PACKAGE, amazing_quote, package_source, parameter_value,
                              python_type_name, short, topics_seen)
 

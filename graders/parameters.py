@@ -13,7 +13,7 @@ import time
 from course.grading import Check, GradingSession
 from course.probes import parameter_client, wait_future
 from graders._common import process_state, record_rate, record_sigint_exit, require_executable, wait_for_node
-from graders._quotes import (DEFAULTS, EXECUTABLE, NODE, PACKAGE, amazing_quote, parameter_value,
+from graders.kit.quotes import (DEFAULTS, EXECUTABLE, NODE, PACKAGE, amazing_quote, parameter_value,
                              short, topics_seen)
 
 DEFAULT_TOPIC = "/amazing_quote"

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import re
 
-from course.grading import Check, GradingSession
 from course.probes import LATE_DELIVERY, stamp_seconds, wait_until
-from graders._common import process_state, record_rate, record_sigint_exit, require_executable, wait_for_node
+from graders import kit
+from graders.kit import Check, GradingSession
 
 PACKAGE = "python_package_with_a_node"
 EXECUTABLE = "print_forever_node"
@@ -41,21 +41,21 @@ def make_checks(client_library: str = "rclpy", package: str = PACKAGE, node: str
               "then colcon build" if python else
               "add_executable(print_forever_node src/print_forever_node.cpp) and install(TARGETS print_forever_node "
               "DESTINATION lib/${PROJECT_NAME}) in CMakeLists.txt, then colcon build"),
-        Check("node_name", f"A node named {node} starts", 2,
+        Check("node_name", f"A node named {node} starts", 2, needs=("executable",), hint=
               f"pass '{node}' to super().__init__() in your Node subclass" if python else
               f"pass \"{node}\" to the rclcpp::Node constructor"),
-        Check("log_format", "It logs 'Printed N times.' on /rosout", 2,
+        Check("log_format", "It logs 'Printed N times.' on /rosout", 2, needs=("executable",), hint=
               "use self.get_logger().info(f'Printed {self.print_count} times.') in the timer callback; "
               "print() does not reach /rosout" if python else
               "use RCLCPP_INFO(get_logger(), \"Printed %d times.\", count_) in the timer callback; "
               "std::cout does not reach /rosout"),
-        Check("counts_from_zero", "N counts 0, 1, 2, ...", 2,
+        Check("counts_from_zero", "N counts 0, 1, 2, ...", 2, needs=("log_format",), hint=
               "start the counter at 0 in __init__ and add 1 after each log" if python else
               "start the counter at 0 in the constructor and add 1 after each log"),
-        Check("rate", "One record every 0.5 s (2 Hz)", 2,
+        Check("rate", "One record every 0.5 s (2 Hz)", 2, needs=("log_format",), hint=
               "create the timer with create_timer(0.5, self.timer_callback)" if python else
               "create the timer with create_wall_timer(500ms, ...)"),
-        Check("sigint_exit", "Ctrl+C ends it with exit code 0 and no traceback", 2,
+        Check("sigint_exit", "Ctrl+C ends it with exit code 0 and no traceback", 2, needs=("executable",), hint=
               "in Jazzy rclpy.spin() may raise ExternalShutdownException on Ctrl+C: catch it together with "
               "KeyboardInterrupt" if python else
               "let rclcpp::spin return on Ctrl+C, then call rclcpp::shutdown() and return 0"),
@@ -63,20 +63,6 @@ def make_checks(client_library: str = "rclpy", package: str = PACKAGE, node: str
 
 
 CHECKS = make_checks()
-
-
-def _check_package_xml(s: GradingSession, check: str, package: str, client_library: str) -> None:
-    from course.build import find_packages  # noqa: PLC0415
-
-    found = find_packages(s.workspace_root / "src").get(package)
-    if found is None:
-        s.record(check, False, f"no package {package} in src/", f"<depend>{client_library}</depend> in package.xml")
-        return
-    pkg = found[1]
-    deps = {d.name for d in (*pkg.exec_depends, *pkg.build_depends)}
-    s.record(check, client_library in deps,
-             f"package.xml run dependencies: {', '.join(sorted(deps)) or 'none'}",
-             f"{client_library} among them (<depend>{client_library}</depend>)")
 
 
 def grade(s: GradingSession) -> None:
@@ -90,35 +76,26 @@ def grade_node(s: GradingSession, package: str, node: str, client_library: str) 
     Black-box: the node's /rosout records and exit; the language only shows in
     the ``package.xml`` dependency checked (``rclpy`` or ``rclcpp``).
     """
-    _check_package_xml(s, "depends_rclpy" if client_library == "rclpy" else "depends_client", package, client_library)
-    path = require_executable(s, "executable", package, EXECUTABLE)
-    if path is None:
-        return
+    kit.depends(s, "depends_rclpy" if client_library == "rclpy" else "depends_client", package, (client_library,))
+    path = kit.executable(s, "executable", package, EXECUTABLE)
     rosout = s.ros.rosout()
-    proc = s.launch(path, EXECUTABLE)
-    if not wait_for_node(s, "node_name", proc, node):
-        if proc.poll() is not None:
-            s.skip_remaining(process_state(proc))
-            record_sigint_exit(s, "sigint_exit", proc)
-            return
+    # a misnamed node is still graded on its records (need_node=False)
+    started = kit.start_node(s, "node_name", path, node, sigint_check="sigint_exit", need_node=False)
 
     def counted():
         return [r for r in rosout.records(level=INFO) if LOG.match(r.msg)]
 
+    waited = SAMPLES * PERIOD + 3.0 + LATE_DELIVERY
     with s.phase("observe"):
-        wait_until(lambda: len(counted()) >= SAMPLES, timeout=SAMPLES * PERIOD + 3.0 + LATE_DELIVERY,
-                   abort=lambda: proc.poll() is not None)
+        wait_until(lambda: len(counted()) >= SAMPLES, timeout=waited, abort=started.ended)
     records = counted()
-    everything = rosout.records()
     if not records:
-        texts = [f"[{r.name}] {r.msg}" for r in everything[:3]]
-        on_stdout = "Printed 0 times." in proc.stdout()
+        texts = [f"[{r.name}] {r.msg}" for r in rosout.records()[:3]]
         observed = ("no /rosout records" if not texts else "records: " + " | ".join(texts))
-        if on_stdout:
+        if "Printed 0 times." in started.proc.stdout():
             observed += "; 'Printed 0 times.' appeared on stdout only (print() instead of the logger?)"
-        s.record("log_format", False, observed + f"; {process_state(proc)}", "INFO records 'Printed N times.'")
-        s.skip_remaining("no 'Printed N times.' record to judge")
-        record_sigint_exit(s, "sigint_exit", proc)
+        s.record("log_format", False, f"{observed}; {kit.process_state(started.proc)}",
+                 "INFO records 'Printed N times.'")
         return
     loggers = sorted({r.name for r in records})
     s.record("log_format", True, f"{len(records)} records like '{records[0].msg}' from {', '.join(loggers)}",
@@ -130,6 +107,5 @@ def grade_node(s: GradingSession, package: str, node: str, client_library: str) 
     shown = ", ".join(map(str, counts[:8])) + (", ..." if len(counts) > 8 else "")
     s.record("counts_from_zero", counts == list(range(len(counts))), f"N = {shown}",
              "N = " + ", ".join(map(str, range(min(len(counts), 8)))) + ", ...")
-    record_rate(s, "rate", [stamp_seconds(r.stamp) for r in mine], period=PERIOD, needed=SAMPLES,
-                waited=SAMPLES * PERIOD + 3.0, noun="record", source="the records' stamps")
-    record_sigint_exit(s, "sigint_exit", proc)
+    kit.rate(s, "rate", [stamp_seconds(r.stamp) for r in mine], period=PERIOD, needed=SAMPLES,
+             waited=waited, noun="record", source="the records' stamps")

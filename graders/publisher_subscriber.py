@@ -18,7 +18,7 @@ import random
 from course.grading import Check, GradingSession
 from course.probes import wait_until
 from graders._common import process_state, record_rate, record_sigint_exit
-from graders._quote_tools import (
+from graders.kit.topics_services import (
     describe_endpoints,
     has_integer,
     launch_node,

@@ -15,7 +15,7 @@ import json
 import math
 
 from course.grading import Check, GradingSession
-from graders._packaging import (
+from graders.kit.packaging import (
     install_prefix,
     relative,
     run_installed_python,

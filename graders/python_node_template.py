@@ -11,7 +11,7 @@ from __future__ import annotations
 from course.grading import Check, GradingSession
 from course.probes import wait_until
 from course.process import LearnerProcess
-from graders._packaging import require_ros2_run_executable
+from graders.kit.packaging import require_ros2_run_executable
 
 PACKAGE = "python_package_with_a_node"
 EXECUTABLE = "sample_python_node"

@@ -6,11 +6,11 @@ seed's C++ driver built on the real ``sas`` packages:
 * **The launch file** ``launch/real_robot_launch.py`` must be installed in
   ``share/sas_robot_driver_myrobot/launch`` and start the driver as
   ``myrobot_1`` with the seed's parameters (read statically, see
-  :mod:`graders._launch`).
+  :mod:`graders.kit.launch`).
 * **The driver** is started the way launch_ros starts that ``Node`` action
   (``--ros-args -r __node:=myrobot_1 --params-file TMP.yaml``) with the seed's
   parameters (ch. 31.7). The grader watches ``/myrobot_1/get/joint_states``
-  with :class:`graders._joint_stream.JointStreamProbe` (rate at 500 Hz, six
+  with :class:`graders.kit.joint_stream.JointStreamProbe` (rate at 500 Hz, six
   positions, zeros after ``connect()``, increasing stamps), reads the limits
   topics (radians), sends a sequence of targets on
   ``/myrobot_1/set/target_joint_positions`` (it is the only publisher there)
@@ -37,13 +37,13 @@ from course.env import foreign_python_prefix
 from course.grading import Check, GradingSession
 from course.probes import wait_until
 from graders._common import process_state, record_sigint_exit, wait_for_node
-from graders._joint_stream import (
+from graders.kit.joint_stream import (
     JointSample,
     JointStreamProbe,
     arrival_rate,
     source_rate,
 )
-from graders._launch import NodeAction, describe_launch_folder, read_launch_file, start_node_action
+from graders.kit.launch import NodeAction, describe_launch_folder, read_launch_file, start_node_action
 
 PACKAGE = "sas_robot_driver_myrobot"
 DRIVER_EXECUTABLE = "sas_robot_driver_myrobot_node"

@@ -26,7 +26,7 @@ import time
 from course.grading import Check, GradingSession
 from course.probes import LATE_DELIVERY, wait_until
 from graders._common import RATE_TOLERANCE, process_state, record_rate, record_sigint_exit
-from graders._quote_tools import (
+from graders.kit.topics_services import (
     DeferredServer,
     describe_endpoints,
     has_point,

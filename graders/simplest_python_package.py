@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from course.grading import Check, GradingSession
-from graders._packaging import (
+from graders.kit.packaging import (
     ament_index_packages,
     data_files_mapping,
     install_prefix,

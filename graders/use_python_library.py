@@ -5,7 +5,7 @@ Every 0.5 s the node logs ``sample_function_for_square_of_sum(a,b) returned c.``
 (a in [0, 1], b in [1, 2], c == (a+b)**2) and then
 ``sample_class_with_random_name.get_name() returned NAME.`` (ten random ASCII
 letters). Numbers are parsed however the node formats them; c is compared with
-(a+b)**2 within the rounding of the printed digits (``graders._packaging.SquareLine``).
+(a+b)**2 within the rounding of the printed digits (``graders.kit.packaging.SquareLine``).
 Only ``package.xml`` is read, for the dependency on the library the contract names.
 """
 
@@ -14,7 +14,7 @@ from __future__ import annotations
 from course.grading import Check, GradingSession
 from course.probes import LATE_DELIVERY, stamp_seconds, wait_until
 from graders._common import process_state, record_rate, record_sigint_exit, wait_for_node
-from graders._packaging import (
+from graders.kit.packaging import (
     classify,
     is_ten_letters,
     parse_name_line,

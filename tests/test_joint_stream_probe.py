@@ -1,4 +1,4 @@
-"""graders._joint_stream: the 500 Hz joint-state probe of the sas-robot-driver lesson keeps up.
+"""graders.kit.joint_stream: the 500 Hz joint-state probe of the sas-robot-driver lesson keeps up.
 
 A known publisher (a small rclpy script, like a sas driver: ``JointState``
 every 2 ms on a history-depth-1 publisher) runs in a private domain. It
@@ -77,7 +77,7 @@ def ros_env():
 def test_probe_measures_a_known_500hz_publisher_on_send_stamps(ros_env, tmp_path):
     from course.probes import RateStats, RosSession  # noqa: PLC0415
     from course.process import LearnerProcess, sweep_stale_fastdds_shm
-    from graders._joint_stream import JointStreamProbe, arrival_rate, source_rate
+    from graders.kit.joint_stream import JointStreamProbe, arrival_rate, source_rate
 
     script = tmp_path / "known_500hz_publisher.py"
     script.write_text(textwrap.dedent(PUBLISHER), encoding="utf-8")

@@ -14,8 +14,8 @@ import pytest
 import yaml
 
 from course.lesson import content_root
-from graders import _launch
-from graders._launch import MODE_LAUNCH_ROS, read_launch_file, start_launch_file, start_node_action
+from graders.kit import launch as _launch
+from graders.kit.launch import MODE_LAUNCH_ROS, read_launch_file, start_launch_file, start_node_action
 
 REFERENCE = (content_root() / "solutions" / "src" / "python_package_that_uses_parameters_and_launch_files"
              / "launch" / "peanut_butter_falcon_quote_publisher_launch.py")

@@ -1,4 +1,4 @@
-"""Unit tests of the packaging lessons' grader helpers (graders/_packaging.py); no ROS needed.
+"""Unit tests of the packaging lessons' grader helpers (graders/kit/packaging.py); no ROS needed.
 
 The parsers judge the /rosout lines of ``use-python-library`` (seed ch. 15.1): they must
 accept every reasonable way of printing the numbers, and still catch a wrong c.
@@ -11,7 +11,7 @@ import string
 
 import pytest
 
-from graders._packaging import (
+from graders.kit.packaging import (
     classify,
     data_files_mapping,
     is_ten_letters,

@@ -1,0 +1,26 @@
+"""The grader kit: the steps graders share, each recording its own check and returning a value.
+
+A grader is ``CHECKS`` (what is graded, each :class:`Check` naming the checks
+it ``needs``) plus a ``grade(s)`` that calls kit steps in order::
+
+    path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)       # raises Unmet if missing
+    node = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit")
+    kit.rate(s, "rate", stamps, period=0.5, needed=6, waited=..., noun="record", source="...")
+
+A step that cannot hand back its value (no executable, the process died)
+raises :class:`Unmet`; the engine then records every check that needs the
+failed one as "not checked" with the reason, and still runs the closing
+checks (Ctrl+C of a started node). Graders never write skip logic. See
+graders/README.md for a whole grader.
+"""
+
+from course.grading import Check, GradingSession, Unmet
+from graders.kit.judge import RATE_TOLERANCE, STANDARD_TOPICS, rate, topics_seen
+from graders.kit.nodes import StartedNode, executable, process_state, sigint_exit, start_node, wait_for_node
+from graders.kit.packages import declared_dependencies, depends, source_package
+
+__all__ = [
+    "RATE_TOLERANCE", "STANDARD_TOPICS", "Check", "GradingSession", "StartedNode", "Unmet", "declared_dependencies",
+    "depends", "executable", "process_state", "rate", "sigint_exit", "source_package", "start_node", "topics_seen",
+    "wait_for_node",
+]
