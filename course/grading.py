@@ -17,6 +17,7 @@ import importlib
 import json
 import os
 import sys
+import threading
 import time
 import traceback
 from collections.abc import Iterator, Mapping, Sequence
@@ -100,8 +101,10 @@ class GradingSession:
         check_dependencies(checks)
         self.checks = {c.id: c for c in checks}
         self._order = [c.id for c in checks]
-        #: closing actions of the open parts, innermost last (see :meth:`part`).
-        self._closers: list[list[Any]] = [[]]
+        # Closing actions of the open parts, innermost last (see :meth:`part`), per thread:
+        # a lesson's two halves may be graded on two threads at once, each in its own part.
+        self._local = threading.local()
+        self._timings_lock = threading.Lock()
         self.workspace_root = workspace_root
         self.log_dir = log_dir
         self.base_env = base_env
@@ -143,7 +146,8 @@ class GradingSession:
         try:
             yield
         finally:
-            self.timings[name] = self.timings.get(name, 0.0) + time.monotonic() - begin
+            with self._timings_lock:  # two halves of a lesson may be timed on two threads
+                self.timings[name] = self.timings.get(name, 0.0) + time.monotonic() - begin
 
     # --- recording ---------------------------------------------------------
 
@@ -165,11 +169,29 @@ class GradingSession:
         if blocker is not None:
             self._not_checked(check_id, blocker)
             return False
+        previous = self.results.get(check_id)
+        if previous is not None and previous.skipped:
+            return False  # the engine marked it "not checked" (its part stopped): that verdict stays
         share = (1.0 if passed else 0.0) if fraction is None else max(0.0, min(1.0, fraction))
         self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
                                              passed, observed, expected,
                                              "" if passed else (hint if hint is not None else check.hint))
         return passed
+
+    def amend(self, check_id: str, *, observed: str | None = None, hint: str | None = None) -> None:
+        """Add to a recorded verdict's explanation; its points and pass/fail stay.
+
+        Args:
+            observed: replaces the observed text (e.g. the first text plus what else was found).
+            hint: replaces the hint.
+
+        Raises:
+            KeyError: ``check_id`` has no verdict yet.
+        """
+        result = self.results[check_id]
+        self.results[check_id] = dataclasses.replace(
+            result, observed=result.observed if observed is None else observed,
+            hint=result.hint if hint is None else hint)
 
     def unmet_need(self, check_id: str) -> str | None:
         """Why ``check_id`` cannot be judged: a sentence naming the first of its needs that did not pass.
@@ -219,6 +241,13 @@ class GradingSession:
             self.stop_part(name, str(stop))
         else:
             self._run_closers(self._closers.pop())
+
+    @property
+    def _closers(self) -> list[list[Any]]:
+        """The calling thread's stack of open parts' closing actions."""
+        if not hasattr(self._local, "closers"):
+            self._local.closers = [[]]
+        return self._local.closers
 
     def stop_part(self, name: str, reason: str) -> None:
         """Record every unrecorded check of part ``name`` ("" = every part) as not checked because of ``reason``.

@@ -1,5 +1,6 @@
-"""Graders: one module per lesson, each a short composition of ``course`` probes.
+"""Graders: one module per lesson, a declaration of checks plus a ``grade()`` built from the kit.
 
-A grader module defines ``CHECKS`` (list of :class:`course.grading.Check`)
-and ``grade(session: course.grading.GradingSession) -> None``.
+A grader module defines ``CHECKS`` (list of :class:`course.grading.Check`,
+each naming the checks it ``needs``) and ``grade(session) -> None`` calling
+the steps of :mod:`graders.kit`. How to write one: graders/README.md.
 """

@@ -2,24 +2,19 @@
 
 The contract is about the package itself, so this grader reads what colcon
 installed: the package manifest, the ament index entry rosidl writes
-(what ``ros2 interface package`` lists) and the generated Python types.
-
-A Python process holds one build of an interface package (see
-:mod:`course.interfaces`), and ``dev validate`` grades many variants of this
-one in a single process, so the generated types are inspected in a fresh
-interpreter started with the sourced workspace environment
-(``source install/setup.bash``), the way a learner's node would import them.
+(what ``ros2 interface package`` lists) and the generated Python types,
+imported in a fresh interpreter of the sourced workspace
+(:func:`graders.kit.topics_services.generated_fields`), the way a learner's
+node would import them.
 """
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
 from pathlib import Path
 
-from course import sandbox
-from course.grading import Check, GradingSession
+from graders import kit
+from graders.kit import Check, GradingSession
+from graders.kit.topics_services import fields, generated_fields
 
 PACKAGE = "package_with_interfaces"
 #: field -> type as ``get_fields_and_field_types()`` spells it (seed ch. 17.4 and 17.6).
@@ -56,72 +51,9 @@ CHECKS = [
           "below the '---': 'geometry_msgs/Point point' (another package: with its prefix)"),
 ]
 
-#: Run in a fresh interpreter with the workspace sourced: import the types, print their fields as JSON.
-_PROBE = r"""
-import json
-out = {}
-for key, module, name in (("message", "package_with_interfaces.msg", "AmazingQuote"),
-                          ("service", "package_with_interfaces.srv", "WhatIsThePoint")):
-    try:
-        cls = getattr(__import__(module, fromlist=[name]), name)
-        cls.__class__.__import_type_support__()  # loads the generated C extension and typesupport
-        if key == "message":
-            out["message"] = cls.get_fields_and_field_types()
-        else:
-            out["request"] = cls.Request.get_fields_and_field_types()
-            out["response"] = cls.Response.get_fields_and_field_types()
-    except Exception as exc:
-        out[key + "_error"] = f"{type(exc).__name__}: {exc}"
-print(json.dumps(out))
-"""
-
-
-def _inspect_types(s: GradingSession) -> dict:
-    """Fields of the generated types, as a fresh ``python3`` in the sourced workspace sees them."""
-    try:
-        proc = sandbox.run([sys.executable, "-c", _PROBE], env=s.overlay(), cwd=s.workspace_root,
-                              capture_output=True, text=True, timeout=60, check=False)
-    except subprocess.TimeoutExpired:
-        return {"message_error": "importing the generated types took more than 60 s",
-                "service_error": "importing the generated types took more than 60 s"}
-    lines = proc.stdout.strip().splitlines()
-    try:
-        return json.loads(lines[-1])
-    except (IndexError, json.JSONDecodeError):
-        last = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-        return {"message_error": last, "service_error": last}
-
-
-def _record_fields(s: GradingSession, check_id: str, what: str, observed: dict | None, expected: dict,
-                   error: str | None) -> None:
-    """Compare field by field: partial credit for each field with the right name and type."""
-    wanted = ", ".join(f"{t} {n}" for n, t in expected.items())
-    if observed is None:
-        s.record(check_id, False, f"{what} cannot be imported: {error}", f"{what} with {wanted}")
-        return
-    problems = []
-    good = 0
-    for name, type_name in expected.items():
-        got = observed.get(name)
-        if got is None:
-            problems.append(f"no field {name}")
-        elif got != type_name:
-            problems.append(f"{name} is {got}, not {type_name}")
-        else:
-            good += 1
-    extra = [f"{t} {n}" for n, t in observed.items() if n not in expected]
-    if extra:
-        problems.append("unexpected field(s): " + ", ".join(extra))
-    total = len(expected) + (1 if extra else 0)
-    shown = ", ".join(f"{t} {n}" for n, t in observed.items()) or "no fields"
-    s.record(check_id, not problems, f"{what}: {shown}" + (f" ({'; '.join(problems)})" if problems else ""),
-             f"{what}: {wanted}", fraction=good / total)
-
 
 def _check_manifest(s: GradingSession) -> None:
-    from course.build import find_packages  # noqa: PLC0415
-
-    found = find_packages(s.workspace_root / "src").get(PACKAGE)
+    found = kit.source_package(s, PACKAGE)
     if found is None:
         s.record("ament_cmake", False, f"no package {PACKAGE} in src/", "<build_type>ament_cmake</build_type>")
         s.record("manifest", False, f"no package {PACKAGE} in src/", "the interface dependencies in package.xml")
@@ -164,9 +96,10 @@ def grade(s: GradingSession) -> None:
     _check_manifest(s)
     _check_index(s)
     with s.phase("observe"):
-        types = _inspect_types(s)
-    _record_fields(s, "message_fields", "AmazingQuote", types.get("message"), MESSAGE, types.get("message_error"))
-    _record_fields(s, "request_fields", "WhatIsThePoint.Request", types.get("request"), REQUEST,
-                   types.get("service_error"))
-    _record_fields(s, "response_fields", "WhatIsThePoint.Response", types.get("response"), RESPONSE,
-                   types.get("service_error"))
+        types = generated_fields(s, [(PACKAGE, "msg", "AmazingQuote"), (PACKAGE, "srv", "WhatIsThePoint")])
+    msg, srv = f"{PACKAGE}/msg/AmazingQuote", f"{PACKAGE}/srv/WhatIsThePoint"
+    fields(s, "message_fields", "AmazingQuote", types.get(msg), MESSAGE, types.get(f"{msg}.error"))
+    fields(s, "request_fields", "WhatIsThePoint.Request", types.get(f"{srv}.Request"), REQUEST,
+           types.get(f"{srv}.error"))
+    fields(s, "response_fields", "WhatIsThePoint.Response", types.get(f"{srv}.Response"), RESPONSE,
+           types.get(f"{srv}.error"))

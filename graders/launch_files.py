@@ -12,13 +12,13 @@ from __future__ import annotations
 
 import time
 
-from course.grading import Check, GradingSession
 from course.probes import LATE_DELIVERY
-from graders._common import process_state, record_rate
+from graders import kit
+from graders.kit import Check, GradingSession, Unmet
 from graders.kit.launch import MODE_LAUNCH_ROS, LaunchRun, describe_launch_folder, start_launch_file
 from graders.kit.quotes import (EXECUTABLE, LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER, LAUNCH_QUOTE,
-                             LAUNCH_TOPIC, PACKAGE, amazing_quote, first_difference, package_share, package_source,
-                             short, topics_seen)
+                                LAUNCH_TOPIC, PACKAGE, amazing_quote, first_difference, package_share, package_source,
+                                short)
 
 SAMPLES = 6  # messages -> 5 intervals at 4 Hz (the minimum shared/LESSONS.md asks for)
 NODE_TIMEOUT = 10.0  # seconds for the node to appear (launch_ros start-up included)
@@ -38,15 +38,20 @@ CHECKS = [
     Check("node_name", f"The node is named {LAUNCH_NODE}", 2, f"give Node(...) name='{LAUNCH_NODE}'"),
     Check("topic", f"It publishes AmazingQuote on /{LAUNCH_TOPIC}", 2,
           f"parameters=[{{'topic_name': '{LAUNCH_TOPIC}', ...}}] in Node(...)"),
-    Check("rate", "It publishes at 4 Hz (period 0.25 s)", 2, "'period': 0.25 in the parameters dict (a float)"),
+    Check("rate", "It publishes at 4 Hz (period 0.25 s)", 2, "'period': 0.25 in the parameters dict (a float)",
+          needs=("topic",)),
     Check("contents", "The messages carry the ch. 22.9 quote and philosopher Tyler", 2,
           "'quote' and 'philosopher_name': 'Tyler' in the parameters dict; adjacent string literals are glued "
-          "without a space, so mind the spaces at the ends of the pieces"),
+          "without a space, so mind the spaces at the ends of the pieces", needs=("topic",)),
 ]
 
 
 def _find_launch_file(s: GradingSession):
-    """Record ``launch_installed``; return the file to run (installed, else the source one) or None."""
+    """Record ``launch_installed``; return the file to run (installed, else the source one).
+
+    Raises:
+        Unmet: the package has no such launch file at all.
+    """
     share = package_share(s)
     installed = share / "launch" / LAUNCH_FILE if share else None
     expected = f"install/{PACKAGE}/share/{PACKAGE}/launch/{LAUNCH_FILE}"
@@ -64,8 +69,7 @@ def _find_launch_file(s: GradingSession):
         return in_source
     s.record("launch_installed", False, where + f"; no launch/{LAUNCH_FILE} in the package's source either",
              expected, f"create launch/{LAUNCH_FILE} in the package and install it from setup.py's data_files")
-    s.skip_remaining(f"there is no {LAUNCH_FILE} to launch")
-    return None
+    raise Unmet(f"there is no {LAUNCH_FILE} to launch")
 
 
 def _record_start(s: GradingSession, run: LaunchRun, node_found: bool) -> bool:
@@ -82,15 +86,13 @@ def _record_start(s: GradingSession, run: LaunchRun, node_found: bool) -> bool:
     tail = " | ".join(output.strip().splitlines()[-3:])
     contents = run.file_contents()
     return s.record("launch_starts", False, f"{MODE_LAUNCH_ROS}: launch did not report starting {EXECUTABLE}; "
-                    f"{process_state(proc)}" + (f"; last output: {tail}" if tail else "")
+                    f"{kit.process_state(proc)}" + (f"; last output: {tail}" if tail else "")
                     + (f"; {contents}" if contents else ""), expected)
 
 
 def grade(s: GradingSession) -> None:
     """Start the launch file, then watch the node, its topic, rate and messages."""
     launch_file = _find_launch_file(s)
-    if launch_file is None:
-        return
     probe = s.ros.topic(f"/{LAUNCH_TOPIC}", amazing_quote(s))
     with s.phase("start"):
         run = start_launch_file(s, launch_file)
@@ -110,25 +112,20 @@ def grade(s: GradingSession) -> None:
         found = s.ros.wait_for_node(LAUNCH_NODE, NODE_TIMEOUT, abort=give_up)
     _record_start(s, run, found)
     seen = ", ".join(s.ros.node_names()) or "none"
-    states = "; ".join(f"{p.name}: {process_state(p)}" for p in run.processes)
+    states = "; ".join(f"{p.name}: {kit.process_state(p)}" for p in run.processes)
     s.record("node_name", found, f"node /{LAUNCH_NODE} is running ({mode})" if found else
              f"no node named {LAUNCH_NODE} after {time.monotonic() - began:.1f} s; nodes seen: {seen}; {states}",
              f"a node named {LAUNCH_NODE} (Node(name=...) renames the node)")
     if not run.any_running():
-        s.skip_remaining(f"nothing the launch file started is running: {states}")
-        return
+        raise Unmet(f"nothing the launch file started is running: {states}")
     with s.phase("observe"):
         timeout = probe.observe(SAMPLES, LAUNCH_PERIOD, 4.0 + LATE_DELIVERY, abort=lambda: not run.any_running())
     samples = probe.samples()
-    if not samples:
-        s.record("topic", False, f"no message on /{LAUNCH_TOPIC} within {timeout:.1f} s ({mode}); "
-                 f"topics seen: {topics_seen(s)}", f"AmazingQuote messages on /{LAUNCH_TOPIC}")
-        s.skip_remaining(f"no message on /{LAUNCH_TOPIC}")
-        return
-    s.record("topic", True, f"{len(samples)} AmazingQuote message(s) on /{LAUNCH_TOPIC} ({mode})",
-             f"AmazingQuote messages on /{LAUNCH_TOPIC}")
-    record_rate(s, "rate", probe.send_stamps(), period=LAUNCH_PERIOD, needed=SAMPLES, waited=timeout,
-                noun="message", source="the messages' send stamps")
+    s.record("topic", bool(samples), f"{len(samples)} AmazingQuote message(s) on /{LAUNCH_TOPIC} ({mode})"
+             if samples else f"no message on /{LAUNCH_TOPIC} within {timeout:.1f} s ({mode}); "
+             f"topics seen: {kit.topics_seen(s.ros)}", f"AmazingQuote messages on /{LAUNCH_TOPIC}")
+    kit.rate(s, "rate", probe.send_stamps(), period=LAUNCH_PERIOD, needed=SAMPLES, waited=timeout,
+             noun="message", source="the messages' send stamps")
     wrong = [m for _, m in samples if m.quote != LAUNCH_QUOTE or m.philosopher_name != LAUNCH_PHILOSOPHER]
     expected = f"quote {short(LAUNCH_QUOTE)} (ch. 22.9), philosopher_name {LAUNCH_PHILOSOPHER!r}"
     if not wrong:

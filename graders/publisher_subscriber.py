@@ -6,7 +6,7 @@ types, the messages' fields, the id sequence, the rate). The **subscriber**
 is driven like ``ros2 topic pub`` would: the grader publishes quotes of its
 own (texts, philosophers and ids it makes up for this check, so an echo of
 the seed's example cannot pass) and looks for them in the subscriber's
-``/rosout`` records. Each executable is graded separately (partial credit)
+``/rosout`` records. Each executable is a part of its own (partial credit)
 and each ends with its Ctrl+C check.
 """
 
@@ -15,20 +15,10 @@ from __future__ import annotations
 import itertools
 import random
 
-from course.grading import Check, GradingSession
 from course.probes import wait_until
-from graders._common import process_state, record_rate, record_sigint_exit
-from graders.kit.topics_services import (
-    describe_endpoints,
-    has_integer,
-    launch_node,
-    give_up,
-    pick_endpoint,
-    record_depends,
-    require_executable,
-    wait_for_endpoint,
-    workspace_types,
-)
+from graders import kit
+from graders.kit import Check, GradingSession, Unmet
+from graders.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_the_messages"
 PUB_EXE = "amazing_quote_publisher_node"
@@ -45,14 +35,11 @@ SAMPLES = 6  # messages -> 5 intervals, the minimum LESSONS.md asks for
 START_TIMEOUT = 5.0
 GRADER_QUOTES = 3  # quotes the grader publishes to the subscriber
 
-PUB_CHECKS = ["pub_executable", "pub_node_name", "pub_topic", "pub_contents", "pub_id_counts", "pub_rate",
-              "pub_sigint_exit"]
-SUB_CHECKS = ["sub_executable", "sub_node_name", "sub_topic", "sub_logs_quotes", "sub_logs_details",
-              "sub_sigint_exit"]
-
 #: Seconds of observation the contract needs: the publisher's 6 messages at 2 Hz, then the
 #: grader's quotes to the subscriber (one period each).
 WINDOW = SAMPLES * PERIOD + GRADER_QUOTES * PERIOD
+SIGINT_HINT = "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"
+PUB, SUB = {"part": "publisher", "needs": ("pub_executable",)}, {"part": "subscriber", "needs": ("sub_executable",)}
 
 CHECKS = [
     Check("build", "The packages build with colcon", 1),
@@ -60,118 +47,88 @@ CHECKS = [
           "add <depend>rclpy</depend> and <depend>package_with_interfaces</depend> to package.xml (seed ch. 18.1)"),
     Check("pub_executable", "ros2 run finds amazing_quote_publisher_node", 1,
           "register 'amazing_quote_publisher_node = python_package_that_uses_the_messages."
-          "amazing_quote_publisher_node:main' in console_scripts, then colcon build"),
+          "amazing_quote_publisher_node:main' in console_scripts, then colcon build", part="publisher"),
     Check("pub_node_name", "A node named amazing_quote_publisher_node starts", 1,
-          "pass 'amazing_quote_publisher_node' to super().__init__()"),
+          "pass 'amazing_quote_publisher_node' to super().__init__()", **PUB),
     Check("pub_topic", "It publishes /amazing_quote of type package_with_interfaces/msg/AmazingQuote", 2,
-          "self.create_publisher(msg_type=AmazingQuote, topic='/amazing_quote', qos_profile=1)"),
+          "self.create_publisher(msg_type=AmazingQuote, topic='/amazing_quote', qos_profile=1)", **PUB),
     Check("pub_contents", "Each message says 'Use the force, Pikachu!' by 'Uncle Ben'", 2,
-          "set amazing_quote.quote and amazing_quote.philosopher_name before publishing (check the spelling)"),
+          "set amazing_quote.quote and amazing_quote.philosopher_name before publishing (check the spelling)", **PUB),
     Check("pub_id_counts", "The id counts up by 1 from one message to the next", 2,
-          "keep the id in an attribute (self.incremental_id), put it in each message, then add 1"),
+          "keep the id in an attribute (self.incremental_id), put it in each message, then add 1", **PUB),
     Check("pub_rate", "One message every 0.5 s (2 Hz)", 2,
-          "self.create_timer(0.5, self.timer_callback), one publish per tick"),
-    Check("pub_sigint_exit", "Ctrl+C ends the publisher with exit code 0 and no traceback", 1,
-          "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"),
+          "self.create_timer(0.5, self.timer_callback), one publish per tick", **PUB),
+    Check("pub_sigint_exit", "Ctrl+C ends the publisher with exit code 0 and no traceback", 1, SIGINT_HINT, **PUB),
     Check("sub_executable", "ros2 run finds amazing_quote_subscriber_node", 1,
           "register 'amazing_quote_subscriber_node = python_package_that_uses_the_messages."
-          "amazing_quote_subscriber_node:main' in console_scripts, then colcon build"),
+          "amazing_quote_subscriber_node:main' in console_scripts, then colcon build", part="subscriber"),
     Check("sub_node_name", "A node named amazing_quote_subscriber_node starts", 1,
-          "pass 'amazing_quote_subscriber_node' to super().__init__()"),
+          "pass 'amazing_quote_subscriber_node' to super().__init__()", **SUB),
     Check("sub_topic", "It subscribes to /amazing_quote of type package_with_interfaces/msg/AmazingQuote", 2,
-          "self.create_subscription(msg_type=AmazingQuote, topic='/amazing_quote', callback=..., qos_profile=1)"),
+          "self.create_subscription(msg_type=AmazingQuote, topic='/amazing_quote', callback=..., qos_profile=1)",
+          **SUB),
     Check("sub_logs_quotes", "It logs the text of each quote it receives", 3,
           "in the subscription callback, log msg.quote with self.get_logger().info(...) "
-          "(print() does not reach /rosout)"),
+          "(print() does not reach /rosout)", **SUB),
     Check("sub_logs_details", "With each quote it logs the philosopher's name and the id", 2,
-          "log msg.philosopher_name and msg.id too, e.g. in the same f-string as msg.quote"),
-    Check("sub_sigint_exit", "Ctrl+C ends the subscriber with exit code 0 and no traceback", 1,
-          "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"),
+          "log msg.philosopher_name and msg.id too, e.g. in the same f-string as msg.quote", **SUB),
+    Check("sub_sigint_exit", "Ctrl+C ends the subscriber with exit code 0 and no traceback", 1, SIGINT_HINT, **SUB),
 ]
-
-
-def _reliable(depth: int = 10):
-    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: PLC0415
-
-    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE)
-
-
-def _topics_seen(s: GradingSession) -> str:
-    """What ``ros2 topic list -t`` would show, without /rosout, /parameter_events and the grader's own probes."""
-    graph = s.ros.node
-
-    def learners(topic: str) -> bool:
-        infos = [*graph.get_publishers_info_by_topic(topic), *graph.get_subscriptions_info_by_topic(topic)]
-        return any(not info.node_name.startswith("_") for info in infos)
-
-    topics = {n: types for n, types in s.ros.topic_types().items()
-              if n not in ("/rosout", "/parameter_events") and learners(n)}
-    return describe_endpoints(topics)
 
 
 def _show(msg) -> str:
     return f"{{id: {msg.id}, quote: {msg.quote!r}, philosopher_name: {msg.philosopher_name!r}}}"
 
 
-# --- the publisher ---------------------------------------------------------------
+def _endpoint(s: GradingSession, check_id: str, node: kit.StartedNode, kind: str, verb: str, none: str,
+              where: str) -> tuple[str, str]:
+    """Record ``check_id`` on the node's own /amazing_quote endpoint of ``kind``; return (topic to use, where).
+
+    Raises:
+        Unmet: (with reason ``none``) the node has no AmazingQuote endpoint of that kind at all.
+    """
+    found = ts.wait_for_endpoint(s, node.name, kind, TOPIC, 3.0, abort=node.ended)
+    ok = MSG_TYPE in found.get(TOPIC, [])
+    s.record(check_id, ok, f"{node.name or 'the node'} {verb}: {ts.describe_endpoints(found)}"
+             + ("" if ok else f"; topics in the graph: {ts.learner_topics(s.ros)}"), f"{TOPIC} [{MSG_TYPE}]")
+    target = ts.pick_endpoint(found, TOPIC, MSG_TYPE)
+    if target is None:
+        raise Unmet(none)
+    return target, ("" if target == TOPIC else f" ({where} {target}, the topic your node uses)")
+
 
 def _grade_publisher(s: GradingSession, msg_type: type) -> None:
-    path = require_executable(s, "pub_executable", PACKAGE, PUB_EXE, PUB_CHECKS)
-    if path is None:
-        return
-    # Subscribe before the node starts: no message is missed and the rate window starts at once.
-    probes = {TOPIC: s.ros.topic(TOPIC, msg_type, _reliable())}
-    proc, node = launch_node(s, "pub_node_name", path, PUB_EXE, PUB_NODE)
-    if proc.poll() is not None:
-        give_up(s, PUB_CHECKS, process_state(proc), proc)
-        return
-    with s.phase("start"):
-        found = wait_for_endpoint(s, node, "publishers", TOPIC, 3.0, abort=lambda: proc.poll() is not None) \
-            if node else {}
-    expected = f"{TOPIC} [{MSG_TYPE}]"
-    ok = MSG_TYPE in found.get(TOPIC, [])
-    s.record("pub_topic", ok, f"{node or 'the node'} publishes: {describe_endpoints(found)}"
-             + ("" if ok else f"; topics in the graph: {_topics_seen(s)}"), expected)
-    target = pick_endpoint(found, TOPIC, MSG_TYPE)
-    if target is None or MSG_TYPE not in found.get(target, []):
-        give_up(s, PUB_CHECKS, f"no {MSG_TYPE} topic published to listen to", proc)
-        return
-    if target not in probes:  # grade the contents where the learner publishes them
-        probes[target] = s.ros.topic(target, msg_type, _reliable())
-    probe = probes[target]
-    where = "" if target == TOPIC else f" (on {target}, the topic your node uses)"
+    path = kit.executable(s, "pub_executable", PACKAGE, PUB_EXE)
+    probes = {TOPIC: ts.listen(s, TOPIC, msg_type)}  # before the node starts: no message is missed
+    node = kit.start_node(s, "pub_node_name", path, PUB_NODE, sigint_check="pub_sigint_exit", need_node=False)
+    target, where = _endpoint(s, "pub_topic", node, "publishers", "publishes",
+                              f"no {MSG_TYPE} topic published to listen to", "on")
+    probe = probes.get(target) or ts.listen(s, target, msg_type)  # grade the contents where they are published
     with s.phase("observe"):
-        window = probe.observe(SAMPLES, PERIOD, START_TIMEOUT, abort=lambda: proc.poll() is not None)
+        window = probe.observe(SAMPLES, PERIOD, START_TIMEOUT, abort=node.ended)
     messages = probe.messages()[:SAMPLES]
     if not messages:
-        give_up(s, PUB_CHECKS, f"no message on {target} in {window:.1f} s; {process_state(proc)}", proc)
-        return
+        raise Unmet(f"no message on {target} in {window:.1f} s; {kit.process_state(node.proc)}")
 
     wrong_quote = [m for m in messages if m.quote != QUOTE]
     wrong_name = [m for m in messages if m.philosopher_name != PHILOSOPHER]
     share = (0.5 if not wrong_quote else 0.0) + (0.5 if not wrong_name else 0.0)
     bad = (wrong_quote or wrong_name or messages)[0]
-    wrong = len(wrong_quote) + len(wrong_name)
     observed = (f"all {len(messages)} messages are {_show(bad)}" if share == 1.0
-                else f"{wrong} wrong field(s) in {len(messages)} messages, e.g. {_show(bad)}")
+                else f"{len(wrong_quote) + len(wrong_name)} wrong field(s) in {len(messages)} messages, "
+                f"e.g. {_show(bad)}")
     s.record("pub_contents", share == 1.0, observed + where,
              f"quote: {QUOTE!r}, philosopher_name: {PHILOSOPHER!r} in every message", fraction=share)
-
     ids = [m.id for m in messages]
     shown = ", ".join(map(str, ids))
     if len(ids) < 2:
         s.record("pub_id_counts", False, f"only one message (id {shown}) to compare", "ids n, n+1, n+2, ...")
     else:
-        counts = all(b - a == 1 for a, b in itertools.pairwise(ids))
-        s.record("pub_id_counts", counts, f"ids {shown}" + where,
+        s.record("pub_id_counts", all(b - a == 1 for a, b in itertools.pairwise(ids)), f"ids {shown}" + where,
                  f"ids {ids[0]}, {ids[0] + 1}, {ids[0] + 2}, ... (each one more than the previous)")
+    kit.rate(s, "pub_rate", probe.send_stamps(SAMPLES), period=PERIOD, needed=SAMPLES, waited=window,
+             noun="message", source="the messages' send stamps", where=where)
 
-    record_rate(s, "pub_rate", probe.send_stamps(SAMPLES), period=PERIOD, needed=SAMPLES, waited=window,
-                noun="message", source="the messages' send stamps", where=where)
-    record_sigint_exit(s, "pub_sigint_exit", proc)
-
-
-# --- the subscriber ----------------------------------------------------------------
 
 _WORDS = ["teapot", "lantern", "cactus", "harbour", "violin", "comet", "pebble", "marmalade", "glacier",
           "walrus", "origami", "thunder", "velvet", "compass", "biscuit", "nebula"]
@@ -184,52 +141,31 @@ def _grader_quotes(msg_type: type) -> list:
     out = []
     for _ in range(GRADER_QUOTES):
         a, b, c = rng.sample(_WORDS, 3)
-        msg = msg_type()
-        msg.id = rng.randrange(100_000, 1_000_000)
-        msg.quote = f"A {a} in the {b} is worth two {c}s."
-        msg.philosopher_name = f"{rng.choice(_NAMES)} {rng.choice(_WORDS).capitalize()}"
+        msg = msg_type(id=rng.randrange(100_000, 1_000_000), quote=f"A {a} in the {b} is worth two {c}s.",
+                       philosopher_name=f"{rng.choice(_NAMES)} {rng.choice(_WORDS).capitalize()}")
         out.append(msg)
     return out
 
 
 def _grade_subscriber(s: GradingSession, msg_type: type) -> None:
-    path = require_executable(s, "sub_executable", PACKAGE, SUB_EXE, SUB_CHECKS)
-    if path is None:
-        return
+    path = kit.executable(s, "sub_executable", PACKAGE, SUB_EXE)
     rosout = s.ros.rosout()
-    proc, node = launch_node(s, "sub_node_name", path, SUB_EXE, SUB_NODE)
-    if proc.poll() is not None:
-        give_up(s, SUB_CHECKS, process_state(proc), proc)
-        return
-    with s.phase("start"):
-        found = wait_for_endpoint(s, node, "subscriptions", TOPIC, 3.0, abort=lambda: proc.poll() is not None) \
-            if node else {}
-    ok = MSG_TYPE in found.get(TOPIC, [])
-    s.record("sub_topic", ok, f"{node or 'the node'} subscribes to: {describe_endpoints(found)}"
-             + ("" if ok else f"; topics in the graph: {_topics_seen(s)}"), f"{TOPIC} [{MSG_TYPE}]")
-    target = pick_endpoint(found, TOPIC, MSG_TYPE)
-    if target is None or MSG_TYPE not in found.get(target, []):
-        give_up(s, SUB_CHECKS, f"no {MSG_TYPE} subscription to publish to", proc)
-        return
-    where = "" if target == TOPIC else f" (published on {target}, the topic your node uses)"
-
-    publisher = s.ros.node.create_publisher(msg_type, target, _reliable())
+    node = kit.start_node(s, "sub_node_name", path, SUB_NODE, sigint_check="sub_sigint_exit", need_node=False)
+    target, where = _endpoint(s, "sub_topic", node, "subscriptions", "subscribes to",
+                              f"no {MSG_TYPE} subscription to publish to", "published on")
     quotes = _grader_quotes(msg_type)
-    try:
-        with s.phase("observe"):
-            # Publish only once the subscriber is matched, else the first quote is lost.
-            wait_until(lambda: publisher.get_subscription_count() > 0, 3.0, abort=lambda: proc.poll() is not None)
 
-            def seen(msg) -> bool:
-                return any(msg.quote in r.msg for r in rosout.records())
+    def seen(msg) -> bool:
+        return any(msg.quote in r.msg for r in rosout.records())
 
-            for msg in quotes:
-                for _ in range(2):  # a second chance if a message was lost
-                    publisher.publish(msg)
-                    if wait_until(lambda m=msg: seen(m), 1.0, abort=lambda: proc.poll() is not None):
-                        break
-    finally:
-        s.ros.node.destroy_publisher(publisher)
+    with ts.publisher(s, target, msg_type) as publisher, s.phase("observe"):
+        # Publish only once the subscriber is matched, else the first quote is lost.
+        wait_until(lambda: publisher.get_subscription_count() > 0, 3.0, abort=node.ended)
+        for msg in quotes:
+            for _ in range(2):  # a second chance if a message was lost
+                publisher.publish(msg)
+                if wait_until(lambda m=msg: seen(m), 1.0, abort=node.ended):
+                    break
 
     records = rosout.records()
     logged = [m for m in quotes if any(m.quote in r.msg for r in records)]
@@ -239,34 +175,30 @@ def _grade_subscriber(s: GradingSession, msg_type: type) -> None:
                  + where, expected)
     else:
         recent = " | ".join(r.msg.strip().replace("\n", " ")[:80] for r in records[-2:]) or "no log records"
-        on_stdout = any(m.quote in proc.stdout() for m in quotes)
+        on_stdout = any(m.quote in node.proc.stdout() for m in quotes)
         s.record("sub_logs_quotes", False,
                  f"{len(logged)} of {len(quotes)} quotes found in the log (e.g. {quotes[0].quote!r} was published)"
                  f"{where}; last records: {recent}"
                  + ("; the quotes appeared on stdout only (print() instead of the logger?)" if on_stdout else "")
-                 + f"; {process_state(proc)}", expected, fraction=len(logged) / len(quotes))
+                 + f"; {kit.process_state(node.proc)}", expected, fraction=len(logged) / len(quotes))
+    if not logged:
+        raise Unmet("no quote was logged")
     # Details: the philosopher and the id, in any record of the node (one record or several).
     items = [(m, what, ok) for m in logged
              for what, ok in (("philosopher_name", any(m.philosopher_name in r.msg for r in records)),
-                              ("id", any(has_integer(r.msg, m.id) for r in records)))]
-    if not logged:
-        s.record("sub_logs_details", False, "not checked: no quote was logged", "philosopher_name and id logged too")
-    else:
-        missing = [f"{what} of {m.quote!r} ({getattr(m, what)!r})" for m, what, ok in items if not ok]
-        good = len(items) - len(missing)
-        observed = ("philosopher and id of every logged quote found" if not missing
-                    else "missing: " + "; ".join(missing[:2]))
-        s.record("sub_logs_details", not missing, observed,
-                 "each quote's philosopher_name and id in the log too", fraction=good / len(items))
-    record_sigint_exit(s, "sub_sigint_exit", proc)
+                              ("id", any(ts.has_integer(r.msg, m.id) for r in records)))]
+    missing = [f"{what} of {m.quote!r} ({getattr(m, what)!r})" for m, what, ok in items if not ok]
+    s.record("sub_logs_details", not missing, "philosopher and id of every logged quote found" if not missing
+             else "missing: " + "; ".join(missing[:2]), "each quote's philosopher_name and id in the log too",
+             fraction=(len(items) - len(missing)) / len(items))
 
 
 def grade(s: GradingSession) -> None:
-    """Grade the publisher (as a listener), then the subscriber (as a publisher)."""
-    record_depends(s, "depends", PACKAGE)
-    msg_type = workspace_types(s, "msg", "AmazingQuote")
-    if msg_type is None:
-        return
-    _grade_publisher(s, msg_type)
+    """Grade the publisher (as a listener), then the subscriber (as a publisher), each a part of its own."""
+    kit.depends(s, "depends", PACKAGE, ("rclpy", ts.INTERFACES))
+    msg_type = ts.workspace_types(s, "msg", "AmazingQuote")
+    with s.part("publisher"):
+        _grade_publisher(s, msg_type)
     # A fresh graph: a second learner process is discovered faster there (GradingSession.in_new_graph).
-    _grade_subscriber(s.in_new_graph(), msg_type)
+    with s.part("subscriber"):
+        _grade_subscriber(s.in_new_graph(), msg_type)

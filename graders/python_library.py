@@ -14,13 +14,8 @@ from __future__ import annotations
 import json
 import math
 
-from course.grading import Check, GradingSession
-from graders.kit.packaging import (
-    install_prefix,
-    relative,
-    run_installed_python,
-    site_packages,
-)
+from graders.kit import Check, GradingSession
+from graders.kit.packaging import installed_import, installed_subpackage
 
 PACKAGE = "python_package_with_a_library"
 SUBPACKAGE = "sample_python_library"
@@ -46,10 +41,10 @@ CHECKS = [
           "sample_function_for_square_of_sum must work after 'source install/setup.bash', from any folder"),
     Check("square_of_sum", "sample_function_for_square_of_sum(a, b) returns (a + b)**2", 2,
           "export the function in sample_python_library/__init__.py and return (a + b) ** 2 "
-          "(that is a**2 + 2*a*b + b**2)"),
+          "(that is a**2 + 2*a*b + b**2)", needs=("importable",)),
     Check("sample_class", "SampleClass(name).get_name() returns that name", 2,
           "store the name in __init__ (self._name = name) and return it from get_name(); "
-          "export SampleClass in sample_python_library/__init__.py"),
+          "export SampleClass in sample_python_library/__init__.py", needs=("importable",)),
 ]
 
 _PROBE = """
@@ -68,10 +63,10 @@ def dump():
 
 
 try:
-    mod = importlib.import_module(@MODULE@)
+    mod = importlib.import_module(sys.argv[2])
     out["file"] = str(getattr(mod, "__file__", None) or list(getattr(mod, "__path__", [])))
 except BaseException as exc:
-    out["import_error"] = text(exc)
+    out["error"] = text(exc)
     dump()
     sys.exit(0)
 out["names"] = sorted(n for n in dir(mod) if not n.startswith("__"))
@@ -98,32 +93,14 @@ if cls is not None:
         out["class_error"] = text(exc)
 dump()
 """
-for _key, _value in {"@CASES@": json.dumps(CASES), "@NAMES@": json.dumps(NAMES), "@MODULE@": MODULE,
-                     "@FUNCTION@": FUNCTION, "@CLASS@": CLASS}.items():
+# (the module to import comes in sys.argv[2]: graders.kit.packaging.installed_import passes it)
+for _key, _value in {"@CASES@": json.dumps(CASES), "@NAMES@": json.dumps(NAMES), "@FUNCTION@": FUNCTION,
+                     "@CLASS@": CLASS}.items():
     _PROBE = _PROBE.replace(_key, repr(_value))
 
 
-def _record_installed(s: GradingSession) -> bool:
-    """``installed``: the sub-package's ``__init__.py`` is in the install tree's site-packages."""
-    prefix = install_prefix(s, PACKAGE)
-    roots = site_packages(prefix)
-    wanted = [root / PACKAGE / SUBPACKAGE / "__init__.py" for root in roots]
-    found = [p for p in wanted if p.is_file()]
-    expected = f"install/{PACKAGE}/lib/python3.*/site-packages/{PACKAGE}/{SUBPACKAGE}/__init__.py"
-    if found:
-        files = sorted(p.name for p in found[0].parent.iterdir() if p.suffix == ".py")
-        return s.record("installed", True, f"{relative(s, found[0].parent)} holds {', '.join(files)}", expected)
-    if not roots:
-        observed = f"no {relative(s, prefix)}/lib/python3.*/site-packages folder (was the package built?)"
-    else:
-        top = roots[0] / PACKAGE
-        listing = sorted(p.name + ("/" if p.is_dir() else "") for p in top.iterdir()) if top.is_dir() else []
-        observed = (f"{relative(s, top)} holds {', '.join(listing) or 'nothing'}: no {SUBPACKAGE}/"
-                    if top.is_dir() else f"no {relative(s, top)}")
-    return s.record("installed", False, observed, expected)
-
-
 def _record_function(s: GradingSession, result: dict) -> None:
+    """``square_of_sum``: the probe's calls of the function returned (a + b)**2 (seed ch. 14.3)."""
     expected = "(a + b)**2 for " + ", ".join(f"({a}, {b})" for a, b in CASES)
     calls = result.get("calls")
     if calls is None:
@@ -147,6 +124,7 @@ def _record_function(s: GradingSession, result: dict) -> None:
 
 
 def _record_class(s: GradingSession, result: dict) -> None:
+    """``sample_class``: two instances gave back the names they were made with (seed ch. 14.3)."""
     expected = (f"{CLASS}({NAMES[0]!r}).get_name() == {NAMES[0]!r} and "
                 f"{CLASS}(name={NAMES[1]!r}).get_name() == {NAMES[1]!r}, each instance keeping its own name")
     if "names_returned" not in result and "class_error" not in result:
@@ -161,22 +139,9 @@ def _record_class(s: GradingSession, result: dict) -> None:
 
 def grade(s: GradingSession) -> None:
     """Check the install tree, then import and exercise the installed library in a subprocess."""
-    installed = _record_installed(s)
-    result, problem = run_installed_python(s, _PROBE)
-    expected = f"from {MODULE} import {CLASS}, {FUNCTION} works from outside src/, using the installed copy"
-    if problem:
-        s.record("importable", False, problem, expected)
-        s.skip_remaining("the library could not be imported")
-        return
-    if "import_error" in result:
-        s.record("importable", False, f"import {MODULE} with the workspace sourced: {result['import_error']}"
-                 + ("" if installed else " (it is not installed, see above)"), expected)
-        s.skip_remaining("the library could not be imported")
-        return
-    where = result.get("file", "")
-    inside = str(s.workspace_root / "install") in where
-    s.record("importable", inside, f"import {MODULE} loads {where.replace(str(s.workspace_root) + '/', '')}", expected,
-             None if inside else "that is not the copy colcon installed: rebuild and source install/setup.bash")
+    installed = installed_subpackage(s, "installed", PACKAGE, SUBPACKAGE)
+    result = installed_import(s, "importable", MODULE, f"from {MODULE} import {CLASS}, {FUNCTION} works from "
+                              "outside src/, using the installed copy",
+                              note="" if installed else " (it is not installed, see above)", code=_PROBE)
     _record_function(s, result)
     _record_class(s, result)
-

@@ -8,10 +8,10 @@ graph is started.
 
 from __future__ import annotations
 
-from course.grading import Check, GradingSession
 from course.probes import wait_until
 from course.process import LearnerProcess
-from graders.kit.packaging import require_ros2_run_executable
+from graders.kit import Check, GradingSession
+from graders.kit.packaging import ros2_run_executable
 
 PACKAGE = "python_package_with_a_node"
 EXECUTABLE = "sample_python_node"
@@ -27,13 +27,14 @@ CHECKS = [
           "register 'sample_python_node = python_package_with_a_node.sample_python_node:main' in console_scripts "
           "(setup.py), keep setup.cfg's install_scripts=$base/lib/python_package_with_a_node, then colcon build"),
     Check("greeting", "It prints 'Hi from python_package_with_a_node.'", 3,
-          "main() prints exactly: Hi from python_package_with_a_node."),
+          "main() prints exactly: Hi from python_package_with_a_node.", needs=("executable",)),
     Check("exit_code", "It ends by itself with exit code 0 and no traceback", 2,
-          "main() should print and return; no loop, no sys.exit() with a non-zero code"),
+          "main() should print and return; no loop, no sys.exit() with a non-zero code", needs=("executable",)),
 ]
 
 
 def _lines(text: str, limit: int = 3) -> str:
+    """The first ``limit`` non-blank lines of ``text``, quoted and joined with `` | `` ("nothing" if none)."""
     lines = [line.strip() for line in text.splitlines() if line.strip()]
     shown = " | ".join(repr(line) for line in lines[:limit])
     return shown + (f" (+{len(lines) - limit} more lines)" if len(lines) > limit else "") if lines else "nothing"
@@ -41,9 +42,7 @@ def _lines(text: str, limit: int = 3) -> str:
 
 def grade(s: GradingSession) -> None:
     """Run the executable once, wait for it to end, judge its stdout and exit code."""
-    path = require_ros2_run_executable(s, "executable", PACKAGE, EXECUTABLE)
-    if path is None:
-        return
+    path = ros2_run_executable(s, "executable", PACKAGE, EXECUTABLE)
     proc = LearnerProcess([str(path)], s.overlay(), s.log_dir, EXECUTABLE, cwd=s.workspace_root,
                           deadline=EXIT_TIMEOUT + 20.0)
     try:

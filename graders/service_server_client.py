@@ -23,22 +23,10 @@ import random
 import re
 import time
 
-from course.grading import Check, GradingSession
-from course.probes import LATE_DELIVERY, wait_until
-from graders._common import RATE_TOLERANCE, process_state, record_rate, record_sigint_exit
-from graders.kit.topics_services import (
-    DeferredServer,
-    describe_endpoints,
-    has_point,
-    launch_node,
-    give_up,
-    pick_endpoint,
-    record_depends,
-    require_executable,
-    skip_checks,
-    wait_for_endpoint,
-    workspace_types,
-)
+from course.probes import LATE_DELIVERY, call_service, wait_until
+from graders import kit
+from graders.kit import RATE_TOLERANCE, Check, GradingSession
+from graders.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_the_services"
 SERVER_EXE = "what_is_the_point_service_server_node"
@@ -74,10 +62,9 @@ NO_LIFE = [
     ("no match", "Nobody", False),
 ]
 
-SERVER_CHECKS = ["server_executable", "server_node_name", "service_name_type", "life_sum_42", "life_any_case",
-                 "no_life_not_42", "server_sigint_exit"]
-CLIENT_CHECKS = ["client_executable", "client_node_name", "client_waits", "client_calls", "client_rate",
-                 "client_logs_points", "client_keeps_calling_when_slow", "client_sigint_exit"]
+SERVER = {"part": "server", "needs": ("server_executable",)}
+CLIENT = {"part": "client", "needs": ("client_executable",)}
+SIGINT_HINT = "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"
 
 #: Seconds of observation the contract needs, on the client's clock (the server half runs at the
 #: same time in a graph of its own and is shorter): its first "waiting" record (within one 0.5 s
@@ -91,41 +78,42 @@ CHECKS = [
           "add <depend>rclpy</depend> and <depend>package_with_interfaces</depend> to package.xml (seed ch. 18.1)"),
     Check("server_executable", "ros2 run finds what_is_the_point_service_server_node", 1,
           "register 'what_is_the_point_service_server_node = python_package_that_uses_the_services."
-          "what_is_the_point_service_server_node:main' in console_scripts, then colcon build"),
+          "what_is_the_point_service_server_node:main' in console_scripts, then colcon build", part="server"),
     Check("server_node_name", "A node named what_is_the_point_service_server starts", 1,
-          "pass 'what_is_the_point_service_server' to super().__init__()"),
+          "pass 'what_is_the_point_service_server' to super().__init__()", **SERVER),
     Check("service_name_type", "It serves /what_is_the_point of type package_with_interfaces/srv/WhatIsThePoint", 2,
-          "self.create_service(srv_type=WhatIsThePoint, srv_name='/what_is_the_point', callback=...)"),
+          "self.create_service(srv_type=WhatIsThePoint, srv_name='/what_is_the_point', callback=...)", **SERVER),
     Check("life_sum_42", "A quote containing 'life' gets a point whose coordinates sum to 42", 2,
-          "in the callback, test request.quote.quote and make z = 42 - (x + y)"),
+          "in the callback, test request.quote.quote and make z = 42 - (x + y)", **SERVER),
     Check("life_any_case", "'LIFE', 'Life', 'lIfE' count as 'life' too", 2,
-          "compare in one case: 'life' in request.quote.quote.lower()"),
+          "compare in one case: 'life' in request.quote.quote.lower()", **SERVER),
     Check("no_life_not_42", "Any other quote gets a point whose coordinates do not sum to 42", 2,
           "look at the quote's text (request.quote.quote), not the philosopher's name; "
-          "if a random point happens to sum to 42, move it"),
-    Check("server_sigint_exit", "Ctrl+C ends the server with exit code 0 and no traceback", 1,
-          "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"),
+          "if a random point happens to sum to 42, move it", **SERVER),
+    Check("server_sigint_exit", "Ctrl+C ends the server with exit code 0 and no traceback", 1, SIGINT_HINT, **SERVER),
     Check("client_executable", "ros2 run finds what_is_the_point_service_client_node", 1,
           "register 'what_is_the_point_service_client_node = python_package_that_uses_the_services."
-          "what_is_the_point_service_client_node:main' in console_scripts, then colcon build"),
+          "what_is_the_point_service_client_node:main' in console_scripts, then colcon build", part="client"),
     Check("client_node_name", "A node named what_is_the_point_service_client starts", 1,
-          "pass 'what_is_the_point_service_client' to super().__init__()"),
+          "pass 'what_is_the_point_service_client' to super().__init__()", **CLIENT),
     Check("client_waits", "Before the service exists, the client logs that it is waiting for it", 2,
           "until self.service_client.service_is_ready() is true, log e.g. "
-          "'service /what_is_the_point not available, waiting...' (and send nothing)"),
+          "'service /what_is_the_point not available, waiting...' (and send nothing)", **CLIENT),
     Check("client_calls", "Once the service exists, the client calls /what_is_the_point", 2,
           "create the client with srv_type=WhatIsThePoint, srv_name='/what_is_the_point' "
-          "and call self.service_client.call_async(request) in a timer callback"),
+          "and call self.service_client.call_async(request) in a timer callback", **CLIENT),
     Check("client_rate", "It calls twice a second (every 0.5 s)", 2,
-          "self.create_timer(0.5, self.timer_callback), one call_async per tick"),
+          "self.create_timer(0.5, self.timer_callback), one call_async per tick", part="client",
+          needs=("client_calls",)),
     Check("client_logs_points", "It logs every point the server returns", 2,
-          "future.add_done_callback(self.process_response); in it, log future.result().point with the logger"),
+          "future.add_done_callback(self.process_response); in it, log future.result().point with the logger",
+          part="client", needs=("client_calls",)),
     Check("client_keeps_calling_when_slow",
           "While an answer is late, it still calls every 0.5 s (call_async never blocks the executor)", 3,
           "don't wait for the answer inside the timer callback (no spin_until_future_complete, no call(), "
-          "no loop on future.done()): return at once and let a done callback handle the response"),
-    Check("client_sigint_exit", "Ctrl+C ends the client with exit code 0 and no traceback", 1,
-          "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"),
+          "no loop on future.done()): return at once and let a done callback handle the response",
+          part="client", needs=("client_calls",)),
+    Check("client_sigint_exit", "Ctrl+C ends the client with exit code 0 and no traceback", 1, SIGINT_HINT, **CLIENT),
 ]
 
 
@@ -133,29 +121,17 @@ def _point_text(point) -> str:
     return f"({point.x:.6g}, {point.y:.6g}, {point.z:.6g})"
 
 
-# --- the server ------------------------------------------------------------------
-
 def _grade_server(s: GradingSession, srv_type: type) -> None:
-    path = require_executable(s, "server_executable", PACKAGE, SERVER_EXE, SERVER_CHECKS)
-    if path is None:
-        return
-    proc, node = launch_node(s, "server_node_name", path, SERVER_EXE, SERVER_NODE)
-    if proc.poll() is not None:
-        give_up(s, SERVER_CHECKS, process_state(proc), proc)
-        return
-    with s.phase("start"):
-        found = wait_for_endpoint(s, node, "services", SERVICE, 3.0, abort=lambda: proc.poll() is not None) \
-            if node else {}
-    expected = f"{SERVICE} [{SRV_TYPE}]"
-    ok = SRV_TYPE in found.get(SERVICE, [])
-    s.record("service_name_type", ok, f"{node or 'the node'} serves: {describe_endpoints(found)}", expected)
-    target = pick_endpoint(found, SERVICE, SRV_TYPE)
-    if target is None or SRV_TYPE not in found.get(target, []):
-        give_up(s, SERVER_CHECKS, f"no service of type {SRV_TYPE} to call", proc)
-        return
+    path = kit.executable(s, "server_executable", PACKAGE, SERVER_EXE)
+    node = kit.start_node(s, "server_node_name", path, SERVER_NODE, sigint_check="server_sigint_exit",
+                          need_node=False)
+    found = ts.wait_for_endpoint(s, node.name, "services", SERVICE, 3.0, abort=node.ended)
+    s.record("service_name_type", SRV_TYPE in found.get(SERVICE, []),
+             f"{node.name or 'the node'} serves: {ts.describe_endpoints(found)}", f"{SERVICE} [{SRV_TYPE}]")
+    target = ts.pick_endpoint(found, SERVICE, SRV_TYPE)
+    if target is None:
+        raise kit.Unmet(f"no service of type {SRV_TYPE} to call")
     where = "" if target == SERVICE else f" (called at {target}, the name your server uses)"
-
-    from course.probes import call_service  # noqa: PLC0415
 
     def ask(case: tuple[str, str, bool], quote_id: int) -> tuple[bool, str]:
         """Call once; returns (answer as expected, description)."""
@@ -165,12 +141,12 @@ def _grade_server(s: GradingSession, srv_type: type) -> None:
         request.quote.quote = text
         request.quote.philosopher_name = philosopher
         label = f"'{text}' -- {philosopher}"
-        if proc.poll() is not None:
-            return False, f"{label}: not asked, {process_state(proc)}"
+        if node.ended():
+            return False, f"{label}: not asked, {kit.process_state(node.proc)}"
         try:
             response = call_service(s.ros, srv_type, target, request, timeout=3.0)
         except TimeoutError as exc:
-            return False, f"{label}: {exc}; {process_state(proc)}"
+            return False, f"{label}: {exc}; {kit.process_state(node.proc)}"
         total = response.point.x + response.point.y + response.point.z
         is_42 = abs(total - 42.0) <= SUM_TOLERANCE
         return is_42 == life, f"{label}: point {_point_text(response.point)}, sum {total:.9g}"
@@ -186,38 +162,11 @@ def _grade_server(s: GradingSession, srv_type: type) -> None:
         passed = sum(r[0] for r in results)
         s.record("no_life_not_42", passed == len(results), "; ".join(r[1] for r in results) + where,
                  "no point sums to 42 (the quote text has no 'life')", fraction=passed / len(results))
-    record_sigint_exit(s, "server_sigint_exit", proc)
 
-
-# --- the client ----------------------------------------------------------------
 
 def _grade_client(s: GradingSession, srv_type: type) -> None:
-    path = require_executable(s, "client_executable", PACKAGE, CLIENT_EXE, CLIENT_CHECKS)
-    if path is None:
-        return
+    path = kit.executable(s, "client_executable", PACKAGE, CLIENT_EXE)
     rosout = s.ros.rosout()
-    proc, _ = launch_node(s, "client_node_name", path, CLIENT_EXE, CLIENT_NODE)
-    if proc.poll() is not None:
-        give_up(s, CLIENT_CHECKS, process_state(proc), proc)
-        return
-
-    def waiting_records():
-        return rosout.records(match=lambda text: WAITING.search(text) is not None)
-
-    # 1. No service yet: the client must say that it waits.
-    with s.phase("observe"):
-        wait_until(lambda: bool(waiting_records()), 3.0, abort=lambda: proc.poll() is not None)
-    said = waiting_records()
-    before = rosout.records()
-    if said:
-        s.record("client_waits", True, f"logged '{said[0].msg.strip()}' while {SERVICE} did not exist",
-                 "a log record saying it waits for the service")
-    else:
-        shown = " | ".join(r.msg.strip()[:80] for r in before[:3]) or "no log records"
-        s.record("client_waits", False, f"in 3 s without the service: {shown}; {process_state(proc)}",
-                 f"a log record (e.g. 'service {SERVICE} not available, waiting...') while the service is missing")
-
-    # 2. Offer the service; answer at once with points the client's log must show.
     rng = random.Random()
     base = [rng.randrange(100, 900) for _ in range(3)]
 
@@ -228,36 +177,51 @@ def _grade_client(s: GradingSession, srv_type: type) -> None:
         response.point.z = base[2] + 0.75 * ((index % 3) + 1)
         return response
 
-    server = DeferredServer(s, srv_type, SERVICE, answer)
-    try:
-        _grade_calls(s, server, rosout, proc)
-        # Stop the client while the service still exists (what a learner would do).
-        record_sigint_exit(s, "client_sigint_exit", proc)
-    finally:
-        server.close()
+    # Made before the client starts, so it closes after the client's Ctrl+C (closing actions run newest first):
+    # the client is stopped while the service still exists, as a learner would stop it.
+    server = ts.stand_in_server(s, srv_type, SERVICE, answer)
+    node = kit.start_node(s, "client_node_name", path, CLIENT_NODE, sigint_check="client_sigint_exit",
+                          need_node=False)
+
+    def waiting_records():
+        return rosout.records(match=lambda text: WAITING.search(text) is not None)
+
+    # 1. No service yet: the client must say that it waits.
+    with s.phase("observe"):
+        wait_until(lambda: bool(waiting_records()), 3.0, abort=node.ended)
+    said = waiting_records()
+    before = rosout.records()
+    if said:
+        s.record("client_waits", True, f"logged '{said[0].msg.strip()}' while {SERVICE} did not exist",
+                 "a log record saying it waits for the service")
+    else:
+        shown = " | ".join(r.msg.strip()[:80] for r in before[:3]) or "no log records"
+        s.record("client_waits", False, f"in 3 s without the service: {shown}; {kit.process_state(node.proc)}",
+                 f"a log record (e.g. 'service {SERVICE} not available, waiting...') while the service is missing")
+    # 2. Offer the service; answer at once with points the client's log must show.
+    server.offer()
+    _grade_calls(s, server, rosout, node)
 
 
-def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> None:
+def _grade_calls(s: GradingSession, server: ts.DeferredServer, rosout, node: kit.StartedNode) -> None:
     """Calls, their rate, the logged points, then calls while answers are late (seconds as named)."""
+    proc = node.proc
     offered = time.monotonic()
     with s.phase("observe"):
-        wait_until(lambda: len(server.calls) >= CALLS, CALLS * PERIOD + 2.0 + LATE_DELIVERY_GRACE,
-                   abort=lambda: proc.poll() is not None)
+        wait_until(lambda: len(server.calls) >= CALLS, CALLS * PERIOD + 2.0 + LATE_DELIVERY_GRACE, abort=node.ended)
     calls = server.calls_since(offered)
     expected_calls = f"calls to {SERVICE} within {CALLS * PERIOD + 2.0 + LATE_DELIVERY_GRACE:.0f} s of it appearing"
     if not calls:
-        s.record("client_calls", False, f"no call in {time.monotonic() - offered:.1f} s; {process_state(proc)}",
+        s.record("client_calls", False, f"no call in {time.monotonic() - offered:.1f} s; {kit.process_state(proc)}",
                  expected_calls)
-        skip_checks(s, ["client_rate", "client_logs_points", "client_keeps_calling_when_slow"],
-                    "the client never called the service")
-        return
+        s.require("client_calls")
     first = calls[0][0] - offered
     s.record("client_calls", True, f"{len(calls)} call(s), the first {first:.2f} s after the service appeared",
              expected_calls)
 
-    record_rate(s, "client_rate", server.send_stamps(offered, CALLS), period=PERIOD, needed=CALLS,
-                waited=time.monotonic() - offered, noun="call", source="the requests' send stamps",
-                few_note=f"; {process_state(proc)}")
+    kit.rate(s, "client_rate", server.send_stamps(offered, CALLS), period=PERIOD, needed=CALLS,
+             waited=time.monotonic() - offered, noun="call", source="the requests' send stamps",
+             few_note=f"; {kit.process_state(proc)}")
 
     # The points sent so far must show up in the client's log (give the last one a moment).
     # A client that cancels a call still unanswered at its next tick (the seed's client does,
@@ -267,7 +231,7 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
         return [(r.point.x, r.point.y, r.point.z) for _, r in server.answers]
 
     def logged(point):
-        return any(has_point(rec.msg, point) for rec in rosout.records())
+        return any(ts.has_point(rec.msg, point) for rec in rosout.records())
 
     def cancels():
         return rosout.records(match=lambda text: CANCELLED.search(text) is not None)
@@ -276,7 +240,7 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
     with s.phase("observe"):
         # 1 s for the last answer's log record, more only while records are missing (LATE_DELIVERY_GRACE).
         wait_until(lambda: sum(not logged(p) for p in sent) <= len(cancels()), 1.0 + LATE_DELIVERY_GRACE,
-                   abort=lambda: proc.poll() is not None)
+                   abort=node.ended)
     found = [p for p in sent if logged(p)]
     missing = [p for p in sent if p not in found]
     cancelled = cancels()
@@ -302,7 +266,7 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
     slow_begin = time.monotonic()
     window = CALLS * PERIOD + 1.0 + LATE_DELIVERY_GRACE
     with s.phase("observe"):
-        wait_until(lambda: len(server.calls_since(slow_begin)) >= CALLS, window, abort=lambda: proc.poll() is not None)
+        wait_until(lambda: len(server.calls_since(slow_begin)) >= CALLS, window, abort=node.ended)
     late = server.calls_since(slow_begin)
     stats = server.rate(slow_begin, CALLS)
     expected_slow = (f"calls keep coming every {PERIOD:.1f} s (± {RATE_TOLERANCE:.0%}, over {CALLS - 1} intervals) "
@@ -315,12 +279,12 @@ def _grade_calls(s: GradingSession, server: DeferredServer, rosout, proc) -> Non
         s.record("client_keeps_calling_when_slow", False,
                  f"with answers {LATE_ANSWER:.1f} s late: {what} in {time.monotonic() - slow_begin:.1f} s; "
                  "the client seems to wait for each answer before calling again (a blocked executor?); "
-                 + process_state(proc), expected_slow)
+                 + kit.process_state(proc), expected_slow)
 
 
 def _first_line_with(rosout, point) -> str:
     for rec in rosout.records():
-        if has_point(rec.msg, point):
+        if ts.has_point(rec.msg, point):
             lines = [line.strip() for line in rec.msg.strip().splitlines() if line.strip()]
             return " ".join(lines)[:100]
     return ""
@@ -333,16 +297,20 @@ def grade(s: GradingSession) -> None:
     other, and neither waits for the other's discovery), which lets the two
     halves overlap: the check takes about as long as the client's half. The
     client is started from this (main) thread, so it gets the parent-death
-    signal; the server half runs on a worker thread.
+    signal; the server half runs on a worker thread, in a part of its own
+    (``s.part`` keeps each thread's closing actions apart).
     """
-    record_depends(s, "depends", PACKAGE)
-    srv_type = workspace_types(s, "srv", "WhatIsThePoint")
-    if srv_type is None:
-        return
-    client_graph = s.in_new_graph()
+    kit.depends(s, "depends", PACKAGE, ("rclpy", ts.INTERFACES))
+    srv_type = ts.workspace_types(s, "srv", "WhatIsThePoint")
+
+    def server_half() -> None:
+        with s.part("server"):
+            _grade_server(s, srv_type)
+
     with concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="ros2course-server-half") as pool:
-        server_half = pool.submit(_grade_server, s, srv_type)
+        server_done = pool.submit(server_half)
         try:
-            _grade_client(client_graph, srv_type)
+            with s.part("client"):
+                _grade_client(s.in_new_graph(), srv_type)
         finally:
-            server_half.result()  # re-raises a grader fault of the server half
+            server_done.result()  # re-raises a grader fault of the server half

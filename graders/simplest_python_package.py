@@ -10,17 +10,17 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from course.grading import Check, GradingSession
+from graders import kit
+from graders.kit import Check, GradingSession, Unmet
 from graders.kit.packaging import (
     ament_index_packages,
     data_files_mapping,
     install_prefix,
+    installed_import,
     relative,
-    run_installed_python,
     setup_cfg_problems,
     setup_py_arguments,
     site_packages,
-    source_package,
 )
 
 PACKAGE = "the_simplest_python_package"
@@ -48,19 +48,6 @@ CHECKS = [
           "create the_simplest_python_package/__init__.py (an empty file) and list it in setup.py with "
           "packages=find_packages(exclude=['test'])"),
 ]
-
-_IMPORT = """
-import json, sys
-out = {}
-try:
-    import the_simplest_python_package as m
-    out["file"] = str(getattr(m, "__file__", None) or list(getattr(m, "__path__", [])))
-except BaseException as exc:
-    out["error"] = f"{type(exc).__name__}: {exc}"
-with open(sys.argv[1], "w") as f:
-    json.dump(out, f)
-"""
-
 
 #: what colcon-ros prints when setup.py leaves the marker or package.xml out of data_files
 FALLBACK = ("colcon-ros added it through its implicit fallback (colcon warns \"doesn't explicitly install\"; "
@@ -109,10 +96,9 @@ def _record_manifest(s: GradingSession, prefix: Path, installs: dict[str, str], 
 
 def grade(s: GradingSession) -> None:
     """Read the package's files, then look at the install tree and the sourced environment."""
-    found = source_package(s, PACKAGE)
+    found = kit.source_package(s, PACKAGE)
     if found is None:  # the build step already insists on it; kept for direct calls
-        s.skip_remaining(f"no package {PACKAGE} in src/")
-        return
+        raise Unmet(f"no package {PACKAGE} in src/")
     folder, pkg = found
     fmt = int(pkg.package_format)
     s.record("package_xml", fmt == 3 and folder.name == PACKAGE,
@@ -141,16 +127,6 @@ def grade(s: GradingSession) -> None:
              "; ".join(problems) if problems else f"both point to $base/lib/{PACKAGE}",
              f"[develop] script_dir and [install] install_scripts = $base/lib/{PACKAGE}")
 
-    result, problem = run_installed_python(s, _IMPORT)
     places = ", ".join(relative(s, p / PACKAGE) for p in site_packages(prefix)) or f"{relative(s, prefix)}/lib/python3.*"
-    if problem:
-        s.record("python_package", False, problem, f"import {PACKAGE} works with the workspace sourced")
-    elif "error" in result:
-        s.record("python_package", False, f"import {PACKAGE} with the workspace sourced: {result['error']} "
-                 f"(nothing installed at {places}?)", f"the package installed at {places}")
-    else:
-        where = result.get("file", "")
-        inside = str(s.workspace_root / "install") in where
-        s.record("python_package", inside, f"import {PACKAGE} loads {relative(s, Path(where))}",
-                 f"the copy colcon installed under install/ ({places})",
-                 None if inside else "the module was found outside install/: rebuild and source install/setup.bash")
+    installed_import(s, "python_package", PACKAGE, f"import {PACKAGE} works with the workspace sourced and loads "
+                     f"the copy colcon installed under install/ ({places})", note=f" (nothing installed at {places}?)")

@@ -13,7 +13,7 @@ from pathlib import Path
 from course import sandbox
 from course.build import colcon_command, overlay_env
 from course.errors import NotGradable
-from course.grading import Check, GradingSession
+from graders.kit import Check, GradingSession, Unmet
 
 #: No node is observed: the checks read the folder and ask colcon and bash.
 WINDOW = 0.0
@@ -24,6 +24,7 @@ CHECKS = [
           "run 'colcon list' in the workspace and fix what it complains about"),
     Check("built", "colcon build ran and succeeded (build/, install/, log/)", 2,
           "cd into the workspace folder (not src/) and run 'colcon build' until it reports no failed package"),
+    # judged whenever install/setup.bash exists, even after a failed build (colcon still writes it)
     Check("sourceable", "install/setup.bash sources cleanly and adds the workspace", 1,
           "run 'source install/setup.bash' from the workspace folder; rebuild if it fails"),
 ]
@@ -99,8 +100,7 @@ def grade(s: GradingSession) -> None:
     s.record("built", not missing and not failed, observed,
              "what a successful 'colcon build' creates in the workspace folder (LESSONS.md: the build succeeds)")
     if not setup:
-        s.skip_remaining("install/setup.bash does not exist")
-        return
+        raise Unmet("install/setup.bash does not exist")
     try:
         env = overlay_env(root, s.base_env)
     except NotGradable as exc:

@@ -112,3 +112,45 @@ def test_probe_measures_a_known_500hz_publisher_on_send_stamps(ros_env, tmp_path
     print(report)
     assert abs(measured.rate_hz - own_hz) <= 0.05 * own_hz, report
     assert lost <= 0.05 * len(seqs), report
+
+
+class _Recorder:
+    """The one method of GradingSession that graders.kit.sas.span_rate calls."""
+
+    def __init__(self) -> None:
+        self.results: dict[str, tuple] = {}
+
+    def record(self, check_id, passed, observed, expected, hint=None, fraction=None):
+        self.results[check_id] = (passed, observed, expected)
+        return passed
+
+
+def _samples(period: float, count: int):
+    from graders.kit.joint_stream import JointSample  # noqa: PLC0415
+
+    return [JointSample(100.0 + i * period, 50.0 + i * period, 0.0, (0.0,) * 6, "") for i in range(count)]
+
+
+def test_span_rate_judges_the_source_stamps_over_the_span():
+    pytest.importorskip("rclpy")
+    from graders.kit.sas import span_rate  # noqa: PLC0415
+
+    s = _Recorder()
+    assert span_rate(s, "rate", _samples(0.002, 501), period=0.002, span=1.0, noun="message")
+    assert "500.0 Hz" in s.results["rate"][1] and "2.0 ms" in s.results["rate"][2]
+    assert not span_rate(s, "slow", _samples(0.02, 51), period=0.002, span=1.0, noun="message")
+    assert not span_rate(s, "short", _samples(0.002, 100), period=0.002, span=1.0, noun="message")
+    assert s.results["short"][1].startswith("only 100 message(s) over 0.20 s")
+
+
+def test_sas_driver_topics_and_limits_follow_the_seed():
+    pytest.importorskip("rclpy")
+    from graders.sas_robot_driver import DRIVER  # noqa: PLC0415
+
+    assert DRIVER.joint_states == "/myrobot_1/get/joint_states"
+    assert DRIVER.target == "/myrobot_1/set/target_joint_positions"
+    assert DRIVER.period == 0.002
+    limits = DRIVER.limits_radians()
+    assert abs(limits[DRIVER.limits_max][5] - 4 * 3.141592653589793) < 1e-12
+    action = DRIVER.action()
+    assert action.name == "myrobot_1" and action.parameters == [DRIVER.parameters]

@@ -1,4 +1,4 @@
-"""graders/_launch.py: the static reader of Python launch files (feedback, the sas grader's parameters),
+"""graders/kit/launch.py: the static reader of Python launch files (feedback, the sas grader's parameters),
 the launch_ros command line start_node_action gives a node, and how a learner's launch file is run.
 
 No ROS node is started: a stand-in session records what would be launched.

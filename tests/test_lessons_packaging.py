@@ -6,22 +6,33 @@ accept every reasonable way of printing the numbers, and still catch a wrong c.
 
 from __future__ import annotations
 
+import importlib
+import inspect
 import random
 import string
+from types import SimpleNamespace
 
 import pytest
 
+from course.grading import GradingSession, Unmet, check_dependencies
 from graders.kit.packaging import (
     classify,
     data_files_mapping,
+    installed_subpackage,
     is_ten_letters,
+    name_lines,
     parse_name_line,
     parse_square_line,
     read_setup_cfg,
+    ros2_run_executable,
     rounding_error,
     setup_cfg_problems,
+    square_lines,
     unpaired,
 )
+
+PACKAGING_GRADERS = ["workspace_setup", "simplest_python_package", "python_node_template", "python_library",
+                     "use_python_library"]
 
 # --- the square-of-sum line ------------------------------------------------------------
 
@@ -207,3 +218,78 @@ def test_data_files_mapping_like_colcon():
         "README.md": "README.md",
     }
     assert data_files_mapping(None) == {}
+
+
+# --- the graders and their kit steps (a real GradingSession, no ROS) ---------------------
+
+
+@pytest.mark.parametrize("name", PACKAGING_GRADERS)
+def test_graders_are_ported_to_the_kit(name):
+    """Valid needs, and none of the old skip helpers (issue "One grader kit")."""
+    module = importlib.import_module(f"graders.{name}")
+    check_dependencies(module.CHECKS)
+    source = inspect.getsource(module)
+    for old in ("skip_remaining", "graders._common", "import rclpy"):
+        assert old not in source
+
+
+def _session(tmp_path, checks):
+    from graders.kit import Check
+
+    return GradingSession(None, [Check(c, c, 1, needs=n) for c, n in checks], tmp_path, tmp_path / "log", {})
+
+
+def test_ros2_run_executable_names_a_script_installed_to_bin(tmp_path):
+    s = _session(tmp_path, [("executable", ())])
+    s.find_executable = lambda package, name: (None, f"no {name} in install/{package}/lib/{package}")
+    stray = tmp_path / "install" / "pkg" / "bin" / "exe"
+    stray.parent.mkdir(parents=True)
+    stray.write_text("#!/usr/bin/python3\n")
+    with pytest.raises(Unmet):
+        ros2_run_executable(s, "executable", "pkg", "exe")
+    result = s.results["executable"]
+    assert not result.passed
+    assert "installed as install/pkg/bin/exe instead" in result.observed
+    assert "install_scripts=$base/lib/pkg" in result.hint
+
+
+def test_ros2_run_executable_returns_the_path(tmp_path):
+    s = _session(tmp_path, [("executable", ())])
+    s.find_executable = lambda package, name: (tmp_path / name, "found")
+    assert ros2_run_executable(s, "executable", "pkg", "exe") == tmp_path / "exe"
+    assert s.results["executable"].passed
+
+
+def test_installed_subpackage(tmp_path):
+    s = _session(tmp_path, [("installed", ())])
+    top = tmp_path / "install" / "pkg" / "lib" / "python3.12" / "site-packages" / "pkg"
+    top.mkdir(parents=True)
+    (top / "__init__.py").write_text("")
+    assert not installed_subpackage(s, "installed", "pkg", "sub")
+    assert "holds __init__.py: no sub/" in s.results["installed"].observed
+    (top / "sub").mkdir()
+    (top / "sub" / "__init__.py").write_text("")
+    assert installed_subpackage(s, "installed", "pkg", "sub")
+
+
+def _record(text, t):
+    return SimpleNamespace(msg=text, name="node", stamp=SimpleNamespace(sec=int(t), nanosec=int(t % 1 * 1e9)))
+
+
+def test_square_and_name_lines_judge_a_correct_node(tmp_path):
+    s = _session(tmp_path, [(c, ()) for c in ("ranges", "values", "name", "pairs", "differ")])
+    records = []
+    for tick in range(4):
+        a, b = random.uniform(0, 1), random.uniform(1, 2)
+        name = "".join(random.choice(string.ascii_letters) for _ in range(10))
+        records += [_record(_line(a, b, (a + b) ** 2), tick * 0.5),
+                    _record(f"sample_class_with_random_name.get_name() returned {name}.", tick * 0.5 + 0.001)]
+    square_lines(s, "ranges", "values", [r for r in records if classify(r.msg) == "square"])
+    name_lines(s, "name", "pairs", "differ", records, max_gap=0.25)
+    assert all(result.passed for result in s.results.values()), s.results
+
+
+def test_name_lines_without_names_fail_all_three(tmp_path):
+    s = _session(tmp_path, [(c, ()) for c in ("name", "pairs", "differ")])
+    name_lines(s, "name", "pairs", "differ", [_record(_line(0.5, 1.5, 4.0), 0.0)], max_gap=0.25)
+    assert [r.passed for r in s.results.values()] == [False, False, False]

@@ -21,21 +21,11 @@ from typing import Any
 
 from course import index as ament_index
 from course import sandbox
-from course.grading import GradingSession
+from course.grading import GradingSession, Unmet
+from course.probes import stamp_seconds
+from graders.kit.nodes import executable as executable_step
 
-# --- package.xml and setup.cfg ------------------------------------------------------
-
-def source_package(s: GradingSession, name: str) -> tuple[Path, Any] | None:
-    """``(folder, catkin_pkg Package)`` of the workspace package ``name`` under ``src/``, or None."""
-    from course.build import find_packages
-
-    return find_packages(s.workspace_root / "src").get(name)
-
-
-def run_dependencies(package: Any) -> set[str]:
-    """Names a ``package.xml`` lists as build or run dependencies (``<depend>`` counts as both)."""
-    return {d.name for d in (*package.exec_depends, *package.build_depends, *package.build_export_depends)}
-
+# --- setup.cfg and setup.py ----------------------------------------------------------
 
 def read_setup_cfg(path: Path) -> dict[str, dict[str, str]]:
     """``setup.cfg`` as ``{section: {key: value}}``; keys normalised (``script-dir`` -> ``script_dir``).
@@ -194,11 +184,13 @@ def ament_index_packages(s: GradingSession) -> dict[str, str]:
     return {name: str(prefix) for name, prefix in ament_index.packages_with_prefixes(s.overlay()).items()}
 
 
-def run_installed_python(s: GradingSession, code: str, timeout: float = 20.0) -> tuple[dict[str, Any], str]:
+def run_installed_python(s: GradingSession, code: str, timeout: float = 20.0,
+                         args: tuple[str, ...] = ()) -> tuple[dict[str, Any], str]:
     """Run ``code`` with the sourced workspace's Python, from an empty folder outside the source tree.
 
-    ``code`` finds the path of a JSON output file in ``sys.argv[1]`` and writes its findings
-    there (so whatever the learner's code prints cannot garble them).
+    ``code`` finds the path of a JSON output file in ``sys.argv[1]`` (then ``args``) and writes
+    its findings there (so whatever the learner's code prints cannot garble them). ``timeout``
+    is in seconds.
 
     Returns:
         ``(result, problem)``: the decoded JSON (``{}`` if none) and, when the run itself
@@ -209,7 +201,7 @@ def run_installed_python(s: GradingSession, code: str, timeout: float = 20.0) ->
         env = s.overlay()
         env["PYTHONDONTWRITEBYTECODE"] = "1"
         try:
-            proc = sandbox.run([sys.executable, "-c", code, str(out)], cwd=folder, env=env,
+            proc = sandbox.run([sys.executable, "-c", code, str(out), *args], cwd=folder, env=env,
                                   stdin=subprocess.DEVNULL, capture_output=True, text=True, timeout=timeout,
                                   check=False)
         except subprocess.TimeoutExpired:
@@ -221,25 +213,102 @@ def run_installed_python(s: GradingSession, code: str, timeout: float = 20.0) ->
             return {}, f"the import test crashed (exit code {proc.returncode}): {tail}"
 
 
-def require_ros2_run_executable(s: GradingSession, check_id: str, package: str, executable: str,
-                                hint: str = "") -> Path | None:
-    """Like ``graders._common.require_executable``, but says so when the script went to ``bin/``.
+#: Imports the module named in ``sys.argv[2]`` and writes ``{"file": ...}`` or ``{"error": ...}`` to ``sys.argv[1]``.
+IMPORT_PROBE = """
+import importlib, json, sys
+out = {}
+try:
+    m = importlib.import_module(sys.argv[2])
+    out["file"] = str(getattr(m, "__file__", None) or list(getattr(m, "__path__", [])))
+except BaseException as exc:
+    out["error"] = f"{type(exc).__name__}: {exc}"
+with open(sys.argv[1], "w") as f:
+    json.dump(out, f)
+"""
 
-    Without ``setup.cfg`` (or with a wrong ``install_scripts``) setuptools installs console
-    scripts in ``<prefix>/bin``, where ``ros2 run`` does not look (shared/ROS_ENV.md).
+
+def installed_import(s: GradingSession, check_id: str, module: str, expected: str, note: str = "",
+                     code: str = "") -> dict[str, Any]:
+    """Record ``check_id`` on whether ``import module`` works with the workspace sourced and loads install/'s copy.
+
+    Runs ``code`` (default :data:`IMPORT_PROBE`) with :func:`run_installed_python`, from an
+    empty folder outside the source tree, so a module found only in ``src/`` does not count
+    (other packages import the installed copy: seed ch. 14-15). ``code`` gets the JSON output
+    path in ``sys.argv[1]`` and ``module`` in ``sys.argv[2]``; it writes ``"file"`` (the
+    module's ``__file__``) or ``"error"`` (the import's exception), plus anything else the
+    grader wants back.
+
+    Args:
+        note: appended to the observation when the import fails (e.g. where colcon should
+            have installed it).
+
+    Returns:
+        The decoded JSON the code wrote (``{}`` when it crashed before writing).
     """
-    from graders._common import require_executable
+    result, problem = run_installed_python(s, code or IMPORT_PROBE, args=(module,))
+    if problem:
+        s.record(check_id, False, problem, expected)
+    elif "error" in result:
+        s.record(check_id, False, f"import {module} with the workspace sourced: {result['error']}{note}", expected)
+    else:
+        where = result.get("file", "")
+        inside = str(s.workspace_root / "install") in where
+        s.record(check_id, inside, f"import {module} loads {relative(s, Path(where))}", expected,
+                 None if inside else "that is not the copy colcon installed under install/: rebuild and "
+                 "source install/setup.bash")
+    return result
 
-    path = require_executable(s, check_id, package, executable, hint)
-    if path is None:
+
+def ros2_run_executable(s: GradingSession, check_id: str, package: str, executable: str, hint: str = "") -> Path:
+    """:func:`graders.kit.executable`, saying so when the script went to ``bin/`` instead.
+
+    Records ``check_id`` on whether ``ros2 run package executable`` finds
+    ``<prefix>/lib/<package>/<executable>``. Without ``setup.cfg`` (or with a wrong
+    ``install_scripts``) setuptools installs console scripts in ``<prefix>/bin``, where
+    ``ros2 run`` does not look (ros2run source; shared/ROS_ENV.md): the observation then
+    names the stray file and the hint the ``setup.cfg`` lines of the ``ros2 pkg create``
+    template (seed ch. 7-8).
+
+    Raises:
+        Unmet: not found (nothing to run).
+    """
+    try:
+        return executable_step(s, check_id, package, executable, hint)
+    except Unmet:
         prefix = install_prefix(s, package)
         strays = [p for p in (prefix / "bin" / executable, prefix / "lib" / executable) if p.is_file()]
         if strays:
-            result = s.results[check_id]
-            s.record(check_id, False, f"{result.observed}; it was installed as {relative(s, strays[0])} instead",
-                     result.expected, f"setup.cfg must say install_scripts=$base/lib/{package} "
-                     f"(and script_dir=$base/lib/{package} under [develop]); then colcon build")
-    return path
+            s.amend(check_id, observed=f"{s.results[check_id].observed}; it was installed as "
+                    f"{relative(s, strays[0])} instead",
+                    hint=f"setup.cfg must say install_scripts=$base/lib/{package} "
+                    f"(and script_dir=$base/lib/{package} under [develop]); then colcon build")
+        raise
+
+
+def installed_subpackage(s: GradingSession, check_id: str, package: str, subpackage: str) -> bool:
+    """Record ``check_id`` on whether colcon installed ``package/subpackage/__init__.py`` in site-packages.
+
+    Looks under ``<prefix>/lib/python3.*/site-packages`` of the package's install
+    prefix (isolated or merged layout). ``packages=[package_name]`` in ``setup.py``
+    installs only the top level; ``find_packages()`` installs every folder with an
+    ``__init__.py`` (seed ch. 14.1; setuptools docs, "Package Discovery").
+    Observed lists what was installed instead.
+    """
+    prefix = install_prefix(s, package)
+    roots = site_packages(prefix)
+    found = [p for p in (root / package / subpackage / "__init__.py" for root in roots) if p.is_file()]
+    expected = f"install/{package}/lib/python3.*/site-packages/{package}/{subpackage}/__init__.py"
+    if found:
+        files = sorted(p.name for p in found[0].parent.iterdir() if p.suffix == ".py")
+        return s.record(check_id, True, f"{relative(s, found[0].parent)} holds {', '.join(files)}", expected)
+    if not roots:
+        observed = f"no {relative(s, prefix)}/lib/python3.*/site-packages folder (was the package built?)"
+    else:
+        top = roots[0] / package
+        listing = sorted(p.name + ("/" if p.is_dir() else "") for p in top.iterdir()) if top.is_dir() else []
+        observed = (f"{relative(s, top)} holds {', '.join(listing) or 'nothing'}: no {subpackage}/"
+                    if top.is_dir() else f"no {relative(s, top)}")
+    return s.record(check_id, False, observed, expected)
 
 
 # --- log lines of use-python-library (seed ch. 15.1) ---------------------------------
@@ -355,3 +424,69 @@ def unpaired(records: list[tuple[str, float]], max_gap: float) -> list[int]:
                                or stamp - records[index - 1][1] > max_gap):
             bad.append(index)
     return bad
+
+
+def shorten(text: str, limit: int = 110) -> str:
+    """``text`` cut to ``limit`` characters (``...`` at the end when cut), for observations."""
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def square_lines(s: GradingSession, ranges_check: str, values_check: str, records: list[Any]) -> None:
+    """Record ``ranges_check`` and ``values_check`` over /rosout ``records`` of square-of-sum lines.
+
+    ``records`` are ``rcl_interfaces/msg/Log`` messages whose text :func:`parse_square_line`
+    accepts. Ranges: a in [0, 1], b in [1, 2]; values: c == (a+b)**2 within the printed
+    digits (:class:`SquareLine`; seed ch. 15.1).
+    """
+    lines = [parse_square_line(r.msg) for r in records]
+    out_of_range = [r.msg for line, r in zip(lines, records) if not line.ranges_ok()]
+    s.record(ranges_check, not out_of_range,
+             f"all {len(lines)} records in range" if not out_of_range
+             else f"{len(out_of_range)}/{len(lines)} out of range, e.g. '{shorten(out_of_range[0])}'",
+             "0 <= a <= 1 and 1 <= b <= 2 in every record")
+    wrong = [(line, r.msg) for line, r in zip(lines, records) if not line.square_ok()]
+    if not wrong:
+        observed = f"c == (a+b)**2 in all {len(lines)} records"
+    else:
+        line, text = wrong[0]
+        observed = (f"{len(wrong)}/{len(lines)} records wrong, e.g. '{shorten(text)}': "
+                    f"(a+b)**2 = {line.expected_c()!r}, logged c = {line.c!r}")
+    s.record(values_check, not wrong, observed, "c == (a+b)**2 (within the digits printed)")
+
+
+def name_lines(s: GradingSession, name_check: str, pairs_check: str, differ_check: str, ordered: list[Any],
+               max_gap: float) -> None:
+    """Record the name-line checks over one node's /rosout ``records`` of both kinds, in order.
+
+    ``name_check``: every ``get_name() returned NAME`` record has ten ASCII letters;
+    ``pairs_check``: each square-of-sum record is followed by a name record within
+    ``max_gap`` seconds (:func:`unpaired`); ``differ_check``: no name repeats (a new
+    random name per tick, seed ch. 15.1). ``ordered`` holds Log messages that
+    :func:`classify` calls ``"square"`` or ``"name"``.
+    """
+    names = [parse_name_line(r.msg) for r in ordered if classify(r.msg) == "name"]
+    expected_name = "INFO records 'sample_class_with_random_name.get_name() returned NAME.', NAME ten ASCII letters"
+    if not names:
+        s.record(name_check, False, "no 'sample_class_with_random_name.get_name() returned ...' record from the node",
+                 expected_name)
+        s.record(pairs_check, False, "no name records to pair", "a name record right after each square-of-sum record")
+        s.record(differ_check, False, "no names logged", "a different name in every record")
+        return
+    bad = [n for n in names if not is_ten_letters(n)]
+    s.record(name_check, not bad,
+             f"{len(names)} names like {names[0]!r}" if not bad
+             else f"{len(bad)}/{len(names)} names are not ten ASCII letters, e.g. {bad[0]!r} ({len(bad[0])} characters)",
+             expected_name)
+    kinds = [classify(r.msg) for r in ordered]
+    lonely = unpaired([(kind, stamp_seconds(r.stamp)) for kind, r in zip(kinds, ordered)], max_gap=max_gap)
+    shown = " ".join("S" if k == "square" else "N" for k in kinds[:12])
+    s.record(pairs_check, not lonely,
+             f"{kinds.count('square')} square and {kinds.count('name')} name records alternate ({shown} ...)"
+             if not lonely else f"order of records (S square, N name): {shown}{' ...' if len(kinds) > 12 else ''}"
+             f"; {len(lonely)} not in a square-then-name pair logged together",
+             "S N S N ...: in every tick the square-of-sum record, then at once the name record")
+    distinct = len(set(names))
+    s.record(differ_check, len(names) >= 2 and distinct == len(names),
+             f"{distinct} different names in {len(names)} records"
+             + (f" (repeated: {max(set(names), key=names.count)!r})" if distinct < len(names) else ""),
+             "a new random name in every record")

@@ -1,4 +1,4 @@
-"""Shared by the parameters, launch-files and param-dump-load graders (seed ch. 22 and 24).
+"""The quote publisher's contract, shared by the parameters, launch-files and param-dump-load graders (seed ch. 22, 24).
 
 Contract names come from shared/LESSONS.md; the launch file's values from the
 seed's ch. 22.9 listing.
@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from course.grading import GradingSession
+from graders.kit.packages import source_package
 
 PACKAGE = "python_package_that_uses_parameters_and_launch_files"
 EXECUTABLE = "amazing_quote_configurable_publisher_node"
@@ -41,11 +42,6 @@ LAUNCH_PARAMETERS: dict[str, Any] = {
 }
 
 
-#: rcl_interfaces/msg/ParameterType values -> the words ``ros2 param describe`` uses.
-PARAMETER_TYPES = {0: "not set", 1: "boolean", 2: "integer", 3: "double", 4: "string", 5: "byte array",
-                   6: "boolean array", 7: "integer array", 8: "double array", 9: "string array"}
-
-
 def amazing_quote(s: GradingSession) -> type:
     """The workspace's ``package_with_interfaces/msg/AmazingQuote`` class (NotGradable if not built)."""
     return s.interface_type(INTERFACES, "msg", "AmazingQuote")
@@ -66,57 +62,42 @@ def first_difference(got: str, wanted: str) -> str:
             f"expected {wanted[start:index + 15]!r}")
 
 
-def python_type_name(value: Any) -> str:
-    """The ROS parameter type a YAML/Python value maps to (as rclpy's ``Parameter`` infers it)."""
-    if isinstance(value, bool):
-        return "boolean"
-    if isinstance(value, int):
-        return "integer"
-    if isinstance(value, float):
-        return "double"
-    if isinstance(value, str):
-        return "string"
-    if isinstance(value, (list, tuple)):
-        if all(isinstance(v, bool) for v in value):
-            return "boolean array"
-        if all(isinstance(v, int) and not isinstance(v, bool) for v in value):
-            return "integer array"
-        if all(isinstance(v, float) for v in value):
-            return "double array"
-        if all(isinstance(v, str) for v in value):
-            return "string array"
-    return f"unsupported ({type(value).__name__})"
-
-
-def parameter_value(value_msg: Any) -> tuple[str, Any]:
-    """``(type word, Python value)`` of an ``rcl_interfaces/msg/ParameterValue``."""
-    from rclpy.parameter import parameter_value_to_python  # noqa: PLC0415
-
-    kind = PARAMETER_TYPES.get(value_msg.type, f"type {value_msg.type}")
-    try:
-        value = parameter_value_to_python(value_msg)
-    except RuntimeError:
-        value = None
-    if isinstance(value, (list, tuple)) or hasattr(value, "tolist"):
-        value = list(value)
-    return kind, value
-
-
-def topics_seen(s: GradingSession, graph=None) -> str:
-    """``/a (pkg/msg/T), /b (...)`` for the learner's topics in ``graph`` (default ``s.ros``; ROS's own left out)."""
-    hidden = {"/rosout", "/parameter_events"}
-    topics = {name: types for name, types in (graph or s.ros).topic_types().items() if name not in hidden}
-    return ", ".join(f"{name} ({', '.join(types)})" for name, types in sorted(topics.items())) or "none"
-
-
 def package_source(s: GradingSession) -> Path | None:
     """The learner's ``src/.../python_package_that_uses_parameters_and_launch_files`` folder, if any."""
-    from course.build import find_packages  # noqa: PLC0415
-
-    found = find_packages(s.workspace_root / "src").get(PACKAGE)
+    found = source_package(s, PACKAGE)
     return found[0] if found else None
 
 
 def package_share(s: GradingSession) -> Path | None:
     """``share/<package>`` of the installed package, found the way ``ros2 launch`` finds it."""
     return s.find_share(PACKAGE)
+
+
+def quote_after(s: GradingSession, check_id: str, probe: Any, since: float, *, count: int, period: float,
+                quote: str, philosopher: str, proc: Any, expected: str, prefix: str = "", stale: str = "") -> bool:
+    """Record ``check_id`` on the ``count``-th AmazingQuote message sent after ``since`` (wall clock, ``time.time()``).
+
+    A parameter change must show within ``count`` messages (one may already be
+    on its way when it is made: seed ch. 24.5); judged on send stamps
+    (``TopicProbe.wait_sent_after``: up to ``count * period`` s plus
+    ``LATE_DELIVERY``). Half the credit each for ``quote`` and ``philosopher``.
+
+    Args:
+        probe: the :class:`~course.probes.TopicProbe` of the quote topic.
+        period: the publisher's period in seconds.
+        proc: the publisher's process (the wait ends if it dies; its state is shown).
+        prefix: opens the observed text (e.g. "set_parameters succeeded; ").
+        stale: appended when a value did not change (a likely cause for the learner).
+    """
+    from graders.kit.nodes import process_state  # noqa: PLC0415
+
+    with s.phase("observe"):
+        later = probe.wait_sent_after(since, count, period, abort=lambda: proc.poll() is not None)
+    if not later:
+        return s.record(check_id, False, f"{prefix}no message after the change; {process_state(proc)}", expected)
+    last = later[min(count, len(later)) - 1]
+    quote_ok, name_ok = last.quote == quote, last.philosopher_name == philosopher
+    seen = ", ".join(f"({short(m.quote, 30)}, {m.philosopher_name!r})" for m in later[:count])
+    return s.record(check_id, quote_ok and name_ok,
+                    f"{prefix}the next {len(later[:count])} message(s) were {seen}"
+                    + ("" if quote_ok and name_ok else stale), expected, fraction=(quote_ok + name_ok) / 2)

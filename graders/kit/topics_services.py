@@ -1,180 +1,186 @@
-"""Helpers of the interface lessons (publisher-subscriber, service-server-client).
+"""Kit steps of the interface lessons (custom-interfaces, publisher-subscriber, service-server-client).
 
-Private to those graders: per-part skipping (a lesson grades two executables
-independently, so one missing executable must not skip the other's checks),
-the learner node's own endpoints (``ros2 node info``), the workspace's
-``package_with_interfaces`` types, number matching in log records, and a
+The workspace's ``package_with_interfaces`` types (as the grader and as a
+fresh interpreter see them), a learner node's own endpoints (``ros2 node
+info``), the grader's own publisher, number matching in log records, a
 stand-in service server that can answer late without blocking any executor.
 """
 
 from __future__ import annotations
 
+import contextlib
+import json
 import re
+import subprocess
+import sys
 import threading
 import time
-from collections.abc import Callable, Iterable
-from pathlib import Path
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-from course.grading import GradingSession
+from course import sandbox
+from course.errors import NotGradable
+from course.grading import GradingSession, Unmet
 from course.probes import RateStats, wait_until
+from graders.kit.judge import STANDARD_TOPICS
 
 INTERFACES = "package_with_interfaces"
-#: Endpoints every rclpy node has; not the learner's doing, left out of "observed" lists.
-_STANDARD_TOPICS = {"/rosout", "/parameter_events"}
 _STANDARD_SERVICE_SUFFIXES = ("/describe_parameters", "/get_parameter_types", "/get_parameters",
                               "/list_parameters", "/set_parameters", "/set_parameters_atomically",
                               "/get_type_description")
 _NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
 
 
-# --- recording ---------------------------------------------------------------
+# --- the workspace's interface types ---------------------------------------------
 
-def skip_checks(s: GradingSession, check_ids: Iterable[str], reason: str) -> None:
-    """Record every check in ``check_ids`` not recorded yet as failed because of ``reason``.
+def workspace_types(s: GradingSession, kind: str, name: str) -> Any:
+    """``package_with_interfaces.<kind>.<name>`` of this workspace (:meth:`GradingSession.interface_type`).
 
-    Unlike :meth:`GradingSession.skip_remaining` this leaves the other part of
-    the lesson (the other executable) to be graded.
+    The learner's nodes could not import it either when it fails; the
+    ``depends`` check (recorded before) tells why.
+
+    Raises:
+        Unmet: the interface package is not built or does not load (every unrecorded check of the
+            current part becomes "not checked").
     """
-    for check_id in check_ids:
-        if check_id not in s.results:
-            s.record(check_id, False, f"not checked: {reason}", "(depends on the failed check above)")
-
-
-def give_up(s: GradingSession, checks: list[str], reason: str, proc) -> None:
-    """Stop grading one executable: skip its ``checks`` but the last (with ``reason``), which is its
-    SIGINT-exit check, recorded by pressing Ctrl+C on ``proc`` (``graders._common.record_sigint_exit``)."""
-    from graders._common import record_sigint_exit  # noqa: PLC0415
-
-    skip_checks(s, checks[:-1], reason)
-    record_sigint_exit(s, checks[-1], proc)
-
-
-def require_executable(s: GradingSession, check_id: str, package: str, executable: str,
-                       dependents: Iterable[str]) -> Path | None:
-    """Record ``check_id`` on whether ``ros2 run package executable`` finds it (ros2run's lookup).
-
-    On failure, the ``dependents`` checks are skipped. Returns the path or None.
-    """
-    path, observed = s.find_executable(package, executable)
-    s.record(check_id, path is not None, observed,
-             f"ros2 run {package} {executable} finds install/{package}/lib/{package}/{executable}")
-    if path is None:
-        skip_checks(s, dependents, f"there is no {executable} executable to run")
-    return path
-
-
-def record_depends(s: GradingSession, check_id: str, package: str,
-                   needed: tuple[str, ...] = ("rclpy", INTERFACES)) -> bool:
-    """Record ``check_id`` on whether ``package``'s package.xml declares the ``needed`` dependencies.
-
-    Seed ch. 18.1 creates the package with ``--dependencies rclpy
-    package_with_interfaces``; without the second one ``colcon build
-    --packages-up-to`` does not build the interfaces first.
-    """
-    from course.build import find_packages  # noqa: PLC0415
-
-    expected = ", ".join(f"<depend>{n}</depend>" for n in needed)
-    found = find_packages(s.workspace_root / "src").get(package)
-    if found is None:
-        return s.record(check_id, False, f"no package {package} in src/", expected)
-    pkg = found[1]
-    deps = {d.name for d in (*pkg.build_depends, *pkg.exec_depends)}
-    missing = [n for n in needed if n not in deps]
-    return s.record(check_id, not missing, f"package.xml dependencies: {', '.join(sorted(deps)) or 'none'}"
-                    + (f" (missing {', '.join(missing)})" if missing else ""), expected,
-                    fraction=(len(needed) - len(missing)) / len(needed))
-
-
-def workspace_types(s: GradingSession, kind: str, name: str) -> Any | None:
-    """``package_with_interfaces.<kind>.<name>`` of this workspace, or None when it is not built.
-
-    Loaded through ``GradingSession.interface_type``; when it fails, every
-    unrecorded check is skipped.
-
-    The learner's nodes could not import them either; the depends check
-    (recorded before) tells why.
-    """
-    from course.errors import NotGradable  # noqa: PLC0415
-
     try:
         return s.interface_type(INTERFACES, kind, name)
     except NotGradable as exc:
-        s.skip_remaining(f"{exc.message} (colcon build --packages-up-to builds it only when package.xml "
-                         f"depends on {INTERFACES})")
-        return None
+        raise Unmet(f"{exc.message} (colcon build --packages-up-to builds it only when package.xml "
+                    f"depends on {INTERFACES})") from exc
+
+
+#: Run in a fresh interpreter with the workspace sourced: import each type, print its fields as JSON.
+_FIELDS_PROBE = r"""
+import json, sys
+out = {}
+for package, kind, name in json.loads(sys.argv[1]):
+    key = f"{package}/{kind}/{name}"
+    try:
+        cls = getattr(__import__(f"{package}.{kind}", fromlist=[name]), name)
+        cls.__class__.__import_type_support__()  # loads the generated C extension and typesupport
+        if kind == "msg":
+            out[key] = cls.get_fields_and_field_types()
+        else:
+            out[key + ".Request"] = cls.Request.get_fields_and_field_types()
+            out[key + ".Response"] = cls.Response.get_fields_and_field_types()
+    except Exception as exc:
+        out[key + ".error"] = f"{type(exc).__name__}: {exc}"
+print(json.dumps(out))
+"""
+
+
+def generated_fields(s: GradingSession, types: Iterable[tuple[str, str, str]], timeout: float = 60.0) -> dict:
+    """Fields of generated interface types as a fresh ``python3`` in the sourced workspace imports them.
+
+    A Python process holds one build of an interface package
+    (:mod:`course.interfaces`) and ``dev validate`` grades many variants in one
+    process, so the types are imported in a new interpreter started with
+    ``s.overlay()`` (``source install/setup.bash``), the way a learner's node would.
+
+    Args:
+        types: ``(package, "msg" | "srv", name)`` triples.
+        timeout: seconds for the whole import.
+
+    Returns:
+        ``"pkg/msg/Name"`` -> ``{field: type}`` as ``get_fields_and_field_types()`` spells it
+        (``"pkg/srv/Name.Request"`` and ``".Response"`` for a service); ``"<key>.error"`` -> a
+        sentence when a type cannot be imported.
+    """
+    types = [list(t) for t in types]
+    keys = ["/".join(t) for t in types]
+    try:
+        proc = sandbox.run([sys.executable, "-c", _FIELDS_PROBE, json.dumps(types)], env=s.overlay(),
+                           cwd=s.workspace_root, capture_output=True, text=True, timeout=timeout, check=False)
+    except subprocess.TimeoutExpired:
+        return {f"{k}.error": f"importing the generated types took more than {timeout:.0f} s" for k in keys}
+    lines = proc.stdout.strip().splitlines()
+    try:
+        return json.loads(lines[-1])
+    except (IndexError, json.JSONDecodeError):
+        last = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+        return {f"{k}.error": last for k in keys}
+
+
+def fields(s: GradingSession, check_id: str, what: str, observed: dict | None, expected: dict,
+           error: str | None = None) -> bool:
+    """Record ``check_id`` on whether a type has exactly the ``expected`` fields (name -> type).
+
+    Partial credit per field with the right name and type; unexpected extra
+    fields cost one share. ``observed`` None means the type cannot be
+    imported (``error`` says why). The rule is the tutorial's (seed ch. 17.4, 17.6).
+    """
+    wanted = ", ".join(f"{t} {n}" for n, t in expected.items())
+    if observed is None:
+        return s.record(check_id, False, f"{what} cannot be imported: {error}", f"{what} with {wanted}")
+    problems = []
+    good = 0
+    for name, type_name in expected.items():
+        got = observed.get(name)
+        if got is None:
+            problems.append(f"no field {name}")
+        elif got != type_name:
+            problems.append(f"{name} is {got}, not {type_name}")
+        else:
+            good += 1
+    extra = [f"{t} {n}" for n, t in observed.items() if n not in expected]
+    if extra:
+        problems.append("unexpected field(s): " + ", ".join(extra))
+    total = len(expected) + (1 if extra else 0)
+    shown = ", ".join(f"{t} {n}" for n, t in observed.items()) or "no fields"
+    return s.record(check_id, not problems, f"{what}: {shown}" + (f" ({'; '.join(problems)})" if problems else ""),
+                    f"{what}: {wanted}", fraction=good / total)
 
 
 # --- the learner's node and its endpoints ------------------------------------
 
-def launch_node(s: GradingSession, check_id: str, path: Path, executable: str, node: str,
-                timeout: float = 10.0, grace: float = 3.0):
-    """Start ``executable`` and record ``check_id`` on whether a node called ``node`` appears.
-
-    :func:`graders._common.wait_for_node`, ignoring the nodes already in the
-    graph before the launch. Later processes of a check can take about 3 s to
-    be discovered (Fast DDS announcement period), hence ``timeout`` seconds.
-
-    Returns:
-        ``(process, name)``: the LearnerProcess, and the node name to inspect
-        (``node``, else the only new node, e.g. a misnamed one, else None).
-    """
-    from graders._common import wait_for_node  # noqa: PLC0415
-
-    before = set(s.ros.node_names())
-    proc = s.launch(path, executable)
-    if wait_for_node(s, check_id, proc, node, timeout, grace, before=before):
-        return proc, node
-    plain = [n for n in s.ros.node_names() if n not in before and n.count("/") == 1]
-    return proc, (plain[0].lstrip("/") if len(plain) == 1 else None)
-
-
-def endpoints(s: GradingSession, node: str, kind: str) -> dict[str, list[str]]:
+def endpoints(graph: Any, node: str | None, kind: str) -> dict[str, list[str]]:
     """The node's own ``publishers``, ``subscriptions`` or ``services``: name -> type names.
 
     What ``ros2 node info`` lists, without the endpoints every rclpy node has
     (``/rosout``, ``/parameter_events``, parameter and type description services).
-    Empty when the node is not (or no longer) in the graph.
+    Empty when ``node`` is None or not (or no longer) in ``graph`` (a RosSession).
     """
     from rclpy.node import NodeNameNonExistentError  # noqa: PLC0415
 
-    graph = s.ros.node
-    query = {"publishers": graph.get_publisher_names_and_types_by_node,
-             "subscriptions": graph.get_subscriber_names_and_types_by_node,
-             "services": graph.get_service_names_and_types_by_node}[kind]
+    if node is None:
+        return {}
+    query = {"publishers": graph.node.get_publisher_names_and_types_by_node,
+             "subscriptions": graph.node.get_subscriber_names_and_types_by_node,
+             "services": graph.node.get_service_names_and_types_by_node}[kind]
     try:
         found = query(node, "/")
     except (NodeNameNonExistentError, RuntimeError):
         return {}
-    out = {}
-    for name, types in found:
-        if name in _STANDARD_TOPICS or name.endswith(_STANDARD_SERVICE_SUFFIXES):
-            continue
-        out[name] = list(types)
-    return out
+    return {name: list(types) for name, types in found
+            if name not in STANDARD_TOPICS and not name.endswith(_STANDARD_SERVICE_SUFFIXES)}
 
 
-def wait_for_endpoint(s: GradingSession, node: str, kind: str, name: str, timeout: float,
+def wait_for_endpoint(s: GradingSession, node: str | None, kind: str, name: str, timeout: float,
                       abort: Callable[[], bool] | None = None) -> dict[str, list[str]]:
-    """Poll :func:`endpoints` until ``name`` is among them or ``timeout`` seconds pass; returns the last listing.
+    """Poll :func:`endpoints` of ``node`` in ``s.ros`` until ``name`` is among them; returns the last listing.
 
-    Discovery of a node's endpoints can lag behind the node itself by a few
-    hundred milliseconds; any endpoint at all ends the wait early after 1 s
-    more (a misnamed topic will not rename itself).
+    Waits at most ``timeout`` seconds (timed as phase ``start``). Discovery of
+    a node's endpoints can lag behind the node itself by a few hundred
+    milliseconds; any endpoint at all ends the wait early after 1 s more (a
+    misnamed topic will not rename itself). ``{}`` at once when ``node`` is None.
     """
     seen: dict[str, list[str]] = {}
+    if node is None:
+        return seen
     first_other: list[float] = []
 
     def done() -> bool:
         seen.clear()
-        seen.update(endpoints(s, node, kind))
+        seen.update(endpoints(s.ros, node, kind))
         if name in seen:
             return True
         if seen and not first_other:
             first_other.append(time.monotonic())
         return bool(first_other) and time.monotonic() - first_other[0] > 1.0
 
-    wait_until(done, timeout, interval=0.05, abort=abort)
+    with s.phase("start"):
+        wait_until(done, timeout, interval=0.05, abort=abort)
     return dict(seen)
 
 
@@ -184,14 +190,65 @@ def describe_endpoints(found: dict[str, list[str]]) -> str:
 
 
 def pick_endpoint(found: dict[str, list[str]], name: str, type_name: str) -> str | None:
-    """``name`` if present, else the only endpoint of type ``type_name`` (to grade a misnamed topic's behaviour)."""
+    """The endpoint to grade: ``name`` when it has ``type_name``, else the only endpoint of that type.
+
+    A misnamed topic is still graded on what flows through it. None when
+    there is no endpoint of ``type_name`` to use.
+    """
     if name in found:
-        return name
+        return name if type_name in found[name] else None
     same_type = [n for n, types in found.items() if type_name in types]
     return same_type[0] if len(same_type) == 1 else None
 
 
-# --- the workspace's interface types -------------------------------------------
+def learner_topics(graph: Any) -> str:
+    """What ``ros2 topic list -t`` shows in ``graph``, without ROS's own topics and the grader's probes.
+
+    A topic counts when a node not starting with ``_`` (the grader's hidden
+    nodes) publishes or subscribes to it.
+    """
+    def learners(topic: str) -> bool:
+        infos = [*graph.node.get_publishers_info_by_topic(topic), *graph.node.get_subscriptions_info_by_topic(topic)]
+        return any(not info.node_name.startswith("_") for info in infos)
+
+    return describe_endpoints({n: types for n, types in graph.topic_types().items()
+                               if n not in STANDARD_TOPICS and learners(n)})
+
+
+# --- the grader's side of a topic ---------------------------------------------------
+
+def reliable_qos(depth: int = 10) -> Any:
+    """Keep-last ``depth``, reliable: the QoS of the grader's probes and publisher.
+
+    Matches a learner's ``qos_profile=1`` (reliable by default in rclpy) and
+    keeps a burst of ``depth`` messages a loaded machine delivers at once.
+    """
+    from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: PLC0415
+
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE)
+
+
+def listen(s: GradingSession, topic: str, msg_type: type) -> Any:
+    """A :class:`~course.probes.TopicProbe` on ``topic`` in ``s.ros`` with :func:`reliable_qos`.
+
+    Create it before the learner's publisher starts: no message is missed.
+    """
+    return s.ros.topic(topic, msg_type, reliable_qos())
+
+
+@contextlib.contextmanager
+def publisher(s: GradingSession, topic: str, msg_type: type) -> Iterator[Any]:
+    """The grader's own publisher on ``topic`` in ``s.ros`` (like ``ros2 topic pub``), removed on exit.
+
+    Yields the rclpy publisher (``publish(msg)``, ``get_subscription_count()``),
+    :func:`reliable_qos`.
+    """
+    pub = s.ros.node.create_publisher(msg_type, topic, reliable_qos())
+    try:
+        yield pub
+    finally:
+        s.ros.node.destroy_publisher(pub)
+
 
 # --- text matching -------------------------------------------------------------
 
@@ -226,9 +283,11 @@ class DeferredServer:
     would block an executor thread (and with it the grader's /rosout
     subscription). This server lives on a node of its own that no executor
     spins: a thread takes requests as they arrive (every 5 ms), records their
-    arrival time, and sends each response once it is due.
+    arrival time, and sends each response once it is due. Nothing exists in
+    the graph before :meth:`offer`.
 
     Args:
+        graph: the :class:`~course.probes.RosSession` to serve in.
         handler: ``handler(index, request, response) -> response``; ``index`` counts calls from 0.
         delay: seconds between a request's arrival and its answer; can be changed while running.
 
@@ -242,26 +301,34 @@ class DeferredServer:
 
     POLL = 0.005  # seconds
 
-    def __init__(self, s: GradingSession, srv_type: type, name: str,
+    def __init__(self, graph: Any, srv_type: type, name: str,
                  handler: Callable[[int, Any, Any], Any], delay: float = 0.0) -> None:
-        import rclpy  # noqa: PLC0415
-        from rclpy.parameter import Parameter  # noqa: PLC0415
-
         self.delay = delay
         self.calls: list[tuple[float, Any]] = []
         self.sent: list[float] = []
         self.answers: list[tuple[float, Any]] = []
+        self._graph = graph
+        self._name = name
         self._srv_type = srv_type
         self._handler = handler
         self._lock = threading.Lock()
         self._due: list[tuple[float, Any, Any]] = []
         self._stop = threading.Event()
+        self._node = None
+        self._service = None
+        self._thread: threading.Thread | None = None
+
+    def offer(self) -> None:
+        """Create the service (it appears in the graph) and start answering."""
+        import rclpy  # noqa: PLC0415
+        from rclpy.parameter import Parameter  # noqa: PLC0415
+
         self._node = rclpy.create_node(
-            "_ros2course_stand_in_server", context=s.ros.context, enable_rosout=False,
+            "_ros2course_stand_in_server", context=self._graph.context, enable_rosout=False,
             start_parameter_services=False,
             parameter_overrides=[Parameter("start_type_description_service", value=False)])
         # The callback is never run: no executor spins this node; _run takes the requests.
-        self._service = self._node.create_service(srv_type, name, lambda request, response: response)
+        self._service = self._node.create_service(self._srv_type, self._name, lambda request, response: response)
         self._thread = threading.Thread(target=self._run, daemon=True, name="ros2course-stand-in-server")
         self._thread.start()
 
@@ -314,7 +381,24 @@ class DeferredServer:
         return RateStats.from_times(self.send_stamps(begin, count))
 
     def close(self) -> None:
-        """Stop answering and remove the service from the graph."""
+        """Stop answering and remove the service from the graph (nothing to do before :meth:`offer`)."""
         self._stop.set()
-        self._thread.join(timeout=2.0)
-        self._node.destroy_node()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+        if self._node is not None:
+            self._node.destroy_node()
+            self._node = None
+
+
+def stand_in_server(s: GradingSession, srv_type: type, name: str,
+                    handler: Callable[[int, Any, Any], Any]) -> DeferredServer:
+    """A :class:`DeferredServer` for service ``name`` in ``s.ros``, not offered yet, closed when the part ends.
+
+    Create it before starting the learner's client (``kit.start_node``): the
+    closing actions run newest first, so the client's Ctrl+C check runs while
+    the service still exists (what a learner would do), then the server goes.
+    Call :meth:`DeferredServer.offer` when the service is to appear.
+    """
+    server = DeferredServer(s.ros, srv_type, name, handler)
+    s.on_close(server.close)
+    return server
