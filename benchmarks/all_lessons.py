@@ -25,11 +25,11 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
-from course import env as env_mod
-from course.grading import grade_lesson, load_grader
-from course.results import Status
-from course.lesson import load_catalog
-from course.validate import reference_workspace, run_commands
+from course.grade.engine import grade_lesson, load_grader
+from course.grade.results import Status
+from course.grade.validate import reference_workspace, run_commands
+from course.lesson.catalog import load_catalog
+from course.ros import env as env_mod
 
 #: issue 3: "a warm check takes at most its observation window plus 1.5 s"
 ALLOWANCE = 1.5

@@ -48,14 +48,14 @@ from typing import Any
 from rich.console import Console
 from rich.table import Table
 
-from course import build as build_mod
-from course import env as env_mod
+from course.build import colcon as build_mod
 from course.errors import CourseError
-from course.grading import grade_lesson, load_grader
-from course.results import LessonResult, Status
-from course.lesson import Lesson, load_catalog
-from course.validate import reference_workspace
-from course.process import kill_marked
+from course.grade.engine import grade_lesson, load_grader
+from course.grade.results import LessonResult, Status
+from course.grade.validate import reference_workspace
+from course.lesson.catalog import Lesson, load_catalog
+from course.ros import env as env_mod
+from course.run.process import kill_marked
 
 LESSON_ID = "print-forever-node"
 #: What "warm overhead above floor" should stay under, seconds.
@@ -216,8 +216,8 @@ def measure_floor(runs: int, folder: Path, period: float, progress: Console) -> 
     Also records, per run, Popen -> node in the graph, SIGINT -> exit, and the
     RosSession's open/close times (what a check pays around its node).
     """
-    from course.probes import RosSession, wait_until  # noqa: PLC0415 - rclpy only when measuring
-    from course.process import LearnerProcess, sweep_stale_fastdds_shm
+    from course.run.probes import RosSession, wait_until  # noqa: PLC0415 - rclpy only when measuring
+    from course.run.process import LearnerProcess, sweep_stale_fastdds_shm
 
     folder.mkdir(parents=True, exist_ok=True)
     script = folder / "floor_node.py"
@@ -314,7 +314,7 @@ def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, f
     # What the grader's ROS graph costs in a fresh process (``ros2course check``): imports, rclpy init,
     # node (with its type description service), executor thread; then closing it, then exiting.
     out["ros_session_open_fresh"], out["ros_session_close_fresh"], out["exit_after_ros_session"] = self_timed(
-        "RosSession", "from course.probes import RosSession\ns = RosSession().__enter__()\n"
+        "RosSession", "from course.run.probes import RosSession\ns = RosSession().__enter__()\n"
         "opened = time.perf_counter()\ns.__exit__(None, None, None)\n"
         "print(opened - t, time.perf_counter() - opened, flush=True)", dict(os.environ))
     out["exit_plain_python"] = self_timed("print", "print(0, flush=True)", dict(os.environ))[-1]
@@ -323,7 +323,7 @@ def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, f
         "entry point lookup", "from importlib.metadata import distribution\n"
         "[e for e in distribution('python-package-with-a-node').entry_points]\n"
         "print(time.perf_counter() - t)", overlay)[0]
-    from course.process import sweep_stale_fastdds_shm  # noqa: PLC0415
+    from course.run.process import sweep_stale_fastdds_shm  # noqa: PLC0415
 
     sweep_stale_fastdds_shm()
     return out

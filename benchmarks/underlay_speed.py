@@ -1,6 +1,6 @@
 """Set-up time of the ROS 2 underlay: cold build, warm (cached) no-op, installed size.
 
-Builds the pinned underlay (course/underlay_pins.py) into a temporary root, as
+Builds the pinned underlay (course/ros/underlay_pins.py) into a temporary root, as
 ``ros2course env --build`` does, then asks again with the same pins (the cache:
 nothing is built), and prints the times and the installed size. The
 project's own underlay is not touched. A script, not a timed test::
@@ -25,8 +25,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from course import env as env_mod  # noqa: E402
-from course import underlay  # noqa: E402
+from course.ros import env as env_mod  # noqa: E402
+from course.ros import underlay  # noqa: E402
 
 
 def main() -> int:

@@ -19,10 +19,10 @@ import typer
 from rich.console import Console
 from rich.text import Text
 
-from course import env as env_mod
 from course.errors import CourseError, ExitStatus
-from course.lesson import load_catalog
-from course.progress import Workspace, find_workspace
+from course.lesson.catalog import load_catalog
+from course.lesson.progress import Workspace, find_workspace
+from course.ros import env as env_mod
 
 app = typer.Typer(name="ros2course", no_args_is_help=True, add_completion=False,
                   help="Learn ROS 2 Jazzy by writing real nodes; ros2course builds, runs and grades them.")
@@ -103,7 +103,7 @@ def init(directory: Annotated[Path, typer.Argument(help="Workspace folder to cre
 @_handle_errors
 def list_(workspace: WorkspaceOpt = None) -> None:
     """Every lesson, its status and best score."""
-    from course.report import render_list  # noqa: PLC0415
+    from course.report.table import render_list  # noqa: PLC0415
 
     catalog = load_catalog()
     ws = _workspace(workspace)
@@ -114,8 +114,8 @@ def list_(workspace: WorkspaceOpt = None) -> None:
 @_handle_errors
 def next_(workspace: WorkspaceOpt = None) -> None:
     """Move to the next lesson: show its instructions and copy its starter files."""
-    from course.report import render_lesson  # noqa: PLC0415
-    from course.starter import copy_starter
+    from course.lesson.starter import copy_starter
+    from course.report.table import render_lesson  # noqa: PLC0415
 
     catalog = load_catalog()
     ws = _workspace(workspace)
@@ -165,16 +165,16 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
           as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON on stdout, nothing else.")] = False,
           ) -> None:
     """Build the lesson's packages, run your nodes, grade them. Exit 0 only on full marks."""
-    from course.grading import grade_lesson  # noqa: PLC0415
-    from course.report import render_result, result_json
-    from course.results import Status
+    from course.grade.engine import grade_lesson  # noqa: PLC0415
+    from course.grade.results import Status
+    from course.report.table import render_result, result_json
 
     ws = _workspace(workspace)
     lesson = _lesson_for(lesson_id, ws)
     if ws.initialised:
         ws.load_progress()  # a corrupt progress file is reported before, not after, a long check
     err = stderr_console()
-    # the sas lesson's C++ path: build SmartArmStack once, on demand (minutes; course.env)
+    # the sas lesson's C++ path: build SmartArmStack once, on demand (minutes; course.ros.env)
     env_mod.ensure_components_for(ws.root, lesson.packages,
                                   progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
     with err.status(f"grading {lesson.id} in {ws.root} ...") if not as_json and err.is_terminal else _null():
@@ -234,7 +234,7 @@ def hint(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON")] =
 def reset(lesson_id: Annotated[str, typer.Argument(metavar="LESSON")],
           workspace: WorkspaceOpt = None) -> None:
     """Restore the lesson's starter files; your versions are backed up first."""
-    from course.starter import reset_starter  # noqa: PLC0415
+    from course.lesson.starter import reset_starter  # noqa: PLC0415
 
     ws = _workspace(workspace)
     lesson = load_catalog().get(lesson_id)
@@ -289,7 +289,7 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
                                                                  "about 6 min on 2 cores).")] = None,
          ) -> None:
     """The learner's ROS 2 environment: source "$(ros2course env --path)" in a terminal."""
-    from course import underlay  # noqa: PLC0415
+    from course.ros import underlay  # noqa: PLC0415
 
     if not (path or build):
         raise CourseError("say what to do: --path or --build", 'e.g. source "$(ros2course env --path)"')
@@ -318,7 +318,7 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
 def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="[LESSON]...")] = None,
              as_json: Annotated[bool, typer.Option("--json", help="Print the outcomes as JSON.")] = False) -> None:
     """Grade every lesson's reference (full marks), starter (not full) and wrong solutions (named checks fail)."""
-    from course.validate import render_outcomes, validate_course  # noqa: PLC0415
+    from course.grade.validate import render_outcomes, validate_course  # noqa: PLC0415
 
     outcomes = validate_course(lesson_ids or None, progress=stderr_console())
     if as_json:
@@ -349,7 +349,7 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
                                                           help="Refuse to grade unless every protection (namespaces, unprivileged uid, process limit) is in effect.")] = False,
           ) -> None:
     """Grade a whole class: each submission isolated, in parallel, resumable; writes a gradebook."""
-    from course.batch import render_summary, run_batch  # noqa: PLC0415
+    from course.batch.runner import render_summary, run_batch  # noqa: PLC0415
 
     err = stderr_console()
     if memory_mb < 0:
@@ -374,7 +374,7 @@ def gradescope(lesson: Annotated[Optional[list[str]], typer.Option("--lesson", "
                                                                help="Refuse to grade unless every protection is in effect.")] = False,
                ) -> None:
     """Grade one submission inside a Gradescope autograder container (writes results.json)."""
-    from course.batch_gradescope import run_gradescope  # noqa: PLC0415
+    from course.batch.gradescope import run_gradescope  # noqa: PLC0415
 
     score = run_gradescope(lesson or [], submission, results, timeout=timeout, pids_limit=pids_limit,
                            require_isolation=require_isolation)

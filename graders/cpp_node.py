@@ -5,12 +5,12 @@ executable ``print_forever_node``, node ``print_forever_node``, logging
 ``Printed N times.`` every 0.5 s. Graded by the same black-box checks
 (graders/print_forever_node.py); only the ``package.xml`` dependency differs
 (``rclcpp``). Needs rclcpp: on the PyPI install, the source-built underlay
-(course/underlay.py).
+(course/ros/underlay.py).
 """
 
 from __future__ import annotations
 
-from course.grading import GradingSession
+from course.grade.engine import GradingSession
 from graders import print_forever_node
 from graders.print_forever_node import grade_node, make_checks
 

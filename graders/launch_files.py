@@ -12,13 +12,30 @@ from __future__ import annotations
 
 import time
 
-from course.probes import LATE_DELIVERY
+from course.run.probes import LATE_DELIVERY
 from graders import kit
 from graders.kit import Check, GradingSession, Unmet
-from graders.kit.launch import MODE_LAUNCH_ROS, LaunchRun, describe_launch_folder, start_launch_file
-from graders.kit.quotes import (EXECUTABLE, LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER, LAUNCH_QUOTE,
-                                LAUNCH_TOPIC, PACKAGE, amazing_quote, first_difference, package_share, package_source,
-                                short)
+from graders.kit.launch import (
+    MODE_LAUNCH_ROS,
+    LaunchRun,
+    describe_launch_folder,
+    start_launch_file,
+)
+from graders.kit.quotes import (
+    EXECUTABLE,
+    LAUNCH_FILE,
+    LAUNCH_NODE,
+    LAUNCH_PERIOD,
+    LAUNCH_PHILOSOPHER,
+    LAUNCH_QUOTE,
+    LAUNCH_TOPIC,
+    PACKAGE,
+    amazing_quote,
+    first_difference,
+    package_share,
+    package_source,
+    short,
+)
 
 SAMPLES = 6  # messages -> 5 intervals at 4 Hz (the minimum shared/LESSONS.md asks for)
 NODE_TIMEOUT = 10.0  # seconds for the node to appear (launch_ros start-up included)

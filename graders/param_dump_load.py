@@ -25,12 +25,24 @@ import time
 from pathlib import Path
 from typing import Any
 
-from course.probes import LATE_DELIVERY
+from course.run.probes import LATE_DELIVERY
 from graders import kit
 from graders.kit import Check, GradingSession, Unmet, params
 from graders.kit.launch import NodeAction, start_node_action
-from graders.kit.quotes import (EXECUTABLE, LAUNCH_NODE, LAUNCH_PARAMETERS, LAUNCH_PERIOD, LAUNCH_PHILOSOPHER,
-                                LAUNCH_QUOTE, LAUNCH_TOPIC, PACKAGE, amazing_quote, package_source, quote_after, short)
+from graders.kit.quotes import (
+    EXECUTABLE,
+    LAUNCH_NODE,
+    LAUNCH_PARAMETERS,
+    LAUNCH_PERIOD,
+    LAUNCH_PHILOSOPHER,
+    LAUNCH_QUOTE,
+    LAUNCH_TOPIC,
+    PACKAGE,
+    amazing_quote,
+    package_source,
+    quote_after,
+    short,
+)
 
 CONFIG = Path("config") / f"{LAUNCH_NODE}.yaml"  # inside the package's source folder
 NODE_KEY = f"/{LAUNCH_NODE}"
@@ -108,7 +120,7 @@ def _read_file(s: GradingSession) -> tuple[Path, dict[str, Any] | None]:
     """
     import yaml  # noqa: PLC0415
 
-    from course.lesson import yaml_error_text  # noqa: PLC0415
+    from course.lesson.catalog import yaml_error_text  # noqa: PLC0415
 
     source = package_source(s)
     path = source / CONFIG if source else None

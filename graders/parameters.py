@@ -13,7 +13,15 @@ import time
 
 from graders import kit
 from graders.kit import Check, GradingSession, params
-from graders.kit.quotes import DEFAULTS, EXECUTABLE, NODE, PACKAGE, amazing_quote, quote_after, short
+from graders.kit.quotes import (
+    DEFAULTS,
+    EXECUTABLE,
+    NODE,
+    PACKAGE,
+    amazing_quote,
+    quote_after,
+    short,
+)
 
 DEFAULT_TOPIC = "/amazing_quote"
 DEFAULT_PERIOD = 0.5  # seconds (seed ch. 22.3)

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 
-from course.probes import LATE_DELIVERY, stamp_seconds, wait_until
+from course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
 from graders import kit
 from graders.kit import Check, GradingSession
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 import itertools
 import random
 
-from course.probes import wait_until
+from course.run.probes import wait_until
 from graders import kit
 from graders.kit import Check, GradingSession, Unmet
 from graders.kit import topics_services as ts

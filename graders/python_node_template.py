@@ -8,8 +8,8 @@ graph is started.
 
 from __future__ import annotations
 
-from course.probes import wait_until
-from course.process import LearnerProcess
+from course.run.probes import wait_until
+from course.run.process import LearnerProcess
 from graders.kit import Check, GradingSession
 from graders.kit.packaging import ros2_run_executable
 

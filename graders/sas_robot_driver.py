@@ -14,8 +14,7 @@ from __future__ import annotations
 import math
 
 from graders import kit
-from graders.kit import Check, GradingSession
-from graders.kit import sas
+from graders.kit import Check, GradingSession, sas
 
 PACKAGE = "sas_robot_driver_myrobot"
 DRIVER_EXECUTABLE = "sas_robot_driver_myrobot_node"

@@ -23,7 +23,7 @@ import random
 import re
 import time
 
-from course.probes import LATE_DELIVERY, call_service, wait_until
+from course.run.probes import LATE_DELIVERY, call_service, wait_until
 from graders import kit
 from graders.kit import RATE_TOLERANCE, Check, GradingSession
 from graders.kit import topics_services as ts

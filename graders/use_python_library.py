@@ -11,10 +11,16 @@ Only ``package.xml`` is read, for the dependency on the library the contract nam
 
 from __future__ import annotations
 
-from course.probes import LATE_DELIVERY, stamp_seconds, wait_until
+from course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
 from graders import kit
 from graders.kit import Check, GradingSession
-from graders.kit.packaging import classify, name_lines, ros2_run_executable, shorten, square_lines
+from graders.kit.packaging import (
+    classify,
+    name_lines,
+    ros2_run_executable,
+    shorten,
+    square_lines,
+)
 
 PACKAGE = "python_package_that_uses_the_library"
 LIBRARY = "python_package_with_a_library"

@@ -2,7 +2,7 @@
 # Create (or update) .venv with ros2course, ROS 2 Jazzy from PyPI and the test
 # tools (and Dask, for the batch grader's cluster test), repair the wheels' CMake
 # files, then build the ROS 2 pieces PyPI lacks (ros2 CLI, launch, rclcpp) from
-# their pinned sources into .venv/opt/ros2course-jazzy (course/underlay.py; about
+# their pinned sources into .venv/opt/ros2course-jazzy (course/ros/underlay.py; about
 # 4 min on 2 cores the first time, a no-op afterwards). Idempotent; run from anywhere.
 #
 # Sources: $ROS2COURSE_ROS_SOURCES, else ../shared/ros-src beside the project when

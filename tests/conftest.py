@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from course import env as env_mod
-from course.lesson import content_root, load_catalog
-from course.progress import Workspace
+from course.lesson.catalog import content_root, load_catalog
+from course.lesson.progress import Workspace
+from course.ros import env as env_mod
 
 ROOT = content_root()
 SOLUTIONS = ROOT / "solutions" / "src"

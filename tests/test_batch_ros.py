@@ -18,11 +18,16 @@ from pathlib import Path
 import psutil
 import pytest
 
-from course import gradebook
-from course.batch import BATCH_MARKER_VAR, run_batch
-from course.grading import grade_lesson
-from course.lesson import load_catalog
-from course.validate import apply_edits, load_fixtures, reference_workspace, run_commands
+from course.batch.runner import BATCH_MARKER_VAR, run_batch
+from course.grade.engine import grade_lesson
+from course.grade.validate import (
+    apply_edits,
+    load_fixtures,
+    reference_workspace,
+    run_commands,
+)
+from course.lesson.catalog import load_catalog
+from course.report import gradebook
 from tests.conftest import cpu_lock
 
 #: whole classes graded two at a time: never beside the determinism tests (conftest.cpu_exclusive)

@@ -14,12 +14,14 @@ from pathlib import Path
 import pytest
 import yaml
 
-from course.lesson import content_root, load_catalog
-from course.starter import starter_files, starter_sources
+from course.lesson.catalog import content_root, load_catalog
+from course.lesson.starter import starter_files, starter_sources
 
 ROOT = content_root()
 CATALOG = load_catalog()
 FIRST, LAST = CATALOG.lessons[0], CATALOG.lessons[-1]
+#: The first lesson of the ROS 2 track (after the preamble): the colcon workspace.
+WS_SETUP = CATALOG.get("workspace-setup")
 PRINT_FOREVER = "print-forever-node"
 PKG = "src/python_package_with_a_node"
 
@@ -188,7 +190,8 @@ def test_next_renders_instructions_and_copies_starters(ws, cli):
     out = normalised(proc.stdout)
     assert FIRST.title in out
     assert f"lesson id: {FIRST.id}" in out
-    assert "Why a workspace?" in out  # a heading of the lesson's markdown instructions
+    heading = next(line[3:].strip() for line in FIRST.instructions.splitlines() if line.startswith("## "))
+    assert heading in out  # a heading of the lesson's markdown instructions
     files = starter_files(FIRST)
     assert files, "the first lesson has starter files"
     sources = starter_sources(FIRST)
@@ -211,12 +214,14 @@ def test_next_renders_instructions_and_copies_starters(ws, cli):
 
 def test_next_keeps_the_learners_files(ws, cli):
     mine_top = b"#!/bin/bash\n# my own notes \xc3\xa9\n"
-    (ws / "build_and_source.sh").write_bytes(mine_top)
+    first_file = sorted(starter_files(FIRST))[0]
+    (ws / first_file).parent.mkdir(parents=True, exist_ok=True)
+    (ws / first_file).write_bytes(mine_top)
     proc = cli("next", cwd=ws)
     assert proc.returncode == 0, proc.stderr
-    assert (ws / "build_and_source.sh").read_bytes() == mine_top
-    assert "kept your file build_and_source.sh" in proc.stderr
-    assert "created build_and_source.sh" not in proc.stdout
+    assert (ws / first_file).read_bytes() == mine_top
+    assert f"kept your file {first_file}" in proc.stderr
+    assert f"created {first_file}" not in proc.stdout
 
     target = first_lesson_shipping(f"{PKG}/setup.py")
     before = CATALOG.lessons[CATALOG.ids().index(target.id) - 1]
@@ -353,7 +358,7 @@ def test_check_on_the_starter_fails_and_explains(ws, cli):
     assert "✘ ros2 run finds print_forever_node" in failed
     assert len([line for line in out.splitlines() if line.strip().startswith("observed:")]) == len(failed)
     assert len([line for line in out.splitlines() if line.strip().startswith("expected:")]) == len(failed)
-    assert "observed: package.xml run dependencies: none" in out
+    assert "observed: package.xml dependencies: none" in out
     assert "no executable print_forever_node" in out
     assert "check(s) not run" in out  # the checks that depend on the executable are summarised
     record = progress_of(ws)["lessons"][PRINT_FOREVER]
@@ -363,7 +368,7 @@ def test_check_on_the_starter_fails_and_explains(ws, cli):
 
 @pytest.mark.ros
 def test_check_unbuilt_workspace_setup_reports(ws, cli):
-    proc = cli("check", FIRST.id, "--json", cwd=ws)
+    proc = cli("check", WS_SETUP.id, "--json", cwd=ws)
     assert proc.returncode == 1, (proc.stdout, proc.stderr)
     result = json.loads(proc.stdout)
     assert set(result) == RESULT_KEYS
@@ -374,12 +379,12 @@ def test_check_unbuilt_workspace_setup_reports(ws, cli):
     assert "build/" in checks["built"]["observed"] and "install/" in checks["built"]["observed"]
     assert checks["sourceable"]["passed"] is False
     assert 0 < result["score"] < result["max_score"]
-    assert progress_of(ws)["lessons"][FIRST.id]["last_status"] == "failed"
+    assert progress_of(ws)["lessons"][WS_SETUP.id]["last_status"] == "failed"
 
 
 @pytest.mark.ros
 def test_check_workspace_setup_does_not_see_its_own_log_folder(ws, cli):
-    proc = cli("check", FIRST.id, "--json", cwd=ws)
+    proc = cli("check", WS_SETUP.id, "--json", cwd=ws)
     result = json.loads(proc.stdout)
     checks = {c["id"]: c for c in result["checks"]}
     assert "log/" in checks["built"]["observed"]  # the learner never built: log/ is missing too
@@ -417,11 +422,11 @@ def test_check_a_workspace_never_initialised(tmp_path, cli):
     (plain_ws / "src").mkdir(parents=True)
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
-    proc = cli("check", FIRST.id, "--json", "--workspace", str(plain_ws), cwd=elsewhere)
+    proc = cli("check", WS_SETUP.id, "--json", "--workspace", str(plain_ws), cwd=elsewhere)
     assert proc.returncode == 1, (proc.stdout, proc.stderr)
     result = json.loads(proc.stdout)
     assert set(result) == RESULT_KEYS
-    assert result["lesson"] == FIRST.id
+    assert result["lesson"] == WS_SETUP.id
     assert {c["id"]: c for c in result["checks"]}["src_folder"]["passed"] is True
     assert not (plain_ws / ".ros2course").exists()
     assert not (elsewhere / ".ros2course").exists()

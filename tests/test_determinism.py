@@ -15,10 +15,10 @@ from __future__ import annotations
 
 import pytest
 
-from course.grading import grade_lesson
-from course.results import Status
-from course.lesson import load_catalog
-from course.validate import reference_workspace
+from course.grade.engine import grade_lesson
+from course.grade.results import Status
+from course.grade.validate import reference_workspace
+from course.lesson.catalog import load_catalog
 
 RUNS = 20
 

@@ -1,4 +1,4 @@
-"""course/env.py: the learner's activation script, the wheel link repairs, foreign shebangs. No ROS node runs."""
+"""course/ros/env.py: the learner's activation script, the wheel link repairs, foreign shebangs. No ROS node runs."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from course import env as env_mod
+from course.ros import env as env_mod
 
 WHEELS = env_mod.detect().kind == "wheels"
 needs_wheels = pytest.mark.skipif(not WHEELS, reason="ROS 2 comes from a sourced system install, not the wheels")
@@ -100,8 +100,8 @@ def _workspace_depending_on(tmp_path: Path, dep: str) -> Path:
 
 @needs_wheels
 def test_a_package_on_sas_builds_the_sas_component_on_demand_or_says_why_not(tmp_path, monkeypatch):
-    from course import underlay
     from course.errors import MissingRequirement
+    from course.ros import underlay
 
     calls = []
     monkeypatch.setattr(underlay, "build", lambda **kw: calls.append(kw["component"].name))

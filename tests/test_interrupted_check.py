@@ -12,7 +12,7 @@ import time
 import psutil
 import pytest
 
-from course.process import sweep_stale_fastdds_shm
+from course.run.process import sweep_stale_fastdds_shm
 
 
 def _wait_for(predicate, timeout: float) -> bool:

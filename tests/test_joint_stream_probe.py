@@ -65,7 +65,7 @@ PUBLISHER = f"""
 @pytest.fixture
 def ros_env():
     pytest.importorskip("rclpy")
-    from course import env as env_mod  # noqa: PLC0415
+    from course.ros import env as env_mod  # noqa: PLC0415
 
     env = dict(os.environ)
     env_mod.activate(env)
@@ -75,8 +75,8 @@ def ros_env():
 @pytest.mark.ros
 @pytest.mark.timeout(90)
 def test_probe_measures_a_known_500hz_publisher_on_send_stamps(ros_env, tmp_path):
-    from course.probes import RateStats, RosSession  # noqa: PLC0415
-    from course.process import LearnerProcess, sweep_stale_fastdds_shm
+    from course.run.probes import RateStats, RosSession  # noqa: PLC0415
+    from course.run.process import LearnerProcess, sweep_stale_fastdds_shm
     from graders.kit.joint_stream import JointStreamProbe, arrival_rate, source_rate
 
     script = tmp_path / "known_500hz_publisher.py"

@@ -13,9 +13,14 @@ from pathlib import Path
 import pytest
 import yaml
 
-from course.lesson import content_root
+from course.lesson.catalog import content_root
 from graders.kit import launch as _launch
-from graders.kit.launch import MODE_LAUNCH_ROS, read_launch_file, start_launch_file, start_node_action
+from graders.kit.launch import (
+    MODE_LAUNCH_ROS,
+    read_launch_file,
+    start_launch_file,
+    start_node_action,
+)
 
 REFERENCE = (content_root() / "solutions" / "src" / "python_package_that_uses_parameters_and_launch_files"
              / "launch" / "peanut_butter_falcon_quote_publisher_launch.py")
@@ -240,7 +245,7 @@ def test_without_launch_ros_a_launch_file_is_not_gradable_and_nothing_starts(tmp
     from course.errors import MissingRequirement
 
     monkeypatch.setattr(_launch, "launch_ros_available", lambda: False)
-    monkeypatch.setattr("course.env.probe_requirement", lambda name: (False, "launch/launch_ros not importable"))
+    monkeypatch.setattr("course.ros.env.probe_requirement", lambda name: (False, "launch/launch_ros not importable"))
     session = FakeSession(tmp_path)
     with pytest.raises(MissingRequirement, match="needs launch"):
         start_launch_file(session, REFERENCE)

@@ -1,7 +1,7 @@
 """Schema-level tests of the course content: lessons, graders, fixtures, starters.
 
 No ROS node is started here: fixtures are applied to a copy of the reference
-solution with :func:`course.validate.apply_edits`, never graded.
+solution with :func:`course.grade.validate.apply_edits`, never graded.
 """
 
 from __future__ import annotations
@@ -13,12 +13,17 @@ from pathlib import Path
 import pytest
 import yaml
 
-from course.build import find_packages
+from course.build.colcon import find_packages
 from course.errors import LessonFormatError
-from course.grading import Check, load_grader
-from course.lesson import content_root, load_catalog, load_lesson
-from course.starter import copy_starter, starter_files, starter_sources
-from course.validate import apply_edits, fixtures_dir, load_fixtures, reference_workspace
+from course.grade.engine import Check, load_grader
+from course.grade.validate import (
+    apply_edits,
+    fixtures_dir,
+    load_fixtures,
+    reference_workspace,
+)
+from course.lesson.catalog import content_root, load_catalog, load_lesson
+from course.lesson.starter import copy_starter, starter_files, starter_sources
 
 ROOT = content_root()
 CATALOG = load_catalog()
@@ -40,8 +45,9 @@ def snapshot(root: Path) -> dict[str, bytes | None]:
 # --- the catalog ---------------------------------------------------------------
 
 def test_catalog_has_the_known_lessons_in_order():
-    # shared/LESSONS.md order: workspace-setup opens the ROS 2 Python track, print-forever-node follows it
-    assert LESSON_IDS[0] == "workspace-setup"
+    # shared/LESSONS.md order: the preamble (ch. 1-2) first, then workspace-setup opens the ROS 2 Python track
+    assert LESSON_IDS[0] == "terminal-basics"
+    assert LESSON_IDS.index("terminal-basics") < LESSON_IDS.index("workspace-setup")
     assert LESSON_IDS.index("workspace-setup") < LESSON_IDS.index("print-forever-node")
     numbers = [int(CATALOG.get(i).folder.name.split("-", 1)[0]) for i in LESSON_IDS]
     assert numbers == sorted(numbers), "the catalog runs in folder-number order"
@@ -151,7 +157,7 @@ def test_fixture_edits_apply_exactly_once_to_the_reference(lesson_id, fixture_na
 
 def test_apply_edits_rejects_a_replace_that_is_not_unique(tmp_path):
     """The guard the previous test relies on: a replace text found 0 or 2 times is an error."""
-    from course.validate import Edit
+    from course.grade.validate import Edit
 
     (tmp_path / "f.txt").write_text("a a\n")
     with pytest.raises(LessonFormatError, match="2 times"):
@@ -286,7 +292,7 @@ def _tiny_lesson(chapters: Path, folder: str, extra: str = "", files: dict[str, 
 
 
 def test_starter_includes_lay_earlier_starters_under_the_lessons_own(tmp_path):
-    from course.lesson import Catalog  # noqa: PLC0415
+    from course.lesson.catalog import Catalog  # noqa: PLC0415
 
     chapters = tmp_path / "chapters"
     _tiny_lesson(chapters, "01-alpha", files={"src/p/node.py": "alpha", "src/p/setup.py": "alpha"})
@@ -309,7 +315,7 @@ def test_starter_includes_lay_earlier_starters_under_the_lessons_own(tmp_path):
 @pytest.mark.parametrize("include, problem", [("delta", "no such lesson"),
                                               ("gamma", "does not come earlier")])
 def test_starter_includes_must_name_an_earlier_lesson(tmp_path, include, problem):
-    from course.lesson import Catalog  # noqa: PLC0415
+    from course.lesson.catalog import Catalog  # noqa: PLC0415
 
     chapters = tmp_path / "chapters"
     _tiny_lesson(chapters, "01-alpha")

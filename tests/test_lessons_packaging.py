@@ -14,7 +14,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from course.grading import GradingSession, Unmet, check_dependencies
+from course.grade.engine import GradingSession, Unmet, check_dependencies
 from graders.kit.packaging import (
     classify,
     data_files_mapping,

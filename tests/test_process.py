@@ -1,4 +1,4 @@
-"""course.process: starting, stopping and cleaning up after learner processes.
+"""course.run.process: starting, stopping and cleaning up after learner processes.
 
 The "learners" here are tiny ``python -c`` / ``sh -c`` programs, so these
 tests need no ROS, except the last one, which checks the Fast DDS
@@ -21,8 +21,13 @@ from pathlib import Path
 import psutil
 import pytest
 
-from course.process import (MARKER_VAR, LearnerProcess, kill_marked, last_traceback,
-                            sweep_stale_fastdds_shm)
+from course.run.process import (
+    MARKER_VAR,
+    LearnerProcess,
+    kill_marked,
+    last_traceback,
+    sweep_stale_fastdds_shm,
+)
 
 PY = sys.executable
 
@@ -579,7 +584,7 @@ def _owned_lock_names(pid: int) -> set[str]:
 def test_sweep_after_sigkilled_rclpy_node(tmp_path):
     pytest.importorskip("rclpy")
     domain_coordinator = pytest.importorskip("domain_coordinator")
-    from course import env as env_mod  # noqa: PLC0415
+    from course.ros import env as env_mod  # noqa: PLC0415
 
     shm = Path("/dev/shm")
     if not shm.is_dir():

@@ -17,11 +17,11 @@ from pathlib import Path
 import psutil
 import pytest
 
-from course.grading import grade_lesson
-from course.results import LessonResult, Status
-from course.lesson import load_catalog
-from course.process import DEFAULT_OUTPUT_CAP, MARKER_VAR
-from course.validate import Edit, apply_edits, reference_workspace
+from course.grade.engine import grade_lesson
+from course.grade.results import LessonResult, Status
+from course.grade.validate import Edit, apply_edits, reference_workspace
+from course.lesson.catalog import load_catalog
+from course.run.process import DEFAULT_OUTPUT_CAP, MARKER_VAR
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(600)]
 
@@ -33,7 +33,7 @@ SHM = Path("/dev/shm")
 @pytest.fixture(scope="module")
 def lesson():
     pytest.importorskip("rclpy")
-    from course import env as env_mod  # noqa: PLC0415
+    from course.ros import env as env_mod  # noqa: PLC0415
 
     for requirement in ("rclpy", "colcon"):
         ok, detail = env_mod.probe_requirement(requirement)
@@ -94,7 +94,7 @@ def _flocked_inodes() -> set[tuple[int, int]]:
 
 
 def stale_shm(names: set[str]) -> set[str]:
-    """Those of ``names`` still in /dev/shm whose owner is gone (the definition in course/process.py)."""
+    """Those of ``names`` still in /dev/shm whose owner is gone (the definition in course/run/process.py)."""
     held = _flocked_inodes()
     used = None
     stale = set()

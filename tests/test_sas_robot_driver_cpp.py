@@ -6,7 +6,7 @@ does: ``joint_interface_example.py`` with ``#!/usr/bin/python3``). Built on the
 real ``sas`` packages it must get full marks from the same black-box grader as
 the lesson's Python package. sas is not on PyPI: on the pip install it is the
 optional underlay component (``ros2course env --build --with sas``,
-course/underlay.py); with a system ROS, ``ros-jazzy-sas-*``. Skipped where
+course/ros/underlay.py); with a system ROS, ``ros-jazzy-sas-*``. Skipped where
 neither is installed.
 """
 
@@ -40,8 +40,8 @@ pytestmark = [
 
 @pytest.mark.timeout(900)
 def test_grader_gives_the_seeds_cpp_driver_full_marks(tmp_path: Path):
-    from course.grading import grade_lesson  # noqa: PLC0415
-    from course.lesson import load_catalog
+    from course.grade.engine import grade_lesson  # noqa: PLC0415
+    from course.lesson.catalog import load_catalog
 
     source = Path(__file__).parent / "data" / "sas_cpp" / "sas_robot_driver_myrobot"
     shutil.copytree(source, tmp_path / "src" / "sas_robot_driver_myrobot")

@@ -1,4 +1,4 @@
-"""course/underlay.py on tiny made-up pins: cache, atomic switch, one-line failures, interruption.
+"""course/ros/underlay.py on tiny made-up pins: cache, atomic switch, one-line failures, interruption.
 
 The real pins take minutes; these build one small ament_python package with the
 same code path (mirror folder, COLCON_IGNORE of unlisted packages, two colcon
@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from course import underlay
-from course.underlay_pins import Pin
+from course.ros import underlay
+from course.ros.underlay_pins import Pin
 
 #: colcon builds: never beside the determinism tests (conftest.cpu_exclusive)
 pytestmark = [pytest.mark.usefixtures("cpu_exclusive"), pytest.mark.timeout(1200)]

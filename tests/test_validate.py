@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-from course.lesson import load_catalog
+from course.lesson.catalog import load_catalog
 
 
 @pytest.mark.ros
@@ -27,8 +27,8 @@ def test_dev_validate(lesson_id, cli):
 
 def test_a_fixture_that_does_not_build_fails_only_for_the_build() -> None:
     """A not-gradable result (no checks ran) proves a fixture's bug only when the fixture names the build."""
-    from course.results import CheckResult, LessonResult
-    from course.validate import judge_fixture
+    from course.grade.results import CheckResult, LessonResult
+    from course.grade.validate import judge_fixture
 
     broken = LessonResult("l", 0.0, 10.0, "not gradable", [], "colcon build failed")
     assert judge_fixture(["build"], broken)[0]

@@ -14,9 +14,16 @@ checks (Ctrl+C of a started node). Graders never write skip logic. See
 graders/README.md for a whole grader.
 """
 
-from course.grading import Check, GradingSession, Unmet
+from course.grade.engine import Check, GradingSession, Unmet
 from graders.kit.judge import RATE_TOLERANCE, STANDARD_TOPICS, rate, topics_seen
-from graders.kit.nodes import StartedNode, executable, process_state, sigint_exit, start_node, wait_for_node
+from graders.kit.nodes import (
+    StartedNode,
+    executable,
+    process_state,
+    sigint_exit,
+    start_node,
+    wait_for_node,
+)
 from graders.kit.packages import declared_dependencies, depends, source_package
 
 __all__ = [

@@ -1,6 +1,6 @@
 """A probe that keeps up with a 500 Hz ``sensor_msgs/JointState`` stream (sas-robot-driver lesson).
 
-:class:`course.probes.TopicProbe` records through the grading session's
+:class:`course.run.probes.TopicProbe` records through the grading session's
 shared node and multi-threaded executor, which is fine for a few Hz. A sas
 driver publishes its joint states every ``thread_sampling_time_sec`` = 0.002 s
 (500 Hz, seed ch. 31.7), so this probe has:
@@ -32,7 +32,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from course.probes import RateStats, wait_until
+from course.run.probes import RateStats, wait_until
 
 #: Reader history depth: 4 s of a 500 Hz stream; the probe never drops for lack of room.
 READER_DEPTH = 2000

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from course.grading import GradingSession
-from course.probes import RateStats
+from course.grade.engine import GradingSession
+from course.run.probes import RateStats
 
 #: Tolerance on a mean period, as a fraction (shared/LESSONS.md: rates within ±15 %).
 RATE_TOLERANCE = 0.15

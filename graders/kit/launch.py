@@ -3,9 +3,9 @@
 * **run**: the launch file is run in a subprocess the way ``ros2 launch`` runs
   it (ros2launch's ``launch_a_launch_file``: a ``LaunchService`` including the
   file through ``AnyLaunchDescriptionSource``), started and stopped like every
-  learner process (``GradingSession.launch``: course.process.LearnerProcess,
+  learner process (``GradingSession.launch``: course.run.process.LearnerProcess,
   SIGINT like Ctrl+C). ``launch``/``launch_ros`` come from a sourced system ROS
-  or from the source-built underlay (course/underlay.py); the verdict is what
+  or from the source-built underlay (course/ros/underlay.py); the verdict is what
   that real launch started.
 * **read**: the file is also parsed with :mod:`ast`, never executed, to say in
   the feedback which ``Node(...)`` actions it holds (their *literal* keyword
@@ -372,7 +372,7 @@ class LaunchRun:
 
 def launch_ros_available() -> bool:
     """True when ROS 2's ``launch`` and ``launch_ros`` import (not PyPI's unrelated ``launch``)."""
-    from course.env import probe_requirement  # noqa: PLC0415
+    from course.ros.env import probe_requirement  # noqa: PLC0415
 
     return probe_requirement("launch")[0]
 
@@ -381,7 +381,7 @@ def start_node_action(s: Any, action: NodeAction, label: str) -> tuple[Any | Non
     """Start one literal ``Node`` action the way launch_ros does.
 
     Args:
-        s: the :class:`~course.grading.GradingSession`.
+        s: the :class:`~course.grade.engine.GradingSession`.
         action: a supported :class:`NodeAction`.
         label: name for the process's log files.
 
@@ -408,8 +408,8 @@ def start_launch_file(s: Any, launch_file: Path, label: str = "launch") -> Launc
     """Run ``launch_file`` with launch_ros, as ``ros2 launch`` does; read it statically for feedback.
 
     Args:
-        s: the :class:`~course.grading.GradingSession` (it starts the process,
-            a course.process.LearnerProcess, and stops it at its end).
+        s: the :class:`~course.grade.engine.GradingSession` (it starts the process,
+            a course.run.process.LearnerProcess, and stops it at its end).
         launch_file: the launch file (normally the installed one in ``share/<pkg>/launch``).
         label: prefix of the log files.
 
@@ -421,7 +421,7 @@ def start_launch_file(s: Any, launch_file: Path, label: str = "launch") -> Launc
             doctor --fix`` builds them).
     """
     if not launch_ros_available():
-        from course.env import require  # noqa: PLC0415
+        from course.ros.env import require  # noqa: PLC0415
 
         require(["launch"], f"running {launch_file.name}")
     proc = s.launch(Path(sys.executable), label, ["-c", _LAUNCH_SCRIPT, str(launch_file)])

@@ -2,7 +2,7 @@
 
 Each step records its own check and returns a value the grader goes on
 with; when the value does not exist (no executable, the process died) the
-step raises :class:`course.grading.Unmet` and the engine marks the checks
+step raises :class:`course.grade.engine.Unmet` and the engine marks the checks
 that need it "not checked".
 """
 
@@ -16,9 +16,9 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from course.grading import GradingSession, Unmet
-from course.probes import wait_until
-from course.process import LearnerProcess, last_traceback
+from course.grade.engine import GradingSession, Unmet
+from course.run.probes import wait_until
+from course.run.process import LearnerProcess, last_traceback
 
 
 def executable(s: GradingSession, check_id: str, package: str, name: str, hint: str = "") -> Path:
@@ -84,7 +84,7 @@ def start_node(s: GradingSession, check_id: str, path: Path, node: str, *, sigin
             even when a later step raised :class:`Unmet`.
         args: extra arguments (e.g. ``["--ros-args", "-p", "period:=0.25"]``).
         label: name of its log files (default: the executable's name).
-        graph: the :class:`~course.probes.RosSession` to run in (default ``s.ros``).
+        graph: the :class:`~course.run.probes.RosSession` to run in (default ``s.ros``).
         timeout: seconds to wait for the node (a later process of a check can
             take ~3 s to be discovered: Fast DDS's announcement period).
         grace: stop waiting this many seconds after other nodes appeared without it.

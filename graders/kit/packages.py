@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from course.build import find_packages
-from course.grading import GradingSession
+from course.build.colcon import find_packages
+from course.grade.engine import GradingSession
 
 
 def source_package(s: GradingSession, name: str) -> tuple[Any, Any] | None:

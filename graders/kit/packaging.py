@@ -19,10 +19,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from course import index as ament_index
-from course import sandbox
-from course.grading import GradingSession, Unmet
-from course.probes import stamp_seconds
+from course.grade.engine import GradingSession, Unmet
+from course.ros import index as ament_index
+from course.run import sandbox
+from course.run.probes import stamp_seconds
 from graders.kit.nodes import executable as executable_step
 
 # --- setup.cfg and setup.py ----------------------------------------------------------
@@ -93,7 +93,7 @@ def colcon_python(s: GradingSession) -> str:
     It has setuptools (colcon needs it to build ``ament_python`` packages); the course's own
     interpreter may not (a Python 3.12 venv ships without setuptools).
     """
-    from course.build import colcon_command
+    from course.build.colcon import colcon_command
 
     command = colcon_command(s.base_env)[0]
     script = command if os.path.isabs(command) else shutil.which(command, path=s.base_env.get("PATH"))
@@ -179,7 +179,7 @@ def relative(s: GradingSession, path: Path) -> str:
 def ament_index_packages(s: GradingSession) -> dict[str, str]:
     """Package name -> prefix, as ``ros2 pkg list`` sees them with the workspace sourced.
 
-    Read from the overlay itself (:mod:`course.index`), not the process environment.
+    Read from the overlay itself (:mod:`course.ros.index`), not the process environment.
     """
     return {name: str(prefix) for name, prefix in ament_index.packages_with_prefixes(s.overlay()).items()}
 

@@ -4,7 +4,7 @@
 ``list_parameters``, ``get_parameters``, ``describe_parameters`` and
 ``set_parameters`` services with rclpy's ``AsyncParameterClient``; so does
 :class:`NodeParameters`, from the grader's own node in the session's private
-graph. Every call that gets no answer raises :class:`course.grading.Unmet`:
+graph. Every call that gets no answer raises :class:`course.grade.engine.Unmet`:
 the checks that needed the answer become "not checked" with the reason.
 """
 
@@ -14,8 +14,8 @@ import dataclasses
 from pathlib import Path
 from typing import Any
 
-from course.grading import GradingSession, Unmet
-from course.probes import wait_future, wait_until
+from course.grade.engine import GradingSession, Unmet
+from course.run.probes import wait_future, wait_until
 from graders.kit.nodes import process_state
 
 #: rcl_interfaces/msg/ParameterType values -> the words ``ros2 param describe`` uses.

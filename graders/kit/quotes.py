@@ -10,7 +10,7 @@ import os
 from pathlib import Path
 from typing import Any
 
-from course.grading import GradingSession
+from course.grade.engine import GradingSession
 from graders.kit.packages import source_package
 
 PACKAGE = "python_package_that_uses_parameters_and_launch_files"
@@ -83,7 +83,7 @@ def quote_after(s: GradingSession, check_id: str, probe: Any, since: float, *, c
     ``LATE_DELIVERY``). Half the credit each for ``quote`` and ``philosopher``.
 
     Args:
-        probe: the :class:`~course.probes.TopicProbe` of the quote topic.
+        probe: the :class:`~course.run.probes.TopicProbe` of the quote topic.
         period: the publisher's period in seconds.
         proc: the publisher's process (the wait ends if it dies; its state is shown).
         prefix: opens the observed text (e.g. "set_parameters succeeded; ").

@@ -32,12 +32,22 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from course.env import foreign_python_prefix
-from course.grading import GradingSession, Unmet
-from course.probes import wait_until
+from course.grade.engine import GradingSession, Unmet
+from course.ros.env import foreign_python_prefix
+from course.run.probes import wait_until
+from graders.kit.joint_stream import (
+    JointSample,
+    JointStreamProbe,
+    arrival_rate,
+    source_rate,
+)
 from graders.kit.judge import RATE_TOLERANCE, topics_seen
-from graders.kit.joint_stream import JointSample, JointStreamProbe, arrival_rate, source_rate
-from graders.kit.launch import NodeAction, describe_launch_folder, read_launch_file, start_node_action
+from graders.kit.launch import (
+    NodeAction,
+    describe_launch_folder,
+    read_launch_file,
+    start_node_action,
+)
 from graders.kit.nodes import process_state, sigint_exit, wait_for_node
 
 SAME = 1e-9  # radians: "equal" for values the driver must pass through unchanged
@@ -548,7 +558,7 @@ def start_client(s: GradingSession, check_id: str, driver: SasDriver, executable
     LESSONS.md); start it in a graph of its own with a :class:`StandInDriver` (not publishing yet).
 
     A ``#!/usr/bin/python3`` script is run with the course's Python on a pip
-    install (:func:`course.env.foreign_python_prefix`). The caller stops it
+    install (:func:`course.ros.env.foreign_python_prefix`). The caller stops it
     with :meth:`ClientRun.close`.
 
     Raises:

@@ -18,10 +18,10 @@ import time
 from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
-from course import sandbox
 from course.errors import NotGradable
-from course.grading import GradingSession, Unmet
-from course.probes import RateStats, wait_until
+from course.grade.engine import GradingSession, Unmet
+from course.run import sandbox
+from course.run.probes import RateStats, wait_until
 from graders.kit.judge import STANDARD_TOPICS
 
 INTERFACES = "package_with_interfaces"
@@ -74,7 +74,7 @@ def generated_fields(s: GradingSession, types: Iterable[tuple[str, str, str]], t
     """Fields of generated interface types as a fresh ``python3`` in the sourced workspace imports them.
 
     A Python process holds one build of an interface package
-    (:mod:`course.interfaces`) and ``dev validate`` grades many variants in one
+    (:mod:`course.ros.interfaces`) and ``dev validate`` grades many variants in one
     process, so the types are imported in a new interpreter started with
     ``s.overlay()`` (``source install/setup.bash``), the way a learner's node would.
 
@@ -229,7 +229,7 @@ def reliable_qos(depth: int = 10) -> Any:
 
 
 def listen(s: GradingSession, topic: str, msg_type: type) -> Any:
-    """A :class:`~course.probes.TopicProbe` on ``topic`` in ``s.ros`` with :func:`reliable_qos`.
+    """A :class:`~course.run.probes.TopicProbe` on ``topic`` in ``s.ros`` with :func:`reliable_qos`.
 
     Create it before the learner's publisher starts: no message is missed.
     """
@@ -287,7 +287,7 @@ class DeferredServer:
     the graph before :meth:`offer`.
 
     Args:
-        graph: the :class:`~course.probes.RosSession` to serve in.
+        graph: the :class:`~course.run.probes.RosSession` to serve in.
         handler: ``handler(index, request, response) -> response``; ``index`` counts calls from 0.
         delay: seconds between a request's arrival and its answer; can be changed while running.
 

@@ -1,0 +1,1 @@
+"""Building a workspace with colcon and sourcing its overlay."""

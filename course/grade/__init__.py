@@ -1,0 +1,1 @@
+"""The grading engine, its result model and the course validation."""

@@ -1,0 +1,546 @@
+"""The grading engine: build, launch, observe, judge, tear down.
+
+A grader module (``graders/<name>.py``) declares ``CHECKS`` (a list of
+:class:`Check`) and a function ``grade(session: GradingSession) -> None``
+that composes probes and calls :meth:`GradingSession.record` for each check.
+The engine always produces a :class:`LessonResult`, even when the grader
+itself crashes (otter-grader's rule): a visible "grader error" for the
+learner, the traceback in the log for the instructor.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import datetime as dt
+import importlib
+import json
+import os
+import sys
+import threading
+import time
+import traceback
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from course.build import colcon as build_mod
+from course.errors import CourseError, NotGradable
+from course.grade.results import CheckResult, LessonResult, Plot, Status
+from course.lesson.catalog import Lesson, content_root
+from course.ros import env as env_mod
+from course.ros import index as ament_index
+from course.run.process import LearnerProcess, sweep_stale_fastdds_shm
+
+
+@dataclasses.dataclass(frozen=True)
+class Check:
+    """One graded property of a submission.
+
+    Attributes:
+        id: stable, snake_case, unique within the lesson (fixtures and reports name it).
+        name: one line, what is checked, in the learner's terms.
+        points: points for passing (partial credit is spread over checks).
+        hint: default learner-facing hint shown when it fails.
+        needs: ids of earlier checks this one depends on. When one of them
+            fails (or was itself not checked), the engine records this check
+            as "not checked" with the reason, whatever the grader does.
+        part: the independent part of the lesson it belongs to (e.g. one of two
+            executables; see :meth:`GradingSession.part`); "" for the whole lesson.
+    """
+
+    id: str
+    name: str
+    points: float
+    hint: str = ""
+    needs: tuple[str, ...] = ()
+    part: str = ""
+
+
+class Unmet(Exception):  # noqa: N818 - a grading outcome, not an error of the course
+    """A check that later steps depend on did not pass: the current part of the grader ends.
+
+    Raised by :meth:`GradingSession.require` and by grader-kit steps that
+    return a value the rest of the part needs (an executable, a node). Caught
+    by :meth:`GradingSession.part` (and by the engine around ``grade()``),
+    which then runs the part's closing actions; the checks left unrecorded
+    become "not checked" with the reason.
+    """
+
+
+def check_dependencies(checks: Sequence[Check]) -> None:
+    """Validate ``needs``: every id names an earlier check of the same list.
+
+    Raises:
+        CourseError: a duplicate id, or a need that is unknown or not earlier (a cycle).
+    """
+    seen: set[str] = set()
+    for check in checks:
+        if check.id in seen:
+            raise CourseError(f"check id {check.id!r} is declared twice", "check ids are unique within a lesson")
+        for need in check.needs:
+            if need not in seen:
+                raise CourseError(f"check {check.id!r} needs {need!r}, which is not an earlier check",
+                                  "list a check's needs before it in CHECKS")
+        seen.add(check.id)
+
+
+class GradingSession:
+    """What a grader's ``grade()`` works with.
+
+    Attributes:
+        lesson: the :class:`~course.lesson.catalog.Lesson`.
+        workspace_root: the colcon workspace being graded.
+        log_dir: this check's log folder (node stdout/stderr go here).
+        ros: the :class:`~course.run.probes.RosSession` (private domain), started on first use.
+        base_env: the ROS install's environment (no workspace overlay).
+    """
+
+    def __init__(self, lesson: Lesson, checks: list[Check], workspace_root: Path, log_dir: Path,
+                 base_env: dict[str, str], trusted_interfaces: Path | None = None) -> None:
+        self.lesson = lesson
+        check_dependencies(checks)
+        self.checks = {c.id: c for c in checks}
+        self._order = [c.id for c in checks]
+        # Closing actions of the open parts, innermost last (see :meth:`part`), per thread:
+        # a lesson's two halves may be graded on two threads at once, each in its own part.
+        self._local = threading.local()
+        self._timings_lock = threading.Lock()
+        self.workspace_root = workspace_root
+        self.log_dir = log_dir
+        self.base_env = base_env
+        self.trusted_interfaces = trusted_interfaces
+        self.results: dict[str, CheckResult] = {}
+        self._processes: list[LearnerProcess] = []
+        self._stack = contextlib.ExitStack()
+        self._ros = None
+        self._overlay: dict[str, str] | None = None
+        self.notes: list[str] = []
+        #: seconds per named phase (``start``, ``observe``, ``stop``...), see :meth:`phase`.
+        self.timings: dict[str, float] = {}
+        #: time series to show under the table of checks, see :meth:`add_plot`.
+        self.plots: list[Plot] = []
+
+    def add_plot(self, title: str, times: Sequence[float], series: Mapping[str, Sequence[float]],
+                 unit: str = "") -> None:
+        """Attach observed time series to the result (rendered as sparklines by ``check``).
+
+        Args:
+            title: what is plotted.
+            times: seconds from the window start, one per sample.
+            series: label -> values, each as long as ``times``.
+            unit: unit of the values (e.g. ``"deg"``).
+
+        Raises:
+            ValueError: a series' length differs from ``times``.
+        """
+        times = [float(t) for t in times]
+        for label, values in series.items():
+            if len(values) != len(times):
+                raise ValueError(f"plot {title!r}: series {label!r} has {len(values)} values for {len(times)} times")
+        self.plots.append(Plot(title, times, {k: [float(v) for v in vs] for k, vs in series.items()}, unit))
+
+    @contextlib.contextmanager
+    def phase(self, name: str) -> Iterator[None]:
+        """Time a phase of the grader (accumulated into ``timings[name]``, seconds)."""
+        begin = time.monotonic()
+        try:
+            yield
+        finally:
+            with self._timings_lock:  # two halves of a lesson may be timed on two threads
+                self.timings[name] = self.timings.get(name, 0.0) + time.monotonic() - begin
+
+    # --- recording ---------------------------------------------------------
+
+    def record(self, check_id: str, passed: bool, observed: str, expected: str, hint: str | None = None,
+               fraction: float | None = None) -> bool:
+        """Record the verdict on ``check_id``; returns ``passed``.
+
+        Args:
+            observed: what the grader saw, in the learner's terms.
+            expected: what the lesson's contract asks for.
+            hint: overrides the check's default hint (shown only on failure).
+            fraction: partial credit in [0, 1] (default: all or nothing).
+
+        Raises:
+            KeyError: ``check_id`` is not declared in the grader's ``CHECKS``.
+        """
+        check = self.checks[check_id]
+        blocker = self.unmet_need(check_id)
+        if blocker is not None:
+            self._not_checked(check_id, blocker)
+            return False
+        previous = self.results.get(check_id)
+        if previous is not None and previous.skipped:
+            return False  # the engine marked it "not checked" (its part stopped): that verdict stays
+        share = (1.0 if passed else 0.0) if fraction is None else max(0.0, min(1.0, fraction))
+        self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
+                                             passed, observed, expected,
+                                             "" if passed else (hint if hint is not None else check.hint))
+        return passed
+
+    def amend(self, check_id: str, *, observed: str | None = None, hint: str | None = None) -> None:
+        """Add to a recorded verdict's explanation; its points and pass/fail stay.
+
+        Args:
+            observed: replaces the observed text (e.g. the first text plus what else was found).
+            hint: replaces the hint.
+
+        Raises:
+            KeyError: ``check_id`` has no verdict yet.
+        """
+        result = self.results[check_id]
+        self.results[check_id] = dataclasses.replace(
+            result, observed=result.observed if observed is None else observed,
+            hint=result.hint if hint is None else hint)
+
+    def unmet_need(self, check_id: str) -> str | None:
+        """Why ``check_id`` cannot be judged: a sentence naming the first of its needs that did not pass.
+
+        None while every need passed or is still to be judged. Needs are
+        followed through: a need that was itself not checked blocks too.
+        """
+        for need in self.checks[check_id].needs:
+            result = self.results.get(need)
+            if result is not None and not result.passed:
+                return (f"'{self.checks[need].name}' was not checked" if result.skipped
+                        else f"'{self.checks[need].name}' failed")
+            if result is None and self.unmet_need(need) is not None:
+                return self.unmet_need(need)
+        return None
+
+    def _not_checked(self, check_id: str, reason: str) -> None:
+        check = self.checks[check_id]
+        self.results[check_id] = CheckResult(check.id, check.name, 0.0, check.points, False,
+                                             f"not checked: {reason}", "(depends on the failed check above)",
+                                             check.hint, skipped=True)
+
+    def require(self, *check_ids: str) -> None:
+        """Go on only if every check in ``check_ids`` passed.
+
+        Raises:
+            Unmet: one of them failed or is not recorded; the current :meth:`part` ends.
+        """
+        for check_id in check_ids:
+            result = self.results.get(check_id)
+            if result is None or not result.passed:
+                raise Unmet(self.unmet_need(check_id) or f"'{self.checks[check_id].name}' did not pass")
+
+    @contextlib.contextmanager
+    def part(self, name: str = "") -> Iterator[None]:
+        """Grade one independent part of a lesson (e.g. one of two executables).
+
+        :class:`Unmet` raised inside ends only this part. On the way out the
+        part's closing actions (:meth:`on_close`, e.g. judging Ctrl+C of a
+        node it started) run, newest first, whatever happened.
+        """
+        self._closers.append([])
+        try:
+            yield
+        except Unmet as stop:
+            self._run_closers(self._closers.pop())
+            self.stop_part(name, str(stop))
+        else:
+            self._run_closers(self._closers.pop())
+
+    @property
+    def _closers(self) -> list[list[Any]]:
+        """The calling thread's stack of open parts' closing actions."""
+        if not hasattr(self._local, "closers"):
+            self._local.closers = [[]]
+        return self._local.closers
+
+    def stop_part(self, name: str, reason: str) -> None:
+        """Record every unrecorded check of part ``name`` ("" = every part) as not checked because of ``reason``.
+
+        A check whose own needs failed gets that reason instead.
+        """
+        for check_id in self._order:
+            if check_id not in self.results and (not name or self.checks[check_id].part == name):
+                self._not_checked(check_id, self.unmet_need(check_id) or reason)
+
+    def on_close(self, action: Any) -> None:
+        """Run ``action()`` when the current :meth:`part` (or ``grade()``) ends, even after :class:`Unmet`."""
+        self._closers[-1].append(action)
+
+    def _run_closers(self, closers: list[Any]) -> None:
+        for action in reversed(closers):
+            with contextlib.suppress(Unmet):
+                action()
+
+    def skip_remaining(self, reason: str) -> None:
+        """Mark every check not recorded yet as failed because of ``reason`` (e.g. no node)."""
+        for check_id in self._order:
+            if check_id not in self.results:
+                self._not_checked(check_id, reason)
+
+    def ordered_results(self) -> list[CheckResult]:
+        """Every declared check's result, in declaration order; unrecorded ones become "not checked"."""
+        for check_id in self._order:
+            if check_id not in self.results:
+                self._not_checked(check_id, self.unmet_need(check_id) or "the grader stopped before this check")
+        return [self.results[c] for c in self._order]
+
+    # --- environment and processes ----------------------------------------
+
+    @property
+    def ros(self):
+        """The private ROS graph of this check (created on first use)."""
+        if self._ros is None:
+            from course.run.probes import RosSession  # noqa: PLC0415 - rclpy import only when grading
+
+            self._ros = self._stack.enter_context(RosSession())
+        return self._ros
+
+    def overlay(self) -> dict[str, str]:
+        """The sourced workspace environment (``install/setup.bash``), without the domain id."""
+        if self._overlay is None:
+            self._overlay = build_mod.overlay_env(self.workspace_root, self.base_env)
+        return dict(self._overlay)
+
+    def node_env(self) -> dict[str, str]:
+        """Environment for learner executables: overlay + private domain + localhost discovery."""
+        return self.ros.learner_env(self.overlay())
+
+    def interface_type(self, package: str, kind: str, name: str) -> Any:
+        """A generated msg/srv class from the workspace (see :mod:`course.ros.interfaces`).
+
+        With ``trusted_interfaces`` (batch grading) the class comes from the
+        course's own build of the package, never from the submission's: its
+        generated Python and C code would run inside the grader.
+
+        Raises:
+            NotGradable: the interface package is not built or does not load.
+            CourseError: submission code runs sandboxed and the course has no build of ``package``.
+        """
+        from course.ros.interfaces import workspace_type
+        from course.run import sandbox  # noqa: PLC0415
+
+        if self.trusted_interfaces is not None:
+            return workspace_type(build_mod.overlay_env(self.trusted_interfaces, self.base_env), package, kind, name)
+        if sandbox.current() is not None:
+            raise CourseError(f"the grader needs {package} types but the batch built no trusted copy of {package}",
+                              "a fault of the course: list the package as a dependency of the lesson's packages")
+        return workspace_type(self.overlay(), package, kind, name)
+
+    def find_executable(self, package: str, executable: str) -> tuple[Path | None, str]:
+        """Resolve ``package``/``executable`` the way ``ros2 run`` does.
+
+        The package's prefix in the workspace overlay's ament index
+        (:func:`course.ros.index.package_prefix`, as ``get_package_prefix``), then
+        ``<prefix>/lib/<package>/<executable>`` (ros2run source).
+
+        Returns:
+            ``(path, observed)``: the path (None when not found) and a sentence
+            saying what was found, for the check's "observed".
+        """
+        prefix = ament_index.package_prefix(package, self.overlay())
+        if prefix is None:
+            return None, f"package {package} is not in the ament index (was it built and installed?)"
+        lib = prefix / "lib" / package
+        candidate = lib / executable
+        if candidate.is_file() and os.access(candidate, os.X_OK):
+            return candidate, f"{candidate.relative_to(self.workspace_root) if candidate.is_relative_to(self.workspace_root) else candidate}"
+        others = sorted(p.name for p in lib.iterdir() if p.is_file()) if lib.is_dir() else []
+        listing = ", ".join(others) if others else "nothing"
+        return None, f"no executable {executable} in {lib}; found: {listing}"
+
+    def find_share(self, package: str) -> Path | None:
+        """``install/<package>/share/<package>`` as ``ros2 launch`` finds it (ament index), or None."""
+        return ament_index.package_share(package, self.overlay())
+
+    def new_graph(self):
+        """Another private ROS graph (its own domain id) for this check, closed with it.
+
+        For running a second instance of a learner's node at the same time as the
+        first without either seeing the other (e.g. the parameters lesson's run
+        with ``-p`` overrides).
+        """
+        from course.run.probes import RosSession  # noqa: PLC0415
+
+        return self._stack.enter_context(RosSession())
+
+    def in_new_graph(self) -> "GraphView":
+        """This session seen through a new private graph (:meth:`new_graph`).
+
+        The view's ``ros`` is the new graph and its ``launch`` starts processes
+        in it; everything else (``record``, ``phase``, ...) is this session's.
+        For grading a lesson's second executable: a process joining a graph
+        whose participants already know each other is discovered up to ~3 s
+        later than one joining a fresh graph (measured with Fast DDS and
+        localhost discovery), so a fresh graph keeps the check short.
+        """
+        return GraphView(self, self.new_graph())
+
+    def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:
+        """Start a learner executable in the private domain; it is stopped at the end of the check.
+
+        Args:
+            path: the executable (from :meth:`find_executable`).
+            name: label for its log files (``<name>.stdout.log``).
+            args: extra arguments (e.g. ``["--ros-args", "-r", "__node:=x"]``).
+            graph: the :class:`~course.run.probes.RosSession` to run in (default :attr:`ros`).
+        """
+        env = (graph or self.ros).learner_env(self.overlay())
+        proc = LearnerProcess([str(path), *(args or [])], env, self.log_dir, name,
+                              cwd=self.workspace_root, ros_sigint=True)
+        self._processes.append(proc)
+        proc.start()
+        return proc
+
+    def start_program(self, argv: list[str], label: str, *, env: dict[str, str] | None = None,
+                      cwd: Path | None = None, deadline: float = 60.0) -> LearnerProcess:
+        """Start a learner program that is not a ROS node (a script, a compiled binary, pip).
+
+        The same care as nodes: its own process group, capped output in
+        ``<label>.stdout.log``, a watchdog SIGKILL ``deadline`` seconds after start,
+        and it is stopped with the check. No ROS graph is created.
+
+        Args:
+            argv: the command (``argv[0]`` a path or a name on ``env``'s PATH).
+            env: its whole environment (default: the ROS install's, without the workspace overlay).
+            cwd: working directory (default: the workspace root).
+        """
+        proc = LearnerProcess(list(argv), dict(self.base_env if env is None else env), self.log_dir, label,
+                              cwd=cwd or self.workspace_root, deadline=deadline)
+        self._processes.append(proc)
+        proc.start()
+        return proc
+
+    def close(self) -> None:
+        """Stop every learner process, close the ROS graph, remove stale shared memory."""
+        for proc in self._processes:
+            proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
+        self._stack.close()
+        sweep_stale_fastdds_shm()
+
+
+class GraphView:
+    """A :class:`GradingSession` whose ``ros`` (and default launch graph) is another private graph.
+
+    Made by :meth:`GradingSession.in_new_graph`; every other attribute is the
+    underlying session's, so checks recorded through the view are the session's.
+    """
+
+    def __init__(self, session: GradingSession, graph: Any) -> None:
+        self._session = session
+        self.ros = graph
+
+    def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:
+        """:meth:`GradingSession.launch` in this view's graph (unless ``graph`` is given)."""
+        return self._session.launch(path, name, args, graph=graph or self.ros)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._session, name)
+
+
+def load_grader(name: str):
+    """Import ``graders.<name>``; it must define ``CHECKS`` and ``grade``.
+
+    Raises:
+        CourseError: the module is missing or incomplete.
+    """
+    root = str(content_root())
+    if root not in sys.path:
+        sys.path.insert(0, root)
+    try:
+        module = importlib.import_module(f"graders.{name}")
+    except ImportError as exc:
+        raise CourseError(f"grader module graders.{name} cannot be imported: {exc}",
+                          "check the lesson's 'grader:' field") from exc
+    if not hasattr(module, "CHECKS") or not hasattr(module, "grade"):
+        raise CourseError(f"grader module graders.{name} lacks CHECKS or grade()", "see graders/README.md")
+    return module
+
+
+def new_log_dir(workspace_root: Path, lesson_id: str) -> Path:
+    """A fresh ``log/ros2course/<lesson>/<timestamp>`` folder; ``latest`` points at it."""
+    stamp = dt.datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")
+    folder = workspace_root / "log" / "ros2course" / lesson_id / stamp
+    folder.mkdir(parents=True, exist_ok=True)
+    latest = folder.parent / "latest"
+    with contextlib.suppress(OSError):
+        if latest.is_symlink() or latest.exists():
+            latest.unlink()
+        latest.symlink_to(folder.name)
+    return folder
+
+
+def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = None,
+                 underlays: tuple[Path, ...] | list[Path] = (), trusted_interfaces: Path | None = None) -> LessonResult:
+    """Build the lesson's packages in ``workspace_root``, run its grader, return the result.
+
+    ``underlays`` are built workspaces sourced before building and running the
+    submission (ROS's overlay mechanism), e.g. reference interface packages an
+    instructor built once for a whole class. ``trusted_interfaces`` is a built
+    workspace of the course's own interface packages: when given, the grader
+    imports message types from it instead of from the submission (batch
+    grading: generated code is code the submission controls).
+
+    Never raises for problems of the submission (they become the result);
+    raises :class:`~course.errors.MissingRequirement` when the machine lacks
+    what the lesson ``requires`` (so a missing rclcpp is never a pass).
+    """
+    env_mod.require(lesson.requires, f"lesson {lesson.id}")
+    sweep_stale_fastdds_shm()  # leftovers of an earlier run that was SIGKILLed
+    module = load_grader(lesson.grader)
+    checks: list[Check] = list(module.CHECKS)
+    max_score = float(sum(c.points for c in checks))
+    log_dir = log_dir or new_log_dir(workspace_root, lesson.id)
+    base_env = dict(os.environ)
+    env_mod.activate(base_env)
+    for underlay in underlays:
+        base_env = build_mod.overlay_env(Path(underlay), base_env)
+    timings: dict[str, float] = {}
+    build_info: dict[str, Any] = {}
+
+    def not_gradable(message: str, hint: str) -> LessonResult:
+        return LessonResult(lesson.id, 0.0, max_score, Status.NOT_GRADABLE, [], message, hint, timings,
+                            build_info, str(log_dir))
+
+    if lesson.packages:
+        try:
+            built = build_mod.build_packages(workspace_root, lesson.packages, base_env, log_dir / "build.log")
+        except NotGradable as exc:
+            return not_gradable(exc.message, exc.hint)
+        timings["build"] = built.seconds
+        build_info = {"ok": built.ok, "cached": built.cached, "seconds": round(built.seconds, 3),
+                      "log": str(built.log_path) if built.log_path else ""}
+        if not built.ok:
+            return not_gradable(f"colcon build failed for {', '.join(lesson.packages)}:\n{built.excerpt}",
+                                f"fix the build error; full log: {built.log_path}")
+    session = GradingSession(lesson, checks, workspace_root, log_dir, base_env, trusted_interfaces)
+    if lesson.packages and "build" in session.checks:
+        session.record("build", True, "colcon built " + ", ".join(lesson.packages)
+                       + (" (unchanged since the last build)" if build_info.get("cached") else ""),
+                       "the package builds with colcon")
+    begin = time.monotonic()
+    status = None
+    message = hint = ""
+    try:
+        try:
+            with session.part():  # Unmet in grade(): the unrecorded checks become "not checked" with its reason
+                module.grade(session)
+        finally:
+            graded = time.monotonic()
+            timings["grade"] = graded - begin
+            session.close()
+            timings["teardown"] = time.monotonic() - graded
+            timings.update(session.timings)
+    except NotGradable as exc:
+        return not_gradable(exc.message, exc.hint)
+    except Exception as exc:  # noqa: BLE001 - any grader crash becomes a visible "grader error"
+        status = Status.GRADER_ERROR
+        trace = traceback.format_exc()
+        (log_dir / "grader-error.txt").write_text(trace, encoding="utf-8")
+        message = f"the grader failed: {type(exc).__name__}: {exc}"
+        hint = f"this is a fault of the course, not of your code; traceback in {log_dir / 'grader-error.txt'}"
+    results = session.ordered_results()
+    score = round(sum(r.points for r in results), 3)
+    if status is None:
+        status = Status.PASSED if score >= max_score else Status.FAILED
+    result = LessonResult(lesson.id, score, max_score, status, results, message, hint, timings, build_info,
+                          str(log_dir), session.plots)
+    with contextlib.suppress(OSError):
+        (log_dir / "result.json").write_text(json.dumps(result.to_json(), indent=2), encoding="utf-8")
+    return result

@@ -1,0 +1,364 @@
+"""``ros2course dev validate``: the course checks itself (rustlings' ``dev check``).
+
+For every lesson:
+
+* its reference solution (``solutions/``) must get full marks;
+* its starter files must not;
+* every wrong solution kept in ``tests/fixtures/<lesson-id>/*.yaml`` must
+  lose the points of the checks it names (and a fixture marked
+  ``expect: full_marks``, e.g. the seed's own Humble-style listing, must pass).
+
+A wrong solution is the reference plus a few edits, so the fixture file
+shows exactly the bug and nothing else::
+
+    description: the timer period is 1.0 s instead of 0.5 s
+    fails: [rate]
+    edits:
+      - file: src/python_package_with_a_node/python_package_with_a_node/print_forever_node.py
+        replace: "timer_period: float = 0.5"
+        with: "timer_period: float = 1.0"
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import shutil
+import subprocess
+import tempfile
+from pathlib import Path
+from typing import Any, Literal
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from rich.console import Console
+from rich.table import Table
+
+from course.build.colcon import dependency_closure, find_packages
+from course.errors import LessonFormatError, ValidationFailed
+from course.grade.engine import grade_lesson
+from course.grade.results import LessonResult, Status
+from course.lesson.catalog import (
+    Lesson,
+    content_root,
+    format_validation_error,
+    load_catalog,
+)
+from course.lesson.starter import copy_starter
+
+
+class Edit(BaseModel):
+    """One change to the reference workspace: replace text once, write a file, or delete a path."""
+
+    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+
+    file: str | None = None
+    replace: str | None = None
+    with_: str | None = Field(default=None, alias="with")
+    content: str | None = None
+    delete: str | None = None
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> Edit:
+        kinds = [self.replace is not None, self.content is not None, self.delete is not None]
+        if sum(kinds) != 1:
+            raise ValueError("an edit has exactly one of 'replace' (with 'with'), 'content' or 'delete'")
+        if (self.replace is not None or self.content is not None) and not self.file:
+            raise ValueError("'replace' and 'content' edits need 'file'")
+        if self.replace is not None and self.with_ is None:
+            raise ValueError("'replace' needs 'with'")
+        return self
+
+
+class Fixture(BaseModel):
+    """A wrong (or alternative right) solution of one lesson."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    description: str
+    expect: Literal["fail", "full_marks"] = "fail"
+    fails: list[str] = Field(default_factory=list)
+    edits: list[Edit] = Field(default_factory=list)
+    #: shell commands run in the workspace after the edits (default: the lesson's reference commands).
+    commands: list[str] | None = None
+
+    name: str = Field(default="", exclude=True)
+
+    @model_validator(mode="after")
+    def _fails_named(self) -> Fixture:
+        if self.expect == "fail" and not self.fails:
+            raise ValueError("a failing fixture names the check(s) its bug must fail in 'fails'")
+        return self
+
+
+def fixtures_dir(lesson_id: str) -> Path:
+    """Where the lesson's fixture YAML files live."""
+    return content_root() / "tests" / "fixtures" / lesson_id
+
+
+def load_fixtures(lesson_id: str) -> list[Fixture]:
+    """Every ``tests/fixtures/<lesson>/*.yaml``, validated.
+
+    Raises:
+        LessonFormatError: a fixture file is malformed (file and field named).
+    """
+    out = []
+    for path in sorted(fixtures_dir(lesson_id).glob("*.yaml")):
+        try:
+            data = yaml.safe_load(path.read_text(encoding="utf-8"))
+            fixture = Fixture.model_validate(data)
+        except yaml.YAMLError as exc:
+            raise LessonFormatError(f"{path}: not readable as YAML: {exc}", "fix the fixture's YAML") from exc
+        except ValidationError as exc:
+            raise LessonFormatError(format_validation_error(path, exc), "see course/grade/validate.py (Fixture)") from exc
+        fixture.name = path.stem
+        out.append(fixture)
+    return out
+
+
+def apply_edits(workspace_root: Path, edits: list[Edit]) -> None:
+    """Apply a fixture's edits to a workspace copy.
+
+    Raises:
+        LessonFormatError: a ``replace`` text does not occur exactly once.
+    """
+    for edit in edits:
+        if edit.delete is not None:
+            target = workspace_root / edit.delete
+            if target.is_dir():
+                shutil.rmtree(target)
+            else:
+                target.unlink(missing_ok=True)
+            continue
+        target = workspace_root / edit.file
+        if edit.content is not None:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            target.write_text(edit.content, encoding="utf-8")
+            continue
+        text = target.read_text(encoding="utf-8")
+        count = text.count(edit.replace)
+        if count != 1:
+            raise LessonFormatError(f"{edit.file}: the text to replace occurs {count} times (must be once): "
+                                    f"{edit.replace!r}", "make 'replace' longer so it is unique")
+        target.write_text(text.replace(edit.replace, edit.with_), encoding="utf-8")
+
+
+def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None = None) -> Path:
+    """Copy reference packages from ``solutions/src`` into ``dest/src``, and the lesson's ``folders``.
+
+    Args:
+        packages: which ones (default: the lesson's packages and their dependencies,
+            plus the lesson's non-ROS ``folders`` from ``solutions/``).
+
+    Raises:
+        ValidationFailed: a folder the lesson names is not in ``solutions/``.
+    """
+    solutions = content_root() / "solutions"
+    found = find_packages(solutions / "src")
+    (dest / "src").mkdir(parents=True, exist_ok=True)
+    ignore = shutil.ignore_patterns("__pycache__", "*.egg-info")
+    for name in (dependency_closure(lesson.packages, found) if packages is None else packages):
+        shutil.copytree(found[name][0], dest / "src" / found[name][0].name, ignore=ignore)
+    for folder in lesson.folders if packages is None else ():
+        if not (solutions / folder).is_dir():
+            raise ValidationFailed(f"lesson {lesson.id} names folder {folder!r}, which is not in solutions/")
+        shutil.copytree(solutions / folder, dest / folder, ignore=ignore, dirs_exist_ok=True)
+    return dest
+
+
+def lesson_dependencies(lesson: Lesson) -> list[str]:
+    """Reference packages the lesson's packages depend on but does not itself teach (e.g. interfaces)."""
+    found = find_packages(content_root() / "solutions" / "src")
+    return [name for name in dependency_closure(lesson.packages, found) if name not in lesson.packages]
+
+
+def build_underlay(lesson: Lesson, dest: Path) -> Path | None:
+    """Build the lesson's dependencies once in ``dest``, as an underlay for every validation case.
+
+    The standard ROS overlay mechanism: each case's workspace is built and
+    sourced on top of this one, so an interface package is built once per
+    lesson instead of once per case. Returns None when there is nothing to build.
+
+    Raises:
+        ValidationFailed: the reference dependencies do not build.
+    """
+    from course.build.colcon import build_packages
+    from course.ros import env as env_mod  # noqa: PLC0415
+
+    deps = lesson_dependencies(lesson)
+    if not deps:
+        return None
+    reference_workspace(lesson, dest, deps)
+    env = dict(os.environ)
+    env_mod.activate(env)
+    built = build_packages(dest, deps, env, dest / "log" / "underlay-build.log")
+    if not built.ok:
+        raise ValidationFailed(f"the reference packages {', '.join(deps)} do not build:\n{built.excerpt}",
+                               f"see {built.log_path}")
+    return dest
+
+
+def run_commands(workspace_root: Path, commands: list[str]) -> None:
+    """Run shell commands in the workspace as a learner would (errors are the grader's to see)."""
+    from course.ros import env as env_mod  # noqa: PLC0415
+
+    env = dict(os.environ)
+    env_mod.activate(env)
+    for command in commands:
+        subprocess.run(["bash", "-c", command], cwd=workspace_root, env=env, stdin=subprocess.DEVNULL,
+                       stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=600, check=False)
+
+
+@dataclasses.dataclass
+class Outcome:
+    """One validation case: reference, starter or a fixture of one lesson."""
+
+    lesson: str
+    case: str
+    ok: bool
+    expected: str
+    got: str
+    seconds: float = 0.0
+    result: LessonResult | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"lesson": self.lesson, "case": self.case, "ok": self.ok, "expected": self.expected,
+                "got": self.got, "seconds": round(self.seconds, 2),
+                "result": self.result.to_json() if self.result else None}
+
+
+def _describe(result: LessonResult) -> str:
+    failed = ", ".join(result.failed_checks()) or "none"
+    text = f"{result.status} {result.score:g}/{result.max_score:g}; failed: {failed}"
+    if result.message and result.status != Status.PASSED:
+        text += f"; {result.message.splitlines()[0]}"
+    return text
+
+
+def grade_case(lesson: Lesson, case: str, prepare, keep: bool = False,
+               underlays: tuple[Path, ...] = ()) -> tuple[LessonResult, float]:
+    """Grade a throw-away workspace that ``prepare(root)`` fills; returns the result and seconds."""
+    import time  # noqa: PLC0415
+
+    root = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-{case}-"))
+    begin = time.monotonic()
+    try:
+        prepare(root)
+        result = grade_lesson(lesson, root, underlays=underlays)
+        return result, time.monotonic() - begin
+    finally:
+        if not keep:
+            shutil.rmtree(root, ignore_errors=True)
+
+
+def validate_lesson(lesson: Lesson) -> list[Outcome]:
+    """Validate one lesson: reference, starter, fixtures (see module docstring)."""
+    underlay_dir = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-underlay-"))
+    try:
+        underlay = build_underlay(lesson, underlay_dir)
+        return _validate_lesson(lesson, underlay)
+    finally:
+        shutil.rmtree(underlay_dir, ignore_errors=True)
+
+
+def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
+    outcomes = []
+    deps = lesson_dependencies(lesson) if underlay is not None else []
+    own = [name for name in lesson.packages]
+    underlays = (underlay,) if underlay is not None else ()
+
+    def reference(root: Path) -> None:
+        reference_workspace(lesson, root, own if underlay is not None else None)
+        run_commands(root, lesson.reference.commands)
+
+    result, seconds = grade_case(lesson, "reference", reference, underlays=underlays)
+    outcomes.append(Outcome(lesson.id, "reference", result.status == Status.PASSED, "full marks",
+                            _describe(result), seconds, result))
+
+    def starter(root: Path) -> None:
+        (root / "src").mkdir(parents=True)
+        copy_starter(lesson, root)
+
+    result, seconds = grade_case(lesson, "starter", starter, underlays=underlays)
+    outcomes.append(Outcome(lesson.id, "starter", result.status != Status.PASSED and result.score < result.max_score,
+                            "not full marks", _describe(result), seconds, result))
+
+    for fixture in load_fixtures(lesson.id):
+        # a fixture that edits a dependency builds everything itself, without the underlay
+        touched = {Path(e.file or e.delete or "").parts[1:2] for e in fixture.edits}
+        uses_underlay = underlay is not None and not any(part and part[0] in _folders(deps) for part in touched)
+
+        def wrong(root: Path, fixture: Fixture = fixture, uses_underlay: bool = uses_underlay) -> None:
+            reference_workspace(lesson, root, own if uses_underlay else None)
+            apply_edits(root, fixture.edits)
+            run_commands(root, lesson.reference.commands if fixture.commands is None else fixture.commands)
+
+        result, seconds = grade_case(lesson, fixture.name, wrong, underlays=underlays if uses_underlay else ())
+        if fixture.expect == "full_marks":
+            ok, expected = result.status == Status.PASSED, "full marks"
+        else:
+            ok, expected = judge_fixture(fixture.fails, result)
+        outcomes.append(Outcome(lesson.id, fixture.name, ok, expected, _describe(result), seconds, result))
+    return outcomes
+
+
+#: The check a fixture names when its bug is that the workspace does not build (grading.grade_lesson).
+BUILD_CHECK = "build"
+
+
+def judge_fixture(fails: list[str], result: LessonResult) -> tuple[bool, str]:
+    """Whether a wrong solution failed for its stated reason: ``(ok, expected text)``.
+
+    It must lose the points of every check in ``fails`` (ids the grader
+    declares). A submission that is not gradable at all has no checks: that is
+    its stated reason only when ``fails`` names the build (a fixture whose bug
+    is a runtime behaviour must build, or it proves nothing about that check).
+    """
+    expected = "loses the points of " + ", ".join(fails)
+    if not result.checks:
+        if set(fails) == {BUILD_CHECK} and result.status == Status.NOT_GRADABLE:
+            return True, expected
+        runtime = [c for c in fails if c != BUILD_CHECK]
+        return False, expected + (f" (but it was {result.status} before any check ran, so {', '.join(runtime)} "
+                                  "were never judged: the fixture must build)" if runtime else "")
+    by_id = {c.id: c for c in result.checks}
+    unknown = [c for c in fails if c not in by_id]
+    lost = [c for c in fails if c in by_id and by_id[c].points < by_id[c].max_points]
+    if unknown:
+        expected += f" (unknown check ids: {', '.join(unknown)})"
+    return not unknown and result.score < result.max_score and len(lost) == len(fails), expected
+
+
+def _folders(packages: list[str]) -> set[str]:
+    """Source folder names (under solutions/src) of these packages."""
+    found = find_packages(content_root() / "solutions" / "src")
+    return {found[name][0].name for name in packages if name in found}
+
+
+def validate_course(lesson_ids: list[str] | None = None, progress: Console | None = None) -> list[Outcome]:
+    """Validate the given lessons (default: all), printing one line per case on ``progress``."""
+    catalog = load_catalog()
+    lessons = [catalog.get(i) for i in lesson_ids] if lesson_ids else catalog.lessons
+    outcomes = []
+    for lesson in lessons:
+        if progress is not None:
+            progress.print(f"validating {lesson.id} ...")
+        for outcome in validate_lesson(lesson):
+            outcomes.append(outcome)
+            if progress is not None:
+                mark = "[green]ok[/]" if outcome.ok else "[red]WRONG[/]"
+                progress.print(f"  {mark} {outcome.case}: {outcome.got} ({outcome.seconds:.1f} s)")
+    return outcomes
+
+
+def render_outcomes(outcomes: list[Outcome], console: Console) -> None:
+    """Table of every case, then a one-line summary."""
+    table = Table(title="ros2course dev validate", title_justify="left")
+    for column in ("lesson", "case", "", "expected", "got"):
+        table.add_column(column, overflow="fold")
+    for o in outcomes:
+        table.add_row(o.lesson, o.case, "[green]ok[/]" if o.ok else "[red]WRONG[/]", o.expected, o.got)
+    console.print(table)
+    bad = sum(not o.ok for o in outcomes)
+    console.print(f"{len(outcomes) - bad} passed, {bad} failed")
+

@@ -1,0 +1,1 @@
+"""The lesson catalog: lessons, starters, the learner's progress."""

@@ -1,0 +1,223 @@
+"""Lessons: one ``chapters/NN-<id>/lesson.yaml`` each, validated when loaded.
+
+The schema is a pydantic model, so a malformed lesson is reported as
+``<file>: <field>: <what is wrong>`` (pydantic's error locations).
+The catalog's order is the folders' numeric prefix order, like rustlings'
+single manifest but one file per lesson.
+"""
+
+from __future__ import annotations
+
+import functools
+import os
+import re
+from pathlib import Path
+from typing import Annotated
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+
+from course.errors import LessonFormatError, UnknownLesson
+from course.ros.env import KNOWN_REQUIREMENTS
+
+_ID = r"^[a-z][a-z0-9]*(-[a-z0-9]+)*$"
+
+
+def content_root() -> Path:
+    """The folder holding ``chapters/``, ``graders/`` and ``solutions/``.
+
+    ``ROS2COURSE_CONTENT`` overrides it (tests, instructors with their own course).
+    """
+    override = os.environ.get("ROS2COURSE_CONTENT")
+    return Path(override).resolve() if override else Path(__file__).resolve().parents[2]
+
+
+class ReferenceSolution(BaseModel):
+    """How ``dev validate`` prepares the reference workspace for this lesson."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    #: Shell commands run in the workspace before grading (what the learner types).
+    commands: list[str] = Field(default_factory=list)
+
+
+class Lesson(BaseModel):
+    """One graded exercise, as declared in its ``lesson.yaml``.
+
+    Attributes:
+        id: stable lesson id from shared/LESSONS.md (kebab-case).
+        title: one line.
+        chapters: seed tutorial chapter numbers this lesson follows.
+        requires: what must be installed (see ``course.ros.env.KNOWN_REQUIREMENTS``).
+        packages: ROS packages ``check`` builds with colcon (``--packages-up-to``).
+        instructions: markdown shown by ``next``.
+        hints: ordered from gentle to nearly the answer; ``hint`` shows them one at a time.
+        grader: module name under ``graders/`` exposing ``CHECKS`` and ``grade``.
+        starter: folder (relative to the lesson folder) copied into the workspace by ``next``.
+        starter_includes: ids of earlier lessons whose starter files this lesson offers too
+            (e.g. launch-files builds on the parameters package); its own ``starter``
+            files win where both have the same path.
+        reference: how ``dev validate`` readies the reference solution.
+        folders: workspace folders holding the lesson's files outside any ROS package
+            (the preamble's ``python/minimalist_package``); ``dev validate`` copies them
+            from ``solutions/`` for the reference and its wrong solutions.
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    id: Annotated[str, Field(pattern=_ID)]
+    title: Annotated[str, Field(min_length=3)]
+    chapters: list[int] = Field(min_length=1)
+    requires: list[str] = Field(default_factory=list)
+    packages: list[str] = Field(default_factory=list)
+    instructions: Annotated[str, Field(min_length=20)]
+    hints: list[Annotated[str, Field(min_length=5)]] = Field(min_length=3)
+    grader: Annotated[str, Field(pattern=r"^[a-z_][a-z0-9_]*$")]
+    starter: str = "starter"
+    starter_includes: list[Annotated[str, Field(pattern=_ID)]] = Field(default_factory=list)
+    reference: ReferenceSolution = Field(default_factory=ReferenceSolution)
+    folders: list[Annotated[str, Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_./-]*$")]] = Field(default_factory=list)
+
+    #: The lesson's folder; set by the loader, not read from YAML.
+    folder: Path = Field(default=Path("."), exclude=True)
+    #: Starter folders of ``starter_includes`` (oldest first); set by :class:`Catalog`.
+    included_starters: list[Path] = Field(default_factory=list, exclude=True)
+
+    @field_validator("requires")
+    @classmethod
+    def _known_requirements(cls, value: list[str]) -> list[str]:
+        unknown = [name for name in value if name not in KNOWN_REQUIREMENTS]
+        if unknown:
+            raise ValueError(f"unknown requirement(s) {unknown}; known: {list(KNOWN_REQUIREMENTS)}")
+        return value
+
+    @property
+    def starter_dir(self) -> Path:
+        """Absolute path of the starter folder (may not exist for lessons without files)."""
+        return self.folder / self.starter
+
+    @property
+    def starter_layers(self) -> list[Path]:
+        """Starter folders in the order they are laid down: included lessons' first, this lesson's last."""
+        return [*self.included_starters, self.starter_dir]
+
+
+def yaml_error_text(exc: Exception) -> str:
+    """PyYAML's error on one line: ``line L, column C: problem (context)``."""
+    mark = getattr(exc, "problem_mark", None)
+    problem = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    context = getattr(exc, "context", None)
+    where = f"line {mark.line + 1}, column {mark.column + 1}: " if mark is not None else ""
+    return f"{where}{problem}" + (f" ({context})" if context else "")
+
+
+def format_validation_error(path: Path, error: ValidationError) -> str:
+    """One line per problem: ``file: field: message``."""
+    lines = []
+    for item in error.errors():
+        field = ".".join(str(part) for part in item["loc"]) or "(top level)"
+        lines.append(f"{path}: {field}: {item['msg']}")
+    return "; ".join(lines)
+
+
+def load_lesson(path: Path) -> Lesson:
+    """Load and validate one ``lesson.yaml``.
+
+    Raises:
+        LessonFormatError: unreadable YAML or a schema violation, naming file and field.
+    """
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise LessonFormatError(f"{path}: cannot be read: {exc.strerror}", "check the file exists and is readable") from exc
+    except yaml.YAMLError as exc:
+        raise LessonFormatError(f"{path}: not valid YAML: {yaml_error_text(exc)}",
+                                "fix the YAML syntax (indentation, quotes)") from exc
+    if not isinstance(data, dict):
+        raise LessonFormatError(f"{path}: (top level): expected a mapping of fields, got {type(data).__name__}",
+                                "a lesson file is a YAML mapping with id, title, instructions, hints, grader")
+    try:
+        lesson = Lesson.model_validate(data)
+    except ValidationError as exc:
+        raise LessonFormatError(format_validation_error(path, exc),
+                                "see course/lesson/catalog.py (Lesson) for the lesson schema") from exc
+    lesson.folder = path.parent
+    folder_id = re.sub(r"^\d+-", "", path.parent.name)
+    if folder_id != lesson.id:
+        raise LessonFormatError(f"{path}: id: {lesson.id!r} does not match its folder name {path.parent.name!r}",
+                                "name the folder NN-<id>")
+    return lesson
+
+
+class Catalog:
+    """Every lesson of the course, in order.
+
+    Args:
+        chapters_dir: folder of ``NN-<id>/lesson.yaml`` folders.
+    """
+
+    def __init__(self, chapters_dir: Path) -> None:
+        self.chapters_dir = chapters_dir
+        if not chapters_dir.is_dir():
+            raise LessonFormatError(f"no chapters folder at {chapters_dir}", "set ROS2COURSE_CONTENT to the course folder")
+        folders = sorted((p for p in chapters_dir.iterdir() if (p / "lesson.yaml").is_file()),
+                         key=lambda p: (int(m.group(1)) if (m := re.match(r"^(\d+)-", p.name)) else 10**6, p.name))
+        self.lessons: list[Lesson] = [load_lesson(p / "lesson.yaml") for p in folders]
+        seen: set[str] = set()
+        for lesson in self.lessons:
+            if lesson.id in seen:
+                raise LessonFormatError(f"{lesson.folder}: id: duplicate lesson id {lesson.id!r}", "ids must be unique")
+            seen.add(lesson.id)
+        self._resolve_starter_includes()
+
+    def _resolve_starter_includes(self) -> None:
+        """Set each lesson's ``included_starters`` from its ``starter_includes`` (earlier lessons only).
+
+        Raises:
+            LessonFormatError: an include names no lesson, or a lesson that does not come earlier.
+        """
+        by_id = {lesson.id: lesson for lesson in self.lessons}
+        for index, lesson in enumerate(self.lessons):
+            earlier = {other.id for other in self.lessons[:index]}
+            layers: list[Path] = []
+            for included in lesson.starter_includes:
+                if included not in earlier:
+                    problem = "no such lesson" if included not in by_id else "it does not come earlier in the course"
+                    raise LessonFormatError(f"{lesson.folder / 'lesson.yaml'}: starter_includes: {included!r}: "
+                                            f"{problem}", "name lessons that come before this one")
+                # earlier lessons are resolved already, so their own includes come with them
+                layers += [p for p in by_id[included].starter_layers if p not in layers]
+            lesson.included_starters = layers
+
+    def get(self, lesson_id: str) -> Lesson:
+        """The lesson with this id.
+
+        Raises:
+            UnknownLesson: with the closest ids as a hint.
+        """
+        for lesson in self.lessons:
+            if lesson.id == lesson_id:
+                return lesson
+        import difflib  # noqa: PLC0415 - only on the error path
+
+        close = difflib.get_close_matches(lesson_id, self.ids(), n=3)
+        hint = f"did you mean {', '.join(close)}?" if close else "run 'ros2course list' to see every lesson id"
+        raise UnknownLesson(f"unknown lesson {lesson_id!r}", hint)
+
+    def ids(self) -> list[str]:
+        """Lesson ids in course order."""
+        return [lesson.id for lesson in self.lessons]
+
+    def after(self, lesson_id: str | None) -> Lesson | None:
+        """The lesson following ``lesson_id`` (the first one for None), or None at the end."""
+        ids = self.ids()
+        if lesson_id is None:
+            return self.lessons[0] if self.lessons else None
+        index = ids.index(lesson_id)
+        return self.lessons[index + 1] if index + 1 < len(ids) else None
+
+
+@functools.lru_cache(maxsize=4)
+def load_catalog(root: Path | None = None) -> Catalog:
+    """The catalog under ``root/chapters`` (default :func:`content_root`)."""
+    return Catalog((root or content_root()) / "chapters")

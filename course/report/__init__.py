@@ -1,0 +1,1 @@
+"""Rendering results: the console table and the gradebook."""

@@ -1,0 +1,132 @@
+"""Gradebook exports of a batch: CSV, JSON lines, Gradescope JSON and JUnit XML.
+
+Every writer here is crash-safe: ``results.jsonl`` gets one line per result,
+written, flushed and fsync'd (a batch killed at any moment leaves at most a
+truncated last line, which :func:`read_results` skips); every other file is
+rewritten whole through a temporary file and ``os.replace``.
+
+A *record* is one line of ``results.jsonl``: a :class:`~course.grade.results.LessonResult`
+of one student and lesson as :meth:`~course.grade.results.LessonResult.to_record` writes it
+(the ``check --json`` object plus ``student``, ``timings`` (seconds), ``isolation``,
+``log_dir``...). Every format is rendered by the result itself; this module only
+chooses, orders and writes.
+
+JUnit XML is written with the standard library's ``xml.etree`` rather than the
+``junit-xml`` package: that package has had no release since 2020, and the
+format needs only four elements.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import io
+import json
+import os
+import xml.etree.ElementTree as ET
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from course.grade.results import LessonResult
+
+
+def append_record(path: Path, result: LessonResult) -> None:
+    """Append ``result`` (:meth:`~course.grade.results.LessonResult.to_record`) as one JSON line, flushed and fsync'd.
+
+    A previous run killed mid-line left a truncated last line: a newline is
+    written first so the new record starts on a line of its own.
+    """
+    line = json.dumps(result.to_record(), separators=(",", ":"), ensure_ascii=False) + "\n"
+    with open(path, "ab+") as handle:
+        if handle.tell() > 0:
+            handle.seek(-1, os.SEEK_END)
+            if handle.read(1) != b"\n":
+                line = "\n" + line
+        handle.write(line.encode("utf-8"))
+        handle.flush()
+        os.fsync(handle.fileno())
+
+
+def read_results(path: Path) -> list[LessonResult]:
+    """Every complete record of a ``results.jsonl`` (missing file: none; broken lines are skipped)."""
+    out: list[LessonResult] = []
+    with contextlib.suppress(FileNotFoundError):
+        with open(path, encoding="utf-8", errors="replace") as handle:
+            for line in handle:
+                line = line.strip()
+                if not line:
+                    continue
+                try:
+                    record = json.loads(line)
+                    if isinstance(record, dict) and "student" in record:
+                        out.append(LessonResult.from_record(record))
+                except ValueError:
+                    continue
+    return out
+
+
+def latest(results: Iterable[LessonResult]) -> dict[tuple[str, str], LessonResult]:
+    """The last result per (student, lesson), in first-seen order."""
+    out: dict[tuple[str, str], LessonResult] = {}
+    for result in results:
+        out[(result.student, result.lesson)] = result
+    return out
+
+
+def gradebook_csv(results: Iterable[LessonResult], check_columns: dict[str, list[str]]) -> str:
+    """The gradebook: one row per student and lesson, sorted by student then lesson.
+
+    Args:
+        results: results (the last one per student and lesson counts).
+        check_columns: lesson id -> its check ids, in grader order. With one
+            lesson the check columns are the check ids; with several,
+            ``<lesson>:<check>``.
+
+    Columns: ``student, lesson, score, max_score, status, reason``, then one per check (its points, empty
+    when the check has no result, e.g. not gradable).
+    """
+    multi = len(check_columns) > 1
+    columns = [(lesson, check) for lesson, checks in check_columns.items() for check in checks]
+    buffer = io.StringIO()
+    writer = csv.writer(buffer, lineterminator="\n")
+    writer.writerow(["student", "lesson", "score", "max_score", "status", "reason",
+                     *[f"{lesson}:{check}" if multi else check for lesson, check in columns]])
+    for result in sorted(latest(results).values(), key=lambda r: (r.student, r.lesson)):
+        writer.writerow(result.gradebook_cells(columns))
+    return buffer.getvalue()
+
+
+def gradescope_json(results: list[LessonResult]) -> dict[str, Any]:
+    """The Gradescope autograder ``results.json`` of one student (all their lessons).
+
+    Fields: ``score`` (total points), ``output`` (one line per lesson),
+    ``visibility``, ``stdout_visibility``, ``execution_time`` (seconds, int), and ``tests``:
+    one per check with ``name, score, max_score, output, visibility, status``
+    (``passed``/``failed``); a lesson that could not be graded is one test with 0 points
+    whose output is the reason.
+    """
+    tests: list[dict[str, Any]] = []
+    lines: list[str] = []
+    for result in results:
+        lines.append(f"{result.lesson}: {result.status.value} {result.score:g}/{result.max_score:g}")
+        if result.message:
+            lines.append(result.message)
+        tests += result.gradescope_tests(prefix=len(results) > 1)
+    seconds = sum(float(r.timings.get("total", 0.0)) for r in results)
+    return {"score": round(sum(r.score for r in results), 3), "output": "\n".join(lines),
+            "visibility": "visible", "stdout_visibility": "hidden", "execution_time": int(seconds + 0.5),
+            "tests": tests}
+
+
+def junit_xml(results: Iterable[LessonResult]) -> str:
+    """JUnit XML: one ``<testsuite>`` per student and lesson (:meth:`~course.grade.results.LessonResult.junit_suite`)."""
+    root = ET.Element("testsuites", name="ros2course")
+    totals = {"tests": 0, "failures": 0, "errors": 0}
+    for result in sorted(latest(results).values(), key=lambda r: (r.student, r.lesson)):
+        for key, value in result.junit_suite(root).items():
+            totals[key] += value
+    for key, value in totals.items():
+        root.set(key, str(value))
+    ET.indent(root)
+    return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"

@@ -1,0 +1,141 @@
+"""Rendering results for people (rich) and programs (JSON).
+
+Every renderer takes an injected rich ``Console`` (rich's own testing idiom:
+``Console(file=io.StringIO(), width=100)``), so tests compare plain text.
+"""
+
+from __future__ import annotations
+
+import json
+
+from rich.console import Console, Group
+from rich.markdown import Markdown
+from rich.panel import Panel
+from rich.table import Table
+from rich.text import Text
+
+from course.grade.results import LessonResult, Plot, Status
+from course.lesson.catalog import Lesson
+from course.lesson.progress import Progress
+
+_STATUS_STYLE = {Status.PASSED: "bold green", Status.FAILED: "bold yellow", Status.NOT_GRADABLE: "bold red",
+                 Status.GRADER_ERROR: "bold magenta"}
+
+
+def _points(value: float) -> str:
+    return f"{value:g}"
+
+
+#: Eight block glyphs, lowest to highest. rich has no sparkline renderable and a plotting
+#: dependency (plotext, asciichartpy) would be heavier than this one mapping.
+_SPARK = "▁▂▃▄▅▆▇█"
+
+
+def sparkline(values: list[float], width: int = 60, low: float | None = None, high: float | None = None) -> str:
+    """``values`` as a string of at most ``width`` block glyphs (evenly resampled).
+
+    ``low``/``high`` fix the scale (default: the values' own range); a flat
+    series is drawn at mid height.
+    """
+    if not values:
+        return ""
+    if len(values) > width:
+        values = [values[round(i * (len(values) - 1) / (width - 1))] for i in range(width)]
+    low = min(values) if low is None else low
+    high = max(values) if high is None else high
+    if high - low < 1e-12:
+        return _SPARK[3] * len(values)
+    top = len(_SPARK) - 1
+    return "".join(_SPARK[max(0, min(top, round((v - low) / (high - low) * top)))] for v in values)
+
+
+def render_plot(plot: Plot, console: Console, width: int = 60) -> None:
+    """One sparkline per series of ``plot``, each labelled with its range (in ``plot.unit``)."""
+    if not plot.times or not plot.series:
+        return
+    span = plot.times[-1] - plot.times[0]
+    table = Table(title=f"{plot.title} ({span:.2f} s)", title_justify="left", box=None, show_header=False,
+                  padding=(0, 1))
+    table.add_column(style="bold")
+    table.add_column(style="cyan", no_wrap=True)
+    table.add_column(style="dim", no_wrap=True)
+    unit = f" {plot.unit}" if plot.unit else ""
+    for label, values in plot.series.items():
+        if not values:
+            continue
+        table.add_row(label, sparkline(values, width), f"{min(values):.3g} … {max(values):.3g}{unit}")
+    console.print(table)
+
+
+def render_result(result: LessonResult, console: Console) -> None:
+    """Print the table of checks; under it, for each failed check, observed / expected / hint."""
+    style = _STATUS_STYLE.get(result.status, "bold")
+    title = Text.assemble((f"{result.lesson}: ", "bold"), (result.status.value, style),
+                          f"  {_points(result.score)}/{_points(result.max_score)} points")
+    if result.checks:
+        table = Table(title=title, title_justify="left", show_lines=False, expand=False)
+        table.add_column("", width=2)
+        table.add_column("check")
+        table.add_column("points", justify="right")
+        table.add_column("observed", overflow="fold")
+        for check in result.checks:
+            mark = Text("✔", "green") if check.passed else Text("✘", "red")
+            table.add_row(mark, check.name, f"{_points(check.points)}/{_points(check.max_points)}",
+                          Text(check.observed, style="" if check.passed else "yellow"))
+        console.print(table)
+    else:
+        console.print(title)
+    if result.message:
+        console.print(Panel(Text(result.message), title=result.status.value, border_style=style, expand=False))
+    if result.hint:
+        console.print(Text.assemble(("hint: ", "bold cyan"), result.hint))
+    skipped = [c for c in result.checks if c.skipped]
+    for check in result.checks:
+        if check.passed or check.skipped:
+            continue
+        console.print(Text.assemble(("✘ ", "red"), (check.name, "bold")))
+        console.print(Text.assemble(("    observed: ", "dim"), check.observed))
+        console.print(Text.assemble(("    expected: ", "dim"), check.expected))
+        if check.hint:
+            console.print(Text.assemble(("    hint:     ", "cyan"), check.hint))
+    if skipped:
+        console.print(Text(f"{len(skipped)} check(s) not run: {skipped[0].observed.removeprefix('not checked: ')}",
+                           style="dim"))
+    for plot in result.plots:
+        render_plot(plot, console)
+    if result.status is Status.PASSED:
+        console.print(Text("Full marks. 'ros2course next' moves on.", style="green"))
+    if result.log_dir:
+        console.print(Text(f"logs: {result.log_dir}", style="dim"))
+
+
+def result_json(result: LessonResult) -> str:
+    """The ``check --json`` document (one JSON object, newline-terminated)."""
+    return json.dumps(result.to_json(), indent=2) + "\n"
+
+
+def render_lesson(lesson: Lesson, console: Console) -> None:
+    """The lesson's title, chapters and instructions (markdown)."""
+    chapters = ", ".join(str(c) for c in lesson.chapters)
+    console.print(Panel(Group(Text(lesson.title, style="bold"),
+                              Text(f"lesson id: {lesson.id}   seed chapter(s): {chapters}", style="dim")),
+                        expand=False))
+    console.print(Markdown(lesson.instructions))
+
+
+def render_list(lessons: list[Lesson], progress: Progress, console: Console) -> None:
+    """Every lesson with its status and best score."""
+    table = Table(title="ros2course lessons", title_justify="left")
+    table.add_column("#", justify="right")
+    table.add_column("lesson")
+    table.add_column("title")
+    table.add_column("status")
+    table.add_column("best", justify="right")
+    styles = {"done": "green", "current": "bold cyan", "started": "yellow", "not started": "dim"}
+    for index, lesson in enumerate(lessons, 1):
+        status = progress.status(lesson.id)
+        record = progress.lessons.get(lesson.id)
+        best = (f"{_points(record.best_score)}/{_points(record.max_score)}"
+                if record and record.best_score is not None and record.max_score is not None else "-")
+        table.add_row(str(index), lesson.id, lesson.title, Text(status, styles[status]), best)
+    console.print(table)

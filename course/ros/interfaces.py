@@ -1,0 +1,109 @@
+"""Using the workspace's own generated interface types (msg/srv) inside the grader.
+
+``source install/setup.bash`` would put the package's ``lib/`` on
+``LD_LIBRARY_PATH`` and its Python folder on ``PYTHONPATH`` before Python
+starts. The grader process is already running, so we do what the dynamic
+linker and ``PYTHONPATH`` would have done:
+
+* prepend ``<prefix>/lib`` to ``os.environ["LD_LIBRARY_PATH"]``: rosidl's
+  typesupport dispatch finds ``lib<pkg>__rosidl_typesupport_*.so`` through
+  ``rcpputils::find_library_path``, which reads that variable at call time;
+* load the package's ``lib*.so`` with ``RTLD_GLOBAL`` so the Python extension's
+  ``NEEDED`` entries resolve (the generated libraries carry no RUNPATH);
+* add the package's Python folder to ``sys.path`` and import.
+
+One process holds one build of each interface package at a time. When a
+later check grades another workspace (``dev validate`` and the tests grade
+many throw-away workspaces in one process), the build imported first may be
+deleted already, and its submodules not imported yet (``.srv`` after
+``.msg``) could not be found any more: a package imported from another
+install prefix is forgotten and imported again from this workspace's
+(:func:`_forget_other_prefix`). Graders that must judge the learner's own
+definition of an interface (the custom-interfaces lesson) inspect it in a
+subprocess instead.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import importlib
+import os
+import sys
+from pathlib import Path
+from typing import Any
+
+from course.errors import NotGradable
+from course.ros.index import package_prefix
+
+
+def _preload(lib_dir: Path, package: str) -> None:
+    pending = sorted(lib_dir.glob(f"lib{package}__*.so"))
+    for _ in range(len(pending) + 1):  # load order unknown: retry until nothing changes
+        left = []
+        for path in pending:
+            try:
+                ctypes.CDLL(str(path), mode=ctypes.RTLD_GLOBAL)
+            except OSError:
+                left.append(path)
+        if not left or len(left) == len(pending):
+            pending = left
+            break
+        pending = left
+    if pending:
+        raise NotGradable(f"cannot load {pending[0].name} of {package}", "rebuild the package: colcon build")
+
+
+def _forget_other_prefix(package: str, prefix: Path) -> None:
+    """Drop ``package`` and its submodules from ``sys.modules`` when imported from outside ``prefix``.
+
+    Importing again then loads this workspace's copy of the generated
+    libraries (rosidl's typesupport dispatch looks them up through
+    ``LD_LIBRARY_PATH`` when a type is first used, so ``prefix/lib`` is put first).
+    """
+    cached = sys.modules.get(package)
+    if cached is None:
+        return
+    here = prefix.resolve()
+    folders = [Path(p) for p in getattr(cached, "__path__", [])]
+    if any(f.is_dir() and f.resolve().is_relative_to(here) for f in folders):
+        return
+    for module in [m for m in sys.modules if m == package or m.startswith(package + ".")]:
+        del sys.modules[module]
+
+
+def workspace_type(overlay: dict[str, str], package: str, kind: str, name: str) -> Any:
+    """The generated class ``package.kind.name`` (e.g. ``package_with_interfaces``, ``msg``, ``AmazingQuote``).
+
+    Args:
+        overlay: the sourced workspace environment (``GradingSession.overlay()``).
+        kind: ``"msg"`` or ``"srv"``.
+
+    Raises:
+        NotGradable: the package is not installed in the workspace, or its types do not load.
+    """
+    module_name = f"{package}.{kind}"
+    prefix = package_prefix(package, overlay)
+    if prefix is None:
+        # Checked before the module cache: a build imported from another workspace would hide it.
+        raise NotGradable(f"interface package {package} is not installed in the workspace",
+                          f"build it: colcon build --packages-up-to {package}")
+    lib_dir = str(prefix / "lib")
+    paths = [p for p in os.environ.get("LD_LIBRARY_PATH", "").split(os.pathsep) if p and p != lib_dir]
+    os.environ["LD_LIBRARY_PATH"] = os.pathsep.join([lib_dir, *paths])
+    _forget_other_prefix(package, prefix)
+    module = sys.modules.get(module_name)
+    if module is None:
+        _preload(prefix / "lib", package)
+        for entry in reversed(overlay.get("PYTHONPATH", "").split(os.pathsep)):
+            if entry and entry.startswith(str(prefix)) and entry not in sys.path:
+                sys.path.insert(0, entry)
+        importlib.invalidate_caches()
+        try:
+            module = importlib.import_module(module_name)
+        except ImportError as exc:
+            raise NotGradable(f"cannot import {module_name}: {exc}", f"rebuild {package}: colcon build") from exc
+    try:
+        return getattr(module, name)
+    except AttributeError as exc:
+        raise NotGradable(f"{module_name} has no type {name}",
+                          f"declare it in {kind}/{name}.{kind} and list it in rosidl_generate_interfaces") from exc

@@ -1,0 +1,557 @@
+"""The ROS 2 underlay: the Jazzy pieces PyPI lacks, built from source on top of the wheels.
+
+What, and the repairs it needs, come from shared/ROS_ENV.md ("Building the
+missing ROS pieces from source"); which commits, from
+:mod:`course.ros.underlay_pins`. The underlay belongs to the ros2course install: it
+lives under ``<venv>/opt/ros2course-jazzy`` (``ROS2COURSE_UNDERLAY`` moves it)::
+
+    <root>/current -> builds/<key>     the only thing ever trusted (a symlink)
+    <root>/builds/<key>/               a colcon merged install prefix
+    <root>/builds/<key>/ros2course-underlay.json   its stamp (pins, repairs, python)
+    <root>/work/                       sources, build/ and colcon logs while building
+    <root>/logs/build-<time>.log       the output of every build
+    <root>/setup.bash                  the learner's activation script (course.ros.env)
+    <root>/sas/...                     the optional sas component, same layout, built on top
+
+Atomic: a build goes into a fresh ``builds/<key>`` folder; only when colcon
+succeeded is the stamp written and ``current`` switched with one
+``os.replace`` of a symlink. An interrupted or failed build leaves
+``current`` (the earlier working underlay, if any) as it was; leftovers are
+removed by the next build. The installed files name their own prefix (colcon's
+setup files, console_bridge's CMake config), which is why the prefix is
+never renamed after the build: the symlink is.
+
+Cached: the folder name is a hash of the pins, :data:`REPAIRS_VERSION`, the
+interpreter and the venv prefix (:func:`cache_key`); when ``current`` points
+at a folder with that name and a stamp, :func:`build` returns at once.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import datetime
+import fcntl
+import hashlib
+import importlib.util
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import sysconfig
+import tarfile
+import time
+import urllib.request
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Callable
+
+from course.errors import CourseError, ExitStatus
+from course.ros.underlay_pins import JAZZY, PATCHES, REPAIRS_VERSION, SAS, Pin
+
+#: Environment variable: the underlay's root folder (default ``<sys.prefix>/opt/ros2course-jazzy``).
+ROOT_VAR = "ROS2COURSE_UNDERLAY"
+#: Environment variable: a folder holding the pinned archives (``<org>--<repo>-<commit>.tar.gz``).
+SOURCES_VAR = "ROS2COURSE_ROS_SOURCES"
+STAMP = "ros2course-underlay.json"
+#: Seconds before a colcon pass is stopped (a cold build takes about 4 min on 2 cores).
+BUILD_TIMEOUT = 3600.0
+DOWNLOAD_TIMEOUT = 120.0
+
+
+class UnderlayBuildFailed(CourseError):
+    """Building the underlay failed; the one-line message names the step, the package and the log."""
+
+    exit_status = ExitStatus.MISSING_REQUIREMENT
+
+
+@dataclasses.dataclass(frozen=True)
+class Underlay:
+    """A built underlay.
+
+    Attributes:
+        prefix: the install prefix (resolved ``builds/<key>`` folder).
+        stamp: the stamp's content (``key``, ``pins``, ``repairs``, ``python``, ``built``, ``seconds``).
+    """
+
+    prefix: Path
+    stamp: dict
+
+    @property
+    def site_packages(self) -> Path:
+        """Where its Python packages are (``lib/python3.X/site-packages``)."""
+        return self.prefix / "lib" / f"python{sys.version_info.major}.{sys.version_info.minor}" / "site-packages"
+
+    def commit_of(self, repo: str) -> str | None:
+        """The commit ``repo`` (``"ros2cli"``) was built from, per the stamp, or None."""
+        for pin in self.stamp.get("pins", []):
+            if pin.get("repo") == repo:
+                return pin.get("commit")
+        return None
+
+
+@dataclasses.dataclass(frozen=True)
+class Component:
+    """A set of pins built together into one prefix.
+
+    Attributes:
+        name: ``"jazzy"`` (the ROS 2 underlay) or ``"sas"`` (optional, on top of it).
+        pins: what it is built from.
+        subdir: its folder under :func:`root` (``""``: the root itself).
+        what: how messages name it.
+    """
+
+    name: str
+    pins: tuple[Pin, ...]
+    subdir: str
+    what: str
+
+
+#: The ROS 2 pieces PyPI lacks (built by ``scripts/setup.sh``).
+JAZZY_COMPONENT = Component("jazzy", JAZZY, "", "the ROS 2 underlay (ros2 CLI, launch, rclcpp)")
+#: SmartArmStack + DQ Robotics for the sas lesson's C++ path (on demand: ``ros2course env --build --with sas``).
+SAS_COMPONENT = Component("sas", SAS, "sas", "SmartArmStack (sas) and DQ Robotics C++")
+COMPONENTS = {c.name: c for c in (JAZZY_COMPONENT, SAS_COMPONENT)}
+
+
+def root() -> Path:
+    """The underlay's root folder (``$ROS2COURSE_UNDERLAY`` or ``<sys.prefix>/opt/ros2course-jazzy``)."""
+    override = os.environ.get(ROOT_VAR)
+    return Path(override).expanduser().absolute() if override else Path(sys.prefix) / "opt" / "ros2course-jazzy"
+
+
+def component_root(component: Component) -> Path:
+    """Where ``component`` lives (``root()`` for jazzy, ``root()/sas`` for sas)."""
+    return root() / component.subdir if component.subdir else root()
+
+
+def project_mirror() -> Path | None:
+    """``../shared/ros-src`` beside this project's checkout, when it holds the archives (CI, course machines)."""
+    candidate = Path(__file__).resolve().parents[2].parent / "shared" / "ros-src"
+    return candidate if (candidate / "SOURCES.md").is_file() else None
+
+
+def default_sources() -> Path | None:
+    """Where archives come from: ``$ROS2COURSE_ROS_SOURCES``, else :func:`project_mirror`, else None (GitHub)."""
+    given = os.environ.get(SOURCES_VAR)
+    if given:
+        return Path(given).expanduser().absolute()
+    return project_mirror()
+
+
+def cache_key(pins: tuple[Pin, ...] = JAZZY, below: str = "") -> str:
+    """16 hex digits naming one build: pins, repairs version, interpreter version and prefix.
+
+    ``below``: the key of the component it is built on (sas on jazzy), so that a
+    rebuilt underlay invalidates what was built on top of it.
+    """
+    data = {
+        "pins": [dataclasses.asdict(pin) for pin in pins],
+        "repairs": REPAIRS_VERSION,
+        "python": list(sys.version_info[:2]),
+        "prefix": sys.prefix,
+        "below": below,
+    }
+    return hashlib.sha256(json.dumps(data, sort_keys=True).encode()).hexdigest()[:16]
+
+
+def current(base: Path | None = None) -> Underlay | None:
+    """The underlay ``current`` points at, if it has a readable stamp; never raises."""
+    link = (base or root()) / "current"
+    try:
+        prefix = link.resolve(strict=True)
+        stamp = json.loads((prefix / STAMP).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    return Underlay(prefix, stamp) if isinstance(stamp, dict) else None
+
+
+def up_to_date(base: Path | None = None, pins: tuple[Pin, ...] = JAZZY, below: str = "") -> bool:
+    """True when ``current`` is the build of these pins (same :func:`cache_key`)."""
+    found = current(base)
+    return found is not None and found.stamp.get("key") == cache_key(pins, below)
+
+
+def built(component: Component) -> Underlay | None:
+    """The current build of ``component`` if it is up to date (pins, repairs, what it builds on), else None."""
+    below = ""
+    if component is not JAZZY_COMPONENT:
+        under = built(JAZZY_COMPONENT)
+        if under is None:
+            return None
+        below = under.stamp["key"]
+    found = current(component_root(component))
+    return found if found is not None and found.stamp.get("key") == cache_key(component.pins, below) else None
+
+
+# --- What a build needs --------------------------------------------------------
+
+
+EIGEN_INCLUDE = Path("/usr/include/eigen3")
+
+
+def sas_missing_prerequisites() -> list[tuple[str, str]]:
+    """What the sas component needs beyond :func:`missing_prerequisites` (shared/ROS_ENV.md): ``[(what, hint)]``."""
+    missing = []
+    if not (EIGEN_INCLUDE / "Eigen" / "Dense").is_file():
+        missing.append(("no Eigen 3 headers (/usr/include/eigen3)", "apt-get install libeigen3-dev"))
+    if importlib.util.find_spec("pybind11") is None:
+        missing.append(("no pybind11", "pip install 'ros2course[sas]'"))
+    if importlib.util.find_spec("dqrobotics") is None:
+        missing.append(("no dqrobotics (Python)", "pip install 'ros2course[sas]'"))
+    return missing
+
+
+def missing_prerequisites() -> list[tuple[str, str]]:
+    """What this machine lacks to build the underlay: ``[(what, hint)]``, empty when all is there.
+
+    Rules from shared/ROS_ENV.md: a C++ compiler and cmake; a shared libpython
+    (``Py_ENABLE_SHARED``; the wheels' rcl needs libpython symbols, so
+    librclcpp must link it); ``osrf_pycommon`` (launch imports it); ``patch``;
+    colcon in this interpreter.
+    """
+    missing = []
+    if not (shutil.which("c++") or shutil.which("g++")):
+        missing.append(("no C++ compiler (c++/g++)", "apt-get install g++"))
+    if not shutil.which("cmake"):
+        missing.append(("no cmake", "apt-get install cmake"))
+    if not shutil.which("patch"):
+        missing.append(("no patch", "apt-get install patch"))
+    if not sysconfig.get_config_var("Py_ENABLE_SHARED"):
+        missing.append(("no shared libpython (this Python was built without --enable-shared)",
+                        "use a Python with libpython3.X.so (Debian's python3, or pyenv with "
+                        "PYTHON_CONFIGURE_OPTS=--enable-shared)"))
+    if importlib.util.find_spec("osrf_pycommon") is None:
+        missing.append(("no osrf_pycommon (launch imports it)", "pip install osrf-pycommon"))
+    if not (Path(sys.executable).parent / "colcon").is_file() and not shutil.which("colcon"):
+        missing.append(("no colcon", "pip install colcon-common-extensions"))
+    return missing
+
+
+def libpython_link_flags() -> str:
+    """``CMAKE_SHARED_LINKER_FLAGS`` that make every shared library carry libpython.
+
+    shared/ROS_ENV.md: the wheels' ``librcl.so`` needs ``*__rosidl_generator_py.so``,
+    which leave libpython symbols unresolved, so any C++ executable fails to
+    link (``undefined reference to _Py_Dealloc``) unless librclcpp carries libpython.
+    """
+    libdir = sysconfig.get_config_var("LIBDIR")
+    version = sysconfig.get_config_var("LDVERSION") or f"{sys.version_info.major}.{sys.version_info.minor}"
+    return f"-L{libdir} -Wl,-rpath,{libdir} -Wl,--no-as-needed -lpython{version} -Wl,--as-needed"
+
+
+# --- Sources -------------------------------------------------------------------
+
+
+def _fetch(name: str, url: str, mirror: Path | None, dest: Path) -> Path:
+    """``dest/name`` from the mirror folder, or downloaded from ``url`` when there is no mirror."""
+    target = dest / name
+    if mirror is not None:
+        source = mirror / name
+        if not source.is_file():
+            raise UnderlayBuildFailed(f"{name} is not in the sources folder {mirror}",
+                                      f"put it there, or unset {SOURCES_VAR} to download from GitHub")
+        return source
+    partial = target.with_suffix(".part")
+    try:
+        with urllib.request.urlopen(url, timeout=DOWNLOAD_TIMEOUT) as response, open(partial, "wb") as out:
+            shutil.copyfileobj(response, out)
+    except OSError as exc:
+        raise UnderlayBuildFailed(f"downloading {url} failed ({exc})",
+                                  f"check the network, or set {SOURCES_VAR} to a folder with the archives") from exc
+    os.replace(partial, target)
+    return target
+
+
+def _unpack(archive: Path, pin: Pin, src: Path) -> Path:
+    """Unpack ``archive`` into ``src``; return the pin's top folder. Rejects unsafe members."""
+    try:
+        with tarfile.open(archive, "r:gz") as tar:
+            for member in tar.getmembers():
+                if not member.name.startswith(pin.top + "/") and member.name != pin.top:
+                    raise UnderlayBuildFailed(f"{archive.name}: member {member.name!r} is outside {pin.top}/",
+                                              "the archive is not the pinned commit's; replace it")
+            tar.extractall(src, filter="data") if hasattr(tarfile, "data_filter") else tar.extractall(src)
+    except (tarfile.TarError, OSError, EOFError) as exc:
+        raise UnderlayBuildFailed(f"{archive.name} cannot be unpacked ({exc})",
+                                  "the archive is damaged: fetch it again") from exc
+    top = src / pin.top
+    if not top.is_dir():
+        raise UnderlayBuildFailed(f"{archive.name} has no folder {pin.top}/", "the archive is not the pinned commit's")
+    return top
+
+
+def _ignore_unused(top: Path, pin: Pin) -> list[str]:
+    """Put ``COLCON_IGNORE`` in every package of ``top`` that ``pin.packages`` does not list.
+
+    Returns the package folders kept (relative, ``"."`` for the top folder).
+    """
+    if pin.packages is None or pin.packages == (".",):
+        return ["."]
+    kept = []
+    for manifest in sorted(top.rglob("package.xml")):
+        rel = manifest.parent.relative_to(top).as_posix() or "."
+        if rel in pin.packages:
+            kept.append(rel)
+        else:
+            (manifest.parent / "COLCON_IGNORE").touch()
+    if "." in pin.packages and (top / "CMakeLists.txt").is_file():
+        kept.append(".")
+    absent = sorted(set(pin.packages) - set(kept))
+    if absent:
+        raise UnderlayBuildFailed(f"{pin.org}/{pin.repo}@{pin.commit[:8]} has no package {absent[0]}",
+                                  "course/ros/underlay_pins.py names a package the archive does not hold")
+    return kept
+
+
+def _apply_patch(name: str, top: Path, mirror: Path | None, dest: Path, log) -> None:
+    patch = PATCHES[name]
+    path = _fetch(name, patch.url, mirror, dest)
+    log.write(f"\n$ patch -p1 -d {top} < {path}   # {patch.why}\n".encode())
+    log.flush()
+    proc = subprocess.run(["patch", "-p1", "--forward", "-d", str(top), "-i", str(path)], stdout=log,
+                          stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL, check=False)
+    if proc.returncode != 0:
+        raise UnderlayBuildFailed(f"applying {name} to {top.name} failed", "the patch no longer fits the pinned commit")
+
+
+def prepare_sources(work: Path, mirror: Path | None, log, pins: tuple[Pin, ...] = JAZZY) -> Path:
+    """Unpack every pin into ``work/src`` (fresh), ignore unused packages, apply patches.
+
+    Args:
+        work: scratch folder (``src``, ``archives`` are made in it).
+        mirror: folder of archives, or None to download from GitHub.
+        log: a binary file receiving what was done.
+
+    Returns:
+        the ``src`` folder.
+
+    Raises:
+        UnderlayBuildFailed: a missing, damaged or unexpected archive, or a patch that fails.
+    """
+    src = work / "src"
+    archives = work / "archives"
+    shutil.rmtree(src, ignore_errors=True)
+    src.mkdir(parents=True)
+    archives.mkdir(parents=True, exist_ok=True)
+    for pin in pins:
+        folder = mirror / pin.mirror_dir if mirror is not None and pin.mirror_dir else mirror
+        archive = _fetch(pin.archive_name, pin.url, folder, archives)
+        top = _unpack(archive, pin, src)
+        if pin.into is not None:  # a git submodule of another pin
+            repo, _, path = pin.into.partition("/")
+            owner = next((p for p in pins if p.repo == repo), None)
+            if owner is None:
+                raise UnderlayBuildFailed(f"{pin.repo} goes into {repo}, which is not pinned")
+            target = src / owner.top / path
+            shutil.rmtree(target, ignore_errors=True)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            top.rename(target)
+            log.write(f"unpacked {archive.name} into {owner.top}/{path}\n".encode())
+            continue
+        kept = _ignore_unused(top, pin)
+        log.write(f"unpacked {archive.name}: building {', '.join(kept)}\n".encode())
+        for name in pin.patches:
+            _apply_patch(name, top, mirror, archives, log)
+    return src
+
+
+# --- Building ------------------------------------------------------------------
+
+
+@contextlib.contextmanager
+def _locked(base: Path) -> Iterator[None]:
+    """Hold ``<base>/.lock`` so two builds never run at once (the second waits)."""
+    base.mkdir(parents=True, exist_ok=True)
+    with open(base / ".lock", "w") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+_FAILED = re.compile(r"^Failed\s+<<<\s+(\S+)", re.M)
+
+
+def _run_colcon(args: list[str], env: dict[str, str], cwd: Path, log, timeout: float) -> None:
+    """Run one colcon pass in its own process group; on any interruption kill the group."""
+    colcon = Path(sys.executable).parent / "colcon"
+    command = [str(colcon) if colcon.is_file() else "colcon", *args]
+    log.write(f"\n$ {' '.join(command)}\n".encode())
+    log.flush()
+    proc = subprocess.Popen(command, cwd=cwd, env=env, stdout=log, stderr=subprocess.STDOUT,
+                            stdin=subprocess.DEVNULL, start_new_session=True)
+    try:
+        code = proc.wait(timeout=timeout)
+    except BaseException:
+        with contextlib.suppress(ProcessLookupError):
+            os.killpg(proc.pid, signal.SIGKILL)
+        proc.wait()
+        raise
+    if code != 0:
+        raise subprocess.CalledProcessError(code, command)
+
+
+def _build_env(prefix: Path, component: Component) -> dict[str, str]:
+    from course.ros.env import activate  # noqa: PLC0415 - env imports this module
+
+    env = dict(os.environ)
+    for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH", "PYTHONPATH"):
+        env.pop(var, None)  # only the wheels (and what this component builds on), nothing sourced by chance
+    activate(env, underlay=component is not JAZZY_COMPONENT, sas=False)
+    for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH"):
+        env[var] = os.pathsep.join([str(prefix), *[p for p in env.get(var, "").split(os.pathsep) if p]])
+    env.pop("COLCON_PREFIX_PATH", None)
+    if component is SAS_COMPONENT:  # shared/ROS_ENV.md, "Building SmartArmStack (sas) from source"
+        import pybind11  # noqa: PLC0415
+
+        env["pybind11_DIR"] = pybind11.get_cmake_dir()
+        env["CPATH"] = os.pathsep.join([str(prefix / "include"), str(EIGEN_INCLUDE), env.get("CPATH", "")]).rstrip(":")
+        env["LIBRARY_PATH"] = os.pathsep.join([str(prefix / "lib"), env.get("LIBRARY_PATH", "")]).rstrip(":")
+    return env
+
+
+def build(sources: Path | None = None, force: bool = False, progress: Callable[[str], None] | None = None,
+          pins: tuple[Pin, ...] | None = None, base: Path | None = None,
+          component: Component = JAZZY_COMPONENT) -> tuple[Underlay, bool]:
+    """Build ``component`` unless its current build is these pins; switch to the new build only on success.
+
+    Args:
+        sources: folder of pinned archives; None: :func:`default_sources` (which may
+            be None: download from GitHub).
+        force: rebuild even when up to date.
+        progress: called with one short line per step (e.g. a console's print).
+        pins: what to build (default: the component's pins, course/ros/underlay_pins.py).
+        base: the component's folder (default :func:`component_root`).
+        component: :data:`JAZZY_COMPONENT` or :data:`SAS_COMPONENT` (needs the
+            first one built).
+
+    Returns:
+        ``(underlay, built)``: ``built`` is False when the cache was used.
+
+    Raises:
+        UnderlayBuildFailed: a missing prerequisite, source or patch, or a failed
+            colcon pass; the one-line message says which package and where the
+            log is. The earlier build (if any) stays current.
+    """
+    pins = component.pins if pins is None else pins
+    base = base or component_root(component)
+    say = progress or (lambda line: None)
+    from course.ros.env import detect, repair_cmake_files  # noqa: PLC0415
+
+    below = ""
+    if component is not JAZZY_COMPONENT:
+        under = built(JAZZY_COMPONENT)
+        if under is None:
+            raise UnderlayBuildFailed(f"cannot build {component.what}: the ROS 2 underlay is not built "
+                                      "(ros2course env --build)")
+        below = under.stamp["key"]
+    key = cache_key(pins, below)
+    with _locked(base):
+        install = detect()
+        if install.kind == "wheels" and install.prefix is not None:
+            repair_cmake_files(install.prefix)  # shared/ROS_ENV.md; idempotent, also when cached
+        found = current(base)
+        if found is not None and found.stamp.get("key") == key and not force:
+            return found, False
+        missing = missing_prerequisites() + (sas_missing_prerequisites() if component is SAS_COMPONENT else [])
+        if missing:
+            what, hint = missing[0]
+            raise UnderlayBuildFailed(f"cannot build {component.what}: {what} ({hint})")
+        mirror = sources if sources is not None else default_sources()
+        if mirror is not None and not mirror.is_dir():
+            raise UnderlayBuildFailed(f"cannot build {component.what}: the sources folder {mirror} does not "
+                                      f"exist (give a folder of the pinned archives: {SOURCES_VAR} or --sources)")
+        logs = base / "logs"
+        logs.mkdir(parents=True, exist_ok=True)
+        log_path = logs / f"build-{datetime.datetime.now().strftime('%Y%m%d-%H%M%S')}.log"
+        builds = base / "builds"
+        builds.mkdir(exist_ok=True)
+        prefix = builds / key
+        work = base / "work"
+        keep = found.prefix.name if found is not None else None
+        for stale in [*builds.iterdir(), work]:  # leftovers of interrupted or failed builds: never trusted
+            if stale.name != keep:
+                shutil.rmtree(stale, ignore_errors=True)
+        begin = time.monotonic()
+        step = "preparing the sources"
+        with open(log_path, "wb") as log:
+            try:
+                say(f"unpacking {len(pins)} pinned source archives from {mirror or 'GitHub'}")
+                src = prepare_sources(work, mirror, log, pins)
+                env = _build_env(prefix, component)
+                linker = libpython_link_flags()
+                cmake_args = ["--cmake-args", "-DBUILD_TESTING=OFF", "-DCMAKE_BUILD_TYPE=Release",
+                              f"-DPython3_EXECUTABLE={sys.executable}", f"-DPYTHON_EXECUTABLE={sys.executable}"]
+                if component is JAZZY_COMPONENT:
+                    cmake_args.append(f"-DCMAKE_SHARED_LINKER_FLAGS={linker}")
+                else:  # sas links a bare -ldqrobotics: find it in, and load it from, this prefix (ROS_ENV.md)
+                    linker += f" -L{prefix / 'lib'} -Wl,-rpath,{prefix / 'lib'}"
+                    cmake_args += [f"-DCMAKE_{kind}_LINKER_FLAGS={linker}" for kind in ("SHARED", "MODULE", "EXE")]
+                passes = sorted({pin.colcon_pass for pin in pins if pin.into is None})
+                for number in passes:
+                    tops = [str(src / pin.top) for pin in pins if pin.into is None and pin.colcon_pass == number]
+                    names = ", ".join(pin.repo for pin in pins if pin.into is None and pin.colcon_pass == number)
+                    step = f"building {names}"
+                    say(f"{step} (colcon pass {number + 1 - passes[0]} of {len(passes)}); log: {log_path}")
+                    _run_colcon(["--log-base", str(work / "log"), "build", "--merge-install", "--base-paths", *tops,
+                                 "--build-base", str(work / "build"), "--install-base", str(prefix),
+                                 "--event-handlers", "console_direct-", "summary+", "console_start_end+",
+                                 *cmake_args], env, work, log, BUILD_TIMEOUT)
+                stamp = {
+                    "key": key,
+                    "component": component.name,
+                    "pins": [dataclasses.asdict(pin) for pin in pins],
+                    "repairs": REPAIRS_VERSION,
+                    "python": sys.executable,
+                    "below": below,
+                    "built": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
+                    "seconds": round(time.monotonic() - begin, 1),
+                    "sources": str(mirror) if mirror else "github",
+                    "log": str(log_path),
+                }
+                (prefix / STAMP).write_text(json.dumps(stamp, indent=1), encoding="utf-8")
+            except subprocess.CalledProcessError:
+                failed = _FAILED.findall(log_path.read_text(encoding="utf-8", errors="replace"))
+                where = f" (package {failed[0]})" if failed else ""
+                shutil.rmtree(prefix, ignore_errors=True)
+                raise UnderlayBuildFailed(f"building {component.what} failed: {step}{where}; "
+                                          f"log: {log_path}") from None
+            except subprocess.TimeoutExpired:
+                shutil.rmtree(prefix, ignore_errors=True)
+                raise UnderlayBuildFailed(f"building {component.what} failed: {step} took more than "
+                                          f"{BUILD_TIMEOUT:.0f} s; log: {log_path}") from None
+            except UnderlayBuildFailed as exc:
+                shutil.rmtree(prefix, ignore_errors=True)
+                hint = f" ({exc.hint})" if exc.hint else ""
+                raise UnderlayBuildFailed(f"building {component.what} failed: {exc.message}{hint}; "
+                                          f"log: {log_path}") from None
+            except BaseException:
+                shutil.rmtree(prefix, ignore_errors=True)
+                raise
+        link = base / "current"
+        tmp_link = base / f".current-{os.getpid()}"
+        with contextlib.suppress(FileNotFoundError):
+            tmp_link.unlink()
+        tmp_link.symlink_to(Path("builds") / key)
+        os.replace(tmp_link, link)
+        shutil.rmtree(work, ignore_errors=True)
+        if keep is not None and keep != key:
+            shutil.rmtree(builds / keep, ignore_errors=True)
+        made = current(base)
+        assert made is not None
+        return made, True
+
+
+def installed_size(path: Path) -> int:
+    """Bytes of the regular files under ``path`` (symlinks not followed)."""
+    total = 0
+    for dirpath, _dirs, files in os.walk(path):
+        for name in files:
+            with contextlib.suppress(OSError):
+                total += os.lstat(os.path.join(dirpath, name)).st_size
+    return total

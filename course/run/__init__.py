@@ -1,0 +1,1 @@
+"""Running learner executables (processes, the sandbox) and observing them (probes)."""

@@ -1,0 +1,443 @@
+"""Probes: the grader's eyes and hands on a private ROS 2 graph.
+
+A :class:`RosSession` owns one check's graph: a free ``ROS_DOMAIN_ID`` held
+through ``domain_coordinator`` for the session's lifetime, an rclpy
+``Context`` initialised on that domain, a hidden grader node and an executor
+spinning in a background thread. Probes subscribe, call and watch through
+that node with rclpy's own APIs; they never shell out to the ``ros2`` CLI
+(which the PyPI wheels do not have).
+
+Everything here is black-box: the same probes grade Python and C++ nodes.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import os
+import random
+import statistics
+import threading
+import time
+from collections.abc import Callable, Iterator
+from typing import Any
+
+#: Our own node is hidden (leading underscore), so "nodes seen" lists stay the learner's.
+GRADER_NODE = "_ros2course_grader"
+#: Seconds a reliable sample may be late: a DDS sample lost on a loaded machine is repaired
+#: after the writer's next heartbeat (Fast DDS's default heartbeat period is 3 s) and holds
+#: back the samples behind it. Graders wait this long only while messages are missing.
+LATE_DELIVERY = 3.5
+
+
+@dataclasses.dataclass(frozen=True)
+class RateStats:
+    """Message rate computed the way ``ros2 topic hz`` does (ros2topic/verb/hz.py).
+
+    Attributes:
+        rate_hz: 1 / mean of the deltas between consecutive arrivals, Hz.
+        mean_period: mean delta, seconds.
+        min_period, max_period: extreme deltas, seconds.
+        std_dev: population standard deviation of the deltas, seconds.
+        samples: number of deltas (messages - 1).
+    """
+
+    rate_hz: float
+    mean_period: float
+    min_period: float
+    max_period: float
+    std_dev: float
+    samples: int
+
+    @classmethod
+    def from_times(cls, times: list[float]) -> RateStats | None:
+        """Stats over arrival (or stamp) times in seconds; None with fewer than 2 times."""
+        if len(times) < 2:
+            return None
+        deltas = [b - a for a, b in zip(times, times[1:])]
+        mean = sum(deltas) / len(deltas)
+        return cls(1.0 / mean if mean > 0 else float("inf"), mean, min(deltas), max(deltas),
+                   statistics.pstdev(deltas), len(deltas))
+
+    def within(self, expected_hz: float, tolerance: float) -> bool:
+        """True when the mean period is within ``tolerance`` (fraction, e.g. 0.15) of 1/expected_hz."""
+        expected_period = 1.0 / expected_hz
+        return abs(self.mean_period - expected_period) <= tolerance * expected_period
+
+    def describe(self) -> str:
+        """Human summary, e.g. ``2.00 Hz (mean period 0.500 s, min 0.498, max 0.502, 6 intervals)``."""
+        return (f"{self.rate_hz:.2f} Hz (mean period {self.mean_period:.3f} s, min {self.min_period:.3f}, "
+                f"max {self.max_period:.3f}, {self.samples} intervals)")
+
+
+def wait_until(predicate: Callable[[], bool], timeout: float, interval: float = 0.02,
+               abort: Callable[[], bool] | None = None) -> bool:
+    """Poll ``predicate`` until true, ``timeout`` seconds pass, or ``abort()`` is true."""
+    deadline = time.monotonic() + timeout
+    while True:
+        if predicate():
+            return True
+        if time.monotonic() >= deadline or (abort is not None and abort()):
+            return predicate()
+        time.sleep(interval)
+
+
+def _domain_selector() -> Callable[[], int]:
+    # domain_coordinator's default selector starts at 1 every time; a random
+    # start makes concurrent checks collide less often (both are safe anyway).
+    start = random.randrange(100)
+    state = {"n": start}
+
+    def select() -> int:
+        value = (state["n"] % 100) + 1
+        state["n"] += 1
+        return value
+
+    return select
+
+
+def discovery_range() -> str:
+    """``ROS_AUTOMATIC_DISCOVERY_RANGE`` for the grader and learner nodes: ``LOCALHOST`` (REP 2009, Jazzy).
+
+    Batch grading under a submission uid sets ``ROS2COURSE_DISCOVERY_RANGE=SUBNET``:
+    rmw_fastrtps's LOCALHOST mode forces Fast DDS's shared-memory transport,
+    whose segments a grader and a node of two different users cannot both
+    write; the job's network namespace has only loopback, so its "subnet" is
+    the namespace itself (see :mod:`course.run.sandbox`).
+    """
+    return os.environ.get("ROS2COURSE_DISCOVERY_RANGE", "LOCALHOST")
+
+
+class RosSession:
+    """One check's private ROS graph.
+
+    Use as a context manager. Attributes once entered:
+        domain_id: the ``ROS_DOMAIN_ID`` held for this session (1-100).
+        context: the rclpy ``Context``.
+        node: the hidden grader node.
+
+    Raises:
+        RuntimeError: from ``domain_coordinator`` when no domain id is free.
+    """
+
+    def __init__(self) -> None:
+        self.domain_id = -1
+        self._stack = contextlib.ExitStack()
+        self.context = None
+        self.node = None
+        self._executor = None
+        self._thread: threading.Thread | None = None
+
+    def learner_env(self, base: dict[str, str]) -> dict[str, str]:
+        """``base`` plus this session's domain id and localhost-only discovery."""
+        env = dict(base)
+        env["ROS_DOMAIN_ID"] = str(self.domain_id)
+        env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery_range()
+        env.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy, prints a warning
+        env.setdefault("RCUTILS_LOGGING_BUFFERED_STREAM", "1")
+        env["PYTHONUNBUFFERED"] = "1"
+        return env
+
+    def __enter__(self) -> RosSession:
+        import domain_coordinator  # noqa: PLC0415 - ROS imports stay lazy: list/hint must not pay for them
+        import rclpy
+        from rclpy.executors import MultiThreadedExecutor
+        from rclpy.signals import SignalHandlerOptions
+
+        try:
+            self.domain_id = self._stack.enter_context(domain_coordinator.domain_id(_domain_selector()))
+            os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery_range()
+            os.environ.pop("ROS_LOCALHOST_ONLY", None)
+            self.context = rclpy.Context()
+            rclpy.init(context=self.context, domain_id=self.domain_id,
+                       signal_handler_options=SignalHandlerOptions.NO)
+            self._stack.callback(self._shutdown_context)
+            from rclpy.parameter import Parameter  # noqa: PLC0415
+
+            # The grader's node needs no type description service (saves ~70 ms per check).
+            self.node = rclpy.create_node(
+                GRADER_NODE, context=self.context, enable_rosout=False, start_parameter_services=False,
+                parameter_overrides=[Parameter("start_type_description_service", value=False)])
+            self._executor = MultiThreadedExecutor(num_threads=2, context=self.context)
+            self._executor.add_node(self.node)
+            self._thread = threading.Thread(target=self._spin, daemon=True, name="ros2course-executor")
+            self._thread.start()
+        except BaseException:
+            self._stack.close()
+            raise
+        return self
+
+    def _spin(self) -> None:
+        from rclpy.executors import ExternalShutdownException  # noqa: PLC0415
+
+        with contextlib.suppress(ExternalShutdownException, RuntimeError):
+            self._executor.spin()
+
+    def _shutdown_context(self) -> None:
+        import rclpy  # noqa: PLC0415
+
+        if self._executor is not None:
+            self._executor.shutdown(timeout_sec=2.0)
+        if self.node is not None:
+            self.node.destroy_node()
+        with contextlib.suppress(Exception):
+            rclpy.shutdown(context=self.context)
+        if self._thread is not None:
+            self._thread.join(timeout=3.0)
+
+    def __exit__(self, *exc: Any) -> None:
+        self._stack.close()
+
+    # --- graph ---------------------------------------------------------------
+
+    def node_names(self) -> list[str]:
+        """Fully qualified names of the nodes in the graph, our own hidden node excluded."""
+        names = []
+        for name, namespace in self.node.get_node_names_and_namespaces():
+            if name.startswith("_"):
+                continue
+            names.append(f"{namespace.rstrip('/')}/{name}")
+        return sorted(names)
+
+    def wait_for_node(self, name: str, timeout: float, abort: Callable[[], bool] | None = None) -> bool:
+        """Wait until a node called ``name`` (``"print_forever"`` or ``"/ns/name"``) is in the graph."""
+        wanted = name if name.startswith("/") else f"/{name}"
+        return wait_until(lambda: wanted in self.node_names(), timeout, interval=0.05, abort=abort)
+
+    def topic_types(self) -> dict[str, list[str]]:
+        """Every topic in the graph and its type names, e.g. ``{"/chatter": ["std_msgs/msg/String"]}``."""
+        return dict(self.node.get_topic_names_and_types())
+
+    # --- probes ------------------------------------------------------------
+
+    def topic(self, topic: str, msg_type: type, qos: Any = 10) -> TopicProbe:
+        """Subscribe to ``topic`` and record every message with its arrival time and send stamp."""
+        return TopicProbe(self, topic, msg_type, qos)
+
+    def rosout(self) -> RosoutProbe:
+        """Record every ``/rosout`` log record (transient-local: earlier records are replayed)."""
+        return RosoutProbe(self)
+
+
+class TopicProbe:
+    """Messages received on one topic, with arrival time and the publisher's send stamp.
+
+    Every message is recorded with its arrival time (``time.monotonic()``
+    when the grader's callback ran, seconds) and its DDS source timestamp
+    (when the publisher wrote it: the wall clock in the publisher's process,
+    seconds). The subscription callback takes two arguments, so rclpy
+    (Jazzy) hands it the ``MessageInfo`` holding ``source_timestamp``.
+
+    Rates are computed over the send stamps with the formula of ``ros2 topic
+    hz`` (1 / mean delta, ros2topic/verb/hz.py). ``ros2 topic hz`` itself
+    uses arrival times, but on a loaded 2-core machine the grader's thread
+    may get the CPU late and receive two messages at once (CI saw a correct
+    2 Hz timer measured at 3.2 Hz on arrivals: min delta 0.000 s); the send
+    stamps judge the learner's timer, not the machine's scheduling.
+    """
+
+    def __init__(self, session: RosSession, topic: str, msg_type: type, qos: Any = 10) -> None:
+        self.topic = topic
+        self._lock = threading.Lock()
+        self._samples: list[tuple[float, float, Any]] = []
+        self._sub = session.node.create_subscription(msg_type, topic, self._on_message, qos)
+
+    def _on_message(self, msg: Any, info: Any) -> None:
+        now = time.monotonic()
+        # rclpy passes MessageInfo as a dict of rmw_message_info_t fields (nanoseconds).
+        stamp = info.get("source_timestamp", 0) * 1e-9 if isinstance(info, dict) else 0.0
+        with self._lock:
+            self._samples.append((now, stamp or time.time(), msg))
+
+    def samples(self) -> list[tuple[float, Any]]:
+        """(arrival time, message) pairs so far, oldest first."""
+        with self._lock:
+            return [(arrival, msg) for arrival, _, msg in self._samples]
+
+    def send_stamps(self, count: int | None = None) -> list[float]:
+        """The publisher's send stamps (seconds) of the first ``count`` messages (all when None)."""
+        with self._lock:
+            stamps = [stamp for _, stamp, _ in self._samples]
+        return stamps[:count] if count else stamps
+
+    def messages(self) -> list[Any]:
+        """Messages so far, oldest first."""
+        return [msg for _, msg in self.samples()]
+
+    def wait_for_count(self, count: int, timeout: float, abort: Callable[[], bool] | None = None) -> bool:
+        """Wait until ``count`` messages arrived (or ``timeout`` seconds)."""
+        return wait_until(lambda: len(self._samples) >= count, timeout, abort=abort)
+
+    def observe(self, count: int, period: float, start_timeout: float,
+                abort: Callable[[], bool] | None = None) -> float:
+        """Wait for a stream of ``count`` messages expected every ``period`` seconds; returns seconds waited.
+
+        The window is counted from the first message, not from when the
+        wait began: a node that took long to start on a loaded machine
+        still gets ``count * period`` seconds, plus :data:`LATE_DELIVERY`
+        for a sample that DDS must repair. The first message may take up to
+        ``start_timeout`` seconds. Waiting longer never changes a verdict
+        (rates use the send stamps); it only costs time while messages are
+        missing, and returns as soon as ``count`` arrived.
+        """
+        begin = time.monotonic()
+        if not wait_until(lambda: bool(self._samples), start_timeout, abort=abort):
+            return time.monotonic() - begin
+        with self._lock:
+            first = self._samples[0][0]
+        remaining = first + count * period + LATE_DELIVERY - time.monotonic()
+        self.wait_for_count(count, max(0.0, remaining), abort=abort)
+        return time.monotonic() - begin
+
+    def sent_after(self, wall_time: float) -> list[Any]:
+        """Messages the publisher sent after ``wall_time`` (``time.time()`` seconds), by their send stamps.
+
+        "After a parameter change" must be judged where the message was
+        written: a message sent before the change can arrive after it on a
+        loaded machine (CI saw the old quote "after" a change on arrival times).
+        """
+        with self._lock:
+            return [msg for _, stamp, msg in self._samples if stamp > wall_time]
+
+    def wait_sent_after(self, wall_time: float, count: int, period: float,
+                        abort: Callable[[], bool] | None = None) -> list[Any]:
+        """Wait up to ``count * period + LATE_DELIVERY`` s for ``count`` messages sent after ``wall_time``."""
+        wait_until(lambda: len(self.sent_after(wall_time)) >= count, count * period + LATE_DELIVERY, abort=abort)
+        return self.sent_after(wall_time)
+
+    def rate(self, count: int | None = None) -> RateStats | None:
+        """Rate over the send stamps of the first ``count`` messages (``ros2 topic hz``'s formula)."""
+        return RateStats.from_times(self.send_stamps(count))
+
+    def arrival_rate(self) -> RateStats | None:
+        """Rate over arrival times, exactly what ``ros2 topic hz`` would print (for diagnostics)."""
+        return RateStats.from_times([t for t, _ in self.samples()])
+
+
+class RosoutProbe(TopicProbe):
+    """Log records on ``/rosout`` (``rcl_interfaces/msg/Log``).
+
+    The subscription uses rcl's rosout QoS (reliable, transient local, depth
+    1000), so records a node logged before the probe matched are replayed.
+    """
+
+    def __init__(self, session: RosSession) -> None:
+        from rcl_interfaces.msg import Log  # noqa: PLC0415
+        from rclpy.qos import (
+            DurabilityPolicy,
+            HistoryPolicy,
+            QoSProfile,
+            ReliabilityPolicy,
+        )
+
+        qos = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1000, reliability=ReliabilityPolicy.RELIABLE,
+                         durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        super().__init__(session, "/rosout", Log, qos)
+
+    def records(self, node: str | None = None, level: int | None = None,
+                match: Callable[[str], bool] | None = None) -> list[Any]:
+        """Log records, optionally only from logger ``node``, at ``level``, whose text passes ``match``."""
+        out = []
+        for msg in self.messages():
+            if node is not None and msg.name != node:
+                continue
+            if level is not None and msg.level != level:
+                continue
+            if match is not None and not match(msg.msg):
+                continue
+            out.append(msg)
+        return out
+
+    def loggers(self) -> list[str]:
+        """Names of every logger that logged so far, sorted."""
+        return sorted({msg.name for msg in self.messages()})
+
+
+def stamp_seconds(stamp: Any) -> float:
+    """A ``builtin_interfaces/Time`` as float seconds."""
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def wait_future(future: Any, timeout: float) -> Any:
+    """Wait for an rclpy ``Future`` completed by the session's executor thread.
+
+    Returns:
+        the future's result.
+
+    Raises:
+        TimeoutError: not done within ``timeout`` seconds.
+    """
+    if not wait_until(future.done, timeout, interval=0.005):
+        future.cancel()
+        raise TimeoutError(f"no answer within {timeout:.1f} s")
+    return future.result()
+
+
+@contextlib.contextmanager
+def parameter_client(session: RosSession, node_name: str, timeout: float = 5.0) -> Iterator[Any]:
+    """An ``rclpy.parameter_client.AsyncParameterClient`` for ``node_name`` once its services are up.
+
+    Raises:
+        TimeoutError: the node's parameter services did not appear within ``timeout`` s.
+    """
+    from rclpy.parameter_client import AsyncParameterClient  # noqa: PLC0415
+
+    # AsyncParameterClient has no destroy(); its clients go with the session's node.
+    client = AsyncParameterClient(session.node, node_name)
+    if not wait_until(client.services_are_ready, timeout, interval=0.05):
+        raise TimeoutError(f"parameter services of {node_name} not available within {timeout:.1f} s")
+    yield client
+
+
+def call_service(session: RosSession, srv_type: type, name: str, request: Any,
+                 timeout: float = 5.0) -> Any:
+    """Call service ``name`` once and return the response.
+
+    Args:
+        srv_type: the generated service class (e.g. ``WhatIsThePoint``).
+        request: a ``srv_type.Request`` instance.
+        timeout: seconds for the service to appear plus seconds for the answer.
+
+    Raises:
+        TimeoutError: the service did not appear, or did not answer in time.
+    """
+    client = session.node.create_client(srv_type, name)
+    try:
+        if not client.wait_for_service(timeout_sec=timeout):
+            raise TimeoutError(f"service {name} not available within {timeout:.1f} s")
+        return wait_future(client.call_async(request), timeout)
+    finally:
+        session.node.destroy_client(client)
+
+
+class StandInServer:
+    """A service server the grader plays, recording every call (for grading clients).
+
+    Args:
+        handler: ``handler(request, response) -> response``, as an rclpy service callback.
+
+    Attributes:
+        calls: ``(time.monotonic() seconds, request)`` pairs, oldest first.
+    """
+
+    def __init__(self, session: RosSession, srv_type: type, name: str,
+                 handler: Callable[[Any, Any], Any]) -> None:
+        self._handler = handler
+        self._lock = threading.Lock()
+        self.calls: list[tuple[float, Any]] = []
+        self._session = session
+        self._service = session.node.create_service(srv_type, name, self._on_request)
+
+    def _on_request(self, request: Any, response: Any) -> Any:
+        with self._lock:
+            self.calls.append((time.monotonic(), request))
+        return self._handler(request, response)
+
+    def rate(self) -> RateStats | None:
+        """Call rate over arrival times."""
+        with self._lock:
+            return RateStats.from_times([t for t, _ in self.calls])
+
+    def close(self) -> None:
+        """Remove the service from the graph."""
+        self._session.node.destroy_service(self._service)

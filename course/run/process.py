@@ -1,0 +1,417 @@
+"""Learner processes: start with a deadline, capture output, tear down completely.
+
+Rules (shared/ROS_ENV.md, "Running and stopping nodes"):
+
+* Each learner executable runs in its own session / process group
+  (``start_new_session=True``), like pexpect's ``setsid()``, so signals reach
+  its children too.
+* Teardown escalates the way ``launch`` does: SIGINT, then SIGTERM, then
+  SIGKILL, each to the whole group.
+* A child that left the group (``setsid`` + double fork) is still found: every
+  learner process carries a per-run marker in its environment, and after
+  teardown every process still carrying it is killed (psutil reads environ).
+* stdout/stderr are drained by threads into log files with a byte cap, so a
+  node that floods its output neither blocks on a full pipe nor fills the disk.
+* Fast DDS shared-memory files of processes that died without cleaning up are
+  removed only when stale: their ``_el`` lock can be taken (ROS_ENV.md).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import fcntl
+import os
+import shutil
+import signal
+import subprocess
+import threading
+import time
+import uuid
+from pathlib import Path
+
+import psutil
+
+from course.run import sandbox
+
+#: Environment variable carrying the per-run marker (see module docstring).
+MARKER_VAR = "ROS2COURSE_RUN_MARKER"
+#: Default cap of captured output per stream, bytes.
+DEFAULT_OUTPUT_CAP = 2_000_000
+#: Default lifetime of a learner process, seconds: past it the group is killed
+#: even if the grader never got to stop it.
+DEFAULT_DEADLINE = 120.0
+_TAIL_BYTES = 64_000
+
+
+@dataclasses.dataclass
+class ExitReport:
+    """How a learner process ended.
+
+    Attributes:
+        returncode: the exit code (negative: killed by that signal); None if it could not be reaped.
+        signal_used: the last signal we had to send (``"SIGINT"``, ``"SIGTERM"``, ``"SIGKILL"``),
+            or None when it had exited on its own.
+        seconds: from the first signal (or the teardown call) to the exit, seconds.
+        traceback: the last traceback printed on stderr/stdout, or "".
+    """
+
+    returncode: int | None
+    signal_used: str | None
+    seconds: float
+    traceback: str
+
+
+class OutputDrain(threading.Thread):
+    """Copy a pipe into a log file up to ``cap`` bytes, keep a tail in memory, count the rest."""
+
+    def __init__(self, pipe, log_path: Path, cap: int) -> None:
+        super().__init__(daemon=True, name=f"drain-{log_path.name}")
+        self.pipe = pipe
+        self.log_path = log_path
+        self.cap = cap
+        self.total = 0
+        self.head = bytearray()
+        self.tail = bytearray()
+        self.lock = threading.Lock()
+
+    def run(self) -> None:
+        with open(self.log_path, "wb") as log:
+            while True:
+                try:
+                    chunk = os.read(self.pipe.fileno(), 65536)
+                except OSError:
+                    break
+                if not chunk:
+                    break
+                with self.lock:
+                    room = self.cap - self.total
+                    if room > 0:
+                        log.write(chunk[:room])
+                        log.flush()
+                        if len(self.head) < _TAIL_BYTES:
+                            self.head.extend(chunk[: _TAIL_BYTES - len(self.head)])
+                    self.total += len(chunk)
+                    self.tail.extend(chunk)
+                    del self.tail[:-_TAIL_BYTES]
+            if self.total > self.cap:
+                log.write(f"\n[ros2course: output capped at {self.cap} bytes; {self.total - self.cap} more bytes dropped]\n".encode())
+        with contextlib.suppress(OSError):
+            self.pipe.close()
+
+    def text(self) -> str:
+        """The head and tail of what was captured (joined when both fit)."""
+        with self.lock:
+            if self.total <= _TAIL_BYTES:
+                return bytes(self.tail).decode(errors="replace")
+            return (bytes(self.head).decode(errors="replace") + "\n[...]\n" + bytes(self.tail).decode(errors="replace"))
+
+
+def last_traceback(text: str) -> str:
+    """The last Python traceback (or C++ terminate message) in ``text``, or ""."""
+    for marker in ("Traceback (most recent call last):", "terminate called after throwing"):
+        index = text.rfind(marker)
+        if index >= 0:
+            return text[index:].strip()
+    return ""
+
+
+class LearnerProcess:
+    """One learner executable, started in its own process group.
+
+    Args:
+        argv: the command (``argv[0]`` an absolute path to the executable).
+        env: its complete environment (the marker is added).
+        log_dir: where ``<name>.stdout.log`` / ``<name>.stderr.log`` go.
+        name: a short label for logs and messages (e.g. the executable name).
+        output_cap: bytes kept per stream in the log file.
+        cwd: working directory (default: ``log_dir``).
+        ros_sigint: start it with SIGINT ignored at exec (as ``node &`` from a
+            shell script is). Python then installs no ``KeyboardInterrupt``
+            handler and only rclpy's own SIGINT handler reacts, which in Jazzy
+            makes ``rclpy.spin()`` raise ``ExternalShutdownException``. That is
+            the case shared/LESSONS.md requires learners to handle; with the
+            default disposition whether KeyboardInterrupt or the exception
+            wins is a race, so the verdict would not be deterministic. rclpy
+            and rclcpp install their handlers regardless, so nodes still stop.
+        deadline: seconds after start when a watchdog SIGKILLs the group and
+            the marked processes, whatever the grader is doing (None: never).
+    """
+
+    def __init__(self, argv: list[str], env: dict[str, str], log_dir: Path, name: str,
+                 output_cap: int = DEFAULT_OUTPUT_CAP, cwd: Path | None = None, ros_sigint: bool = False,
+                 deadline: float | None = DEFAULT_DEADLINE) -> None:
+        # sh's `trap '' INT` sets SIGINT to ignored and exec keeps that (POSIX); util-linux's
+        # setpriv sets the parent-death signal, so the node dies even if ros2course is
+        # SIGKILLed. Both exec into the learner's program (same PID); no preexec_fn, which is
+        # unsafe in a process with threads (the executor's).
+        wrapped = ["/bin/sh", "-c", "trap '' INT; exec \"$0\" \"$@\"", *argv] if ros_sigint else list(argv)
+        # The kernel sends the parent-death signal when the *thread* that forked the child
+        # ends (prctl(2)), so it is only safe from the main thread.
+        main_thread = threading.current_thread() is threading.main_thread()
+        self.name = name
+        self.marker = uuid.uuid4().hex
+        self.env = {**env, MARKER_VAR: self.marker}
+        # In batch grading the submission's own uid runs it (course.run.sandbox); the
+        # drop and the parent-death signal are then set by one setpriv.
+        if sandbox.current() is not None:
+            self.argv, self._popen_env = sandbox.command(wrapped, self.env, pdeathsig=main_thread)
+        else:
+            setpriv = shutil.which("setpriv") if main_thread else None
+            self.argv = [setpriv, "--pdeathsig", "KILL", *wrapped] if setpriv else wrapped
+            self._popen_env = self.env
+        self.log_dir = log_dir
+        self.output_cap = output_cap
+        self.cwd = cwd or log_dir
+        self.popen: subprocess.Popen | None = None
+        self.started_at = 0.0
+        self._drains: list[OutputDrain] = []
+        self.report: ExitReport | None = None
+        self.deadline = deadline
+        self.deadline_hit = False
+        self._watchdog: threading.Timer | None = None
+
+    @property
+    def stdout_log(self) -> Path:
+        return self.log_dir / f"{self.name}.stdout.log"
+
+    @property
+    def stderr_log(self) -> Path:
+        return self.log_dir / f"{self.name}.stderr.log"
+
+    def start(self) -> LearnerProcess:
+        """Start the process (raises OSError if the executable cannot be run)."""
+        self.log_dir.mkdir(parents=True, exist_ok=True)
+        self.started_at = time.monotonic()
+        self.popen = subprocess.Popen(  # noqa: S603 - runs the learner's own executable, by design
+            self.argv, env=self._popen_env, cwd=self.cwd, stdin=subprocess.DEVNULL,
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
+        self._drains = [OutputDrain(self.popen.stdout, self.stdout_log, self.output_cap),
+                        OutputDrain(self.popen.stderr, self.stderr_log, self.output_cap)]
+        for drain in self._drains:
+            drain.start()
+        if self.deadline is not None:
+            self._watchdog = threading.Timer(self.deadline, self._on_deadline)
+            self._watchdog.daemon = True
+            self._watchdog.start()
+        return self
+
+    def _on_deadline(self) -> None:
+        if self.popen is not None and self.popen.poll() is None:
+            self.deadline_hit = True
+            self._signal_group(signal.SIGKILL)
+            kill_marked(self.marker)
+
+    @property
+    def pid(self) -> int:
+        assert self.popen is not None
+        return self.popen.pid
+
+    def poll(self) -> int | None:
+        """The exit code if it has exited, else None."""
+        return None if self.popen is None else self.popen.poll()
+
+    def stdout(self) -> str:
+        """Captured stdout (head and tail for long output)."""
+        return self._drains[0].text() if self._drains else ""
+
+    def stderr(self) -> str:
+        """Captured stderr (head and tail for long output)."""
+        return self._drains[1].text() if self._drains else ""
+
+    def output_bytes(self) -> int:
+        """Total bytes the process wrote on stdout and stderr (including dropped ones)."""
+        return sum(d.total for d in self._drains)
+
+    def _signal_group(self, sig: int) -> None:
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.pid, sig)
+
+    def _wait(self, timeout: float) -> bool:
+        assert self.popen is not None
+        try:
+            self.popen.wait(timeout=max(timeout, 0.0))
+            return True
+        except subprocess.TimeoutExpired:
+            return False
+
+    def stop(self, sigint_timeout: float = 5.0, sigterm_timeout: float = 2.0) -> ExitReport:
+        """End the process and everything it started; idempotent.
+
+        SIGINT to the group, wait up to ``sigint_timeout`` s; SIGTERM, wait up to
+        ``sigterm_timeout`` s; then SIGKILL. Whatever the main process did, the
+        group and every process carrying this run's marker are SIGKILLed at the
+        end, and stale Fast DDS shared-memory files are removed.
+        """
+        if self.report is not None:
+            return self.report
+        if self._watchdog is not None:
+            self._watchdog.cancel()
+        if self.popen is None:
+            self.report = ExitReport(None, None, 0.0, "")
+            return self.report
+        begin = time.monotonic()
+        signal_used = None
+        if self.popen.poll() is None:
+            for sig, timeout in ((signal.SIGINT, sigint_timeout), (signal.SIGTERM, sigterm_timeout),
+                                 (signal.SIGKILL, 5.0)):
+                signal_used = sig.name
+                self._signal_group(sig)
+                if self._wait(timeout):
+                    break
+        seconds = time.monotonic() - begin
+        self._signal_group(signal.SIGKILL)  # children left in the group
+        kill_marked(self.marker)
+        for drain in self._drains:
+            drain.join(timeout=2.0)
+        text = self.stderr() + "\n" + self.stdout()
+        self.report = ExitReport(self.popen.poll(), signal_used, seconds, last_traceback(text))
+        return self.report
+
+    def __enter__(self) -> LearnerProcess:
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop(sigint_timeout=1.0, sigterm_timeout=1.0)
+        sweep_stale_fastdds_shm()
+
+
+def kill_marked(marker: str, var: str = MARKER_VAR) -> list[int]:
+    """SIGKILL every process (but this one) whose environment has ``var=marker``; returns their PIDs.
+
+    Catches learner children that escaped the process group (setsid, double fork).
+    """
+    needle = f"{var}={marker}".encode()
+    killed: list[psutil.Process] = []
+    me = os.getpid()
+    for proc in psutil.process_iter(["pid"]):
+        if proc.pid == me:
+            continue
+        try:
+            with open(f"/proc/{proc.pid}/environ", "rb") as handle:
+                if needle not in handle.read():
+                    continue
+            proc.kill()
+            killed.append(proc)
+        except (OSError, psutil.Error):
+            continue
+    # Our own children are reaped by their Popen.wait(): waiting here would reap them first
+    # and Popen would report exit code 0 for a killed process.
+    psutil.wait_procs([p for p in killed if _parent_pid(p) != me], timeout=3)
+    return [proc.pid for proc in killed]
+
+
+def _parent_pid(proc: psutil.Process) -> int | None:
+    try:
+        return proc.ppid()
+    except psutil.Error:
+        return None
+
+
+SHM_DIR = Path("/dev/shm")
+
+
+#: Seconds a Fast DDS file must have existed before a sweep may judge it stale. A
+#: participant creates a segment, then its ``_el`` lock file, then takes the lock;
+#: a file younger than this may be half-way through that and is left for a second pass.
+SHM_MIN_AGE = 1.0
+
+
+def sweep_stale_fastdds_shm(shm_dir: Path = SHM_DIR, min_age: float = SHM_MIN_AGE,
+                            wait: bool = True) -> list[str]:
+    """Remove Fast DDS shared-memory files whose owners are gone; returns the names removed.
+
+    A segment ``fastrtps_X`` has a lock file ``fastrtps_X_el`` that live users
+    hold a shared ``flock`` on; when ``flock(LOCK_EX|LOCK_NB)`` succeeds nobody
+    uses it and ``fastrtps_X``, ``fastrtps_X_el`` and ``sem.fastrtps_X_mutex``
+    go. Files in use are never touched (shared/ROS_ENV.md).
+
+    A ``fastrtps_*`` segment (or its ``sem.*_mutex``) left without any ``_el``
+    lock file (a writer re-created a port whose listener had died) is removed
+    only if no process maps it or holds it open (/proc/*/maps and /proc/*/fd).
+
+    An unused file younger than ``min_age`` seconds is not removed: another
+    participant (a check running beside this one) may be creating it and not
+    hold its lock yet. With ``wait`` (the default), when such young files were
+    seen the sweep waits ``min_age`` seconds once and sweeps again, so a node
+    killed right after it started leaves nothing behind either.
+    """
+    removed, young = _sweep_once(shm_dir, min_age)
+    if young and wait:
+        time.sleep(min_age)
+        removed += _sweep_once(shm_dir, min_age)[0]
+    return removed
+
+
+def _sweep_once(shm_dir: Path, min_age: float) -> tuple[list[str], bool]:
+    """One pass of :func:`sweep_stale_fastdds_shm`: (names removed, whether unused young files were left)."""
+    removed: list[str] = []
+    young = False
+    if not shm_dir.is_dir():
+        return removed, young
+    now = time.time()
+
+    def too_young(path: Path) -> bool:
+        nonlocal young
+        try:
+            info = path.stat()
+        except FileNotFoundError:
+            return False  # gone already: nothing to protect
+        if now - min(info.st_mtime, info.st_ctime) < min_age:
+            young = True
+            return True
+        return False
+
+    orphans = [p for p in shm_dir.glob("fastrtps_*") if not p.name.endswith("_el")
+               and not (shm_dir / f"{p.name}_el").exists()]
+    orphans += [p for p in shm_dir.glob("sem.fastrtps_*_mutex")
+                if not (shm_dir / f"{p.name[4:-len('_mutex')]}_el").exists()]
+    if orphans:
+        used = _shm_files_in_use(shm_dir)
+        for path in orphans:
+            if str(path) not in used and not too_young(path):
+                with contextlib.suppress(FileNotFoundError):
+                    path.unlink()
+                    removed.append(path.name)
+    for lock in shm_dir.glob("fastrtps_*_el"):
+        base = lock.name[: -len("_el")]
+        try:
+            fd = os.open(lock, os.O_RDWR)
+        except OSError:
+            continue
+        try:
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                continue  # in use
+            if too_young(lock) or too_young(shm_dir / base):
+                continue  # maybe not locked by its creator yet
+            for name in (base, f"sem.{base}_mutex", lock.name):
+                with contextlib.suppress(FileNotFoundError):
+                    (shm_dir / name).unlink()
+                    removed.append(name)
+        finally:
+            os.close(fd)
+    return removed, young
+
+
+def _shm_files_in_use(shm_dir: Path = SHM_DIR) -> set[str]:
+    """Paths under ``shm_dir`` that some process maps or holds open (as far as we may look)."""
+    prefix = str(shm_dir).rstrip("/") + "/"
+    used: set[str] = set()
+    for pid in os.listdir("/proc"):
+        if not pid.isdigit():
+            continue
+        with contextlib.suppress(OSError):
+            with open(f"/proc/{pid}/maps", encoding="utf-8", errors="replace") as maps:
+                for line in maps:
+                    index = line.find(prefix)
+                    if index >= 0:
+                        used.add(line[index:].strip().removesuffix(" (deleted)"))
+        with contextlib.suppress(OSError):
+            for fd in os.listdir(f"/proc/{pid}/fd"):
+                with contextlib.suppress(OSError):
+                    target = os.readlink(f"/proc/{pid}/fd/{fd}")
+                    if target.startswith(prefix):
+                        used.add(target)
+    return used

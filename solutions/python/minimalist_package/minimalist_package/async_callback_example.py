@@ -1,0 +1,45 @@
+"""Two tasks run concurrently; a callback handles each result as soon as it is ready."""
+
+import asyncio
+from functools import partial
+
+from minimalist_package.minimalist_async import unlikely_to_return
+
+
+def handle_return_callback(tag: str, future: asyncio.Future) -> None:
+    """Print the result of a finished task.
+
+    :param tag: which task this was (bound with functools.partial).
+    :param future: the finished task; asyncio passes it as the last argument.
+    """
+    if future is not None and future.done() and not future.cancelled() and future.exception() is None:
+        print(f"The result of task={tag} was {future.result()}.")
+    else:
+        print(f"Problem with task={tag}.")
+
+
+async def async_main() -> None:
+    """Start both tasks with a done-callback each, then wait until both are done."""
+    tags: list[str] = ["task1", "task2"]
+    tasks: list[asyncio.Task] = []
+    for tag in tags:
+        task = asyncio.create_task(unlikely_to_return(tag=tag))
+        task.add_done_callback(partial(handle_return_callback, tag))
+        tasks.append(task)
+
+    print("Awaiting results...")
+    # The callbacks print the results; awaiting only keeps asyncio.run() from returning early.
+    for task in tasks:
+        await task
+
+
+def main() -> None:
+    """Run the example until both tasks have returned (Ctrl+C stops it quietly)."""
+    try:
+        asyncio.run(async_main())
+    except KeyboardInterrupt:
+        pass
+
+
+if __name__ == "__main__":
+    main()
