@@ -164,9 +164,9 @@ def _grade_server(s: GradingSession, srv_type: type) -> None:
                  "no point sums to 42 (the quote text has no 'life')", fraction=passed / len(results))
 
 
-def _grade_client(s: GradingSession, srv_type: type) -> None:
+def _grade_client(s: GradingSession, srv_type: type, graph) -> None:
     path = kit.executable(s, "client_executable", PACKAGE, CLIENT_EXE)
-    rosout = s.ros.rosout()
+    rosout = graph.rosout()
     rng = random.Random()
     base = [rng.randrange(100, 900) for _ in range(3)]
 
@@ -179,8 +179,8 @@ def _grade_client(s: GradingSession, srv_type: type) -> None:
 
     # Made before the client starts, so it closes after the client's Ctrl+C (closing actions run newest first):
     # the client is stopped while the service still exists, as a learner would stop it.
-    server = ts.stand_in_server(s, srv_type, SERVICE, answer)
-    node = kit.start_node(s, "client_node_name", path, CLIENT_NODE, sigint_check="client_sigint_exit",
+    server = ts.stand_in_server(s, srv_type, SERVICE, answer, graph)
+    node = kit.start_node(s, "client_node_name", path, CLIENT_NODE, sigint_check="client_sigint_exit", graph=graph,
                           need_node=False)
 
     def waiting_records():
@@ -311,6 +311,6 @@ def grade(s: GradingSession) -> None:
         server_done = pool.submit(server_half)
         try:
             with s.part("client"):
-                _grade_client(s.in_new_graph(), srv_type)
+                _grade_client(s, srv_type, s.new_graph())
         finally:
             server_done.result()  # re-raises a grader fault of the server half

@@ -354,23 +354,14 @@ class GradingSession:
 
         For running a second instance of a learner's node at the same time as the
         first without either seeing the other (e.g. the parameters lesson's run
-        with ``-p`` overrides).
+        with ``-p`` overrides), or a lesson's second executable: a process joining
+        a graph whose participants already know each other is discovered up to
+        ~3 s later than one joining a fresh graph (Fast DDS, localhost discovery).
+        Pass it as ``graph=`` to the kit steps and :meth:`launch`.
         """
         from course.run.probes import RosSession  # noqa: PLC0415
 
         return self._stack.enter_context(RosSession())
-
-    def in_new_graph(self) -> "GraphView":
-        """This session seen through a new private graph (:meth:`new_graph`).
-
-        The view's ``ros`` is the new graph and its ``launch`` starts processes
-        in it; everything else (``record``, ``phase``, ...) is this session's.
-        For grading a lesson's second executable: a process joining a graph
-        whose participants already know each other is discovered up to ~3 s
-        later than one joining a fresh graph (measured with Fast DDS and
-        localhost discovery), so a fresh graph keeps the check short.
-        """
-        return GraphView(self, self.new_graph())
 
     def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:
         """Start a learner executable in the private domain; it is stopped at the end of the check.
@@ -413,25 +404,6 @@ class GradingSession:
             proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
         self._stack.close()
         sweep_stale_fastdds_shm()
-
-
-class GraphView:
-    """A :class:`GradingSession` whose ``ros`` (and default launch graph) is another private graph.
-
-    Made by :meth:`GradingSession.in_new_graph`; every other attribute is the
-    underlying session's, so checks recorded through the view are the session's.
-    """
-
-    def __init__(self, session: GradingSession, graph: Any) -> None:
-        self._session = session
-        self.ros = graph
-
-    def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:
-        """:meth:`GradingSession.launch` in this view's graph (unless ``graph`` is given)."""
-        return self._session.launch(path, name, args, graph=graph or self.ros)
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._session, name)
 
 
 def load_grader(name: str):

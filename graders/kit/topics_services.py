@@ -157,8 +157,10 @@ def endpoints(graph: Any, node: str | None, kind: str) -> dict[str, list[str]]:
 
 
 def wait_for_endpoint(s: GradingSession, node: str | None, kind: str, name: str, timeout: float,
-                      abort: Callable[[], bool] | None = None) -> dict[str, list[str]]:
-    """Poll :func:`endpoints` of ``node`` in ``s.ros`` until ``name`` is among them; returns the last listing.
+                      abort: Callable[[], bool] | None = None, graph: Any = None) -> dict[str, list[str]]:
+    """Poll :func:`endpoints` of ``node`` in ``graph`` (default ``s.ros``) until ``name`` is among them.
+
+    Returns the last listing.
 
     Waits at most ``timeout`` seconds (timed as phase ``start``). Discovery of
     a node's endpoints can lag behind the node itself by a few hundred
@@ -172,7 +174,7 @@ def wait_for_endpoint(s: GradingSession, node: str | None, kind: str, name: str,
 
     def done() -> bool:
         seen.clear()
-        seen.update(endpoints(s.ros, node, kind))
+        seen.update(endpoints(graph or s.ros, node, kind))
         if name in seen:
             return True
         if seen and not first_other:
@@ -228,26 +230,29 @@ def reliable_qos(depth: int = 10) -> Any:
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE)
 
 
-def listen(s: GradingSession, topic: str, msg_type: type) -> Any:
-    """A :class:`~course.run.probes.TopicProbe` on ``topic`` in ``s.ros`` with :func:`reliable_qos`.
+def listen(s: GradingSession, topic: str, msg_type: type, graph: Any = None) -> Any:
+    """A :class:`~course.run.probes.TopicProbe` on ``topic`` in ``graph`` (default ``s.ros``), :func:`reliable_qos`.
 
     Create it before the learner's publisher starts: no message is missed.
     """
-    return s.ros.topic(topic, msg_type, reliable_qos())
+    return (graph or s.ros).topic(topic, msg_type, reliable_qos())
 
 
 @contextlib.contextmanager
-def publisher(s: GradingSession, topic: str, msg_type: type) -> Iterator[Any]:
-    """The grader's own publisher on ``topic`` in ``s.ros`` (like ``ros2 topic pub``), removed on exit.
+def publisher(s: GradingSession, topic: str, msg_type: type, graph: Any = None) -> Iterator[Any]:
+    """The grader's own publisher on ``topic`` in ``graph`` (default ``s.ros``; like ``ros2 topic pub``).
+
+    Removed on exit.
 
     Yields the rclpy publisher (``publish(msg)``, ``get_subscription_count()``),
     :func:`reliable_qos`.
     """
-    pub = s.ros.node.create_publisher(msg_type, topic, reliable_qos())
+    node = (graph or s.ros).node
+    pub = node.create_publisher(msg_type, topic, reliable_qos())
     try:
         yield pub
     finally:
-        s.ros.node.destroy_publisher(pub)
+        node.destroy_publisher(pub)
 
 
 # --- text matching -------------------------------------------------------------
@@ -391,14 +396,14 @@ class DeferredServer:
 
 
 def stand_in_server(s: GradingSession, srv_type: type, name: str,
-                    handler: Callable[[int, Any, Any], Any]) -> DeferredServer:
-    """A :class:`DeferredServer` for service ``name`` in ``s.ros``, not offered yet, closed when the part ends.
+                    handler: Callable[[int, Any, Any], Any], graph: Any = None) -> DeferredServer:
+    """A :class:`DeferredServer` for ``name`` in ``graph`` (default ``s.ros``), not offered yet, closed with the part.
 
     Create it before starting the learner's client (``kit.start_node``): the
     closing actions run newest first, so the client's Ctrl+C check runs while
     the service still exists (what a learner would do), then the server goes.
     Call :meth:`DeferredServer.offer` when the service is to appear.
     """
-    server = DeferredServer(s.ros, srv_type, name, handler)
+    server = DeferredServer(graph or s.ros, srv_type, name, handler)
     s.on_close(server.close)
     return server
