@@ -93,7 +93,8 @@ def grade_node(s: GradingSession, package: str, node: str, client_library: str) 
         texts = [f"[{r.name}] {r.msg}" for r in rosout.records()[:3]]
         observed = ("no /rosout records" if not texts else "records: " + " | ".join(texts))
         if "Printed 0 times." in started.proc.stdout():
-            observed += "; 'Printed 0 times.' appeared on stdout only (print() instead of the logger?)"
+            instead = "print()" if client_library == "rclpy" else "std::cout"
+            observed += f"; 'Printed 0 times.' appeared on stdout only ({instead} instead of the logger?)"
         s.record("log_format", False, f"{observed}; {kit.process_state(started.proc)}",
                  "INFO records 'Printed N times.'")
         return

@@ -211,7 +211,8 @@ def test_an_rclcpp_node_is_graded_by_the_print_forever_checks(tmp_path):
     from course.grade.engine import grade_lesson  # noqa: PLC0415
     from course.lesson.catalog import Lesson  # noqa: PLC0415
 
-    shutil.copytree(Path(__file__).parent / "data" / "cpp_ws" / "src", tmp_path / "src")
+    package = Path(__file__).parents[1] / "solutions" / "src" / "cpp_package_with_a_node"
+    shutil.copytree(package, tmp_path / "src" / package.name)
     lesson = Lesson(id="cpp-node", title="A C++ node that prints forever", chapters=[25, 26],
                     requires=["rclcpp", "colcon", "cmake", "cxx"], packages=["cpp_package_with_a_node"],
                     instructions=textwrap.dedent("The seed's C++ print_forever_node (test lesson)."),
