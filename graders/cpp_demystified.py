@@ -23,6 +23,7 @@ import shutil
 import signal
 from pathlib import Path
 
+from graders import kit
 from graders.kit import Check, GradingSession, Unmet
 from graders.kit.programs import ProgramRun, run_program
 
@@ -114,13 +115,7 @@ def _errors(run: ProgramRun, strip: Path | None = None, limit: int = 2) -> str:
 
 def grade(s: GradingSession) -> None:
     """Check the files, build and run the learner's CMake project, then run the test harness on their functions."""
-    project = s.workspace_root / PROJECT
-    if not project.is_dir():
-        s.record("layout", False, f"there is no folder {PROJECT}/ in the workspace", f"the project folder {PROJECT}/")
-        raise Unmet(f"{PROJECT}/ does not exist")
-    missing = [str(f) for f in FILES if not (project / f).is_file()]
-    s.record("layout", not missing, "missing: " + ", ".join(missing) if missing else "all five files are there",
-             ", ".join(str(f) for f in FILES) + f" under {PROJECT}/")
+    project = kit.project_files(s, "layout", PROJECT, FILES)
     with s.part("cmake"):
         _judge_cmake(s, project)
     with s.part("harness"):

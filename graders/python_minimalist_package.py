@@ -21,6 +21,7 @@ import time
 from pathlib import Path
 
 from course.run.probes import wait_until
+from graders import kit
 from graders.kit import Check, GradingSession, Unmet
 from graders.kit.programs import ProgramRun, run_program
 
@@ -257,13 +258,7 @@ def _json_output(run: ProgramRun, what: str) -> object:
 
 def grade(s: GradingSession) -> None:
     """Look at the files, run the script by its path, exercise the class, run the learner's tests."""
-    project = s.workspace_root / PROJECT
-    if not project.is_dir():
-        s.record("layout", False, f"there is no folder {PROJECT}/ in the workspace", f"the project folder {PROJECT}/")
-        raise Unmet(f"{PROJECT}/ does not exist")
-    missing = [str(f) for f in FILES if not (project / f).is_file()]
-    s.record("layout", not missing, "missing: " + ", ".join(missing) if missing else "all four files are there",
-             f"{', '.join(str(f) for f in FILES)} under {PROJECT}/")
+    project = kit.project_files(s, "layout", PROJECT, FILES)
     env = python_env(s)
     with s.part("script"):
         _judge_script(s, project, env)

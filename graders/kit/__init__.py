@@ -24,10 +24,15 @@ from graders.kit.nodes import (
     start_node,
     wait_for_node,
 )
-from graders.kit.packages import declared_dependencies, depends, source_package
+from graders.kit.packages import (
+    declared_dependencies,
+    depends,
+    project_files,
+    source_package,
+)
 
 __all__ = [
     "RATE_TOLERANCE", "STANDARD_TOPICS", "Check", "GradingSession", "StartedNode", "Unmet", "declared_dependencies",
-    "depends", "executable", "process_state", "rate", "sigint_exit", "source_package", "start_node", "topics_seen",
+    "depends", "executable", "process_state", "project_files", "rate", "sigint_exit", "source_package", "start_node", "topics_seen",
     "wait_for_node",
 ]

@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 from course.build.colcon import find_packages
-from course.grade.engine import GradingSession
+from course.grade.engine import GradingSession, Unmet
 
 
 def source_package(s: GradingSession, name: str) -> tuple[Any, Any] | None:
@@ -35,3 +36,26 @@ def depends(s: GradingSession, check_id: str, package: str, needed: tuple[str, .
     return s.record(check_id, not missing, f"package.xml dependencies: {', '.join(sorted(deps)) or 'none'}"
                     + (f" (missing {', '.join(missing)})" if missing else ""), expected,
                     fraction=(len(needed) - len(missing)) / len(needed))
+
+
+def project_files(s: GradingSession, check_id: str, project: Path, files: tuple[Path, ...] | list[Path]) -> Path:
+    """Record ``check_id`` on whether the non-ROS project folder ``project`` holds every file in ``files``.
+
+    Args:
+        project: the folder, relative to the workspace (e.g. ``python/minimalist_package``).
+        files: paths relative to ``project``.
+
+    Returns:
+        the folder's absolute path.
+
+    Raises:
+        Unmet: the folder does not exist (nothing else can be judged).
+    """
+    folder = s.workspace_root / project
+    if not folder.is_dir():
+        s.record(check_id, False, f"there is no folder {project}/ in the workspace", f"the project folder {project}/")
+        raise Unmet(f"{project}/ does not exist")
+    missing = [str(f) for f in files if not (folder / f).is_file()]
+    s.record(check_id, not missing, "missing: " + ", ".join(missing) if missing else f"all {len(files)} files are there",
+             ", ".join(str(f) for f in files) + f" under {project}/")
+    return folder
