@@ -1,0 +1,140 @@
+"""Kit steps for lessons whose answer is a bash script of ``ros2`` commands (tutorial ch. 10, 16, 19, 21, 23, 24).
+
+The grader starts its own "mystery" nodes in the check's private graph, then
+runs the learner's script there: ``bash <script>`` with the sourced workspace,
+the check's ``ROS_DOMAIN_ID`` and localhost discovery (:meth:`GradingSession.node_env`),
+in its own process group with a deadline and capped output
+(:meth:`GradingSession.start_program`). When the script's process is stopped,
+every process carrying its run marker is killed too, so a ``ros2`` daemon that
+the script's first ``ros2 topic list`` spawned (ros2cli's ``spawn_daemon``
+detaches it with ``setsid``) does not outlive the check; the grader itself never
+uses a daemon (its probes are rclpy nodes).
+
+Typical use::
+
+    path = kit.scripts.script(s, "script", "cli/inspect_topics.sh")
+    run = kit.scripts.run_script(s, path, timeout=40.0)
+    kit.scripts.ended(s, "ends", run, "every command in it ends by itself (`--once`)")
+    kit.scripts.printed(s, "echo", run, [quote_text], "a message from /amazing_quote_8341",
+                        "ros2 topic echo --once /amazing_quote_8341")
+"""
+
+from __future__ import annotations
+
+import subprocess
+from collections.abc import Iterable
+from pathlib import Path
+
+from course.grade.engine import GradingSession, Unmet
+from graders.kit.programs import ProgramRun, interrupt_after, run_program
+
+#: Characters of a script's output quoted back in feedback.
+EXCERPT = 400
+
+
+def script(s: GradingSession, check_id: str, relative: str) -> Path:
+    """Record ``check_id``: the learner's script exists in the workspace and is valid bash (``bash -n``).
+
+    Args:
+        relative: path from the workspace root, e.g. ``"cli/inspect_topics.sh"``.
+
+    Returns:
+        The script's absolute path.
+
+    Raises:
+        Unmet: the file is missing or bash rejects its syntax (the message quotes bash's own error).
+    """
+    path = s.workspace_root / relative
+    expected = f"{relative} exists and bash accepts its syntax"
+    if not path.is_file():
+        s.record(check_id, False, f"no file {relative}", expected,
+                 hint=f"create {relative} in your workspace (the starter has one with TODOs)")
+        raise Unmet(f"{relative} is missing")
+    syntax = subprocess.run(["bash", "-n", str(path)], capture_output=True, text=True, timeout=10, check=False)
+    if syntax.returncode != 0:
+        first = (syntax.stderr.strip().splitlines() or ["syntax error"])[0].replace(str(path), relative)
+        s.record(check_id, False, f"bash rejects it: {first}", expected, hint="run `bash -n " + relative + "` and fix the line it names")
+        raise Unmet(f"{relative} is not valid bash")
+    s.record(check_id, True, f"{relative} ({len(path.read_text(errors='replace').splitlines())} lines)", expected)
+    return path
+
+
+def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=None,
+               interrupt_after_s: float | None = None, exit_timeout: float = 5.0,
+               args: Iterable[str] = ()) -> ProgramRun:
+    """Run ``bash path`` in the check's ROS graph and return what it did; it is stopped at ``timeout`` seconds.
+
+    Args:
+        path: from :func:`script`.
+        timeout: seconds the script may run before it is stopped (``timed_out``: a command in it never ended).
+        graph: the :class:`~course.run.probes.RosSession` whose domain it joins (default ``s.ros``).
+        interrupt_after_s: for scripts that run until stopped (``ros2 run``, ``ros2 launch``): press
+            Ctrl+C (SIGINT to its process group) after this many seconds, then wait ``exit_timeout``.
+        args: extra arguments after the script path.
+
+    The working directory is the workspace root; nothing of the learner's runs
+    after this returns (processes with the run's marker are killed, ``ros2``
+    daemons included).
+    """
+    env = (graph or s.ros).learner_env(s.overlay())
+    env.setdefault("ROS_HOME", str(s.log_dir / "ros_home"))
+    argv = ["bash", str(path), *args]
+    label = path.stem
+    if interrupt_after_s is not None:
+        return interrupt_after(s, argv, label, interrupt_after_s, exit_timeout=exit_timeout, env=env,
+                               cwd=s.workspace_root)
+    return run_program(s, argv, label, timeout=timeout, env=env, cwd=s.workspace_root)
+
+
+def excerpt(text: str, limit: int = EXCERPT) -> str:
+    """The last ``limit`` characters of ``text`` on one line, for an "observed" sentence ("" -> "nothing")."""
+    flat = " | ".join(line.strip() for line in text.strip().splitlines() if line.strip())
+    if not flat:
+        return "nothing"
+    return flat if len(flat) <= limit else "..." + flat[-limit:]
+
+
+def ended(s: GradingSession, check_id: str, run: ProgramRun, expected: str) -> bool:
+    """Record ``check_id``: the script ended by itself, with exit code 0, before its deadline.
+
+    A script still running at the deadline names the usual cause (a ``ros2 topic
+    echo`` or ``pub`` without ``--once``); a non-zero exit quotes its last error line.
+    """
+    if run.timed_out:
+        s.record(check_id, False, f"your script was {run.describe()}", expected,
+                 hint="a command in it never ends: `ros2 topic echo` and `ros2 topic pub` need `--once`")
+        return False
+    if run.returncode != 0:
+        last = excerpt(run.stderr or run.stdout, 200)
+        s.record(check_id, False, f"your script ended with {run.describe()}; its last output: {last}", expected,
+                 hint="run it yourself in a sourced terminal and fix the first command that fails")
+        return False
+    s.record(check_id, True, f"it ended by itself ({run.describe()})", expected)
+    return True
+
+
+def printed(s: GradingSession, check_id: str, run: ProgramRun, needles: Iterable[str], what: str,
+            command: str) -> bool:
+    """Record ``check_id``: every one of ``needles`` appears in the script's standard output.
+
+    Args:
+        needles: texts that only the real command can print (the check's random values).
+        what: what they are, for feedback ("the message on /amazing_quote_8341").
+        command: the command that prints them, quoted in the hint ("ros2 topic echo --once /amazing_quote_8341").
+    """
+    missing = [needle for needle in needles if needle not in run.stdout]
+    expected = f"your script prints {what} (`{command}` prints it)"
+    if missing:
+        s.record(check_id, False, f"your script printed no {what}: missing {', '.join(map(repr, missing))}; "
+                 f"it printed: {excerpt(run.stdout)}", expected, hint=f"`{command}` prints it")
+        return False
+    s.record(check_id, True, f"it printed {what}", expected)
+    return True
+
+
+def daemon_port(domain_id: int) -> int:
+    """The TCP port of the ``ros2`` daemon of ``domain_id`` (ros2cli ``get_daemon_port``: 11511 + domain id)."""
+    return 11511 + domain_id
+
+
+__all__ = ["EXCERPT", "daemon_port", "ended", "excerpt", "printed", "run_script", "script"]
