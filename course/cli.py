@@ -8,23 +8,28 @@ that turns errors into exit codes is :func:`_handle_errors`.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import os
 import sys
 import traceback
 from pathlib import Path
-from typing import Annotated, Any, Callable, Optional
+from typing import TYPE_CHECKING, Annotated, Any, Callable, Optional
 
 import typer
-from rich.console import Console
-from rich.text import Text
 
 from course.errors import CourseError, ExitStatus
-from course.lesson.catalog import load_catalog
-from course.lesson.progress import Workspace, find_workspace
-from course.ros import env as env_mod
 
-app = typer.Typer(name="ros2course", no_args_is_help=True, add_completion=False,
+if TYPE_CHECKING:
+    from rich.console import Console
+
+    from course.lesson.progress import Workspace
+
+# Start time (issue 13: `--help` and `list` in under 0.25 s): the catalog
+# (pydantic, yaml), the ROS environment and grading are imported inside the
+# commands that need them, never at module top.
+
+app = typer.Typer(name="ros2course", no_args_is_help=True, add_completion=False, rich_markup_mode=None,
                   help="Learn ROS 2 Jazzy by writing real nodes; ros2course builds, runs and grades them.")
 dev_app = typer.Typer(no_args_is_help=True, help="Course maintenance (for course authors and CI).")
 app.add_typer(dev_app, name="dev")
@@ -38,11 +43,15 @@ WorkspaceOpt = Annotated[Optional[Path], typer.Option(
 
 def stdout_console() -> Console:
     """Console for data (created per call, so test runners that swap sys.stdout see it)."""
+    from rich.console import Console  # noqa: PLC0415 - start time, see the imports
+
     return Console(file=sys.stdout, highlight=False, soft_wrap=False)
 
 
 def stderr_console() -> Console:
     """Console for diagnostics and progress."""
+    from rich.console import Console  # noqa: PLC0415 - start time, see the imports
+
     return Console(file=sys.stderr, highlight=False)
 
 
@@ -52,6 +61,8 @@ def _handle_errors(func: Callable[..., Any]) -> Callable[..., Any]:
         try:
             return func(*args, **kwargs)
         except CourseError as exc:
+            from rich.text import Text  # noqa: PLC0415 - start time, see the imports
+
             err = stderr_console()
             if _state["debug"]:
                 err.print(traceback.format_exc(), markup=False, highlight=False)
@@ -69,11 +80,35 @@ def _handle_errors(func: Callable[..., Any]) -> Callable[..., Any]:
 @app.callback()
 def _root(debug: Annotated[bool, typer.Option("--debug", help="Show tracebacks of errors.")] = False) -> None:
     _state["debug"] = debug
-    env_mod.activate()
+
+
+def _env():
+    """:mod:`course.ros.env`, imported on first use (start time, see the imports)."""
+    from course.ros import env  # noqa: PLC0415
+
+    return env
+
+
+def _ros() -> None:
+    """Activate the ROS 2 environment in this process (:func:`course.ros.env.activate`).
+
+    Only the commands that build, run or inspect ROS call it (check, doctor,
+    env, grade, gradescope, dev validate); list/show/next/hint never pay for it.
+    """
+    _env().activate()
 
 
 def _workspace(workspace: Path | None) -> Workspace:
+    from course.lesson.progress import find_workspace  # noqa: PLC0415 - start time, see the imports
+
     return find_workspace(explicit=workspace)
+
+
+def load_catalog():
+    """The course's lessons (:func:`course.lesson.catalog.load_catalog`), imported on first use for start time."""
+    from course.lesson.catalog import load_catalog as load  # noqa: PLC0415
+
+    return load()
 
 
 def _require_initialised(ws: Workspace) -> None:
@@ -89,6 +124,8 @@ def init(directory: Annotated[Path, typer.Argument(help="Workspace folder to cre
     """Create a workspace (DIR/src) and its progress file."""
     if directory.exists() and not directory.is_dir():
         raise CourseError(f"{directory} exists and is not a folder", "choose another name")
+    from course.lesson.progress import Workspace  # noqa: PLC0415 - start time, see the imports
+
     ws = Workspace(directory)
     created = ws.init()
     out = stdout_console()
@@ -107,7 +144,23 @@ def list_(workspace: WorkspaceOpt = None) -> None:
 
     catalog = load_catalog()
     ws = _workspace(workspace)
-    render_list(catalog.lessons, ws.load_progress(), stdout_console())
+    render_list(catalog.lessons, ws.load_progress(), stdout_console(), root=ws.root if ws.initialised else None)
+
+
+@app.command()
+@_handle_errors
+def show(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", help="Lesson id (default: current).")] = None,
+         workspace: WorkspaceOpt = None) -> None:
+    """Show a lesson's instructions again (changes no file)."""
+    from course.report.table import lesson_files, render_lesson  # noqa: PLC0415
+
+    ws = _workspace(workspace)
+    lesson = _lesson_for(lesson_id, ws)
+    out = stdout_console()
+    render_lesson(lesson, out)
+    if ws.initialised:
+        status = ws.load_progress().status(lesson.id)
+        out.print("Your files: ", lesson_files(lesson, ws.root), f"   status: {status}", sep="")
 
 
 @app.command("next")
@@ -163,49 +216,106 @@ def _lesson_for(lesson_id: str | None, ws: Workspace):
 def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", help="Lesson id (default: current).")] = None,
           workspace: WorkspaceOpt = None,
           as_json: Annotated[bool, typer.Option("--json", help="Print the result as JSON on stdout, nothing else.")] = False,
+          all_passed: Annotated[bool, typer.Option("--all", help="Re-grade every lesson you have passed, in order, "
+                                                                 "after one build, and report regressions.")] = False,
           ) -> None:
     """Build the lesson's packages, run your nodes, grade them. Exit 0 only on full marks."""
-    from course.grade.engine import grade_lesson  # noqa: PLC0415
-    from course.grade.results import Status
-    from course.report.table import render_result, result_json
+    _ros()
+    from course.report.table import render_result, result_json  # noqa: PLC0415
 
     ws = _workspace(workspace)
+    if all_passed:
+        if lesson_id:
+            raise CourseError("--all re-grades every passed lesson: give no LESSON with it",
+                              f"ros2course check {lesson_id}   or   ros2course check --all")
+        _check_all(ws, as_json)
+        return
     lesson = _lesson_for(lesson_id, ws)
     if ws.initialised:
         ws.load_progress()  # a corrupt progress file is reported before, not after, a long check
-    err = stderr_console()
-    # the sas lesson's C++ path: build SmartArmStack once, on demand (minutes; course.ros.env)
-    env_mod.ensure_components_for(ws.root, lesson.packages,
-                                  progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
-    with err.status(f"grading {lesson.id} in {ws.root} ...") if not as_json and err.is_terminal else _null():
-        result = grade_lesson(lesson, ws.root)
-    if ws.initialised:
-        progress = ws.load_progress()
-        record = progress.lesson(lesson.id)
-        record.attempts += 1
-        record.last_status = result.status.value
-        record.max_score = result.max_score
-        if record.best_score is None or result.score > record.best_score:
-            record.best_score = result.score
-        ws.save_progress(progress)
+    result = _grade(ws, lesson, quiet=as_json)
     if as_json:
         sys.stdout.write(result_json(result))
         sys.stdout.flush()
     else:
         render_result(result, stdout_console())
-    codes = {Status.PASSED: ExitStatus.OK, Status.NOT_GRADABLE: ExitStatus.NOT_GRADABLE,
-             Status.GRADER_ERROR: ExitStatus.GRADER_ERROR}
-    code = codes.get(result.status, ExitStatus.CHECK_FAILED)
+    code = _exit_status(result)
     if code:
         raise typer.Exit(int(code))
 
 
-class _null:
-    def __enter__(self) -> None:
-        return None
+def _grade(ws: Workspace, lesson, quiet: bool = False):
+    """Grade ``lesson`` in ``ws`` (building SmartArmStack first where its packages need it) and record the attempt."""
+    from course.grade.engine import grade_lesson  # noqa: PLC0415
 
-    def __exit__(self, *exc: Any) -> None:
-        return None
+    err = stderr_console()
+    # the sas lesson's C++ path: build SmartArmStack once, on demand (minutes; course.ros.env)
+    _env().ensure_components_for(ws.root, lesson.packages,
+                                 progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
+    status = err.status(f"grading {lesson.id} in {ws.root} ...") if not quiet and err.is_terminal else None
+    with status or contextlib.nullcontext():
+        result = grade_lesson(lesson, ws.root)
+    if ws.initialised:
+        ws.record_attempt(lesson.id, result.status.value, result.score, result.max_score)
+    return result
+
+
+def _exit_status(result) -> ExitStatus:
+    """The exit status of one lesson's grade: 0 only on full marks (see :class:`~course.errors.ExitStatus`)."""
+    from course.grade.results import Status  # noqa: PLC0415
+
+    codes = {Status.PASSED: ExitStatus.OK, Status.NOT_GRADABLE: ExitStatus.NOT_GRADABLE,
+             Status.GRADER_ERROR: ExitStatus.GRADER_ERROR}
+    return codes.get(result.status, ExitStatus.CHECK_FAILED)
+
+
+def _check_all(ws: Workspace, as_json: bool) -> None:
+    """``check --all``: every passed lesson re-graded after one build; exit 0 only when all still pass."""
+    import json  # noqa: PLC0415
+
+    from course.grade import regrade as regrade_mod  # noqa: PLC0415
+    from course.report.table import render_regrades  # noqa: PLC0415
+
+    _require_initialised(ws)
+    catalog = load_catalog()
+    progress = ws.load_progress()
+    lessons = regrade_mod.passed_lessons(catalog.lessons, progress)
+    if not lessons:
+        if as_json:
+            sys.stdout.write("[]\n")
+        else:
+            stdout_console().print("No lesson passed yet: nothing to re-grade. 'ros2course check' grades the current one.")
+        return
+    err = stderr_console()
+    for lesson in lessons:
+        _env().ensure_components_for(ws.root, lesson.packages,
+                                     progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
+
+    def shown(item) -> None:
+        ws.record_attempt(item.lesson.id, item.result.status.value, item.result.score, item.result.max_score)
+        if not as_json:
+            verdict = "[green]still passes[/]" if not item.regression else "[bold red]REGRESSION[/]"
+            err.print(f"{item.lesson.id}: {verdict} ({item.result.score:g}/{item.result.max_score:g})")
+
+    items = regrade_mod.regrade(lessons, ws.root, progress, on_result=shown)
+    if as_json:
+        sys.stdout.write(json.dumps([{"lesson": i.lesson.id, "before": i.before, "regression": i.regression,
+                                      **i.result.to_json()} for i in items], indent=2) + "\n")
+    else:
+        render_regrades(items, stdout_console())
+    if any(item.regression for item in items):
+        raise typer.Exit(int(ExitStatus.CHECK_FAILED))
+
+
+@app.command()
+@_handle_errors
+def watch(workspace: WorkspaceOpt = None) -> None:
+    """Re-check the current lesson whenever you save one of its files (keys: h n l c q)."""
+    from course.lesson.watch import Watcher  # noqa: PLC0415
+
+    ws = _workspace(workspace)
+    _require_initialised(ws)
+    raise typer.Exit(Watcher(ws, load_catalog(), stdout_console()).run())
 
 
 @app.command()
@@ -257,9 +367,10 @@ def doctor(fix: Annotated[bool, typer.Option("--fix", help="Repair the ROS wheel
                               ] = None,
            ) -> None:
     """Report what is installed (rclpy, RMW, colcon, cmake, C++, rclcpp, launch, ros2) and repair with --fix."""
+    _ros()
     from rich.table import Table  # noqa: PLC0415
 
-    rows = env_mod.doctor(fix=fix, sources=sources)
+    rows = _env().doctor(fix=fix, sources=sources)
     table = Table(title="ros2course doctor", title_justify="left")
     table.add_column("component")
     table.add_column("")
@@ -289,6 +400,7 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
                                                                  "about 6 min on 2 cores).")] = None,
          ) -> None:
     """The learner's ROS 2 environment: source "$(ros2course env --path)" in a terminal."""
+    _ros()
     from course.ros import underlay  # noqa: PLC0415
 
     if not (path or build):
@@ -299,7 +411,7 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
             raise CourseError(f"unknown component {name!r}", "the optional component is: sas")
         extra.append(underlay.COMPONENTS[name])
     if build:
-        install = env_mod.detect()
+        install = _env().detect()
         if install.kind == "system":
             stderr_console().print(f"a system ROS 2 {install.distro} is sourced ({install.prefix}): nothing to build")
         else:
@@ -310,7 +422,7 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
                 state = f"built in {made.stamp.get('seconds', 0):.0f} s" if built else "up to date"
                 err.print(f"{component.what}: {state}: {made.prefix}", markup=False)
     if path:
-        sys.stdout.write(f"{env_mod.write_setup_script()}\n")
+        sys.stdout.write(f"{_env().write_setup_script()}\n")
 
 
 @dev_app.command()
@@ -318,6 +430,7 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
 def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="[LESSON]...")] = None,
              as_json: Annotated[bool, typer.Option("--json", help="Print the outcomes as JSON.")] = False) -> None:
     """Grade every lesson's reference (full marks), starter (not full) and wrong solutions (named checks fail)."""
+    _ros()
     from course.grade.validate import render_outcomes, validate_course  # noqa: PLC0415
 
     outcomes = validate_course(lesson_ids or None, progress=stderr_console())
@@ -349,6 +462,7 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
                                                           help="Refuse to grade unless every protection (namespaces, unprivileged uid, process limit) is in effect.")] = False,
           ) -> None:
     """Grade a whole class: each submission isolated, in parallel, resumable; writes a gradebook."""
+    _ros()
     from course.batch.runner import render_summary, run_batch  # noqa: PLC0415
 
     err = stderr_console()
@@ -374,6 +488,7 @@ def gradescope(lesson: Annotated[Optional[list[str]], typer.Option("--lesson", "
                                                                help="Refuse to grade unless every protection is in effect.")] = False,
                ) -> None:
     """Grade one submission inside a Gradescope autograder container (writes results.json)."""
+    _ros()
     from course.batch.gradescope import run_gradescope  # noqa: PLC0415
 
     score = run_gradescope(lesson or [], submission, results, timeout=timeout, pids_limit=pids_limit,

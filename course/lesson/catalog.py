@@ -97,6 +97,19 @@ class Lesson(BaseModel):
         return self.folder / self.starter
 
     @property
+    def workspace_paths(self) -> list[str]:
+        """Where the lesson's files live in a workspace, relative to its root.
+
+        ``src/<package>`` for each ROS package, then each of ``folders``; a
+        lesson with neither names its starter's top-level entries
+        (terminal-basics: ``terminal_basics``).
+        """
+        paths = [f"src/{name}" for name in self.packages] + list(self.folders)
+        if not paths and self.starter_dir.is_dir():
+            paths = sorted(entry.name for entry in self.starter_dir.iterdir())
+        return paths
+
+    @property
     def starter_layers(self) -> list[Path]:
         """Starter folders in the order they are laid down: included lessons' first, this lesson's last."""
         return [*self.included_starters, self.starter_dir]
@@ -120,6 +133,10 @@ def format_validation_error(path: Path, error: ValidationError) -> str:
     return "; ".join(lines)
 
 
+#: libyaml's safe loader where PyYAML was built with it (10x faster: ``list`` parses every lesson), else PyYAML's.
+SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
 def load_lesson(path: Path) -> Lesson:
     """Load and validate one ``lesson.yaml``.
 
@@ -127,7 +144,7 @@ def load_lesson(path: Path) -> Lesson:
         LessonFormatError: unreadable YAML or a schema violation, naming file and field.
     """
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        data = yaml.load(path.read_text(encoding="utf-8"), Loader=SAFE_LOADER)  # noqa: S506 - a safe loader
     except OSError as exc:
         raise LessonFormatError(f"{path}: cannot be read: {exc.strerror}", "check the file exists and is readable") from exc
     except yaml.YAMLError as exc:

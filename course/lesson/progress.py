@@ -130,6 +130,21 @@ class Workspace:
             return
         atomic_write_text(self.progress_path, progress.model_dump_json(indent=2) + "\n")
 
+    def record_attempt(self, lesson_id: str, status: str, score: float, max_score: float) -> None:
+        """Count one graded attempt of ``lesson_id`` (points) and keep the best score; saves the file.
+
+        The file is re-read first, so an attempt recorded by another command
+        meanwhile (``watch`` beside a ``check``) is not lost.
+        """
+        progress = self.load_progress()
+        record = progress.lesson(lesson_id)
+        record.attempts += 1
+        record.last_status = status
+        record.max_score = max_score
+        if record.best_score is None or score > record.best_score:
+            record.best_score = score
+        self.save_progress(progress)
+
     def init(self) -> bool:
         """Create ``src/`` and the progress file; returns False if it already existed.
 

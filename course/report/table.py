@@ -7,9 +7,9 @@ Every renderer takes an injected rich ``Console`` (rich's own testing idiom:
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 from rich.console import Console, Group
-from rich.markdown import Markdown
 from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
@@ -120,22 +120,75 @@ def render_lesson(lesson: Lesson, console: Console) -> None:
     console.print(Panel(Group(Text(lesson.title, style="bold"),
                               Text(f"lesson id: {lesson.id}   seed chapter(s): {chapters}", style="dim")),
                         expand=False))
+    # rich.markdown pulls in markdown_it (~50 ms): only the commands that show instructions pay for it
+    from rich.markdown import Markdown  # noqa: PLC0415
+
     console.print(Markdown(lesson.instructions))
 
 
-def render_list(lessons: list[Lesson], progress: Progress, console: Console) -> None:
-    """Every lesson with its status and best score."""
+def render_list(lessons: list[Lesson], progress: Progress, console: Console, root: Path | None = None) -> None:
+    """Every lesson with its status, best score and where its files are in the workspace ``root``.
+
+    A path that exists is printed plain, one not made yet dim (``next`` copies
+    the starter there).
+    """
     table = Table(title="ros2course lessons", title_justify="left")
     table.add_column("#", justify="right")
-    table.add_column("lesson")
+    table.add_column("lesson", overflow="fold")  # ids are typed back: never cut them with an ellipsis
     table.add_column("title")
     table.add_column("status")
     table.add_column("best", justify="right")
+    if root is not None:
+        table.add_column("files", overflow="fold")
     styles = {"done": "green", "current": "bold cyan", "started": "yellow", "not started": "dim"}
     for index, lesson in enumerate(lessons, 1):
         status = progress.status(lesson.id)
         record = progress.lessons.get(lesson.id)
         best = (f"{_points(record.best_score)}/{_points(record.max_score)}"
                 if record and record.best_score is not None and record.max_score is not None else "-")
-        table.add_row(str(index), lesson.id, lesson.title, Text(status, styles[status]), best)
+        row = [str(index), lesson.id, lesson.title, Text(status, styles[status]), best]
+        if root is not None:
+            row.append(lesson_files(lesson, root))
+        table.add_row(*row)
     console.print(table)
+
+
+def lesson_files(lesson: Lesson, root: Path) -> Text:
+    """The lesson's workspace paths (:attr:`Lesson.workspace_paths`), dim where not made yet."""
+    text = Text()
+    for index, relative in enumerate(lesson.workspace_paths):
+        if index:
+            text.append(", ")
+        text.append(relative + ("/" if (root / relative).is_dir() else ""),
+                    style="" if (root / relative).exists() else "dim")
+    return text
+
+
+def render_regrades(items: list, console: Console) -> None:
+    """``check --all``'s summary: each passed lesson's new grade, regressions first in red.
+
+    Args:
+        items: :class:`course.grade.regrade.Regrade` objects, in course order.
+    """
+    table = Table(title="ros2course check --all", title_justify="left")
+    table.add_column("lesson")
+    table.add_column("before", justify="right")
+    table.add_column("now", justify="right")
+    table.add_column("verdict")
+    table.add_column("first failed check", overflow="fold")
+    for item in items:
+        result = item.result
+        failed = next((c for c in result.checks if not c.passed and not c.skipped), None)
+        first = (f"{failed.name}: {failed.observed}" if failed is not None
+                 else (result.message.splitlines()[0] if result.message else ""))
+        table.add_row(item.lesson.id, "-" if item.before is None else _points(item.before),
+                      f"{_points(result.score)}/{_points(result.max_score)}",
+                      Text("REGRESSION", "bold red") if item.regression else Text("still passes", "green"),
+                      first if item.regression else "")
+    console.print(table)
+    broken = [item.lesson.id for item in items if item.regression]
+    if broken:
+        console.print(Text(f"{len(broken)} of {len(items)} passed lessons fail now: {', '.join(broken)}. "
+                           f"'ros2course check {broken[0]}' shows the details.", style="red"))
+    else:
+        console.print(Text(f"All {len(items)} passed lessons still pass.", style="green"))
