@@ -12,20 +12,22 @@ workspace. Two independent parts:
   twin with the same interface that counts how each Potato is constructed.
   The harness is compiled with ``-D_GLIBCXX_ASSERTIONS``, so ``operator[]``
   past the end aborts deterministically instead of reading garbage. The binary
-  is run once per test (an abort ends only that test) and prints one line,
-  ``PASS ...`` or ``FAIL ...``.
+  is run once per test of ``tests.yaml`` (an abort ends only that test) and
+  prints one line, ``PASS ...`` or ``FAIL ...``.
 """
 
 from __future__ import annotations
 
 import os
 import shutil
-import signal
 from pathlib import Path
+
+import yaml
 
 from graders import kit
 from graders.kit import Check, GradingSession, Unmet
-from graders.kit.programs import ProgramRun, run_program
+from graders.kit import cmake as ck
+from graders.kit.programs import last_line, run_program, verdict_test
 
 PROJECT = Path("cpp") / "cpp_demystified"
 HEADER = Path("include") / "cpp_demystified" / "demystified.hpp"
@@ -36,13 +38,10 @@ DEMO = "demystified_demo"
 #: The harness sources (this grader's own data folder).
 DATA = Path(__file__).resolve().parent / "data" / "cpp_demystified"
 
-BUILD_TIMEOUT = 120.0  # seconds for each of cmake configure, cmake build and the harness's g++ call
 RUN_TIMEOUT = 10.0  # seconds for the demo and for each harness test (each takes milliseconds)
 #: Seconds of observation the contract needs (benchmarks read it): none, every program runs to its end.
 WINDOW = 0.0
 
-#: harness test argument -> the check it decides.
-TESTS = {"at": "at_throws", "try": "catches_out_of_range", "acos": "nan_check", "potato": "potato_no_copy"}
 
 CHECKS = [
     Check("layout", "cpp/cpp_demystified holds CMakeLists.txt, the two headers and the two sources", 1,
@@ -76,43 +75,6 @@ CHECKS = [
 ]
 
 
-def _tool(env: dict[str, str], *names: str) -> str:
-    """The first of ``names`` found on ``env``'s PATH.
-
-    Raises:
-        Unmet: none is installed (the lesson's ``requires`` normally catches this before grading).
-    """
-    for name in names:
-        found = shutil.which(name, path=env.get("PATH", os.defpath))
-        if found:
-            return found
-    raise Unmet(f"{' or '.join(names)} is not on PATH: install it (apt-get install cmake g++)")
-
-
-def _errors(run: ProgramRun, strip: Path | None = None, limit: int = 2) -> str:
-    """The first error lines of a build's output (compiler 'error:' or 'CMake Error'), paths made relative."""
-    text = run.stdout + "\n" + run.stderr
-    if strip is not None:
-        text = text.replace(str(strip) + os.sep, "")
-    lines = [line.strip() for line in text.splitlines()]
-    picked: list[str] = []
-    for i, line in enumerate(lines):
-        if "error:" in line or line.startswith("CMake Error"):
-            picked.append(line)
-            if line.startswith("CMake Error") and i + 2 < len(lines):  # the message is on the next lines
-                detail = lines[i + 1] or lines[i + 2]
-                if detail:
-                    picked[-1] += " " + detail
-        if len(picked) >= limit:
-            break
-    if picked:
-        return "; ".join(picked)
-    if run.timed_out:
-        return run.describe()
-    tail = [line for line in lines if line]
-    return f"exit code {run.returncode}" + (f", last output: {tail[-1]}" if tail else "")
-
-
 def grade(s: GradingSession) -> None:
     """Check the files, build and run the learner's CMake project, then run the test harness on their functions."""
     project = kit.project_files(s, "layout", PROJECT, FILES)
@@ -124,55 +86,24 @@ def grade(s: GradingSession) -> None:
 
 def _judge_cmake(s: GradingSession, project: Path) -> None:
     """Configure and build the learner's CMakeLists.txt under log_dir, then run the demo once."""
-    if not (project / "CMakeLists.txt").is_file():
-        s.record("cmake_build", False, f"there is no {PROJECT}/CMakeLists.txt", "a CMakeLists.txt that builds " + DEMO)
-        raise Unmet("there is no CMakeLists.txt")
-    cmake = _tool(s.base_env, "cmake")
-    build = s.log_dir / "cmake-build"
-    configure = run_program(s, [cmake, "-S", str(project), "-B", str(build)], "cmake_configure",
-                            timeout=BUILD_TIMEOUT, cwd=s.log_dir)
-    if configure.returncode != 0 or configure.timed_out:
-        s.record("cmake_build", False, f"cmake -S . -B build failed: {_errors(configure, project)}",
-                 f"cmake configures the project and builds {DEMO}")
-        raise Unmet("the CMake project does not configure")
-    compiled = run_program(s, [cmake, "--build", str(build), "--parallel", "2"], "cmake_build",
-                           timeout=BUILD_TIMEOUT, cwd=s.log_dir)
-    if compiled.returncode != 0 or compiled.timed_out:
-        s.record("cmake_build", False, f"cmake --build build failed: {_errors(compiled, project)}",
-                 f"it compiles and links {DEMO}")
-        raise Unmet("the CMake project does not build")
+    cmake, build = ck.tool(s.base_env, "cmake"), s.log_dir / "cmake-build"
+    expected = f"cmake configures the project and builds {DEMO}"
+    ck.step(s, "cmake_build", [cmake, "-S", str(project), "-B", str(build)], "cmake_configure",
+            shown="cmake -S . -B build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
+    ck.step(s, "cmake_build", [cmake, "--build", str(build), "--parallel", "2"], "cmake_build",
+            shown="cmake --build build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
     found = sorted(p for p in build.rglob(DEMO) if p.is_file() and os.access(p, os.X_OK))
-    if not found:
-        s.record("cmake_build", False, f"the build succeeded but made no executable named {DEMO}",
-                 f"add_executable({DEMO} ...) in CMakeLists.txt")
+    if not s.record("cmake_build", bool(found), f"configured and built {found[0].relative_to(build)}" if found
+                    else f"the build succeeded but made no executable named {DEMO} (add_executable({DEMO} ...))",
+                    expected):
         raise Unmet(f"no {DEMO} was built")
-    s.record("cmake_build", True, f"configured and built {found[0].relative_to(build)}", f"{DEMO} is built")
-
     run = run_program(s, [str(found[0])], DEMO, timeout=RUN_TIMEOUT, cwd=build)
     out = [line for line in run.stdout.splitlines() if line.strip()]
-    observed = f"./{DEMO}: {_ending(run)}"
-    if out:
-        observed += f"; it printed {len(out)} line(s), the last: {out[-1].strip()[:120]!r}"
-    problem = [line for line in run.stderr.splitlines() if line.strip()]
-    if run.returncode != 0 and problem:
-        observed += f"; stderr: {problem[-1].strip()[:160]!r}"
-    s.record("demo_runs", run.returncode == 0 and not run.timed_out, observed,
+    problem = last_line(run.stderr)[:160]
+    s.record("demo_runs", run.returncode == 0 and not run.timed_out, f"./{DEMO}: {run.ending()}"
+             + (f"; it printed {len(out)} line(s), the last: {out[-1].strip()[:120]!r}" if out else "")
+             + (f"; stderr: {problem!r}" if run.returncode != 0 and problem else ""),
              f"exit code 0 within {RUN_TIMEOUT:.0f} s")
-
-
-def _ending(run: ProgramRun) -> str:
-    """How a compiled program ended, in words (a signal named, not only its number)."""
-    if run.timed_out:
-        return f"still running after {run.seconds:.1f} s (stopped)"
-    if run.returncode is not None and run.returncode < 0:
-        try:
-            name = signal.Signals(-run.returncode).name
-        except ValueError:
-            name = f"signal {-run.returncode}"
-        meaning = {"SIGABRT": " (abort: an assertion failed or an exception nothing caught)",
-                   "SIGSEGV": " (segmentation fault: memory that is not yours was touched)"}.get(name, "")
-        return f"killed by {name}{meaning}"
-    return f"exit code {run.returncode}"
 
 
 def _scratch_copy(s: GradingSession, project: Path) -> Path:
@@ -195,49 +126,15 @@ def _judge_harness(s: GradingSession, project: Path) -> None:
     if not (project / SOURCE).is_file():
         s.record("harness_compiles", False, f"there is no {PROJECT}/{SOURCE}", f"{SOURCE} with the four functions")
         raise Unmet(f"there is no {SOURCE}")
-    gxx = _tool(s.base_env, "g++", "c++")
+    gxx = ck.tool(s.base_env, "g++", "c++")
     scratch = _scratch_copy(s, project)
     argv = [gxx, "-std=c++17", "-O0", "-D_GLIBCXX_ASSERTIONS", "-I", "include", "harness.cpp", str(SOURCE),
             "-o", "harness"]
-    compiled = run_program(s, argv, "harness_compile", timeout=BUILD_TIMEOUT, cwd=scratch)
-    if compiled.returncode != 0 or compiled.timed_out or not (scratch / "harness").is_file():
-        s.record("harness_compiles", False,
-                 f"g++ -std=c++17 harness.cpp {SOURCE} failed: {_errors(compiled, scratch)}",
-                 "your functions compile against the signatures of the lesson's demystified.hpp "
-                 "(with the course's copy of potato.hpp)")
-        raise Unmet("your code does not compile with the test harness")
-    s.record("harness_compiles", True, "compiled with the harness", "it compiles")
+    ck.step(s, "harness_compiles", argv, "harness_compile", shown=f"g++ -std=c++17 harness.cpp {SOURCE}",
+            passed="compiled with the harness", cwd=scratch, paths={str(scratch) + os.sep: ""},
+            expected="your functions compile against the signatures of the lesson's demystified.hpp "
+                     "(with the course's copy of potato.hpp)")
 
-    expected = {
-        "at_throws": "checked_element({1, 2, 3, 4}, 1) == 2, and indices 4 and 22 throw std::out_of_range",
-        "catches_out_of_range": "try_element({1, 2, 3, 4}, 2) == 3, and std::nullopt for indices 4 and 22, "
-                                "with no exception escaping",
-        "nan_check": "safe_acos(0.5) == acos(0.5), safe_acos(1.0) == 0, std::nullopt for 1.1 and -1.1",
-        "potato_no_copy": "make_potato(20.0): 1 Potato built from a double, 0 copies, 0 moves, "
-                          "1 heap allocation (std::make_shared), size() 20",
-    }
-    for test, check_id in TESTS.items():
-        run = run_program(s, [str(scratch / "harness"), test], f"harness_{test}", timeout=RUN_TIMEOUT, cwd=scratch)
-        verdicts = [line for line in run.stdout.splitlines() if line.startswith(("PASS ", "FAIL "))]
-        hint = None
-        if verdicts:
-            passed, observed = verdicts[-1].startswith("PASS "), verdicts[-1][5:]
-            if check_id == "nan_check" and "the NaN was not detected" in observed:
-                hint = ("comparing with NAN (a == NAN, a != NAN) never tells: NaN is unequal to everything, "
-                        "itself included; use std::isnan(a) from <cmath>")
-            elif (check_id == "potato_no_copy" and "0 copy(ies), 0 move(s)" in observed
-                  and "1 heap allocation" not in observed):
-                hint = ("std::shared_ptr<Potato>(new Potato(size)) allocates the Potato and the reference count "
-                        "separately; std::make_shared<Potato>(size) does both in one allocation")
-        else:
-            passed = False
-            observed = f"the test program ended before giving a verdict: {_ending(run)}"
-            stderr = [line.strip() for line in run.stderr.splitlines() if line.strip()]
-            if "__n < this->size()" in run.stderr:
-                observed += ("; libstdc++'s bounds assertion fired inside std::vector::operator[] "
-                             "(the check compiles with -D_GLIBCXX_ASSERTIONS; without it the index past "
-                             "the end would have been read silently)")
-                hint = "operator[] does not check the index: use values.at(index), which throws std::out_of_range"
-            elif stderr:
-                observed += f"; stderr: {stderr[-1][:200]!r}"
-        s.record(check_id, passed, observed, expected[check_id], hint=hint)
+    for test in yaml.safe_load((DATA / "tests.yaml").read_text(encoding="utf-8")):
+        verdict_test(s, test["check"], [str(scratch / "harness"), test["test"]], f"harness_{test['test']}",
+                     expected=test["expected"], explain=test.get("explain", []), cwd=scratch, timeout=RUN_TIMEOUT)
