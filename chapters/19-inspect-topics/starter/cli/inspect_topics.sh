@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Inspect a running system with `ros2 topic` (tutorial ch. 19).
+# Run it from the workspace root, with the workspace sourced:  bash cli/inspect_topics.sh
+# Every command must end by itself: nobody presses Ctrl+C in a script.
+
+# TODO 1: find the topic whose name contains "quote" (but is not /amazing_quote_in),
+#         keep it in a variable and print it.
+TOPIC=$(ros2 topic list)
+echo "The mystery topic is ${TOPIC}"
+
+# TODO 2: print its type and publisher count (ros2 topic info).
+
+# TODO 3: print ONE message from it (ros2 topic echo, made to stop after one).
+
+# TODO 4: publish ONE package_with_interfaces/msg/AmazingQuote with id 1994 and
+#         philosopher_name Lloyd on /amazing_quote_in (ros2 topic pub).

@@ -1,0 +1,78 @@
+"""Grader for ``inspect-topics`` (tutorial ch. 19; contract in shared/LESSONS.md).
+
+The grader's mystery node publishes one random AmazingQuote (random id, quote
+and philosopher) on a random ``/amazing_quote_NNNN`` topic, through a random
+number (1-3) of publishers, and listens on ``/amazing_quote_in``. Then it runs
+the learner's ``cli/inspect_topics.sh`` in that graph (kit.scripts) and judges
+what it printed (the random values only the real commands can show) and what
+it published (the message the grader's subscription received).
+"""
+
+from __future__ import annotations
+
+from course.run.probes import wait_until
+from graders.kit import Check, GradingSession, scripts
+from graders.kit.mystery import INBOX_TOPIC, QuotePublisher, quote_inbox
+from graders.kit.quotes import amazing_quote
+
+SCRIPT = "cli/inspect_topics.sh"
+TYPE = "package_with_interfaces/msg/AmazingQuote"
+#: Seconds the script may run: each `ros2` command takes ~1 s to start; a command
+#: without --once never ends and is stopped here (kept short: that fixture waits it out).
+TIMEOUT = 25.0
+#: The message the learner publishes (tutorial ch. 19.10).
+PUB_ID = 1994
+PUB_PHILOSOPHER = "Lloyd"
+PUB_COMMAND = (f"ros2 topic pub --once {INBOX_TOPIC} {TYPE} "
+               f"\"{{id: {PUB_ID}, quote: So you are telling me there is a chance, philosopher_name: {PUB_PHILOSOPHER}}}\"")
+
+SCRIPTED = ("script",)
+CHECKS = [
+    Check("build", "package_with_interfaces builds with colcon", 1),
+    Check("script", f"{SCRIPT} exists and is valid bash", 1),
+    Check("ends", "The script ends by itself, with exit code 0", 2,
+          "`ros2 topic echo` and `ros2 topic pub` run until Ctrl+C unless you add `--once`", needs=SCRIPTED),
+    Check("topic_found", "It prints the name of the topic with 'quote' in it", 1,
+          "ros2 topic list | grep quote", needs=SCRIPTED),
+    Check("info", "It prints the topic's type and publisher count (ros2 topic info)", 2,
+          "ros2 topic info <the topic>", needs=SCRIPTED),
+    Check("echo", "It prints one message of the topic (ros2 topic echo --once)", 2,
+          "ros2 topic echo --once <the topic>", needs=SCRIPTED),
+    Check("published", f"It publishes an AmazingQuote with id {PUB_ID} and philosopher_name {PUB_PHILOSOPHER} "
+          f"on {INBOX_TOPIC}", 2, PUB_COMMAND, needs=SCRIPTED),
+]
+
+
+def grade(s: GradingSession) -> None:
+    msg_type = amazing_quote(s)
+    path = scripts.script(s, "script", SCRIPT)
+    mystery = QuotePublisher(s, msg_type)
+    inbox = quote_inbox(s, msg_type)
+    run = scripts.run_script(s, path, timeout=TIMEOUT)
+    scripts.ended(s, "ends", run, "it ends by itself with exit code 0 (every `echo` and `pub` with `--once`)")
+    scripts.printed(s, "topic_found", run, [mystery.topic], "name of the topic with 'quote' in it",
+                    "ros2 topic list | grep quote")
+    scripts.printed(s, "info", run, [f"Type: {TYPE}", f"Publisher count: {mystery.publishers}"],
+                    f"type and publisher count of {mystery.topic}", f"ros2 topic info {mystery.topic}")
+    scripts.printed(s, "echo", run, [f"id: {mystery.quote_id}", mystery.quote, mystery.philosopher],
+                    f"message from {mystery.topic}", f"ros2 topic echo --once {mystery.topic}")
+    judge_inbox(s, inbox)
+
+
+def judge_inbox(s: GradingSession, inbox) -> None:
+    """Record ``published``: the grader's subscription on /amazing_quote_in received id 1994 from Lloyd."""
+    def wanted(msg) -> bool:
+        return msg.id == PUB_ID and msg.philosopher_name == PUB_PHILOSOPHER
+
+    wait_until(lambda: any(wanted(m) for m in inbox.messages()), 2.0)  # a reliable sample in flight
+    received = inbox.messages()
+    expected = f"the grader receives id {PUB_ID}, philosopher_name {PUB_PHILOSOPHER} on {INBOX_TOPIC}"
+    if any(wanted(m) for m in received):
+        s.record("published", True, f"the grader received {len(received)} message(s) on {INBOX_TOPIC}, "
+                 f"id {PUB_ID} from {PUB_PHILOSOPHER} among them", expected)
+    elif received:
+        seen = ", ".join(f"(id {m.id}, philosopher_name {m.philosopher_name!r})" for m in received[:3])
+        s.record("published", False, f"the grader received {seen} on {INBOX_TOPIC}", expected,
+                 hint=f"set the values in the YAML text: {PUB_COMMAND}")
+    else:
+        s.record("published", False, f"the grader received nothing on {INBOX_TOPIC}", expected)
