@@ -6,7 +6,7 @@ the installed launch file (read statically); the driver started as launch_ros
 starts its ``Node`` action with the seed's parameters (ch. 31.7): its 500 Hz
 joint states, limits in radians, how fast it follows targets, a target of the
 wrong size, Ctrl+C; the client in a graph of its own where the grader plays
-the driver (silent until enabled, 100 Hz, within 10 degrees, moving).
+the driver (silent until enabled, 100 Hz, within 10 degrees, moving, Ctrl+C).
 """
 
 from __future__ import annotations
@@ -106,6 +106,10 @@ CHECKS = [
           "after the driver is enabled", **CLIENT_PART),
     Check("client_moves", "Every joint of the targets actually moves", 1,
           "make the offset depend on the loop counter i, e.g. 10.0 * sin(i / (50.0 * pi)) degrees", **CLIENT_PART),
+    Check("client_sigint_exit", "Ctrl+C ends the client with exit code 0 and no traceback", 1,
+          "wrap main() in try: ... except (KeyboardInterrupt, ExternalShutdownException): pass, with "
+          "rclpy.try_shutdown() in finally: after Ctrl+C, spin_once and send_target_joint_positions raise "
+          "ExternalShutdownException", **CLIENT_PART),
 ]
 
 
@@ -115,7 +119,7 @@ def grade(s: GradingSession) -> None:
     client = None
     with s.part("client"):  # starts now: its start-up overlaps the driver's grading; the two never meet
         client = sas.start_client(s, "client_executable", DRIVER, CLIENT_EXECUTABLE, initial=INITIAL,
-                                  period=CLIENT_STREAM_PERIOD)
+                                  period=CLIENT_STREAM_PERIOD, sigint_check="client_sigint_exit")
     with s.part("driver"):
         kit.executable(s, "executable", PACKAGE, DRIVER_EXECUTABLE)
         driver = sas.start_driver(s, "driver_starts", DRIVER, sigint_check="sigint_exit")

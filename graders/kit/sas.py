@@ -540,26 +540,33 @@ class ClientRun:
     stand_in: StandInDriver
     initial: list[float]
     enabled_at: float = 0.0
+    sigint_check: str | None = None
 
     def ended(self) -> bool:
         """True once the process exited."""
         return self.proc.poll() is not None
 
     def close(self, s: GradingSession) -> None:
-        """Stop the stand-in, then the client (SIGINT, not judged)."""
+        """Ctrl+C the client while the stand-in still plays the driver (judged as :attr:`sigint_check` by
+        :func:`~graders.kit.nodes.sigint_exit`, as a learner stops it with the driver running), then stop the
+        stand-in; a client still running (no check given, or it survived) is stopped with SIGINT/SIGTERM.
+        """
+        if self.sigint_check is not None:
+            sigint_exit(s, self.sigint_check, self.proc)
         self.stand_in.stop()
         with s.phase("stop"):
             self.proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
 
 
 def start_client(s: GradingSession, check_id: str, driver: SasDriver, executable: str, *,
-                 initial: Sequence[float], period: float) -> ClientRun:
+                 initial: Sequence[float], period: float, sigint_check: str | None = None) -> ClientRun:
     """Record ``check_id`` (``ros2 run`` finds ``executable``, or ``executable.py`` as the seed installs it,
     LESSONS.md); start it in a graph of its own with a :class:`StandInDriver` (not publishing yet).
 
     A ``#!/usr/bin/python3`` script is run with the course's Python on a pip
     install (:func:`course.ros.env.foreign_python_prefix`). The caller stops it
-    with :meth:`ClientRun.close`.
+    with :meth:`ClientRun.close`, which judges Ctrl+C as ``sigint_check`` (exit
+    code 0, no traceback: the tutorial's rule for anything that runs until stopped).
 
     Raises:
         Unmet: not found.
@@ -578,7 +585,7 @@ def start_client(s: GradingSession, check_id: str, driver: SasDriver, executable
     interpreter = foreign_python_prefix(path)
     proc = (s.launch(Path(interpreter[0]), executable, [str(path)], graph=graph) if interpreter
             else s.launch(path, executable, graph=graph))
-    return ClientRun(proc, stand_in, list(initial))
+    return ClientRun(proc, stand_in, list(initial), sigint_check=sigint_check)
 
 
 def client_waits(s: GradingSession, check_id: str, run: ClientRun, disabled: float) -> bool:

@@ -22,6 +22,7 @@ import time
 from abc import ABC, abstractmethod
 
 import numpy as np
+from rclpy.executors import ExternalShutdownException
 from sensor_msgs.msg import JointState
 from std_msgs.msg import Float64MultiArray
 
@@ -120,10 +121,22 @@ class RobotDriverClient:
         return self._joint_positions_min, self._joint_positions_max
 
     def send_target_joint_positions(self, target_joint_positions_rad) -> None:
-        """Publish target joint positions (radians) on ``<prefix>/set/target_joint_positions``."""
+        """Publish target joint positions (radians) on ``<prefix>/set/target_joint_positions``.
+
+        Raises:
+            ExternalShutdownException: ROS was shut down (Ctrl+C) before or while publishing, the
+                way ``rclpy.spin()`` reports it in Jazzy: catch it to end your loop cleanly.
+        """
         msg = Float64MultiArray()
         msg.data = [float(x) for x in target_joint_positions_rad]
-        self._target_publisher.publish(msg)
+        try:
+            self._target_publisher.publish(msg)
+        except Exception:
+            # rclpy shuts the context down from its own thread on Ctrl+C; publishing then fails
+            # with "publisher's context is invalid". Report that as the shutdown it is.
+            if self._node.context.ok():
+                raise
+            raise ExternalShutdownException() from None
 
 
 class Statistics(enum.Enum):

@@ -12,6 +12,9 @@ def main(args=None):
     # TODO: a RobotDriverClient for 'myrobot_1'; spin until it is enabled.
     # TODO: read the joint positions once, then every 10 ms (Clock(0.01)) send a target that moves
     #       every joint by up to 10 degrees around them, e.g. 10.0 * sin(i / (50.0 * pi)) degrees.
+    # TODO: Ctrl+C must end it with exit code 0 and no traceback: catch KeyboardInterrupt and
+    #       ExternalShutdownException (spin_once and send_target_joint_positions raise it once Ctrl+C
+    #       has shut ROS down), and call rclpy.try_shutdown() in a finally: block.
     rclpy.spin(node)
 
 
