@@ -21,6 +21,7 @@ import threading
 import time
 from typing import Any
 
+from course.errors import NotGradable
 from course.grade.engine import GradingSession
 from course.run.probes import TopicProbe
 
@@ -47,6 +48,24 @@ CONFIGURABLE_NODE = "peanut_butter_falcon_quote_publisher_node"
 CONFIGURABLE_TOPIC = "truly_inspirational_quote"
 CONFIGURABLE_PERIOD = 0.25  # seconds
 CONFIGURABLE_PHILOSOPHER = "Tyler"
+
+
+#: AmazingQuote's fields (custom-interfaces lesson, tutorial ch. 17.4) the mystery nodes fill.
+QUOTE_FIELDS = {"id": "int32", "quote": "string", "philosopher_name": "string"}
+
+
+def require_quote_fields(msg_type: type) -> None:
+    """Make sure the learner's AmazingQuote has the fields the mystery nodes publish.
+
+    Raises:
+        NotGradable: a field is missing or of another type (the custom-interfaces lesson is unfinished).
+    """
+    fields = msg_type.get_fields_and_field_types()
+    wrong = [f"{name} ({kind})" for name, kind in QUOTE_FIELDS.items() if fields.get(name) != kind]
+    if wrong:
+        raise NotGradable(f"your package_with_interfaces/msg/AmazingQuote lacks {', '.join(wrong)}; it has "
+                          f"{', '.join(f'{k} {v}' for k, v in fields.items()) or 'no field'}",
+                          "finish the custom-interfaces lesson first (ros2course check custom-interfaces)")
 
 
 class MysteryNode:
@@ -106,9 +125,13 @@ class QuotePublisher(MysteryNode):
 
     Args:
         msg_type: the AmazingQuote class (``s.interface_type("package_with_interfaces", "msg", "AmazingQuote")``).
+
+    Raises:
+        NotGradable: the learner's AmazingQuote lacks a field (:func:`require_quote_fields`).
     """
 
     def __init__(self, s: GradingSession, msg_type: type, *, period: float = 0.2) -> None:
+        require_quote_fields(msg_type)
         super().__init__(s, f"quote_oracle_{_RANDOM.randrange(100, 1000)}")
         self.topic = f"/amazing_quote_{_RANDOM.randrange(1000, 10000)}"
         self.quote_id = _RANDOM.randrange(100000, 1000000)
@@ -146,9 +169,13 @@ class ConfigurableQuotePublisher(MysteryNode):
         changes: ``(time.time() seconds, name, value)`` of every parameter change
             the node accepted (recorded before the next message is sent).
         probe: a :class:`~course.run.probes.TopicProbe` of ``/truly_inspirational_quote`` (send stamps).
+
+    Raises:
+        NotGradable: the learner's AmazingQuote lacks a field (:func:`require_quote_fields`).
     """
 
     def __init__(self, s: GradingSession, msg_type: type) -> None:
+        require_quote_fields(msg_type)
         self.initial_quote = f"{_RANDOM.choice(QUOTES)}. Fortune number {_RANDOM.randrange(1000, 10000)}"
         self.changes: list[tuple[float, str, Any]] = []
         self._lock = threading.Lock()
@@ -184,5 +211,6 @@ class ConfigurableQuotePublisher(MysteryNode):
 
 __all__ = [
     "CONFIGURABLE_NODE", "CONFIGURABLE_PERIOD", "CONFIGURABLE_PHILOSOPHER", "CONFIGURABLE_TOPIC", "INBOX_TOPIC",
-    "ConfigurableQuotePublisher", "MysteryNode", "QuotePublisher", "quote_inbox",
+    "QUOTE_FIELDS", "ConfigurableQuotePublisher", "MysteryNode", "QuotePublisher", "quote_inbox",
+    "require_quote_fields",
 ]

@@ -1,0 +1,98 @@
+"""Grader for ``inspect-interfaces`` (tutorial ch. 16 and 17.10; contract in shared/LESSONS.md).
+
+No node runs: ``ros2 interface`` reads the interface files installed with
+their packages. The grader runs the learner's ``cli/inspect_interfaces.sh``
+with the sourced workspace and looks in its output for the field lines of
+the installed definitions (read from each package's ``share/`` folder, found
+through the ament index as ``ros2 interface`` finds them), and for every
+interface type the learner's own ``package_with_interfaces`` build installed.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from graders.kit import Check, GradingSession, Unmet, scripts
+
+SCRIPT = "cli/inspect_interfaces.sh"
+PACKAGE = "package_with_interfaces"
+TIMEOUT = 20.0  # seconds; each `ros2 interface` command takes well under 1 s
+
+SCRIPTED = ("script",)
+#: (check id, interface type, points) of each definition the script must show.
+SHOWN = [
+    ("string", "std_msgs/msg/String", 1),
+    ("point", "geometry_msgs/msg/Point", 1),
+    ("amazing_quote", f"{PACKAGE}/msg/AmazingQuote", 2),
+    ("what_is_the_point", f"{PACKAGE}/srv/WhatIsThePoint", 1),
+]
+CHECKS = [
+    Check("build", f"{PACKAGE} builds with colcon", 1),
+    Check("script", f"{SCRIPT} exists and is valid bash", 1),
+    Check("ends", "The script ends by itself, with exit code 0", 1,
+          "run it yourself: the first command that prints an error is the one to fix", needs=SCRIPTED),
+    Check("package", f"It lists the interface types of your {PACKAGE} (ros2 interface package)", 2,
+          f"ros2 interface package {PACKAGE}", needs=SCRIPTED),
+    *(Check(check_id, f"It shows the definition of {name} (ros2 interface show)", points,
+            f"ros2 interface show {name}", needs=SCRIPTED) for check_id, name, points in SHOWN),
+]
+
+
+def definition_file(s: GradingSession, name: str) -> Path | None:
+    """The installed ``.msg``/``.srv`` file of ``pkg/kind/Name`` (``share/pkg/kind/Name.kind``), or None.
+
+    ``ros2 interface show`` prints this file (rosidl_runtime_py ``get_interface_path``).
+    """
+    package, kind, base = name.split("/")
+    share = s.find_share(package)
+    path = share / kind / f"{base}.{kind}" if share is not None else None
+    return path if path is not None and path.is_file() else None
+
+
+def field_lines(path: Path) -> list[str]:
+    """The definition's lines without comments and blanks (what every ``ros2 interface show`` prints)."""
+    lines = (line.split("#", 1)[0].strip() for line in path.read_text(encoding="utf-8").splitlines())
+    return [line for line in lines if line]
+
+
+def package_types(s: GradingSession) -> list[str]:
+    """``package_with_interfaces/msg/AmazingQuote``... for every interface file the build installed.
+
+    Raises:
+        Unmet: the package is not in the ament index (not built and installed).
+    """
+    share = s.find_share(PACKAGE)
+    if share is None:
+        raise Unmet(f"{PACKAGE} is not installed")
+    return sorted(f"{PACKAGE}/{p.parent.name}/{p.stem}" for kind in ("msg", "srv", "action")
+                  for p in (share / kind).glob(f"*.{kind}"))
+
+
+def grade(s: GradingSession) -> None:
+    path = scripts.script(s, "script", SCRIPT)
+    run = scripts.run_script(s, path, timeout=TIMEOUT)
+    scripts.ended(s, "ends", run, "it ends by itself with exit code 0")
+    scripts.printed(s, "package", run, package_types(s), f"interface types of {PACKAGE}",
+                    f"ros2 interface package {PACKAGE}")
+    for check_id, name, _ in SHOWN:
+        found = definition_file(s, name)
+        if found is None:
+            s.record(check_id, False, f"{name} is not installed here", f"{name} is installed",
+                     hint="this is a fault of the course's ROS install, not of your script")
+            continue
+        printed_lines(s, check_id, run, field_lines(found), name)
+
+
+def printed_lines(s: GradingSession, check_id: str, run, wanted: list[str], name: str) -> None:
+    """Record ``check_id``: each of ``wanted`` is a whole, unindented line of the script's output.
+
+    Whole lines: ``show`` prints a nested message's fields indented under the
+    field that holds it (``WhatIsThePoint`` shows ``float64 x`` of its Point
+    that way), which is not the definition of that message itself.
+    """
+    lines = {line.rstrip() for line in run.stdout.splitlines()}
+    missing = [line for line in wanted if line not in lines]
+    expected = f"your script prints the definition of {name}: the lines {', '.join(wanted)}"
+    s.record(check_id, not missing, f"your script printed no definition of {name}: no line {', '.join(missing)}; "
+             f"it printed: {scripts.excerpt(run.stdout)}" if missing else f"it printed the definition of {name}",
+             expected, hint=f"`ros2 interface show {name}` prints it")

@@ -1,0 +1,120 @@
+"""Grader for ``inspect-params`` (tutorial ch. 24; contract in shared/LESSONS.md).
+
+The grader plays the launch-files lesson's node (``/peanut_butter_falcon_quote_publisher_node``,
+the parameters lesson's interface, :class:`graders.kit.mystery.ConfigurableQuotePublisher`)
+with a random initial ``quote``, runs the learner's ``cli/inspect_params.sh``
+in that graph and judges: the parameter names and the random quote in its
+output, the quote the node publishes after the script's ``ros2 param set``
+(messages sent after the node accepted the change, by send stamps), and the
+file ``cli/params_dump.yaml`` (the ``ros2 param dump`` format).
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+from graders.kit import Check, GradingSession, params, scripts
+from graders.kit.mystery import (
+    CONFIGURABLE_NODE,
+    CONFIGURABLE_PERIOD,
+    CONFIGURABLE_TOPIC,
+    ConfigurableQuotePublisher,
+)
+from graders.kit.quotes import amazing_quote, short
+
+SCRIPT = "cli/inspect_params.sh"
+DUMP = "cli/params_dump.yaml"
+NODE = f"/{CONFIGURABLE_NODE}"
+#: The value the lesson names for ``ros2 param set`` (tutorial ch. 24.5, shortened).
+NEW_QUOTE = "You got a good-guy heart. That's just who you are."
+SET_COMMAND = f"ros2 param set {NODE} quote \"{NEW_QUOTE}\""
+#: The parameters the node declares (ros2 param list prints each on a line, indented two spaces).
+NAMES = ("period", "philosopher_name", "quote", "topic_name")
+TIMEOUT = 30.0  # seconds for the whole script (each ros2 command starts in ~1 s)
+NEXT_MESSAGES = 2  # the change must show within this many messages (one may be on its way)
+
+SCRIPTED = ("script",)
+CHECKS = [
+    Check("build", "package_with_interfaces builds with colcon", 1),
+    Check("script", f"{SCRIPT} exists and is valid bash", 1),
+    Check("ends", "The script ends by itself, with exit code 0", 1,
+          "run it yourself: the first command that prints an error is the one to fix", needs=SCRIPTED),
+    Check("listed", "It prints the node's parameter names (ros2 param list)", 1, f"ros2 param list {NODE}",
+          needs=SCRIPTED),
+    Check("got", "It prints the node's current quote (ros2 param get)", 2, f"ros2 param get {NODE} quote",
+          needs=SCRIPTED),
+    Check("set", "It sets quote to the lesson's text and the next messages carry it (ros2 param set)", 3,
+          SET_COMMAND, needs=SCRIPTED),
+    Check("dump_file", f"It writes {DUMP} in the ros2 param dump format", 2,
+          f"ros2 param dump {NODE} > {DUMP}", needs=SCRIPTED),
+    Check("dump_after_set", "The dump holds the new quote (dumped after the set)", 1,
+          "dump after the set, so the file saves the node's parameters as they are now", needs=("dump_file",)),
+]
+
+
+def grade(s: GradingSession) -> None:
+    node = ConfigurableQuotePublisher(s, amazing_quote(s))
+    path = scripts.script(s, "script", SCRIPT)
+    dump = s.workspace_root / DUMP
+    started = time.time()
+    run = scripts.run_script(s, path, timeout=TIMEOUT)
+    scripts.ended(s, "ends", run, "it ends by itself with exit code 0")
+    lines = {line.rstrip() for line in run.stdout.splitlines()}
+    missing = [name for name in NAMES if f"  {name}" not in lines]
+    s.record("listed", not missing, f"its output lacks the line(s) {', '.join(missing)}; it printed: "
+             f"{scripts.excerpt(run.stdout)}" if missing else f"it printed the names {', '.join(NAMES)}",
+             f"the names of {NODE}'s parameters, one per line (`ros2 param list {NODE}`)")
+    scripts.printed(s, "got", run, [node.initial_quote], f"current quote of {NODE} ({short(node.initial_quote)})",
+                    f"ros2 param get {NODE} quote")
+    judge_set(s, node, run)
+    judge_dump(s, dump, started, node.parameters())
+
+
+def judge_set(s: GradingSession, node: ConfigurableQuotePublisher, run: Any) -> None:
+    """Record ``set``: the node accepted quote = NEW_QUOTE and the next messages (send stamps) carry it."""
+    expected = f"after your `ros2 param set`, /{CONFIGURABLE_TOPIC} carries the quote {NEW_QUOTE!r}"
+    since = node.change_time("quote", NEW_QUOTE)
+    if since is None:
+        tried = [f"{name} = {value!r}" for _, name, value in node.changes]
+        said = [line.strip() for line in (run.stdout + run.stderr).splitlines() if "parameter" in line.lower()]
+        s.record("set", False, f"the node's quote was never set to the lesson's text; changes it accepted: "
+                 f"{', '.join(tried) or 'none'}; your script said: {scripts.excerpt(' | '.join(said), 200)}",
+                 expected, hint=f"{SET_COMMAND} (a string: in double quotes, spelled exactly)")
+        return
+    with s.phase("observe"):
+        later = node.probe.wait_sent_after(since, NEXT_MESSAGES, CONFIGURABLE_PERIOD)
+    quotes = [m.quote for m in later[:NEXT_MESSAGES]]
+    passed = bool(quotes) and quotes[-1] == NEW_QUOTE
+    s.record("set", passed, f"the node accepted the new quote; the next messages said {', '.join(map(short, quotes))}"
+             if quotes else "the node accepted the new quote but sent no message after it", expected)
+
+
+def judge_dump(s: GradingSession, dump, started: float, current: dict[str, Any]) -> None:
+    """Record ``dump_file`` (written by this run, the dump format, the node's parameters) and ``dump_after_set``."""
+    import yaml  # noqa: PLC0415
+
+    expected = f"{DUMP} written by your script: '{NODE}:' -> 'ros__parameters:' -> the node's parameters"
+    if not dump.is_file() or dump.stat().st_mtime < started - 1.0:
+        state = "does not exist" if not dump.is_file() else "was not written by this run (it is older)"
+        s.record("dump_file", False, f"{DUMP} {state}", expected,
+                 hint=f"ros2 param dump prints the parameters; redirect them: ros2 param dump {NODE} > {DUMP}")
+        return
+    text = dump.read_text(encoding="utf-8", errors="replace")
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        s.record("dump_file", False, f"{DUMP} is not valid YAML ({str(exc).splitlines()[0]})", expected)
+        return
+    values, problem = (params.dump_section(data, NODE) if isinstance(data, dict) and data
+                       else (None, f"it holds {scripts.excerpt(text, 120)}"))
+    if values is None:
+        s.record("dump_file", False, f"{DUMP}: {problem}", expected)
+        return
+    wrong = [f"{name} = {values.get(name)!r} (the node has {current[name]!r})" for name in NAMES
+             if name != "quote" and values.get(name) != current[name]]
+    s.record("dump_file", not wrong and "quote" in values,
+             f"{DUMP}: " + ("; ".join(wrong) if wrong else "no quote" if "quote" not in values
+                            else f"{NODE} -> ros__parameters with {len(values)} parameters"), expected)
+    s.record("dump_after_set", values.get("quote") == NEW_QUOTE, f"the dump's quote is {short(str(values.get('quote')))}",
+             f"the dump's quote is {NEW_QUOTE!r} (the value after your set)")
