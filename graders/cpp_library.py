@@ -20,7 +20,6 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from course.ros import index as ament_index
 from course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
 from graders import kit
 from graders.kit import Check, GradingSession
@@ -89,27 +88,6 @@ CHECKS = [
 ]
 
 
-def judge_install(s: GradingSession) -> None:
-    """``library_installed``, ``header_installed``, ``exported_target``: files under the package's install prefix."""
-    prefix = ament_index.package_prefix(PACKAGE, s.overlay())
-    if prefix is None:
-        for check_id in ("library_installed", "header_installed", "exported_target"):
-            s.record(check_id, False, f"{PACKAGE} is not in the ament index of install/", f"install/{PACKAGE}/...")
-        return
-    library = prefix / "lib" / LIBRARY_FILE
-    s.record("library_installed", library.is_file(), f"{library.name} {'is' if library.is_file() else 'is not'} "
-             f"in install/{prefix.name}/lib", f"install/{prefix.name}/lib/{LIBRARY_FILE} (a shared library)")
-    headers = [h for h in (prefix / "include" / HEADER, prefix / "include" / PACKAGE / HEADER) if h.is_file()]
-    s.record("header_installed", bool(headers), f"found {headers[0].relative_to(prefix)}" if headers else
-             f"no include/{HEADER} in install/{prefix.name}", f"install/{prefix.name}/include/{HEADER}")
-    texts = {p.name: p.read_text(encoding="utf-8", errors="replace")
-             for p in sorted((prefix / "share" / PACKAGE / "cmake").glob("*.cmake"))}
-    defines = [name for name, text in texts.items() if re.search(rf"add_library\(\s*{re.escape(TARGET)}\s", text)]
-    s.record("exported_target", bool(defines), f"{defines[0]} defines {TARGET}" if defines else
-             f"no file in share/{PACKAGE}/cmake defines {TARGET} (files: {', '.join(texts) or 'none'})",
-             f"share/{PACKAGE}/cmake/export_{PACKAGE}Export.cmake defining {TARGET}")
-
-
 def judge_consumer(s: GradingSession) -> None:
     """Build the grader's consumer package against the install and compare what its program prints."""
     build = cpp.build_consumer(s, "consumer_configures", "consumer_builds", CONSUMER, PACKAGE, LIBRARY_FILE)
@@ -164,7 +142,8 @@ def grade(s: GradingSession) -> None:
     """package.xml, then the library part (install + consumer package), then the node part."""
     kit.depends(s, "depends", PACKAGE, DEPENDENCIES)
     with s.part("library"):
-        judge_install(s)
+        cpp.installed_library(s, ("library_installed", "header_installed", "exported_target"), PACKAGE,
+                              LIBRARY_FILE, HEADER, TARGET)
         judge_consumer(s)
     with s.part("node"):
         path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)

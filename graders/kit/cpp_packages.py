@@ -108,6 +108,38 @@ def build_consumer(s: GradingSession, configure_check: str, build_check: str, te
     return build
 
 
+def installed_library(s: GradingSession, check_ids: tuple[str, str, str], package: str, library_file: str,
+                      header: str, target: str) -> None:
+    """Record three checks on the install prefix of ``package`` (ament index): library file, header, export.
+
+    Args:
+        check_ids: ``(library, header, export)`` check ids.
+        library_file: e.g. ``libcpp_package_with_a_library.so``, looked for in ``<prefix>/lib``.
+        header: e.g. ``cpp_package_with_a_library/sample_class.hpp``, looked for in ``<prefix>/include`` and
+            ``<prefix>/include/<package>`` (the layout ament_cmake's Jazzy docs suggest).
+        target: the imported target a ``share/<package>/cmake/*.cmake`` file must define (``add_library(<target> ...``),
+            as ``ament_export_targets`` writes it.
+    """
+    library_id, header_id, export_id = check_ids
+    prefix = ament_index.package_prefix(package, s.overlay())
+    if prefix is None:
+        for check_id in check_ids:
+            s.record(check_id, False, f"{package} is not in the ament index of install/", f"install/{package}/...")
+        return
+    library = prefix / "lib" / library_file
+    s.record(library_id, library.is_file(), f"{library_file} {'is' if library.is_file() else 'is not'} "
+             f"in install/{prefix.name}/lib", f"install/{prefix.name}/lib/{library_file} (a shared library)")
+    headers = [h for h in (prefix / "include" / header, prefix / "include" / package / header) if h.is_file()]
+    s.record(header_id, bool(headers), f"found {headers[0].relative_to(prefix)}" if headers else
+             f"no include/{header} in install/{prefix.name}", f"install/{prefix.name}/include/{header}")
+    texts = {p.name: p.read_text(encoding="utf-8", errors="replace")
+             for p in sorted((prefix / "share" / package / "cmake").glob("*.cmake"))}
+    defines = [name for name, text in texts.items() if re.search(rf"add_library\(\s*{re.escape(target)}\s", text)]
+    s.record(export_id, bool(defines), f"{defines[0]} defines {target}" if defines else
+             f"no file in share/{package}/cmake defines {target} (files: {', '.join(texts) or 'none'})",
+             f"share/{package}/cmake/export_{package}Export.cmake defining {target}")
+
+
 def needed_libraries(s: GradingSession, executable: Path) -> list[str] | None:
     """The ``NEEDED`` entries of ``executable``'s dynamic section (``readelf -d``); None when unreadable."""
     run = run_program(s, ["readelf", "-d", str(executable)], "readelf", timeout=20.0)
@@ -148,5 +180,5 @@ def uses_library(s: GradingSession, check_id: str, executable: Path, library_fil
                     f"loads {library_file} and takes {class_prefix}* from it", expected)
 
 
-__all__ = ["BUILD_TIMEOUT", "LEAKY_VARIABLES", "build_consumer", "consumer_env", "defined_functions",
+__all__ = ["BUILD_TIMEOUT", "LEAKY_VARIABLES", "build_consumer", "consumer_env", "defined_functions", "installed_library",
            "needed_libraries", "uses_library"]
