@@ -320,6 +320,20 @@ def watch(workspace: WorkspaceOpt = None) -> None:
 
 @app.command()
 @_handle_errors
+def evidence(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", help="Lesson id (default: current).")] = None,
+             check_ids: Annotated[Optional[list[str]], typer.Argument(metavar="[CHECK]...",
+                                                                      help="Check ids (default: the failed ones).")] = None,
+             workspace: WorkspaceOpt = None) -> None:
+    """What a check saw: the recorded messages and rates of the last check of LESSON."""
+    from course.report.evidence import latest_log_dir, render  # noqa: PLC0415
+
+    ws = _workspace(workspace)
+    lesson = _lesson_for(lesson_id, ws)
+    render(latest_log_dir(ws.root, lesson.id), list(check_ids or []), stdout_console())
+
+
+@app.command()
+@_handle_errors
 def hint(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON")] = None,
          workspace: WorkspaceOpt = None) -> None:
     """Show the next hint for the lesson (each call reveals one more)."""

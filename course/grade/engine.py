@@ -31,6 +31,8 @@ from course.lesson.catalog import Lesson, content_root
 from course.ros import env as env_mod
 from course.ros import index as ament_index
 from course.run.process import LearnerProcess, sweep_stale_fastdds_shm
+from course.run.recording import CHECKS_METADATA, Recorder
+from course.run.recording import FILE_NAME as RECORDING_FILE
 
 
 @dataclasses.dataclass(frozen=True)
@@ -120,6 +122,11 @@ class GradingSession:
         self.timings: dict[str, float] = {}
         #: time series to show under the table of checks, see :meth:`add_plot`.
         self.plots: list[Plot] = []
+        #: check id -> wall-clock window (ns) its verdict judged, see :meth:`record`.
+        self.windows: dict[str, tuple[int, int]] = {}
+        self._started_ns = time.time_ns()
+        #: the check's MCAP recording, made when the grader first uses the ROS graph (:attr:`ros`).
+        self.recorder: Recorder | None = None
 
     def add_plot(self, title: str, times: Sequence[float], series: Mapping[str, Sequence[float]],
                  unit: str = "") -> None:
@@ -153,7 +160,7 @@ class GradingSession:
     # --- recording ---------------------------------------------------------
 
     def record(self, check_id: str, passed: bool, observed: str, expected: str, hint: str | None = None,
-               fraction: float | None = None) -> bool:
+               fraction: float | None = None, window: tuple[float, float] | None = None) -> bool:
         """Record the verdict on ``check_id``; returns ``passed``.
 
         Args:
@@ -161,6 +168,9 @@ class GradingSession:
             expected: what the lesson's contract asks for.
             hint: overrides the check's default hint (shown only on failure).
             fraction: partial credit in [0, 1] (default: all or nothing).
+            window: the wall-clock span the verdict judged (``time.time()`` seconds: first and last
+                send stamp of a rate); default: from the previous verdict of this thread (or the
+                start of its part) to now. Kept with the check's recording (:mod:`course.run.recording`).
 
         Raises:
             KeyError: ``check_id`` is not declared in the grader's ``CHECKS``.
@@ -174,6 +184,10 @@ class GradingSession:
         if previous is not None and previous.skipped:
             return False  # the engine marked it "not checked" (its part stopped): that verdict stays
         share = (1.0 if passed else 0.0) if fraction is None else max(0.0, min(1.0, fraction))
+        now = time.time_ns()
+        start = getattr(self._local, "mark", self._started_ns)
+        self._local.mark = now
+        self.windows[check_id] = (int(window[0] * 1e9), int(window[1] * 1e9)) if window else (start, now)
         self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
                                              passed, observed, expected,
                                              "" if passed else (hint if hint is not None else check.hint))
@@ -205,8 +219,8 @@ class GradingSession:
             if result is not None and not result.passed:
                 return (f"'{self.checks[need].name}' was not checked" if result.skipped
                         else f"'{self.checks[need].name}' failed")
-            if result is None and self.unmet_need(need) is not None:
-                return self.unmet_need(need)
+            if result is None and (blocked := self.unmet_need(need)) is not None:
+                return blocked
         return None
 
     def _not_checked(self, check_id: str, reason: str) -> None:
@@ -235,6 +249,7 @@ class GradingSession:
         node it started) run, newest first, whatever happened.
         """
         self._closers.append([])
+        self._local.mark = time.time_ns()
         try:
             yield
         except Unmet as stop:
@@ -247,7 +262,7 @@ class GradingSession:
     def _closers(self) -> list[list[Any]]:
         """The calling thread's stack of open parts' closing actions."""
         if not hasattr(self._local, "closers"):
-            self._local.closers = [[]]
+            self._local.closers = []
         return self._local.closers
 
     def stop_part(self, name: str, reason: str) -> None:
@@ -268,18 +283,23 @@ class GradingSession:
             with contextlib.suppress(Unmet):
                 action()
 
-    def skip_remaining(self, reason: str) -> None:
-        """Mark every check not recorded yet as failed because of ``reason`` (e.g. no node)."""
-        for check_id in self._order:
-            if check_id not in self.results:
-                self._not_checked(check_id, reason)
-
     def ordered_results(self) -> list[CheckResult]:
-        """Every declared check's result, in declaration order; unrecorded ones become "not checked"."""
+        """Every declared check's result, in declaration order; unrecorded ones become "not checked".
+
+        A failed verdict carries its ``evidence`` (the recording and the window it judged).
+        """
         for check_id in self._order:
             if check_id not in self.results:
                 self._not_checked(check_id, self.unmet_need(check_id) or "the grader stopped before this check")
-        return [self.results[c] for c in self._order]
+        out = []
+        for check_id in self._order:
+            result = self.results[check_id]
+            if self.recorder is not None and not result.passed and not result.skipped and check_id in self.windows:
+                start, end = self.windows[check_id]
+                result = dataclasses.replace(result, evidence={"recording": str(self.recorder.path),
+                                                               "start_ns": start, "end_ns": end})
+            out.append(result)
+        return out
 
     # --- environment and processes ----------------------------------------
 
@@ -289,8 +309,20 @@ class GradingSession:
         if self._ros is None:
             from course.run.probes import RosSession  # noqa: PLC0415 - rclpy import only when grading
 
-            self._ros = self._stack.enter_context(RosSession())
+            self._ros = self._stack.enter_context(RosSession(recorder=self._recording()))
         return self._ros
+
+    def _recording(self) -> Recorder | None:
+        """The check's recorder (``<log_dir>/observed.mcap``), created on first use.
+
+        ``ROS2COURSE_RECORD=0`` turns recording off (benchmarks/check_speed.py measures its cost).
+        """
+        if os.environ.get("ROS2COURSE_RECORD", "1") == "0":
+            return None
+        if self.recorder is None:
+            self.log_dir.mkdir(parents=True, exist_ok=True)
+            self.recorder = Recorder(self.log_dir / RECORDING_FILE)
+        return self.recorder
 
     def overlay(self) -> dict[str, str]:
         """The sourced workspace environment (``install/setup.bash``), without the domain id."""
@@ -361,7 +393,7 @@ class GradingSession:
         """
         from course.run.probes import RosSession  # noqa: PLC0415
 
-        return self._stack.enter_context(RosSession())
+        return self._stack.enter_context(RosSession(recorder=self._recording()))
 
     def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:
         """Start a learner executable in the private domain; it is stopped at the end of the check.
@@ -403,6 +435,12 @@ class GradingSession:
         for proc in self._processes:
             proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
         self._stack.close()
+        if self.recorder is not None:  # after the graphs: no callback writes any more
+            self.recorder.metadata(CHECKS_METADATA, {
+                check_id: json.dumps({"start_ns": start, "end_ns": end, "passed": self.results[check_id].passed,
+                                      "observed": self.results[check_id].observed})
+                for check_id, (start, end) in self.windows.items() if check_id in self.results})
+            self.recorder.close()
         sweep_stale_fastdds_shm()
 
 

@@ -66,19 +66,27 @@ class CheckResult:
     hint: str
     #: not judged because a check it needs failed (not part of the JSON shape).
     skipped: bool = False
+    #: where to see what a failed check judged: ``{"recording": path of the check's MCAP file,
+    #: "start_ns", "end_ns": the wall-clock window (ns since the epoch)}``; None when the check
+    #: observed no ROS graph. In the JSON of failed checks only (``ros2course evidence`` reads it).
+    evidence: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
-        """The documented JSON fields."""
+        """The documented JSON fields (plus ``evidence`` on a failed check that has a recording)."""
         out = dataclasses.asdict(self)
         out.pop("skipped")
+        if self.passed or self.skipped or not self.evidence:
+            out.pop("evidence")
         return out
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> CheckResult:
         """The inverse of :meth:`to_dict` (unknown keys ignored)."""
+        evidence = data.get("evidence")
         return cls(str(data.get("id", "")), str(data.get("name", "")), float(data.get("points", 0.0)),
                    float(data.get("max_points", 0.0)), bool(data.get("passed")), str(data.get("observed", "")),
-                   str(data.get("expected", "")), str(data.get("hint", "")))
+                   str(data.get("expected", "")), str(data.get("hint", "")),
+                   evidence=dict(evidence) if isinstance(evidence, dict) else None)
 
     def output_text(self) -> str:
         """``observed: ...`` / ``expected: ...`` / ``hint: ...`` (Gradescope output, JUnit failure text)."""

@@ -98,6 +98,11 @@ def render_result(result: LessonResult, console: Console) -> None:
         console.print(Text.assemble(("    expected: ", "dim"), check.expected))
         if check.hint:
             console.print(Text.assemble(("    hint:     ", "cyan"), check.hint))
+        if check.evidence:
+            seconds = (check.evidence["end_ns"] - check.evidence["start_ns"]) * 1e-9
+            console.print(Text.assemble(("    evidence: ", "dim"), f"ros2course evidence {result.lesson} {check.id}",
+                                        (f"  ({seconds:.1f} s judged, recorded in {check.evidence['recording']})",
+                                         "dim")))
     if skipped:
         console.print(Text(f"{len(skipped)} check(s) not run: {skipped[0].observed.removeprefix('not checked: ')}",
                            style="dim"))

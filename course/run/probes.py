@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import logging
 import os
 import random
 import statistics
@@ -115,12 +116,14 @@ class RosSession:
         domain_id: the ``ROS_DOMAIN_ID`` held for this session (1-100).
         context: the rclpy ``Context``.
         node: the hidden grader node.
+        recorder: where its probes write what they observe (:class:`~course.run.recording.Recorder`), or None.
 
     Raises:
         RuntimeError: from ``domain_coordinator`` when no domain id is free.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, recorder: Any = None) -> None:
+        self.recorder = recorder
         self.domain_id = -1
         self._stack = contextlib.ExitStack()
         self.context = None
@@ -238,6 +241,7 @@ class TopicProbe:
 
     def __init__(self, session: RosSession, topic: str, msg_type: type, qos: Any = 10) -> None:
         self.topic = topic
+        self._session = session
         self._lock = threading.Lock()
         self._samples: list[tuple[float, float, Any]] = []
         self._sub = session.node.create_subscription(msg_type, topic, self._on_message, qos)
@@ -248,6 +252,7 @@ class TopicProbe:
         stamp = info.get("source_timestamp", 0) * 1e-9 if isinstance(info, dict) else 0.0
         with self._lock:
             self._samples.append((now, stamp or time.time(), msg))
+        record(self._session, self.topic, msg, int(stamp * 1e9) if stamp else None)
 
     def samples(self) -> list[tuple[float, Any]]:
         """(arrival time, message) pairs so far, oldest first."""
@@ -353,6 +358,21 @@ class RosoutProbe(TopicProbe):
         return sorted({msg.name for msg in self.messages()})
 
 
+def record(session: RosSession, topic: str, msg: Any, publish_ns: int | None = None) -> None:
+    """Write ``msg`` into the session's recording, if it has one (never raises: a recording cannot fail a check).
+
+    Args:
+        topic: the channel name (a topic, or ``<service>/request`` / ``<service>/response``).
+        publish_ns: the publisher's send stamp in ns since the epoch (default: now).
+    """
+    if session.recorder is None:
+        return
+    try:
+        session.recorder.write(session.domain_id, topic, msg, publish_ns)
+    except Exception:  # noqa: BLE001 - the evidence is best effort, the verdict is not
+        logging.getLogger(__name__).debug("recording %s failed", topic, exc_info=True)
+
+
 def stamp_seconds(stamp: Any) -> float:
     """A ``builtin_interfaces/Time`` as float seconds."""
     return stamp.sec + stamp.nanosec * 1e-9
@@ -405,7 +425,10 @@ def call_service(session: RosSession, srv_type: type, name: str, request: Any,
     try:
         if not client.wait_for_service(timeout_sec=timeout):
             raise TimeoutError(f"service {name} not available within {timeout:.1f} s")
-        return wait_future(client.call_async(request), timeout)
+        record(session, f"{name}/request", request)
+        response = wait_future(client.call_async(request), timeout)
+        record(session, f"{name}/response", response)
+        return response
     finally:
         session.node.destroy_client(client)
 
@@ -426,12 +449,16 @@ class StandInServer:
         self._lock = threading.Lock()
         self.calls: list[tuple[float, Any]] = []
         self._session = session
+        self._name = name
         self._service = session.node.create_service(srv_type, name, self._on_request)
 
     def _on_request(self, request: Any, response: Any) -> Any:
         with self._lock:
             self.calls.append((time.monotonic(), request))
-        return self._handler(request, response)
+        record(self._session, f"{self._name}/request", request)
+        answer = self._handler(request, response)
+        record(self._session, f"{self._name}/response", answer)
+        return answer
 
     def rate(self) -> RateStats | None:
         """Call rate over arrival times."""

@@ -33,13 +33,15 @@ def rate(s: GradingSession, check_id: str, times: list[float], *, period: float,
         few_note: appended only when too few events came (e.g. the process state).
     """
     stats = RateStats.from_times(times)
+    # the span judged, for the check's recording (``ros2course evidence`` recomputes the rate from it)
+    window = (min(times), max(times)) if times else None
     expected = (f"{1.0 / period:.2f} Hz: mean period {period:.3f} s ± {RATE_TOLERANCE:.0%}, "
                 f"over at least {needed - 1} intervals")
     if stats is None or stats.samples < needed - 1:
         return s.record(check_id, False, f"only {len(times)} {noun}(s) within {waited:.1f} s"
-                        + (f" ({stats.describe()})" if stats else "") + where + few_note, expected)
+                        + (f" ({stats.describe()})" if stats else "") + where + few_note, expected, window=window)
     return s.record(check_id, stats.within(1.0 / period, RATE_TOLERANCE),
-                    f"{stats.describe()} (from {source}){where}", expected)
+                    f"{stats.describe()} (from {source}){where}", expected, window=window)
 
 
 def topics_seen(graph: Any) -> str:

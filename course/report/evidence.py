@@ -1,0 +1,189 @@
+"""``ros2course evidence``: what a check saw, read back from the check's MCAP recording.
+
+When a learner (or a student disputing a grade) asks "why 1.4 Hz?", the
+answer is in ``log/ros2course/<lesson>/latest/observed.mcap``
+(:mod:`course.run.recording`): every message the grader observed, with the
+window each verdict judged. This module decodes it with ``mcap-ros2-support``
+(the ``ros2msg`` schemas are in the file, so no ROS install or workspace is
+needed to read it) and recomputes what a verdict was computed from: a rate
+from the same stamps (/rosout records' own stamps, other topics' send stamps,
+as :func:`graders.kit.judge.rate` judges them), the records of a log check.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import shutil
+from collections import defaultdict
+from pathlib import Path
+from typing import Any
+
+from mcap.reader import make_reader
+from mcap_ros2.decoder import DecoderFactory
+from rich.console import Console
+from rich.table import Table
+from rich.text import Text
+
+from course.errors import CourseError
+from course.run.probes import RateStats
+from course.run.recording import CHECKS_METADATA, FILE_NAME
+
+#: Stamps within this many nanoseconds of a window's ends count as inside it (float seconds round-trip).
+EDGE_NS = 1_000
+#: Messages listed per topic (the rate line covers all of them).
+LISTED = 12
+
+
+@dataclasses.dataclass(frozen=True)
+class Observation:
+    """One recorded message.
+
+    Attributes:
+        topic: its channel (a topic, or ``<service>/request``/``/response``).
+        source: the publishing logger for /rosout records, else "".
+        stamp_ns: when it happened: a /rosout record's own stamp, else the DDS send stamp (ns since the epoch).
+        text: one line summarising it.
+    """
+
+    topic: str
+    source: str
+    stamp_ns: int
+    text: str
+
+
+@dataclasses.dataclass(frozen=True)
+class CheckWindow:
+    """A check's verdict and the window it judged, from the recording's metadata."""
+
+    check_id: str
+    passed: bool
+    observed: str
+    start_ns: int
+    end_ns: int
+
+
+def latest_log_dir(workspace_root: Path, lesson_id: str) -> Path:
+    """``<workspace>/log/ros2course/<lesson>/latest`` (the last check's logs).
+
+    Raises:
+        CourseError: no check of that lesson ran in this workspace, or it observed no ROS graph.
+    """
+    folder = workspace_root / "log" / "ros2course" / lesson_id / "latest"
+    if not folder.is_dir():
+        raise CourseError(f"no check of {lesson_id} has run in {workspace_root}",
+                          f"run 'ros2course check {lesson_id}' first")
+    if not (folder / FILE_NAME).is_file():
+        raise CourseError(f"the last check of {lesson_id} recorded nothing ({folder} has no {FILE_NAME})",
+                          "lessons whose grader watches no ROS graph (terminal, Python, CMake) keep only logs")
+    return folder.resolve()
+
+
+def _summary(topic: str, msg: Any) -> tuple[str, str, int | None]:
+    """(source, one-line text, own stamp ns or None) of a decoded message."""
+    if topic == "/rosout" and hasattr(msg, "msg") and hasattr(msg, "stamp"):
+        return msg.name, f"[{msg.name}] {msg.msg}", msg.stamp.sec * 1_000_000_000 + msg.stamp.nanosec
+    fields = getattr(msg, "__slots__", None) or [k for k in vars(msg) if not k.startswith("_")]
+    parts = []
+    for name in fields:
+        value = getattr(msg, name, None)
+        text = repr(value) if isinstance(value, (str, int, float, bool)) else type(value).__name__
+        if isinstance(value, (list, tuple)):
+            text = "[" + ", ".join(f"{v:.4g}" if isinstance(v, float) else repr(v) for v in value[:8]) + \
+                   (", ...]" if len(value) > 8 else "]")
+        parts.append(f"{name.lstrip('_')}={text}")
+    return "", " ".join(parts), None
+
+
+def read(path: Path) -> tuple[list[Observation], list[CheckWindow]]:
+    """Every message of the recording (oldest stamp first) and every check's window.
+
+    Raises:
+        CourseError: the file is not a readable MCAP recording.
+    """
+    observations: list[Observation] = []
+    windows: list[CheckWindow] = []
+    try:
+        with path.open("rb") as handle:
+            reader = make_reader(handle, decoder_factories=[DecoderFactory()])
+            for _, channel, message, decoded in reader.iter_decoded_messages(log_time_order=True):
+                source, text, own = _summary(channel.topic, decoded)
+                observations.append(Observation(channel.topic, source, own or message.publish_time, text))
+            for record in reader.iter_metadata():
+                if record.name != CHECKS_METADATA:
+                    continue
+                for check_id, value in record.metadata.items():
+                    data = json.loads(value)
+                    windows.append(CheckWindow(check_id, bool(data["passed"]), str(data.get("observed", "")),
+                                               int(data["start_ns"]), int(data["end_ns"])))
+    except Exception as exc:  # noqa: BLE001 - mcap and its decoder raise their own error classes
+        raise CourseError(f"{path}: not a readable recording ({type(exc).__name__}: {exc})",
+                          "run the check again; a check stopped by force may leave the file unfinished") from exc
+    observations.sort(key=lambda o: o.stamp_ns)
+    return observations, windows
+
+
+def within(observations: list[Observation], window: CheckWindow) -> list[Observation]:
+    """The observations whose stamp lies in ``window`` (ends included, :data:`EDGE_NS` of slack)."""
+    return [o for o in observations if window.start_ns - EDGE_NS <= o.stamp_ns <= window.end_ns + EDGE_NS]
+
+
+def groups(observations: list[Observation]) -> dict[tuple[str, str], list[Observation]]:
+    """Observations per (topic, source): one stream per publisher logger on /rosout, one per topic elsewhere."""
+    out: dict[tuple[str, str], list[Observation]] = defaultdict(list)
+    for item in observations:
+        out[(item.topic, item.source)].append(item)
+    return dict(out)
+
+
+def stream_rate(items: list[Observation]) -> RateStats | None:
+    """The rate of a stream as the grader computes it (1 / mean interval of the stamps, seconds)."""
+    return RateStats.from_times([item.stamp_ns * 1e-9 for item in items])
+
+
+def render(folder: Path, check_ids: list[str], console: Console) -> list[str]:
+    """Print, for each check (default: the failed ones, else all), what the recording holds in its window.
+
+    Returns:
+        The ids shown.
+
+    Raises:
+        CourseError: unknown check id, or an unreadable recording.
+    """
+    path = folder / FILE_NAME
+    observations, windows = read(path)
+    by_id = {w.check_id: w for w in windows}
+    unknown = [c for c in check_ids if c not in by_id]
+    if unknown:
+        raise CourseError(f"no recorded window for check {unknown[0]!r} in {path}",
+                          f"checks with a window: {', '.join(by_id) or 'none'}")
+    chosen = [by_id[c] for c in check_ids] or [w for w in windows if not w.passed] or windows
+    origin = min((o.stamp_ns for o in observations), default=0)
+    console.print(Text(f"recording: {path} ({len(observations)} messages)", style="bold"))
+    for window in chosen:
+        seen = within(observations, window)
+        verdict = Text("passed", "green") if window.passed else Text("failed", "red")
+        console.print(Text.assemble("\n", (window.check_id, "bold"), ": ", verdict,
+                                    f" · window {(window.start_ns - origin) * 1e-9:+.3f} s to "
+                                    f"{(window.end_ns - origin) * 1e-9:+.3f} s · {len(seen)} message(s)"))
+        console.print(Text(f"observed: {window.observed}", style="dim"))
+        for (topic, source), items in groups(seen).items():
+            stats = stream_rate(items)
+            console.print(Text(f"{topic}" + (f" from {source}" if source else "") +
+                               (f": {stats.describe()}" if stats else ""), style="cyan"))
+            table = Table(show_edge=False)
+            table.add_column("t (s)", justify="right")
+            table.add_column("interval (s)", justify="right")
+            table.add_column("message", overflow="fold")
+            previous = None
+            for item in items[:LISTED]:
+                interval = "" if previous is None else f"{(item.stamp_ns - previous) * 1e-9:.3f}"
+                table.add_row(f"{(item.stamp_ns - origin) * 1e-9:.3f}", interval, Text(item.text))
+                previous = item.stamp_ns
+            if len(items) > LISTED:
+                table.add_row("...", "", f"{len(items) - LISTED} more")
+            console.print(table)
+    viewer = shutil.which("foxglove-studio") or shutil.which("foxglove")
+    console.print(Text(f"\nThe whole recording opens in Foxglove{f' ({viewer} {path})' if viewer else ''} "
+                       "and with `ros2 bag info` where rosbag2's MCAP plugin is installed.", style="dim"))
+    return [w.check_id for w in chosen]
