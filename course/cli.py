@@ -254,7 +254,8 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
                                  progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
     status = err.status(f"grading {lesson.id} in {ws.root} ...") if not quiet and err.is_terminal else None
     with status or contextlib.nullcontext():
-        result = grade_lesson(lesson, ws.root)
+        progress = (lambda line: status.update(f"{lesson.id}: {line}")) if status is not None else None
+        result = grade_lesson(lesson, ws.root, progress=progress)
     if ws.initialised:
         ws.record_attempt(lesson.id, result.status.value, result.score, result.max_score)
     return result
@@ -431,8 +432,14 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
         else:
             err = stderr_console()
             for component in (underlay.JAZZY_COMPONENT, *extra):
-                made, built = underlay.build(sources, force=rebuild, component=component,
-                                             progress=lambda line: err.print(line, markup=False))
+                # a terminal gets a live line of the packages being built; logs and CI get the steps only
+                status = err.status(f"{component.what} ...") if err.is_terminal else None
+                with status or contextlib.nullcontext():
+                    made, built = underlay.build(
+                        sources, force=rebuild, component=component,
+                        progress=lambda line: err.print(line, markup=False),
+                        packages=(lambda line, st=status, what=component.what: st.update(f"{what}: {line}"))
+                        if status is not None else None)
                 state = f"built in {made.stamp.get('seconds', 0):.0f} s" if built else "up to date"
                 err.print(f"{component.what}: {state}: {made.prefix}", markup=False)
     if path:

@@ -185,3 +185,30 @@ def test_ament_index_lookups_match_ament_index_python_without_touching_os_enviro
     assert index.package_share("rclpy", env) == index.package_prefix("rclpy", env) / "share" / "rclpy"
     assert index.package_prefix("no_such_package_xyz", env) is None
     assert dict(os.environ) == before
+
+
+def test_build_progress_follows_colcons_start_and_finish_lines(tmp_path):
+    """The progress display hears each package colcon starts and finishes, in order, from the log."""
+    import time  # noqa: PLC0415
+
+    from course.build.colcon import BuildProgress  # noqa: PLC0415
+
+    log = tmp_path / "build.log"
+    log.write_text("$ colcon build\n", encoding="utf-8")
+    heard: list[str] = []
+    follower = BuildProgress(log, heard.append, total=2)
+    follower.start()
+    with log.open("a", encoding="utf-8") as out:
+        for line in ("Starting >>> package_with_interfaces\n", "--- stderr: package_with_interfaces\n",
+                     "Finished <<< package_with_interfaces [4.21s]\n", "Starting >>> python_package_that_uses_the_messages\n",
+                     "Failed   <<< python_package_that_uses_the_messages [1.02s, exited with code 1]\n"):
+            out.write(line)
+            out.flush()
+            time.sleep(0.05)
+    deadline = time.monotonic() + 10
+    while len(heard) < 4 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    follower.stop()
+    assert heard == ["building package_with_interfaces (0 of 2 done)", "building ... (1 of 2 done)",
+                     "building python_package_that_uses_the_messages (1 of 2 done)", "building ... (2 of 2 done)"]
+    assert not follower.is_alive()

@@ -14,6 +14,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import hashlib
 import json
@@ -21,7 +22,9 @@ import os
 import re
 import subprocess
 import sys
+import threading
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 from course.errors import NotGradable
@@ -130,8 +133,59 @@ def build_log_excerpt(text: str, limit: int = 25) -> str:
     return "\n".join(lines[i] for i in picked[-limit:])
 
 
+class BuildProgress(threading.Thread):
+    """Follows colcon's output in the build log and reports each package it starts and finishes.
+
+    colcon's console_start_end event handler prints ``Starting >>> pkg`` and
+    ``Finished <<< pkg [1.2s]`` (``Failed <<<``, ``Aborted <<<``) lines; each
+    becomes a call ``report("building pkg (1 of 3 done)")`` for a progress display.
+
+    Args:
+        log_path: the build log being written.
+        report: called from this thread with one short line.
+        total: packages to build (for the "n of total" count; None: unknown).
+
+    It reads from the log's size at construction, so an earlier pass in the same log is not reported again.
+    """
+
+    PATTERN = re.compile(r"^(Starting >>>|Finished <<<|Failed\s+<<<|Aborted\s+<<<)\s+(\S+)")
+
+    def __init__(self, log_path: Path, report: Callable[[str], None], total: int | None) -> None:
+        super().__init__(daemon=True, name="ros2course-build-progress")
+        self.log_path, self.report, self.total = log_path, report, total
+        self._offset = log_path.stat().st_size if log_path.is_file() else 0
+        self._stop_event = threading.Event()
+
+    def run(self) -> None:
+        done, building = 0, []
+        with contextlib.suppress(OSError), open(self.log_path, encoding="utf-8", errors="replace") as log:
+            log.seek(self._offset)
+            while True:
+                line = log.readline()
+                if not line:
+                    if self._stop_event.wait(0.2):
+                        return
+                    continue
+                match = self.PATTERN.match(line)
+                if match is None:
+                    continue
+                verb, package = match.groups()
+                if verb.startswith("Starting"):
+                    building.append(package)
+                else:
+                    done += 1
+                    building = [p for p in building if p != package]
+                count = f"{done} of {self.total} done" if self.total else f"{done} done"
+                self.report(f"building {', '.join(building) or '...'} ({count})")
+
+    def stop(self) -> None:
+        """Stop following (the thread ends within 0.2 s)."""
+        self._stop_event.set()
+        self.join(timeout=1.0)
+
+
 def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str], log_path: Path,
-                   timeout: float = BUILD_TIMEOUT) -> BuildResult:
+                   timeout: float = BUILD_TIMEOUT, progress: Callable[[str], None] | None = None) -> BuildResult:
     """Build ``packages`` (and their workspace dependencies) with colcon, unless unchanged.
 
     Args:
@@ -140,6 +194,8 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
         env: environment for colcon (ROS install activated).
         log_path: file receiving colcon's output.
         timeout: seconds before the build is stopped and reported as failed.
+        progress: called with a short line as colcon starts and finishes each package
+            (:class:`BuildProgress`); None for no progress display (``--json``, batch grading).
 
     Raises:
         NotGradable: a required package is not in ``src/`` (names the ones that are).
@@ -164,6 +220,9 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
     with open(log_path, "wb") as log:
         log.write(f"$ {' '.join(command)}\n".encode())
         log.flush()
+        follower = BuildProgress(log_path, progress, len(closure)) if progress is not None else None
+        if follower is not None:
+            follower.start()
         try:
             # colcon runs the submission's setup.py and CMake code: as the submission (course.run.sandbox)
             proc = sandbox.run(command, cwd=workspace_root, env=env, stdout=log, stderr=subprocess.STDOUT,
@@ -172,6 +231,9 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
         except subprocess.TimeoutExpired:
             ok = False
             log.write(f"\nros2course: build stopped after {timeout:.0f} s (error: timeout)\n".encode())
+        finally:
+            if follower is not None:
+                follower.stop()
     text = log_path.read_text(encoding="utf-8", errors="replace")
     if ok:
         known.update(prints)

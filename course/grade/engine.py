@@ -477,7 +477,8 @@ def new_log_dir(workspace_root: Path, lesson_id: str) -> Path:
 
 
 def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = None,
-                 underlays: tuple[Path, ...] | list[Path] = (), trusted_interfaces: Path | None = None) -> LessonResult:
+                 underlays: tuple[Path, ...] | list[Path] = (), trusted_interfaces: Path | None = None,
+                 progress: Any = None) -> LessonResult:
     """Build the lesson's packages in ``workspace_root``, run its grader, return the result.
 
     ``underlays`` are built workspaces sourced before building and running the
@@ -486,6 +487,9 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     workspace of the course's own interface packages: when given, the grader
     imports message types from it instead of from the submission (batch
     grading: generated code is code the submission controls).
+
+    ``progress(line)``, when given, hears what colcon is building (see
+    :class:`~course.build.colcon.BuildProgress`).
 
     Never raises for problems of the submission (they become the result);
     raises :class:`~course.errors.MissingRequirement` when the machine lacks
@@ -510,10 +514,13 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
 
     if lesson.packages:
         try:
-            built = build_mod.build_packages(workspace_root, lesson.packages, base_env, log_dir / "build.log")
+            built = build_mod.build_packages(workspace_root, lesson.packages, base_env, log_dir / "build.log",
+                                             progress=progress)
         except NotGradable as exc:
             return not_gradable(exc.message, exc.hint)
         timings["build"] = built.seconds
+        if progress is not None:
+            progress("running and grading your nodes ...")
         build_info = {"ok": built.ok, "cached": built.cached, "seconds": round(built.seconds, 3),
                       "log": str(built.log_path) if built.log_path else ""}
         if not built.ok:

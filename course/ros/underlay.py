@@ -377,12 +377,18 @@ def _locked(base: Path) -> Iterator[None]:
 _FAILED = re.compile(r"^Failed\s+<<<\s+(\S+)", re.M)
 
 
-def _run_colcon(args: list[str], env: dict[str, str], cwd: Path, log, timeout: float) -> None:
+def _run_colcon(args: list[str], env: dict[str, str], cwd: Path, log, timeout: float,
+                packages: Callable[[str], None] | None = None) -> None:
     """Run one colcon pass in its own process group; on any interruption kill the group."""
+    from course.build.colcon import BuildProgress  # noqa: PLC0415 - colcon.py imports the sandbox, not needed before
+
     colcon = Path(sys.executable).parent / "colcon"
     command = [str(colcon) if colcon.is_file() else "colcon", *args]
     log.write(f"\n$ {' '.join(command)}\n".encode())
     log.flush()
+    follower = BuildProgress(Path(log.name), packages, None) if packages is not None else None
+    if follower is not None:
+        follower.start()
     proc = subprocess.Popen(command, cwd=cwd, env=env, stdout=log, stderr=subprocess.STDOUT,
                             stdin=subprocess.DEVNULL, start_new_session=True)
     try:
@@ -392,6 +398,9 @@ def _run_colcon(args: list[str], env: dict[str, str], cwd: Path, log, timeout: f
             os.killpg(proc.pid, signal.SIGKILL)
         proc.wait()
         raise
+    finally:
+        if follower is not None:
+            follower.stop()
     if code != 0:
         raise subprocess.CalledProcessError(code, command)
 
@@ -417,7 +426,8 @@ def _build_env(prefix: Path, component: Component) -> dict[str, str]:
 
 def build(sources: Path | None = None, force: bool = False, progress: Callable[[str], None] | None = None,
           pins: tuple[Pin, ...] | None = None, base: Path | None = None,
-          component: Component = JAZZY_COMPONENT) -> tuple[Underlay, bool]:
+          component: Component = JAZZY_COMPONENT,
+          packages: Callable[[str], None] | None = None) -> tuple[Underlay, bool]:
     """Build ``component`` unless its current build is these pins; switch to the new build only on success.
 
     Args:
@@ -425,6 +435,8 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
             be None: download from GitHub).
         force: rebuild even when up to date.
         progress: called with one short line per step (e.g. a console's print).
+        packages: called as colcon starts and finishes each package, with a short line
+            (:class:`~course.build.colcon.BuildProgress`; e.g. a status display's update).
         pins: what to build (default: the component's pins, course/ros/underlay_pins.py).
         base: the component's folder (default :func:`component_root`).
         component: :data:`JAZZY_COMPONENT` or :data:`SAS_COMPONENT` (needs the
@@ -501,7 +513,7 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
                     _run_colcon(["--log-base", str(work / "log"), "build", "--merge-install", "--base-paths", *tops,
                                  "--build-base", str(work / "build"), "--install-base", str(prefix),
                                  "--event-handlers", "console_direct-", "summary+", "console_start_end+",
-                                 *cmake_args], env, work, log, BUILD_TIMEOUT)
+                                 *cmake_args], env, work, log, BUILD_TIMEOUT, packages)
                 stamp = {
                     "key": key,
                     "component": component.name,
