@@ -6,7 +6,12 @@ print the warm median beside the lesson's observation window (``WINDOW`` in
 its grader module, seconds: the time its contract needs to watch the nodes)
 and the goal of issue 3: window + 1.5 s.
 
-    python benchmarks/all_lessons.py [--runs 3] [--json] [LESSON ...]
+    python benchmarks/all_lessons.py [--runs 3] [--json] [--recording-cost] [LESSON ...]
+
+``--recording-cost`` also grades ``--runs`` times with recording off
+(``ROS2COURSE_RECORD=0``), interleaved with the recorded runs, and reports the
+recording's share of the warm check time (issue 13: at most 10 %) and the
+size of the check's ``observed.mcap``.
 
 Every graded run must get full marks; otherwise the script exits 1.
 """
@@ -15,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import statistics
 import sys
@@ -30,22 +36,42 @@ from course.grade.results import Status
 from course.grade.validate import reference_workspace, run_commands
 from course.lesson.catalog import load_catalog
 from course.ros import env as env_mod
+from course.run.recording import FILE_NAME as RECORDING_FILE
 
 #: issue 3: "a warm check takes at most its observation window plus 1.5 s"
 ALLOWANCE = 1.5
 
 
-def bench_lesson(lesson, runs: int) -> dict:
+def _graded(lesson, root: Path, record: bool):
+    """One timed ``grade_lesson`` (seconds, result), with the check's recording on or off."""
+    previous = os.environ.get("ROS2COURSE_RECORD")
+    os.environ["ROS2COURSE_RECORD"] = "1" if record else "0"
+    try:
+        begin = time.monotonic()
+        result = grade_lesson(lesson, root)
+        return time.monotonic() - begin, result
+    finally:
+        if previous is None:
+            os.environ.pop("ROS2COURSE_RECORD", None)
+        else:
+            os.environ["ROS2COURSE_RECORD"] = previous
+
+
+def bench_lesson(lesson, runs: int, recording_cost: bool = False) -> dict:
     """Cold and warm wall times (seconds) of grading the lesson's reference solution."""
     root = Path(tempfile.mkdtemp(prefix=f"ros2course-bench-{lesson.id}-"))
     try:
         reference_workspace(lesson, root)
         run_commands(root, lesson.reference.commands)
-        times, ok = [], True
-        for _ in range(runs + 1):
-            begin = time.monotonic()
-            result = grade_lesson(lesson, root)
-            times.append(time.monotonic() - begin)
+        times, unrecorded, sizes, ok = [], [], [], True
+        for index in range(runs + 1):
+            if recording_cost and index:
+                seconds, result = _graded(lesson, root, record=False)
+                unrecorded.append(seconds)
+            seconds, result = _graded(lesson, root, record=True)
+            times.append(seconds)
+            mcap = Path(result.log_dir) / RECORDING_FILE
+            sizes.append(mcap.stat().st_size if mcap.is_file() else 0)
             if result.status != Status.PASSED:
                 ok = False
                 lost = "; ".join(f"{c.id}: {c.observed}" for c in result.checks if not c.passed)
@@ -56,7 +82,11 @@ def bench_lesson(lesson, runs: int) -> dict:
         return {"lesson": lesson.id, "cold": times[0], "warm_median": warm,
                 "warm_max": max(times[1:]) if runs else times[0], "window": window,
                 "goal": None if window is None else window + ALLOWANCE,
-                "within_goal": None if window is None else warm <= window + ALLOWANCE, "full_marks": ok}
+                "within_goal": None if window is None else warm <= window + ALLOWANCE, "full_marks": ok,
+                "unrecorded_median": statistics.median(unrecorded) if unrecorded else None,
+                "recording_share": (warm - statistics.median(unrecorded)) / statistics.median(unrecorded)
+                if unrecorded else None,
+                "recording_bytes": max(sizes)}
     finally:
         shutil.rmtree(root, ignore_errors=True)
 
@@ -66,6 +96,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("lessons", nargs="*", help="lesson ids (default: all)")
     parser.add_argument("--runs", type=int, default=3, help="warm runs per lesson (default 3)")
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
+    parser.add_argument("--recording-cost", action="store_true",
+                        help="also grade with recording off and report the recording's cost")
     args = parser.parse_args(argv)
     env_mod.activate()
     catalog = load_catalog()
@@ -74,19 +106,27 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     for lesson in lessons:
         err.print(f"benchmarking {lesson.id} ...")
-        rows.append(bench_lesson(lesson, args.runs))
+        rows.append(bench_lesson(lesson, args.runs, args.recording_cost))
     if args.json:
         print(json.dumps(rows, indent=2))
     else:
         table = Table(title=f"warm check vs observation window + {ALLOWANCE} s (seconds, {args.runs} warm runs)",
                       title_justify="left")
-        for column in ("lesson", "cold", "warm median", "warm max", "window", "goal", "ok"):
+        columns = ["lesson", "cold", "warm median", "warm max", "window", "goal", "ok"]
+        if args.recording_cost:
+            columns += ["unrecorded", "recording cost", "mcap KiB"]
+        for column in columns:
             table.add_column(column, justify="left" if column == "lesson" else "right")
         for r in rows:
             fmt = lambda v: "-" if v is None else f"{v:.2f}"  # noqa: E731
             verdict = "-" if r["within_goal"] is None else ("yes" if r["within_goal"] else "NO")
-            table.add_row(r["lesson"], fmt(r["cold"]), fmt(r["warm_median"]), fmt(r["warm_max"]),
-                          fmt(r["window"]), fmt(r["goal"]), verdict if r["full_marks"] else "NOT FULL MARKS")
+            cells = [r["lesson"], fmt(r["cold"]), fmt(r["warm_median"]), fmt(r["warm_max"]),
+                     fmt(r["window"]), fmt(r["goal"]), verdict if r["full_marks"] else "NOT FULL MARKS"]
+            if args.recording_cost:
+                share = r["recording_share"]
+                cells += [fmt(r["unrecorded_median"]), "-" if share is None else f"{share:+.1%}",
+                          f"{r['recording_bytes'] / 1024:.1f}"]
+            table.add_row(*cells)
         Console().print(table)
     return 0 if all(r["full_marks"] for r in rows) else 1
 

