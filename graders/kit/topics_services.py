@@ -203,6 +203,42 @@ def pick_endpoint(found: dict[str, list[str]], name: str, type_name: str) -> str
     return same_type[0] if len(same_type) == 1 else None
 
 
+_VERBS = {"publishers": "publishes", "subscriptions": "subscribes to", "services": "serves"}
+
+
+def own_endpoint(s: GradingSession, check_id: str, node: Any, kind: str, name: str, type_name: str, *,
+                 none: str, where: str, graph: Any = None) -> tuple[str, str]:
+    """Record ``check_id``: ``node`` (a :class:`~graders.kit.StartedNode`) has its own ``name`` of ``type_name``.
+
+    ``kind`` is ``publishers``, ``subscriptions`` or ``services`` (what ``ros2
+    node info`` lists); waits up to 3 s (:func:`wait_for_endpoint`) in
+    ``graph`` (default ``s.ros``). A misnamed endpoint of the right type is
+    still graded where it is (:func:`pick_endpoint`).
+
+    Args:
+        none: the reason given when there is no endpoint of ``type_name`` at all.
+        where: how the grader uses the endpoint, e.g. "on" / "called at": the note
+            returned for a misnamed one reads " (on /x, the topic your node uses)".
+
+    Returns:
+        ``(endpoint to grade, note)``; the note is "" when it is ``name``.
+
+    Raises:
+        Unmet: (``none``) no endpoint of ``type_name``.
+    """
+    graph = graph or s.ros
+    found = wait_for_endpoint(s, node.name, kind, name, 3.0, abort=node.ended, graph=graph)
+    ok = type_name in found.get(name, [])
+    others = "" if ok or kind == "services" else f"; topics in the graph: {learner_topics(graph)}"
+    s.record(check_id, ok, f"{node.name or 'the node'} {_VERBS[kind]}: {describe_endpoints(found)}{others}",
+             f"{name} [{type_name}]")
+    target = pick_endpoint(found, name, type_name)
+    if target is None:
+        raise Unmet(none)
+    noun = "name your server uses" if kind == "services" else "topic your node uses"
+    return target, ("" if target == name else f" ({where} {target}, the {noun})")
+
+
 def learner_topics(graph: Any) -> str:
     """What ``ros2 topic list -t`` shows in ``graph``, without ROS's own topics and the grader's probes.
 
