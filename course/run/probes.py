@@ -109,6 +109,27 @@ def discovery_range() -> str:
     return os.environ.get("ROS2COURSE_DISCOVERY_RANGE", "LOCALHOST")
 
 
+_DISCOVERY_LOCK = threading.Lock()
+
+
+def configure_process_discovery() -> None:
+    """Give this process's own ROS contexts the discovery range of :func:`discovery_range`.
+
+    The one environment variable grading sets in its own process, and why: rcl
+    reads ``ROS_AUTOMATIC_DISCOVERY_RANGE`` only from the process environment,
+    in ``rcl_init`` (rcl/src/rcl/discovery_options.c), and rclpy's ``init`` has no
+    parameter for it. The value is a constant of the process (never swapped per
+    check or per thread, unlike the removed ``patched_environ``), so contexts
+    created on several threads at once all read the same value. Learner
+    processes get theirs explicitly (:meth:`RosSession.learner_env`).
+    """
+    value = discovery_range()
+    with _DISCOVERY_LOCK:
+        if os.environ.get("ROS_AUTOMATIC_DISCOVERY_RANGE") != value:
+            os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = value
+        os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy; it would override the range
+
+
 class RosSession:
     """One check's private ROS graph.
 
@@ -149,8 +170,7 @@ class RosSession:
 
         try:
             self.domain_id = self._stack.enter_context(domain_coordinator.domain_id(_domain_selector()))
-            os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery_range()
-            os.environ.pop("ROS_LOCALHOST_ONLY", None)
+            configure_process_discovery()
             self.context = rclpy.Context()
             rclpy.init(context=self.context, domain_id=self.domain_id,
                        signal_handler_options=SignalHandlerOptions.NO)
