@@ -60,7 +60,7 @@ def grade(s: GradingSession) -> None:
     started = time.time()
     run = scripts.run_script(s, path, timeout=TIMEOUT)
     scripts.ended(s, "ends", run, "it ends by itself with exit code 0")
-    lines = {line.rstrip() for line in run.stdout.splitlines()}
+    lines = {line.rstrip().split(" (type: ")[0] for line in run.stdout.splitlines()}  # --param-type adds it
     missing = [name for name in NAMES if f"  {name}" not in lines]
     s.record("listed", not missing, f"its output lacks the line(s) {', '.join(missing)}; it printed: "
              f"{scripts.excerpt(run.stdout)}" if missing else f"it printed the names {', '.join(NAMES)}",

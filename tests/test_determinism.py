@@ -1,13 +1,15 @@
 """The topic, service and parameter graders are deterministic: the same correct submission gets the same
 verdicts every time (issue 3).
 
-For ``publisher-subscriber``, ``service-server-client`` and ``parameters`` the reference is
+For each lesson below the reference is
 built once into a temporary workspace (later grades reuse the build: colcon
 is skipped when the sources are unchanged), then graded 20 times. Score and
 every check's verdict and points must not vary, although the grader makes up
 new quotes (subscriber) and new points (stand-in server) each time and the
 reference server answers with random points, and the parameters grader changes
-parameters at runtime. Under load a rate could drift,
+parameters at runtime. ``inspect-topics`` and ``inspect-params`` run the reference
+``ros2`` CLI script against mystery nodes with new random values (topic, id, quote,
+publisher count, initial parameter) each time: one score every time. Under load a rate could drift,
 so a failure lists every run that differed and how.
 """
 
@@ -31,7 +33,8 @@ def verdicts(result) -> list[tuple[str, bool, float]]:
 @pytest.mark.ros
 @pytest.mark.usefixtures("cpu_exclusive")  # no C++ compile on the other core meanwhile (conftest)
 @pytest.mark.timeout(1200)
-@pytest.mark.parametrize("lesson_id", ["publisher-subscriber", "service-server-client", "parameters"])
+@pytest.mark.parametrize("lesson_id", ["publisher-subscriber", "service-server-client", "parameters",
+                                       "inspect-topics", "inspect-params"])
 def test_reference_grades_identically_20_times(lesson_id, tmp_path):
     lesson = load_catalog().get(lesson_id)
     workspace = reference_workspace(lesson, tmp_path / "ws")
