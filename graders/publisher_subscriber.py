@@ -13,11 +13,9 @@ and each ends with its Ctrl+C check.
 from __future__ import annotations
 
 import itertools
-import random
 
-from course.run.probes import wait_until
 from graders import kit
-from graders.kit import Check, GradingSession, Unmet
+from graders.kit import Check, GradingSession, Unmet, quotes
 from graders.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_the_messages"
@@ -80,29 +78,12 @@ def _show(msg) -> str:
     return f"{{id: {msg.id}, quote: {msg.quote!r}, philosopher_name: {msg.philosopher_name!r}}}"
 
 
-def _endpoint(s: GradingSession, check_id: str, node: kit.StartedNode, kind: str, verb: str, none: str,
-              where: str, graph) -> tuple[str, str]:
-    """Record ``check_id`` on the node's own /amazing_quote endpoint of ``kind``; return (topic to use, where).
-
-    Raises:
-        Unmet: (with reason ``none``) the node has no AmazingQuote endpoint of that kind at all.
-    """
-    found = ts.wait_for_endpoint(s, node.name, kind, TOPIC, 3.0, abort=node.ended, graph=graph)
-    ok = MSG_TYPE in found.get(TOPIC, [])
-    s.record(check_id, ok, f"{node.name or 'the node'} {verb}: {ts.describe_endpoints(found)}"
-             + ("" if ok else f"; topics in the graph: {ts.learner_topics(graph)}"), f"{TOPIC} [{MSG_TYPE}]")
-    target = ts.pick_endpoint(found, TOPIC, MSG_TYPE)
-    if target is None:
-        raise Unmet(none)
-    return target, ("" if target == TOPIC else f" ({where} {target}, the topic your node uses)")
-
-
 def _grade_publisher(s: GradingSession, msg_type: type) -> None:
     path = kit.executable(s, "pub_executable", PACKAGE, PUB_EXE)
     probes = {TOPIC: ts.listen(s, TOPIC, msg_type)}  # before the node starts: no message is missed
     node = kit.start_node(s, "pub_node_name", path, PUB_NODE, sigint_check="pub_sigint_exit", need_node=False)
-    target, where = _endpoint(s, "pub_topic", node, "publishers", "publishes",
-                              f"no {MSG_TYPE} topic published to listen to", "on", s.ros)
+    target, where = ts.own_endpoint(s, "pub_topic", node, "publishers", TOPIC, MSG_TYPE,
+                                    none=f"no {MSG_TYPE} topic published to listen to", where="on")
     probe = probes.get(target) or ts.listen(s, target, msg_type)  # grade the contents where they are published
     with s.phase("observe"):
         window = probe.observe(SAMPLES, PERIOD, START_TIMEOUT, abort=node.ended)
@@ -130,68 +111,15 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
              noun="message", source="the messages' send stamps", where=where)
 
 
-_WORDS = ["teapot", "lantern", "cactus", "harbour", "violin", "comet", "pebble", "marmalade", "glacier",
-          "walrus", "origami", "thunder", "velvet", "compass", "biscuit", "nebula"]
-_NAMES = ["Ada", "Grace", "Alan", "Edsger", "Barbara", "Donald", "Margaret", "Linus", "Radia", "Ken"]
-
-
-def _grader_quotes(msg_type: type) -> list:
-    """Quotes made up for this check: nobody hard-codes them (random words, names and ids)."""
-    rng = random.Random()
-    out = []
-    for _ in range(GRADER_QUOTES):
-        a, b, c = rng.sample(_WORDS, 3)
-        msg = msg_type(id=rng.randrange(100_000, 1_000_000), quote=f"A {a} in the {b} is worth two {c}s.",
-                       philosopher_name=f"{rng.choice(_NAMES)} {rng.choice(_WORDS).capitalize()}")
-        out.append(msg)
-    return out
-
-
 def _grade_subscriber(s: GradingSession, msg_type: type, graph) -> None:
     path = kit.executable(s, "sub_executable", PACKAGE, SUB_EXE)
     rosout = graph.rosout()
     node = kit.start_node(s, "sub_node_name", path, SUB_NODE, sigint_check="sub_sigint_exit", need_node=False,
                           graph=graph)
-    target, where = _endpoint(s, "sub_topic", node, "subscriptions", "subscribes to",
-                              f"no {MSG_TYPE} subscription to publish to", "published on", graph)
-    quotes = _grader_quotes(msg_type)
-
-    def seen(msg) -> bool:
-        return any(msg.quote in r.msg for r in rosout.records())
-
-    with ts.publisher(s, target, msg_type, graph) as publisher, s.phase("observe"):
-        # Publish only once the subscriber is matched, else the first quote is lost.
-        wait_until(lambda: publisher.get_subscription_count() > 0, 3.0, abort=node.ended)
-        for msg in quotes:
-            for _ in range(2):  # a second chance if a message was lost
-                publisher.publish(msg)
-                if wait_until(lambda m=msg: seen(m), 1.0, abort=node.ended):
-                    break
-
-    records = rosout.records()
-    logged = [m for m in quotes if any(m.quote in r.msg for r in records)]
-    expected = "each quote's text in a log record of the subscriber (the grader's own quotes)"
-    if len(logged) == len(quotes):
-        s.record("sub_logs_quotes", True, f"all {len(quotes)} quotes published were logged, e.g. {quotes[0].quote!r}"
-                 + where, expected)
-    else:
-        recent = " | ".join(r.msg.strip().replace("\n", " ")[:80] for r in records[-2:]) or "no log records"
-        on_stdout = any(m.quote in node.proc.stdout() for m in quotes)
-        s.record("sub_logs_quotes", False,
-                 f"{len(logged)} of {len(quotes)} quotes found in the log (e.g. {quotes[0].quote!r} was published)"
-                 f"{where}; last records: {recent}"
-                 + ("; the quotes appeared on stdout only (print() instead of the logger?)" if on_stdout else "")
-                 + f"; {kit.process_state(node.proc)}", expected, fraction=len(logged) / len(quotes))
-    if not logged:
-        raise Unmet("no quote was logged")
-    # Details: the philosopher and the id, in any record of the node (one record or several).
-    items = [(m, what, ok) for m in logged
-             for what, ok in (("philosopher_name", any(m.philosopher_name in r.msg for r in records)),
-                              ("id", any(ts.has_integer(r.msg, m.id) for r in records)))]
-    missing = [f"{what} of {m.quote!r} ({getattr(m, what)!r})" for m, what, ok in items if not ok]
-    s.record("sub_logs_details", not missing, "philosopher and id of every logged quote found" if not missing
-             else "missing: " + "; ".join(missing[:2]), "each quote's philosopher_name and id in the log too",
-             fraction=(len(items) - len(missing)) / len(items))
+    target, where = ts.own_endpoint(s, "sub_topic", node, "subscriptions", TOPIC, MSG_TYPE, graph=graph,
+                                    none=f"no {MSG_TYPE} subscription to publish to", where="published on")
+    quotes.subscriber_logs(s, "sub_logs_quotes", "sub_logs_details", node, rosout, target, msg_type,
+                           count=GRADER_QUOTES, where=where, graph=graph)
 
 
 def grade(s: GradingSession) -> None:
