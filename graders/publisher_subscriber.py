@@ -15,7 +15,7 @@ from __future__ import annotations
 import itertools
 
 from graders import kit
-from graders.kit import Check, GradingSession, Unmet, quotes
+from graders.kit import Check, GradingSession, Unmet, checks, quotes
 from graders.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_the_messages"
@@ -36,18 +36,12 @@ GRADER_QUOTES = 3  # quotes the grader publishes to the subscriber
 #: Seconds of observation the contract needs: the publisher's 6 messages at 2 Hz, then the
 #: grader's quotes to the subscriber (one period each).
 WINDOW = SAMPLES * PERIOD + GRADER_QUOTES * PERIOD
-SIGINT_HINT = "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"
 PUB, SUB = {"part": "publisher", "needs": ("pub_executable",)}, {"part": "subscriber", "needs": ("sub_executable",)}
 
 CHECKS = [
     Check("build", "The packages build with colcon", 1),
-    Check("depends", "package.xml depends on rclpy and package_with_interfaces", 1,
-          "add <depend>rclpy</depend> and <depend>package_with_interfaces</depend> to package.xml (seed ch. 18.1)"),
-    Check("pub_executable", "ros2 run finds amazing_quote_publisher_node", 1,
-          "register 'amazing_quote_publisher_node = python_package_that_uses_the_messages."
-          "amazing_quote_publisher_node:main' in console_scripts, then colcon build", part="publisher"),
-    Check("pub_node_name", "A node named amazing_quote_publisher_node starts", 1,
-          "pass 'amazing_quote_publisher_node' to super().__init__()", **PUB),
+    checks.interfaces_depend(),
+    *checks.started("pub", PACKAGE, PUB_EXE, PUB_NODE, part="publisher"),
     Check("pub_topic", "It publishes /amazing_quote of type package_with_interfaces/msg/AmazingQuote", 2,
           "self.create_publisher(msg_type=AmazingQuote, topic='/amazing_quote', qos_profile=1)", **PUB),
     Check("pub_contents", "Each message says 'Use the force, Pikachu!' by 'Uncle Ben'", 2,
@@ -56,12 +50,8 @@ CHECKS = [
           "keep the id in an attribute (self.incremental_id), put it in each message, then add 1", **PUB),
     Check("pub_rate", "One message every 0.5 s (2 Hz)", 2,
           "self.create_timer(0.5, self.timer_callback), one publish per tick", **PUB),
-    Check("pub_sigint_exit", "Ctrl+C ends the publisher with exit code 0 and no traceback", 1, SIGINT_HINT, **PUB),
-    Check("sub_executable", "ros2 run finds amazing_quote_subscriber_node", 1,
-          "register 'amazing_quote_subscriber_node = python_package_that_uses_the_messages."
-          "amazing_quote_subscriber_node:main' in console_scripts, then colcon build", part="subscriber"),
-    Check("sub_node_name", "A node named amazing_quote_subscriber_node starts", 1,
-          "pass 'amazing_quote_subscriber_node' to super().__init__()", **SUB),
+    checks.ctrl_c("pub_sigint_exit", "the publisher", **PUB),
+    *checks.started("sub", PACKAGE, SUB_EXE, SUB_NODE, part="subscriber"),
     Check("sub_topic", "It subscribes to /amazing_quote of type package_with_interfaces/msg/AmazingQuote", 2,
           "self.create_subscription(msg_type=AmazingQuote, topic='/amazing_quote', callback=..., qos_profile=1)",
           **SUB),
@@ -70,7 +60,7 @@ CHECKS = [
           "(print() does not reach /rosout)", **SUB),
     Check("sub_logs_details", "With each quote it logs the philosopher's name and the id", 2,
           "log msg.philosopher_name and msg.id too, e.g. in the same f-string as msg.quote", **SUB),
-    Check("sub_sigint_exit", "Ctrl+C ends the subscriber with exit code 0 and no traceback", 1, SIGINT_HINT, **SUB),
+    checks.ctrl_c("sub_sigint_exit", "the subscriber", **SUB),
 ]
 
 

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 
 from graders import kit
-from graders.kit import Check, GradingSession, sas
+from graders.kit import Check, GradingSession, checks, sas
 
 PACKAGE = "sas_robot_driver_myrobot"
 DRIVER_EXECUTABLE = "sas_robot_driver_myrobot_node"
@@ -88,9 +88,9 @@ CHECKS = [
     Check("wrong_size", "A target of the wrong size is not applied (error logged)", 2,
           "set_target_joint_positions must raise on a vector whose size is not 6; catch it in the loop, log "
           "an error and keep the previous positions (or end cleanly, as sas does)", **DRIVER_PART),
-    Check("sigint_exit", "Ctrl+C ends the driver with exit code 0 and no traceback", 2,
-          "catch (KeyboardInterrupt, ExternalShutdownException) around the loop, then deinitialize() and "
-          "disconnect() in finally", **DRIVER_PART),
+    checks.ctrl_c("sigint_exit", "the driver", 2,
+                  "catch (KeyboardInterrupt, ExternalShutdownException) around the loop, then deinitialize() and "
+                  "disconnect() in finally", **DRIVER_PART),
     Check("client_executable", f"ros2 run finds {CLIENT_EXECUTABLE}", 1,
           f"add '{CLIENT_EXECUTABLE} = {PACKAGE}.{CLIENT_EXECUTABLE}:main' to console_scripts in setup.py",
           part="client"),
@@ -106,10 +106,10 @@ CHECKS = [
           "after the driver is enabled", **CLIENT_PART),
     Check("client_moves", "Every joint of the targets actually moves", 1,
           "make the offset depend on the loop counter i, e.g. 10.0 * sin(i / (50.0 * pi)) degrees", **CLIENT_PART),
-    Check("client_sigint_exit", "Ctrl+C ends the client with exit code 0 and no traceback", 1,
-          "wrap main() in try: ... except (KeyboardInterrupt, ExternalShutdownException): pass, with "
-          "rclpy.try_shutdown() in finally: after Ctrl+C, spin_once and send_target_joint_positions raise "
-          "ExternalShutdownException", **CLIENT_PART),
+    checks.ctrl_c("client_sigint_exit", "the client", 1,
+                  "wrap main() in try: ... except (KeyboardInterrupt, ExternalShutdownException): pass, with "
+                  "rclpy.try_shutdown() in finally: after Ctrl+C, spin_once and send_target_joint_positions "
+                  "raise ExternalShutdownException", **CLIENT_PART),
 ]
 
 

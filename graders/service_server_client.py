@@ -19,7 +19,7 @@ Black-box, and the grader plays the other side each time:
 from __future__ import annotations
 
 from graders import kit
-from graders.kit import Check, GradingSession, parts, services
+from graders.kit import Check, GradingSession, checks, parts, services
 from graders.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_the_services"
@@ -49,7 +49,6 @@ NO_LIFE = [
 
 SERVER = {"part": "server", "needs": ("server_executable",)}
 CLIENT = {"part": "client", "needs": ("client_executable",)}
-SIGINT_HINT = "catch (KeyboardInterrupt, ExternalShutdownException) around rclpy.spin()"
 
 #: Seconds of observation the contract needs, on the client's clock (the server half runs at the
 #: same time in a graph of its own and is shorter): its first "waiting" record (within one 0.5 s
@@ -59,13 +58,8 @@ WINDOW = PERIOD + 2 * (PERIOD + (CALLS - 1) * PERIOD)
 
 CHECKS = [
     Check("build", "The packages build with colcon", 1),
-    Check("depends", "package.xml depends on rclpy and package_with_interfaces", 1,
-          "add <depend>rclpy</depend> and <depend>package_with_interfaces</depend> to package.xml (seed ch. 18.1)"),
-    Check("server_executable", "ros2 run finds what_is_the_point_service_server_node", 1,
-          "register 'what_is_the_point_service_server_node = python_package_that_uses_the_services."
-          "what_is_the_point_service_server_node:main' in console_scripts, then colcon build", part="server"),
-    Check("server_node_name", "A node named what_is_the_point_service_server starts", 1,
-          "pass 'what_is_the_point_service_server' to super().__init__()", **SERVER),
+    checks.interfaces_depend(),
+    *checks.started("server", PACKAGE, SERVER_EXE, SERVER_NODE, part="server"),
     Check("service_name_type", "It serves /what_is_the_point of type package_with_interfaces/srv/WhatIsThePoint", 2,
           "self.create_service(srv_type=WhatIsThePoint, srv_name='/what_is_the_point', callback=...)", **SERVER),
     Check("life_sum_42", "A quote containing 'life' gets a point whose coordinates sum to 42", 2,
@@ -75,12 +69,8 @@ CHECKS = [
     Check("no_life_not_42", "Any other quote gets a point whose coordinates do not sum to 42", 2,
           "look at the quote's text (request.quote.quote), not the philosopher's name; "
           "if a random point happens to sum to 42, move it", **SERVER),
-    Check("server_sigint_exit", "Ctrl+C ends the server with exit code 0 and no traceback", 1, SIGINT_HINT, **SERVER),
-    Check("client_executable", "ros2 run finds what_is_the_point_service_client_node", 1,
-          "register 'what_is_the_point_service_client_node = python_package_that_uses_the_services."
-          "what_is_the_point_service_client_node:main' in console_scripts, then colcon build", part="client"),
-    Check("client_node_name", "A node named what_is_the_point_service_client starts", 1,
-          "pass 'what_is_the_point_service_client' to super().__init__()", **CLIENT),
+    checks.ctrl_c("server_sigint_exit", "the server", **SERVER),
+    *checks.started("client", PACKAGE, CLIENT_EXE, CLIENT_NODE, part="client"),
     Check("client_waits", "Before the service exists, the client logs that it is waiting for it", 2,
           "until self.service_client.service_is_ready() is true, log e.g. "
           "'service /what_is_the_point not available, waiting...' (and send nothing)", **CLIENT),
@@ -98,7 +88,7 @@ CHECKS = [
           "don't wait for the answer inside the timer callback (no spin_until_future_complete, no call(), "
           "no loop on future.done()): return at once and let a done callback handle the response",
           part="client", needs=("client_calls",)),
-    Check("client_sigint_exit", "Ctrl+C ends the client with exit code 0 and no traceback", 1, SIGINT_HINT, **CLIENT),
+    checks.ctrl_c("client_sigint_exit", "the client", **CLIENT),
 ]
 
 
