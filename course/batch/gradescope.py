@@ -32,6 +32,7 @@ from course.batch.runner import (
     run_job,
 )
 from course.errors import CourseError
+from course.lesson.catalog import content_root, load_catalog
 from course.lesson.progress import atomic_write_text
 from course.report import gradebook
 from course.run import sandbox
@@ -43,8 +44,6 @@ def configured_lessons(explicit: list[str]) -> list[str]:
     Raises:
         CourseError: none configured.
     """
-    from course.lesson.catalog import content_root  # noqa: PLC0415
-
     if explicit:
         return explicit
     env = os.environ.get("ROS2COURSE_LESSON", "").replace(",", " ").split()
@@ -92,8 +91,6 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
         CourseError: no lesson configured, unknown lesson, missing submission folder,
             or ``require_isolation`` and a protection is missing.
     """
-    from course.lesson.catalog import load_catalog  # noqa: PLC0415
-
     lessons = configured_lessons(lessons)
     if require_isolation:
         refuse_without_isolation()

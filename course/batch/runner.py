@@ -45,13 +45,29 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
+import psutil
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+
 from course.batch.archive import Submission, discover, prepare
-from course.errors import CourseError, NotGradable
+from course.build.colcon import build_packages
+from course.errors import CourseError, MissingRequirement, NotGradable
+from course.grade.engine import load_grader
 from course.grade.results import LessonResult, Status
+from course.grade.validate import lesson_dependencies, reference_workspace
+from course.lesson.catalog import content_root, load_catalog
 from course.lesson.progress import atomic_write_text
 from course.report import gradebook
+from course.ros import env as env_mod
 from course.run import sandbox
-from course.run.process import OutputDrain
+from course.run.process import OutputDrain, kill_marked, sweep_stale_fastdds_shm
 
 #: Environment variable every process of a job carries (its value: the job's marker).
 BATCH_MARKER_VAR = "ROS2COURSE_BATCH_MARKER"
@@ -115,8 +131,6 @@ class Job:
 
 def _hideable(folder: Path) -> bool:
     """A folder may be hidden unless it holds what the worker itself needs (Python, this package, HOME)."""
-    from course.lesson.catalog import content_root  # noqa: PLC0415
-
     needed = [Path(sys.prefix), Path(sys.executable).resolve(), Path(__file__).resolve().parents[1], content_root() / "graders",
               content_root() / "chapters"]
     folder = folder.resolve()
@@ -125,8 +139,6 @@ def _hideable(folder: Path) -> bool:
 
 def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
     """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions."""
-    from course.lesson.catalog import content_root  # noqa: PLC0415
-
     candidates = [scratch_root, submissions, out_dir, content_root() / "solutions", content_root() / "tests" / "fixtures"]
     out: list[str] = []
     for folder in candidates:
@@ -164,10 +176,6 @@ def build_trusted_interfaces(lessons: list[Any]) -> Path | None:
     Raises:
         CourseError: the reference packages do not build (a fault of the course or machine).
     """
-    from course.build.colcon import build_packages
-    from course.grade.validate import lesson_dependencies, reference_workspace
-    from course.ros import env as env_mod  # noqa: PLC0415
-
     deps = list(dict.fromkeys(dep for lesson in lessons for dep in lesson_dependencies(lesson)))
     if not deps:
         return None
@@ -192,9 +200,6 @@ def lesson_checks(lesson_id: str) -> tuple[float, list[str]]:
     Raises:
         UnknownLesson: no such lesson.  CourseError: its grader cannot be imported.
     """
-    from course.grade.engine import load_grader  # noqa: PLC0415
-    from course.lesson.catalog import load_catalog
-
     module = load_grader(load_catalog().get(lesson_id).grader)
     return float(sum(c.points for c in module.CHECKS)), [c.id for c in module.CHECKS]
 
@@ -208,8 +213,6 @@ def _unfinished(lesson_id: str, status: Status, message: str, hint: str = "") ->
 
 
 def _tree_rss(pid: int) -> int:
-    import psutil  # noqa: PLC0415
-
     try:
         root = psutil.Process(pid)
         procs = [root, *root.children(recursive=True)]
@@ -224,8 +227,6 @@ def _tree_rss(pid: int) -> int:
 
 def _kill_job(popen: subprocess.Popen, marker: str) -> list[int]:
     """SIGKILL the worker's process group and every process carrying the job's marker."""
-    from course.run.process import kill_marked  # noqa: PLC0415
-
     with contextlib.suppress(ProcessLookupError, PermissionError):
         os.killpg(popen.pid, signal.SIGKILL)
     return kill_marked(marker, var=BATCH_MARKER_VAR)
@@ -250,8 +251,6 @@ def run_job(job: Job) -> dict[str, Any]:
         ``timings["total"]`` and the peak memory.
         A cancelled job returns no records (a resumed batch grades it again).
     """
-    from course.run.process import sweep_stale_fastdds_shm  # noqa: PLC0415
-
     begin = time.monotonic()
     student_logs = Path(job.out_dir) / job.student / "logs"
     scratch = Path(tempfile.mkdtemp(prefix=f"ros2course-grade-{job.student[:40]}-", dir=job.scratch_root))
@@ -497,10 +496,8 @@ def make_executor(jobs: int, scheduler: str | None) -> tuple[cf.Executor, Any]:
     if not scheduler:
         return cf.ThreadPoolExecutor(max_workers=jobs, thread_name_prefix="ros2course-grade"), None
     try:
-        from distributed import Client  # noqa: PLC0415
+        from distributed import Client  # noqa: PLC0415 - optional extra [dask]
     except ImportError as exc:
-        from course.errors import MissingRequirement  # noqa: PLC0415
-
         raise MissingRequirement("--scheduler needs Dask distributed, which is not installed",
                                  "pip install 'ros2course[dask]'") from exc
     try:
@@ -558,9 +555,6 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
             ``require_isolation`` and a protection is missing.
         MissingRequirement: a lesson needs what is not installed.
     """
-    from course.lesson.catalog import load_catalog
-    from course.ros import env as env_mod  # noqa: PLC0415
-
     begin = time.monotonic()
     submissions = submissions.absolute()
     out_dir = out_dir.absolute()
@@ -668,15 +662,6 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
 def _progress(console: Any):
     if console is None:
         return None
-    from rich.progress import (  # noqa: PLC0415
-        BarColumn,
-        MofNCompleteColumn,
-        Progress,
-        TextColumn,
-        TimeElapsedColumn,
-        TimeRemainingColumn,
-    )
-
     return Progress(TextColumn("[bold]grading[/]"), BarColumn(), MofNCompleteColumn(), TextColumn("elapsed"),
                     TimeElapsedColumn(), TextColumn("ETA"), TimeRemainingColumn(),
                     TextColumn("[dim]{task.fields[last]}[/]"), console=console, transient=False)
@@ -684,8 +669,6 @@ def _progress(console: Any):
 
 def render_summary(report: BatchReport, console: Any) -> None:
     """Rich tables on ``console``: score distribution, most failed checks, not gradable reasons, isolation."""
-    from rich.table import Table  # noqa: PLC0415
-
     records = report.records
     console.print(f"graded {report.graded_now} submission(s) now, {report.skipped} skipped (--resume), "
                   f"{len(records)} result(s) in {report.out_dir / 'results.jsonl'} ({report.seconds:.1f} s)")

@@ -27,8 +27,11 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+from course.grade.engine import grade_lesson
 from course.grade.results import LessonResult, Status
+from course.lesson.catalog import load_catalog
 from course.lesson.progress import atomic_write_text
+from course.ros import env as env_mod
 from course.run import sandbox
 
 
@@ -59,9 +62,6 @@ def main(argv: list[str] | None = None) -> int:
     _limit(resource.RLIMIT_AS, args.memory_limit)
     _limit(resource.RLIMIT_FSIZE, args.file_limit)
 
-    from course.lesson.catalog import load_catalog
-    from course.ros import env as env_mod  # noqa: PLC0415 - after the limits
-
     env_mod.activate()
     if args.run_as:
         uid, _, gid = args.run_as.partition(":")
@@ -69,7 +69,6 @@ def main(argv: list[str] | None = None) -> int:
     catalog = load_catalog()
     done: list[dict[str, Any]] = []
     atomic_write_text(args.results, json.dumps(done, indent=1))
-    from course.grade.engine import grade_lesson  # noqa: PLC0415
 
     for lesson_id in args.lesson:
         log_dir = args.logs / lesson_id

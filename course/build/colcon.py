@@ -27,6 +27,9 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from catkin_pkg.package import InvalidPackage
+from catkin_pkg.packages import find_packages as catkin_find
+
 from course.errors import NotGradable
 from course.lesson.progress import atomic_write_text
 from course.run import sandbox
@@ -65,9 +68,6 @@ def find_packages(src: Path) -> dict[str, tuple[Path, object]]:
     Raises:
         NotGradable: a ``package.xml`` that catkin_pkg cannot parse (its message included).
     """
-    from catkin_pkg.package import InvalidPackage
-    from catkin_pkg.packages import find_packages as catkin_find  # noqa: PLC0415
-
     if not src.is_dir():
         return {}
     try:

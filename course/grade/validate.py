@@ -26,6 +26,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+import time
 from pathlib import Path
 from typing import Any, Literal
 
@@ -34,7 +35,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from rich.console import Console
 from rich.table import Table
 
-from course.build.colcon import dependency_closure, find_packages
+from course.build.colcon import build_packages, dependency_closure, find_packages
 from course.errors import LessonFormatError, ValidationFailed
 from course.grade.engine import grade_lesson
 from course.grade.results import LessonResult, Status
@@ -45,6 +46,7 @@ from course.lesson.catalog import (
     load_catalog,
 )
 from course.lesson.starter import copy_starter
+from course.ros import env as env_mod
 
 
 class Edit(BaseModel):
@@ -182,9 +184,6 @@ def build_underlay(lesson: Lesson, dest: Path) -> Path | None:
     Raises:
         ValidationFailed: the reference dependencies do not build.
     """
-    from course.build.colcon import build_packages
-    from course.ros import env as env_mod  # noqa: PLC0415
-
     deps = lesson_dependencies(lesson)
     if not deps:
         return None
@@ -200,8 +199,6 @@ def build_underlay(lesson: Lesson, dest: Path) -> Path | None:
 
 def run_commands(workspace_root: Path, commands: list[str]) -> None:
     """Run shell commands in the workspace as a learner would (errors are the grader's to see)."""
-    from course.ros import env as env_mod  # noqa: PLC0415
-
     env = dict(os.environ)
     env_mod.activate(env)
     for command in commands:
@@ -238,8 +235,6 @@ def _describe(result: LessonResult) -> str:
 def grade_case(lesson: Lesson, case: str, prepare, keep: bool = False,
                underlays: tuple[Path, ...] = ()) -> tuple[LessonResult, float]:
     """Grade a throw-away workspace that ``prepare(root)`` fills; returns the result and seconds."""
-    import time  # noqa: PLC0415
-
     root = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-{case}-"))
     begin = time.monotonic()
     try:

@@ -8,6 +8,7 @@ single manifest but one file per lesson.
 
 from __future__ import annotations
 
+import difflib
 import functools
 import os
 import re
@@ -215,7 +216,6 @@ class Catalog:
         for lesson in self.lessons:
             if lesson.id == lesson_id:
                 return lesson
-        import difflib  # noqa: PLC0415 - only on the error path
 
         close = difflib.get_close_matches(lesson_id, self.ids(), n=3)
         hint = f"did you mean {', '.join(close)}?" if close else "run 'ros2course list' to see every lesson id"

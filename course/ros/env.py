@@ -27,7 +27,7 @@ import sysconfig
 from pathlib import Path
 from typing import Callable
 
-from course.errors import CourseError, MissingRequirement
+from course.errors import CourseError, MissingRequirement, NotGradable
 from course.ros import underlay as _underlay
 from course.ros.requirements import KNOWN_REQUIREMENTS
 from course.ros.underlay_pins import JAZZY
@@ -308,7 +308,7 @@ def probe_requirement(name: str) -> tuple[bool, str]:
     if name == "launch":
         ok = importlib.util.find_spec("launch_ros") is not None and importlib.util.find_spec("launch") is not None
         if ok:
-            import launch  # noqa: PLC0415 - only to tell ROS launch from PyPI's unrelated "launch"
+            import launch  # noqa: PLC0415 - optional (underlay); tells ROS launch from PyPI's unrelated "launch"
 
             ok = hasattr(launch, "LaunchDescription")
         return ok, ("launch and launch_ros importable" if ok else "launch/launch_ros not importable")
@@ -556,8 +556,7 @@ def ensure_components_for(workspace_root: Path, packages: list[str],
     Raises:
         MissingRequirement: sas is needed but cannot be built here (one line, why).
     """
-    from course.build.colcon import dependency_closure, find_packages  # noqa: PLC0415
-    from course.errors import NotGradable  # noqa: PLC0415
+    from course.build.colcon import dependency_closure, find_packages  # noqa: PLC0415 - env --path stays light; cycle via run.sandbox
 
     try:
         found = find_packages(workspace_root / "src")

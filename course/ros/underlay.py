@@ -380,7 +380,7 @@ _FAILED = re.compile(r"^Failed\s+<<<\s+(\S+)", re.M)
 def _run_colcon(args: list[str], env: dict[str, str], cwd: Path, log, timeout: float,
                 packages: Callable[[str], None] | None = None) -> None:
     """Run one colcon pass in its own process group; on any interruption kill the group."""
-    from course.build.colcon import BuildProgress  # noqa: PLC0415 - colcon.py imports the sandbox, not needed before
+    from course.build.colcon import BuildProgress  # noqa: PLC0415 - env --path stays light; cycle via run.sandbox
 
     colcon = Path(sys.executable).parent / "colcon"
     command = [str(colcon) if colcon.is_file() else "colcon", *args]
@@ -406,7 +406,7 @@ def _run_colcon(args: list[str], env: dict[str, str], cwd: Path, log, timeout: f
 
 
 def _build_env(prefix: Path, component: Component) -> dict[str, str]:
-    from course.ros.env import activate  # noqa: PLC0415 - env imports this module
+    from course.ros.env import activate  # noqa: PLC0415 - cycle: course.ros.env imports this module
 
     env = dict(os.environ)
     for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH", "PYTHONPATH"):
@@ -416,7 +416,7 @@ def _build_env(prefix: Path, component: Component) -> dict[str, str]:
         env[var] = os.pathsep.join([str(prefix), *[p for p in env.get(var, "").split(os.pathsep) if p]])
     env.pop("COLCON_PREFIX_PATH", None)
     if component is SAS_COMPONENT:  # shared/ROS_ENV.md, "Building SmartArmStack (sas) from source"
-        import pybind11  # noqa: PLC0415
+        import pybind11  # noqa: PLC0415 - optional extra [sas]
 
         env["pybind11_DIR"] = pybind11.get_cmake_dir()
         env["CPATH"] = os.pathsep.join([str(prefix / "include"), str(EIGEN_INCLUDE), env.get("CPATH", "")]).rstrip(":")
@@ -453,7 +453,7 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
     pins = component.pins if pins is None else pins
     base = base or component_root(component)
     say = progress or (lambda line: None)
-    from course.ros.env import detect, repair_cmake_files  # noqa: PLC0415
+    from course.ros.env import detect, repair_cmake_files  # noqa: PLC0415 - cycle: course.ros.env imports this module
 
     below = ""
     if component is not JAZZY_COMPONENT:

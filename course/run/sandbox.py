@@ -45,11 +45,15 @@ import shutil
 import stat
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 import uuid
 from pathlib import Path
 from typing import Any
+
+from course.lesson.catalog import content_root
+from course.ros import env as env_mod
 
 #: Names of the protections a job can have (keys of :attr:`Isolation.protections`).
 NETWORK = "network namespace"
@@ -310,7 +314,6 @@ def _try(argv: list[str]) -> tuple[bool, str]:
 def _probe_uid_drop(unshare_flags: list[str], tools: dict[str, str]) -> tuple[bool, str]:
     """Can a fresh uid run this Python (stdlib and ROS imports) inside the job's mounts?"""
     uid = UID_BASE + UID_SPAN  # just past the range jobs use
-    from course.ros import env as env_mod  # noqa: PLC0415 - the ROS environment, as the worker has it
 
     ros_env = dict(os.environ)
     env_mod.activate(ros_env)
@@ -393,8 +396,6 @@ def grader_home() -> str:
 
 def read_only_paths() -> list[str]:
     """What a submission may read but never write: the course, the venv, the Python and ROS installs."""
-    from course.lesson.catalog import content_root  # noqa: PLC0415 - the catalog module imports pydantic; only when grading
-
     paths = [str(content_root()), sys.prefix, sys.base_prefix]
     for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH"):
         paths += [p for p in os.environ.get(var, "").split(os.pathsep) if p]
@@ -528,8 +529,6 @@ def private_dir(prefix: str):
     Yields:
         the folder's :class:`~pathlib.Path`; it is removed afterwards.
     """
-    import tempfile  # noqa: PLC0415
-
     with tempfile.TemporaryDirectory(prefix=prefix) as folder:
         if _identity is not None:
             os.chown(folder, _identity.uid, _identity.gid)
