@@ -91,17 +91,8 @@ def grade(s: GradingSession) -> None:
     env = ck.prefix_only_env(s.base_env, prefix, PACKAGE)
     cmake = ck.tool(env, "cmake")
     options = dict(env=env, paths={str(scratch): "<grader>"})
-    library = scratch / "library-build"
-    ck.step(s, "library_configures", [cmake, "-S", str(root / LIBRARY), "-B", str(library),
-                                      f"-DCMAKE_INSTALL_PREFIX={prefix}", *ck.ISOLATED_OPTIONS],
-            "cmake-configure-library", shown="cmake configure", passed="configured", **options,
-            expected="cmake -S cmake/greeting_library -B <build> -DCMAKE_INSTALL_PREFIX=<prefix> exits with 0")
-    ck.step(s, "library_builds", [cmake, "--build", str(library), "--parallel", "2"], "cmake-build-library",
-            shown="cmake --build", passed="built", expected="the library compiles and links", **options)
-    # --prefix repeats the prefix at install time: a set(CMAKE_INSTALL_PREFIX ...) in the file cannot redirect it.
-    ck.step(s, "library_installs", [cmake, "--install", str(library), "--prefix", str(prefix)],
-            "cmake-install-library", shown="cmake --install", passed="installed", **options,
-            expected="cmake --install <build> succeeds with relative install destinations")
+    ck.build_and_install(s, ("library_configures", "library_builds", "library_installs"), root / LIBRARY,
+                         scratch / "library-build", prefix, label="library", **options)
     ck.installed_file(s, "installed_headers", prefix, f"include/{HEADER}", f"<prefix>/include/{HEADER}")
     ck.installed_file(s, "installed_library", prefix, "lib*/libgreeting.[sa]*", "<prefix>/lib/libgreeting.so (or .a)")
     ck.package_config(s, "package_config", prefix, PACKAGE, TARGET)

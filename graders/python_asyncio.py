@@ -106,13 +106,13 @@ def _probe(s: GradingSession) -> None:
         raise Unmet("no minimalist_package folder")
     run, trace = run_traced(s, WRAPPER, "probe", "minimalist_package.minimalist_async", [[0.5]], "asyncio_probe",
                             cwd=folder, timeout=RUN_TIMEOUT)
-    _, exists, is_coroutine = trace.first("function") or (None, False, False)
-    s.record("module", bool(exists and is_coroutine), "unlikely_to_return " + (
-        "is an async def" if is_coroutine else "is a plain function (def), not a coroutine" if exists else
-        "does not exist") if trace.first("function") else
-        f"'import minimalist_package.minimalist_async' failed: {trace.error(run)}",
-        "'async def unlikely_to_return(tag, likelihood=0.1)' in minimalist_async, importable from "
-        "python/minimalist_package")
+    found = trace.first("function")  # ["function", exists, is_coroutine]; None: the import failed
+    is_coroutine = bool(found and found[2])
+    observed = ("is an async def" if is_coroutine else "is a plain function (def), not a coroutine"
+                if found and found[1] else "does not exist")
+    s.record("module", is_coroutine, f"unlikely_to_return {observed}" if found else
+             f"'import minimalist_package.minimalist_async' failed: {trace.error(run)}",
+             "'async def unlikely_to_return(tag, likelihood=0.1)' in minimalist_async, importable from " + str(FOLDER))
     s.require("module")
     for name, check_id, rolls, value, draws, expected in SCENARIOS:
         outcome, part = trace.scenario(name)

@@ -12,7 +12,6 @@ that asserts nothing catches none of them.
 
 from __future__ import annotations
 
-import json
 import sys
 from pathlib import Path
 
@@ -21,7 +20,7 @@ import yaml
 from graders import kit
 from graders.kit import Check, GradingSession, Unmet
 from graders.kit import python_programs as py
-from graders.kit.programs import interrupt_after, last_line, sigint_exit
+from graders.kit.programs import interrupt_after, printed_lines, sigint_exit
 
 PROJECT = Path("python") / "minimalist_package"
 SCRIPT = Path("minimalist_package") / "minimalist_script.py"
@@ -113,15 +112,7 @@ def _judge_script(s: GradingSession, project: Path) -> None:
                               first_timeout=FIRST_LINE_TIMEOUT)
     except OSError as exc:
         raise Unmet(f"{how} could not be started: {exc.strerror}") from None
-    lines = [line.strip() for line in run.stdout.splitlines() if line.strip()]
-    howdy = lines.count(GREETING)
-    others = sorted(set(lines) - {GREETING})
-    observed = f"ran {how}: {howdy} {GREETING!r} line(s)" + (
-        f", other output: {', '.join(repr(o) for o in others[:3])}" if others else "")
-    if not howdy and (run.traceback or run.stderr.strip()):
-        observed += (f"; it crashed: {last_line(run.traceback)}" if run.traceback
-                     else f"; stderr: {last_line(run.stderr)!r}")
-    s.record("howdy", howdy > 0, observed, f"lines that read exactly {GREETING!r} on stdout")
+    howdy = printed_lines(s, "howdy", run, GREETING, how)
     s.record("rate", run.interrupted and MIN_LINES <= howdy <= MAX_LINES,
              f"{howdy} line(s): the first and those in the {RUN_SECONDS:.1f} s after it" if run.interrupted
              else f"it ended by itself after {run.seconds:.1f} s having printed {howdy} line(s)",
@@ -155,20 +146,4 @@ def _judge_tests(s: GradingSession, project: Path) -> None:
     py.unit_tests(s, "unit_tests_pass", project, timeout=CHILD_TIMEOUT)
     s.require("unit_tests_pass")
     mutants = yaml.safe_load((DATA / "mutants.yaml").read_text(encoding="utf-8"))
-    verdicts = py.run_probe(s, DATA / "mutant_driver.py", [json.dumps([m["patch"] for m in mutants])],
-                            "unittest_broken_class", cwd=project, timeout=CHILD_TIMEOUT,
-                            what="Running your tests against broken classes")
-    if not isinstance(verdicts, list) or len(verdicts) != len(mutants) + 1:
-        raise Unmet("the broken-class runs printed something unexpected")
-    control, *broken = verdicts
-    if not (control[0] > 0 and control[1]):
-        s.record("tests_catch_bugs", False, "your tests do not pass when loaded with unittest's own test loader "
-                 f"from {PROJECT}: {control[2] if len(control) > 2 else 'some test fails'}",
-                 "the suite passes unchanged, then fails for each broken class")
-        raise Unmet("the suite does not pass under unittest's own loader")
-    missed = [mutant["name"] for mutant, (_, passed, *_) in zip(mutants, broken) if passed]
-    s.record("tests_catch_bugs", not missed, f"your tests failed (caught the bug) for {len(mutants) - len(missed)} "
-             f"of {len(mutants)} broken classes" + ("; they still passed when " + "; when ".join(missed) if missed
-                                                    else ""),
-             f"every one of the {len(mutants)} broken classes makes at least one test fail",
-             fraction=(len(mutants) - len(missed)) / len(mutants))
+    py.mutants_caught(s, "tests_catch_bugs", DATA / "mutant_driver.py", mutants, project, timeout=CHILD_TIMEOUT)

@@ -216,3 +216,27 @@ def package_config(s: GradingSession, check_id: str, prefix: Path, package: str,
                     + (f"{targets[target]} defines {target}" if target in targets else
                        f"no file there defines {target} (imported targets found: {', '.join(targets) or 'none'})"),
                     expected)
+
+
+def build_and_install(s: GradingSession, checks: tuple[str, str, str], source: Path, build: Path, prefix: Path, *,
+                      label: str, env: dict[str, str] | None = None, paths: Mapping[str, str] | None = None) -> None:
+    """Configure ``source`` into ``build`` with ``CMAKE_INSTALL_PREFIX=<prefix>``, build it, install it into ``prefix``.
+
+    Each stage records its own check of ``checks`` (configure, build, install): passed,
+    or failed with CMake's or the compiler's error lines. Configured with
+    :data:`ISOLATED_OPTIONS`; the install repeats ``--prefix``, so a
+    ``set(CMAKE_INSTALL_PREFIX ...)`` in the project cannot redirect it.
+
+    Raises:
+        Unmet: a stage failed (the later ones are then "not checked" through their needs).
+    """
+    cmake = tool(env or s.base_env, "cmake")
+    configure_id, build_id, install_id = checks
+    step(s, configure_id, [cmake, "-S", str(source), "-B", str(build), f"-DCMAKE_INSTALL_PREFIX={prefix}",
+                           *ISOLATED_OPTIONS], f"cmake-configure-{label}", shown="cmake configure", passed="configured",
+         expected="cmake -S <source> -B <build> -DCMAKE_INSTALL_PREFIX=<prefix> exits with 0", env=env, paths=paths)
+    step(s, build_id, [cmake, "--build", str(build), "--parallel", "2"], f"cmake-build-{label}", shown="cmake --build",
+         passed="built", expected="it compiles and links", env=env, paths=paths)
+    step(s, install_id, [cmake, "--install", str(build), "--prefix", str(prefix)], f"cmake-install-{label}",
+         shown="cmake --install", passed="installed", env=env, paths=paths,
+         expected="cmake --install <build> succeeds with relative install destinations")

@@ -210,3 +210,22 @@ def verdict_test(s: GradingSession, check_id: str, argv: list[str], label: str, 
         observed += f"; {known['note']}"
     return s.record(check_id, bool(verdicts) and verdicts[-1].startswith("PASS "), observed, expected,
                     hint=known.get("hint"))
+
+
+def printed_lines(s: GradingSession, check_id: str, run: ProgramRun, line: str, how: str) -> int:
+    """Record ``check_id``: the program printed lines that read exactly ``line``; return how many.
+
+    Args:
+        how: the command as the learner runs it (e.g. ``./minimalist_script.py``), for feedback.
+
+    The observed text quotes up to three other lines it printed and, when it printed
+    none of ``line``, its traceback's or stderr's last line.
+    """
+    lines = [text.strip() for text in run.stdout.splitlines() if text.strip()]
+    count, others = lines.count(line), sorted(set(lines) - {line})
+    observed = f"ran {how}: {count} {line!r} line(s)" + (
+        f", other output: {', '.join(repr(o) for o in others[:3])}" if others else "")
+    if not count and (run.traceback or run.stderr.strip()):
+        observed += f"; it crashed: {last_line(run.traceback)}" if run.traceback else f"; stderr: {last_line(run.stderr)!r}"
+    s.record(check_id, count > 0, observed, f"lines that read exactly {line!r} on stdout")
+    return count

@@ -151,3 +151,37 @@ def unit_tests(s: GradingSession, check_id: str, cwd: Path, *, timeout: float = 
              "at least one test, all passing (OK, exit code 0)",
              hint="no tests were found: name the file test_*.py and the methods test_*" if count == 0 else None)
     return run
+
+
+def mutants_caught(s: GradingSession, check_id: str, driver: Path, mutants: list[dict], cwd: Path, *,
+                   timeout: float = 30.0) -> bool:
+    """Record ``check_id``: the learner's test suite fails for each broken version of their code (mutation testing).
+
+    A suite that calls the code but asserts nothing passes on any of them. Partial
+    credit: the share of broken versions caught.
+
+    Args:
+        driver: the lesson's mutation driver (graders/data/<lesson>/): argv[1] a JSON list of patches; it
+            prints a JSON list ``[tests run, passed?(, error)]`` for the unbroken suite, then one per patch.
+        mutants: ``{"name": what is broken, as the learner reads it, "patch": Python statements}`` each.
+
+    Raises:
+        Unmet: the driver printed nothing usable, or the suite fails even unbroken under unittest's own loader
+            (``check_id`` is recorded failed first).
+    """
+    verdicts = run_probe(s, driver, [json.dumps([m["patch"] for m in mutants])], "unittest_broken_code", cwd=cwd,
+                         timeout=timeout, what="Running your tests against broken versions of your code")
+    if not isinstance(verdicts, list) or len(verdicts) != len(mutants) + 1:
+        raise Unmet("the runs against broken code printed something unexpected")
+    control, *broken = verdicts
+    if not (control[0] > 0 and control[1]):
+        s.record(check_id, False, "your tests do not pass when loaded with unittest's own test loader "
+                 f"from {cwd.name}: {control[2] if len(control) > 2 else 'some test fails'}",
+                 "the suite passes unchanged, then fails for each broken version")
+        raise Unmet("the suite does not pass under unittest's own loader")
+    missed = [mutant["name"] for mutant, (_, passed, *_) in zip(mutants, broken) if passed]
+    caught = len(mutants) - len(missed)
+    return s.record(check_id, not missed, f"your tests failed (caught the bug) for {caught} of {len(mutants)} "
+                    "broken versions" + ("; they still passed when " + "; when ".join(missed) if missed else ""),
+                    f"every one of the {len(mutants)} broken versions makes at least one test fail",
+                    fraction=caught / len(mutants))
