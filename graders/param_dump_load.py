@@ -13,7 +13,7 @@ The learner keeps a parameters file in the ``ros2 param dump`` format at
 3. compares the file's parameters with the ones the running node declares
    (names and types, through its parameter services);
 4. loads the file into the running node as ``ros2 param load`` does
-   (:meth:`graders.kit.params.NodeParameters.load`: rclpy's
+   (:func:`graders.kit.params.load_file`: rclpy's
    ``parameter_dict_from_yaml_file`` for this node, then one non-atomic
    ``set_parameters`` call, results reported per parameter);
 5. watches ``/truly_inspirational_quote`` for the new quote.
@@ -21,18 +21,12 @@ The learner keeps a parameters file in the ``ros2 param dump`` format at
 
 from __future__ import annotations
 
-import time
 from pathlib import Path
 from typing import Any
 
-from course.run.probes import LATE_DELIVERY
-from graders import kit
-from graders.kit import Check, GradingSession, Unmet, params
-from graders.kit.launch import NodeAction, start_node_action
+from graders.kit import Check, GradingSession, params
 from graders.kit.quotes import (
-    EXECUTABLE,
     LAUNCH_NODE,
-    LAUNCH_PARAMETERS,
     LAUNCH_PERIOD,
     LAUNCH_PHILOSOPHER,
     LAUNCH_QUOTE,
@@ -42,6 +36,7 @@ from graders.kit.quotes import (
     package_source,
     quote_after,
     short,
+    start_as_launched,
 )
 
 CONFIG = Path("config") / f"{LAUNCH_NODE}.yaml"  # inside the package's source folder
@@ -82,134 +77,24 @@ CHECKS = [
 
 def grade(s: GradingSession) -> None:
     """Check the file, start the node as launched, load the file into it, watch for the new quote."""
-    path, values = _read_file(s)
+    source = package_source(s)
+    path = source / CONFIG if source else None
+    values = params.read_dump(s, "file_present", "yaml_valid", "node_key", path, NODE_KEY,
+                              shown=f"src/{PACKAGE}/{CONFIG}", absent=f"no package {PACKAGE} in src/",
+                              search=s.workspace_root / "src", pattern=f"*{LAUNCH_NODE}*.yaml")
     _new_quote(s, values or {})  # judged on the file alone (needs node_key)
     probe = s.ros.topic(f"/{LAUNCH_TOPIC}", amazing_quote(s))
-    proc = _start_node(s, probe)
+    proc = start_as_launched(s, "node_running", probe)
     s.require("node_key")
     services = params.connect(s, LAUNCH_NODE, proc=proc)
-    names = services.names()
-    node = services.get(names)
-    read_only = services.read_only(names)
-    _check_types(s, values, node)
-    expected = "every parameter set successfully (read-only ones like start_type_description_service excepted)"
-    try:
-        results = services.load(path, NODE_KEY)
-    except ValueError as exc:
-        s.record("load", False, f"rclpy (as ros2 param load) could not turn the file into parameters: {exc}", expected)
-        return
-    loaded_at = time.time()  # wall clock, as the send stamps the next messages are judged by
-    failed = [r for r in results if not r.successful and not read_only.get(r.name, False)]
-    quote_set = any(r.name == "quote" and r.successful for r in results)
-    s.record("load", quote_set and not failed, "; ".join(r.line() for r in results) or "the file holds no parameters",
-             expected)
-    s.require("load")
+    params.file_types(s, "parameter_types", values, services.get(services.names()), REQUIRED)
+    loaded_at = params.load_file(s, "load", services, path, NODE_KEY, must_set="quote")
     quote, philosopher = str(values.get("quote")), values.get("philosopher_name", LAUNCH_PHILOSOPHER)
     quote_after(s, "observed_quote", probe, loaded_at, count=NEXT_MESSAGES, period=LAUNCH_PERIOD, quote=quote,
                 philosopher=philosopher, proc=proc, expected=f"within {NEXT_MESSAGES} messages after the load: "
                 f"quote {short(quote)} and philosopher_name {philosopher!r}")
     with s.phase("stop"):
         proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
-
-
-def _read_file(s: GradingSession) -> tuple[Path, dict[str, Any] | None]:
-    """``file_present``, ``yaml_valid``, ``node_key``; the path and the flat parameters (None: no node section).
-
-    Raises:
-        Unmet: no file, or not a YAML mapping.
-    """
-    import yaml  # noqa: PLC0415
-
-    from course.lesson.catalog import yaml_error_text  # noqa: PLC0415
-
-    source = package_source(s)
-    path = source / CONFIG if source else None
-    expected = f"src/{PACKAGE}/{CONFIG}"
-    if path is None or not path.is_file():
-        elsewhere = sorted(str(p.relative_to(s.workspace_root)) for p in (s.workspace_root / "src").rglob(
-            f"*{LAUNCH_NODE}*.yaml")) if (s.workspace_root / "src").is_dir() else []
-        observed = (f"no package {PACKAGE} in src/" if source is None else f"no file {CONFIG} in the package")
-        s.record("file_present", False, observed + (f"; found {', '.join(elsewhere)}: move it to {expected}"
-                                                    if elsewhere else ""), expected)
-        raise Unmet("there is no parameters file to load")
-    s.record("file_present", True, expected, expected)
-    try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    except (yaml.YAMLError, UnicodeDecodeError) as exc:
-        s.record("yaml_valid", False, f"not valid YAML: {yaml_error_text(exc)}", "a YAML file ros2 param load can read")
-        raise Unmet("the file is not valid YAML") from None
-    if not isinstance(data, dict) or not data:
-        shape = "empty (only comments?)" if data is None else f"a {type(data).__name__}, not a mapping"
-        s.record("yaml_valid", False, f"the file is {shape}", "a YAML mapping: node name -> ros__parameters")
-        raise Unmet("the file holds no parameters")
-    s.record("yaml_valid", True, "valid YAML", "a YAML file ros2 param load can read")
-    values, problem = params.dump_section(data, NODE_KEY)
-    s.record("node_key", values is not None, problem or f"{NODE_KEY}: ros__parameters with {len(values)} entries",
-             f"'{NODE_KEY}:' whose value has a 'ros__parameters:' mapping")
-    return path, values
-
-
-def _start_node(s: GradingSession, probe) -> Any:
-    """Start the publisher as the launch file does; record ``node_running``; return the process.
-
-    Raises:
-        Unmet: no executable, no node, or no message on the topic.
-    """
-    action = NodeAction(line=0, package=PACKAGE, executable=EXECUTABLE, name=LAUNCH_NODE,
-                        parameters=[dict(LAUNCH_PARAMETERS)])
-    expected = (f"node /{LAUNCH_NODE} publishing the launch file's quote on /{LAUNCH_TOPIC} "
-                f"(started like the launch-files lesson's launch file)")
-    proc, reason = start_node_action(s, action, f"{EXECUTABLE}.as_launched")
-    if proc is None:
-        s.record("node_running", False, reason, expected)
-        raise Unmet("the node could not be started")
-    with s.phase("start"):
-        found = s.ros.wait_for_node(LAUNCH_NODE, 10.0, abort=lambda: proc.poll() is not None)
-        if found:
-            probe.wait_for_count(1, timeout=3.0 + LATE_DELIVERY, abort=lambda: proc.poll() is not None)
-    samples = probe.samples()
-    if not found or not samples:
-        seen = ", ".join(s.ros.node_names()) or "none"
-        s.record("node_running", False, (f"no message on /{LAUNCH_TOPIC}; topics seen: {kit.topics_seen(s.ros)}"
-                                         if found else f"no node {LAUNCH_NODE}; nodes seen: {seen}")
-                 + f"; {kit.process_state(proc)}", expected)
-        raise Unmet("the node is not running as the launch file would run it")
-    first = samples[0][1]
-    s.record("node_running", True, f"/{LAUNCH_NODE} publishes quote {short(first.quote, 40)} "
-             f"by {first.philosopher_name!r} on /{LAUNCH_TOPIC}", expected)
-    return proc
-
-
-def _reparsed_type(text: str) -> str:
-    """The type rclpy's ``get_parameter_value`` guesses for ``text`` (``ros2 param load`` re-parses values)."""
-    import yaml  # noqa: PLC0415
-
-    try:
-        return params.python_type_name(yaml.safe_load(text))
-    except yaml.YAMLError:
-        return "string"
-
-
-def _check_types(s: GradingSession, values: dict[str, Any], node: dict[str, tuple[str, Any]]) -> None:
-    """``parameter_types``: every required parameter in the file, each one the node's, with the node's type."""
-    expected = ("period, philosopher_name, quote and topic_name present; every parameter one the node declares, "
-                "with its type (" + ", ".join(f"{n}: {node[n][0]}" for n in REQUIRED if n in node) + ")")
-    problems = [f"{name} is missing" for name in REQUIRED if name not in values]
-    for name, value in values.items():
-        if name not in node:
-            problems.append(f"the node has no parameter {name!r}")
-            continue
-        kind = params.python_type_name(value)
-        if kind != node[name][0]:
-            note = ""
-            if isinstance(value, str) and _reparsed_type(value) == node[name][0]:
-                note = (" (ros2 param load happens to re-read the text as a number, but --params-file and "
-                        "launch files take it as a string: drop the quotes)")
-            problems.append(f"{name} is a{'n' if kind[0] in 'aeiou' else ''} {kind} in the file "
-                            f"({value!r}) but a {node[name][0]} in the node{note}")
-    s.record("parameter_types", not problems,
-             "; ".join(problems) if problems else f"{len(values)} parameters, names and types match the node's",
-             expected)
 
 
 def _new_quote(s: GradingSession, values: dict[str, Any]) -> None:

@@ -12,14 +12,14 @@ from __future__ import annotations
 import time
 
 from graders import kit
-from graders.kit import Check, GradingSession, params
+from graders.kit import Check, GradingSession, checks, params
 from graders.kit.quotes import (
     DEFAULTS,
     EXECUTABLE,
     NODE,
     PACKAGE,
     amazing_quote,
-    quote_after,
+    set_at_runtime,
     short,
 )
 
@@ -66,7 +66,7 @@ CHECKS = [
     Check("runtime_change", "Setting quote and philosopher_name at runtime changes the next messages", 3,
           "read quote and philosopher_name with self.get_parameter(...) inside the timer callback, "
           "not once in __init__", needs=RUNS, part="defaults"),
-    Check("sigint_exit", "Ctrl+C ends it with exit code 0 and no traceback", 1,
+    checks.ctrl_c("sigint_exit", "it", 1,
           "in Jazzy rclpy.spin() may raise ExternalShutdownException on Ctrl+C: catch it together with KeyboardInterrupt",
           needs=RUNS, part="defaults"),
     Check("configured_topic", "Started with -p topic_name:=..., it publishes on that topic", 2,
@@ -76,8 +76,6 @@ CHECKS = [
           "read period with self.get_parameter('period') after declaring it, and pass it to create_timer",
           needs=("configured_topic",), part="configured"),
 ]
-DEFAULTS_TEXT = ", ".join(f"{name} = {value!r} ({'double' if isinstance(value, float) else 'string'})"
-                          for name, value in DEFAULTS.items())
 
 
 def grade(s: GradingSession) -> None:
@@ -95,8 +93,10 @@ def grade(s: GradingSession) -> None:
         node = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit", need_node=False)
         _default_messages(s, probe, node.proc, began)
         services = params.connect(s, node.name, proc=node.proc, why=s.results["node_name"].observed)
-        _declared_and_defaults(s, services)
-        _runtime_change(s, services, probe, node.proc)
+        params.declared(s, "declared", "defaults", services, DEFAULTS)
+        set_at_runtime(s, "runtime_change", services, probe, node.proc, quote=RUNTIME_QUOTE,
+                       philosopher=RUNTIME_PHILOSOPHER, count=RUNTIME_MESSAGES, period=DEFAULT_PERIOD,
+                       topic=DEFAULT_TOPIC)
     with s.part("configured"):
         _configured_run(s, graph, configured_proc, configured, configured_began)
 
@@ -119,41 +119,6 @@ def _default_messages(s: GradingSession, probe, proc, began: float) -> None:
             if odd else "all with the defaults"), expected)
     kit.rate(s, "default_rate", probe.send_stamps(), period=DEFAULT_PERIOD, needed=DEFAULT_SAMPLES,
              waited=timeout, noun="message", source="the messages' send stamps")
-
-
-def _declared_and_defaults(s: GradingSession, services: params.NodeParameters) -> None:
-    """``declared`` and ``defaults``: ``ros2 param list``, then ``ros2 param get`` of the four parameters."""
-    names = services.names()
-    missing = [name for name in DEFAULTS if name not in names]
-    s.record("declared", not missing, "declared parameters: " + (", ".join(sorted(names)) or "none")
-             + (f"; missing: {', '.join(missing)}" if missing else ""),
-             "quote, philosopher_name, topic_name and period among them")
-    values = services.get([name for name in DEFAULTS if name in names])
-    wrong = [f"{name} = {value!r} ({kind})" for name, (kind, value) in values.items()
-             if (kind, value) != ("double" if isinstance(DEFAULTS[name], float) else "string", DEFAULTS[name])]
-    wrong += [f"{name} not declared" for name in missing]
-    s.record("defaults", not wrong, "all four as expected" if not wrong else
-             "none of the four parameters is declared" if not values else "; ".join(wrong), DEFAULTS_TEXT,
-             fraction=(len(values) - len(wrong) + len(missing)) / len(DEFAULTS))
-
-
-def _runtime_change(s: GradingSession, services: params.NodeParameters, probe, proc) -> None:
-    """``runtime_change``: ``ros2 param set`` quote and philosopher_name, then read the next messages."""
-    expected = (f"within {RUNTIME_MESSAGES} messages after the change, quote {short(RUNTIME_QUOTE)} "
-                f"and philosopher_name {RUNTIME_PHILOSOPHER!r}")
-    if not probe.samples():
-        s.record("runtime_change", False, f"no message on {DEFAULT_TOPIC} to compare with", expected)
-        return
-    results = services.set({"quote": RUNTIME_QUOTE, "philosopher_name": RUNTIME_PHILOSOPHER})
-    changed_at = time.time()  # the node applied the change before it answered: later send stamps are after it
-    failed = [f"{r.name}: {r.reason or 'refused'}" for r in results if not r.successful]
-    if failed:
-        s.record("runtime_change", False, "set_parameters failed: " + "; ".join(failed), expected)
-        return
-    quote_after(s, "runtime_change", probe, changed_at, count=RUNTIME_MESSAGES, period=DEFAULT_PERIOD,
-                quote=RUNTIME_QUOTE, philosopher=RUNTIME_PHILOSOPHER, proc=proc, expected=expected,
-                prefix="set_parameters succeeded; ",
-                stale=" -- the node still publishes the old values: does it read the parameters only once?")
 
 
 def _configured_run(s: GradingSession, graph, proc, probe, began: float) -> None:

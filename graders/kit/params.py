@@ -199,3 +199,136 @@ def dump_section(data: Any, node_key: str) -> tuple[dict[str, Any] | None, str]:
     if not isinstance(found, dict) or not found:
         return None, f"{node_key}: ros__parameters is {found!r}, not a mapping of parameters"
     return flatten_parameters(found), ""
+
+
+# --- steps over a parameters file and a node's declared parameters -----------------------------
+
+def read_dump(s: GradingSession, present_id: str, valid_id: str, key_id: str, path: Path | None, node_key: str, *,
+              shown: str, absent: str, search: Path, pattern: str) -> dict[str, Any] | None:
+    """Record ``present_id`` (``path`` is a file), ``valid_id`` (YAML mapping) and ``key_id`` (:func:`dump_section`).
+
+    Args:
+        path: where the file must be (None: its folder does not exist).
+        shown: how the learner names that place, e.g. ``src/pkg/config/node.yaml``.
+        absent: observed text when ``path`` is None (e.g. "no package pkg in src/").
+        search: a folder searched for misplaced copies (files matching the glob ``pattern``).
+
+    Returns:
+        The node's flat parameters, or None when ``key_id`` failed.
+
+    Raises:
+        Unmet: no file, not valid YAML, or not a non-empty mapping.
+    """
+    import yaml  # noqa: PLC0415
+
+    from course.lesson.catalog import yaml_error_text  # noqa: PLC0415
+
+    if path is None or not path.is_file():
+        root = s.workspace_root
+        elsewhere = sorted(str(p.relative_to(root)) for p in search.rglob(pattern)) if search.is_dir() else []
+        s.record(present_id, False, (absent if path is None else f"no file {shown}")
+                 + (f"; found {', '.join(elsewhere)}: move it to {shown}" if elsewhere else ""), shown)
+        raise Unmet("there is no parameters file to load")
+    s.record(present_id, True, shown, shown)
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (yaml.YAMLError, UnicodeDecodeError) as exc:
+        s.record(valid_id, False, f"not valid YAML: {yaml_error_text(exc)}", "a YAML file ros2 param load can read")
+        raise Unmet("the file is not valid YAML") from None
+    if not isinstance(data, dict) or not data:
+        shape = "empty (only comments?)" if data is None else f"a {type(data).__name__}, not a mapping"
+        s.record(valid_id, False, f"the file is {shape}", "a YAML mapping: node name -> ros__parameters")
+        raise Unmet("the file holds no parameters")
+    s.record(valid_id, True, "valid YAML", "a YAML file ros2 param load can read")
+    values, problem = dump_section(data, node_key)
+    s.record(key_id, values is not None, problem or f"{node_key}: ros__parameters with {len(values)} entries",
+             f"'{node_key}:' whose value has a 'ros__parameters:' mapping")
+    return values
+
+
+def _reparsed_type(text: str) -> str:
+    """The type rclpy's ``get_parameter_value`` guesses for ``text`` (``ros2 param load`` re-parses values)."""
+    import yaml  # noqa: PLC0415
+
+    try:
+        return python_type_name(yaml.safe_load(text))
+    except yaml.YAMLError:
+        return "string"
+
+
+def file_types(s: GradingSession, check_id: str, values: dict[str, Any], node: dict[str, tuple[str, Any]],
+               required: tuple[str, ...]) -> bool:
+    """Record ``check_id``: the file's ``values`` hold every ``required`` name, each one the node declares
+    (``node``: :meth:`NodeParameters.get` of all its names), with the node's type.
+
+    A quoted number is named as such: ``ros2 param load`` happens to re-read it
+    as a number, but ``--params-file`` and launch files take it as a string.
+    """
+    expected = (f"{', '.join(required)} present; every parameter one the node declares, with its type ("
+                + ", ".join(f"{n}: {node[n][0]}" for n in required if n in node) + ")")
+    problems = [f"{name} is missing" for name in required if name not in values]
+    for name, value in values.items():
+        if name not in node:
+            problems.append(f"the node has no parameter {name!r}")
+            continue
+        kind = python_type_name(value)
+        if kind != node[name][0]:
+            note = ""
+            if isinstance(value, str) and _reparsed_type(value) == node[name][0]:
+                note = (" (ros2 param load happens to re-read the text as a number, but --params-file and "
+                        "launch files take it as a string: drop the quotes)")
+            problems.append(f"{name} is a{'n' if kind[0] in 'aeiou' else ''} {kind} in the file "
+                            f"({value!r}) but a {node[name][0]} in the node{note}")
+    return s.record(check_id, not problems,
+                    "; ".join(problems) if problems else f"{len(values)} parameters, names and types match the node's",
+                    expected)
+
+
+def load_file(s: GradingSession, check_id: str, services: NodeParameters, path: Path, node_key: str, *,
+              must_set: str) -> float:
+    """``ros2 param load`` ``path`` into the node; record ``check_id``: every parameter set (read-only ones
+    like ``start_type_description_service`` excepted) and ``must_set`` among them.
+
+    Returns:
+        When the load was answered (``time.time()`` seconds: messages sent later carry the values).
+
+    Raises:
+        Unmet: rclpy cannot read the file, or ``check_id`` failed (``s.require``).
+    """
+    import time  # noqa: PLC0415
+
+    read_only = services.read_only(services.names())
+    expected = "every parameter set successfully (read-only ones like start_type_description_service excepted)"
+    try:
+        results = services.load(path, node_key)
+    except ValueError as exc:
+        s.record(check_id, False, f"rclpy (as ros2 param load) could not turn the file into parameters: {exc}",
+                 expected)
+        raise Unmet("the file could not be loaded") from exc
+    loaded_at = time.time()
+    failed = [r for r in results if not r.successful and not read_only.get(r.name, False)]
+    done = any(r.name == must_set and r.successful for r in results)
+    s.record(check_id, done and not failed, "; ".join(r.line() for r in results) or "the file holds no parameters",
+             expected)
+    s.require(check_id)
+    return loaded_at
+
+
+def declared(s: GradingSession, declared_id: str, defaults_id: str, services: NodeParameters,
+             defaults: dict[str, Any]) -> None:
+    """Record ``declared_id`` (``ros2 param list`` has every name of ``defaults``) and ``defaults_id``
+    (``ros2 param get`` of each gives its default, a float as a double and a str as a string).
+    Partial credit per parameter for ``defaults_id``.
+    """
+    names = services.names()
+    missing = [name for name in defaults if name not in names]
+    s.record(declared_id, not missing, "declared parameters: " + (", ".join(sorted(names)) or "none")
+             + (f"; missing: {', '.join(missing)}" if missing else ""), f"{', '.join(defaults)} among them")
+    values = services.get([name for name in defaults if name in names])
+    wrong = [f"{name} = {value!r} ({kind})" for name, (kind, value) in values.items()
+             if (kind, value) != (python_type_name(defaults[name]), defaults[name])]
+    wrong += [f"{name} not declared" for name in missing]
+    shown = ", ".join(f"{name} = {value!r} ({python_type_name(value)})" for name, value in defaults.items())
+    s.record(defaults_id, not wrong, f"all {len(defaults)} as expected" if not wrong else
+             f"none of the {len(defaults)} parameters is declared" if not values else "; ".join(wrong), shown,
+             fraction=(len(values) - len(wrong) + len(missing)) / len(defaults))
