@@ -430,3 +430,90 @@ def start_launch_file(s: Any, launch_file: Path, label: str = "launch") -> Launc
     except Exception:  # noqa: BLE001 - the reader is only feedback; launch itself says what is wrong
         static = None
     return LaunchRun(MODE_LAUNCH_ROS, [proc], static=static)
+
+
+# --- kit steps over a learner's launch file -------------------------------------------------
+
+def installed_launch_file(s: Any, check_id: str, package: str, name: str, source: Path | None) -> Path:
+    """Record ``check_id``: ``share/<package>/launch/<name>`` is installed (found as ``ros2 launch`` finds it).
+
+    Args:
+        s: the :class:`~course.grade.engine.GradingSession`.
+        source: the package's source folder (``src/.../<package>``), if any.
+
+    Returns:
+        The file to run: the installed one, else the one in ``source/launch`` (the
+        failed check then says setup.py does not install it).
+
+    Raises:
+        Unmet: the package has no such launch file at all.
+    """
+    from course.grade.engine import Unmet  # noqa: PLC0415
+
+    share = s.find_share(package)
+    installed = share / "launch" / name if share else None
+    expected = f"install/{package}/share/{package}/launch/{name}"
+    if installed is not None and installed.is_file():
+        s.record(check_id, True, str(installed.relative_to(s.workspace_root))
+                 if installed.is_relative_to(s.workspace_root) else str(installed), expected)
+        return installed
+    in_source = source / "launch" / name if source else None
+    where = describe_launch_folder(share, package)
+    if in_source is not None and in_source.is_file():
+        s.record(check_id, False, where + f"; src/.../launch/{name} exists but setup.py does not install it "
+                 "(the remaining checks run that source file)", expected)
+        return in_source
+    s.record(check_id, False, where + f"; no launch/{name} in the package's source either", expected,
+             f"create launch/{name} in the package and install it from setup.py's data_files")
+    raise Unmet(f"there is no {name} to launch")
+
+
+def launched_node(s: Any, started_id: str, node_id: str, run: LaunchRun, package: str, executable: str,
+                  node: str, timeout: float = 10.0) -> bool:
+    """Wait for ``node`` started by ``run``; record ``started_id`` (launch started ``package/executable``) and
+    ``node_id`` (a node called ``node`` runs). Returns whether the node appeared.
+
+    Waits up to ``timeout`` seconds (launch_ros start-up included), less when
+    the launch process ends, or 3 s after other nodes appeared without it
+    (launch_ros's own ``launch_ros_<pid>`` node not counted). ``started_id`` is
+    judged on launch's own "process started" report or the node being there.
+
+    Raises:
+        Unmet: nothing the launch file started is still running.
+    """
+    import time  # noqa: PLC0415
+
+    from course.grade.engine import Unmet  # noqa: PLC0415
+    from graders.kit.nodes import process_state  # noqa: PLC0415
+
+    began = time.monotonic()
+    first_other: list[float] = []
+
+    def give_up() -> bool:
+        if not run.any_running():
+            return True
+        if not first_other and [n for n in s.ros.node_names() if not n.startswith("/launch_ros_")]:
+            first_other.append(time.monotonic())
+        return bool(first_other) and time.monotonic() - first_other[0] > 3.0
+
+    with s.phase("start"):
+        found = s.ros.wait_for_node(node, timeout, abort=give_up)
+    proc = run.processes[0]
+    output = proc.stdout() + "\n" + proc.stderr()
+    expected = f"the launch file starts {package}/{executable}"
+    if (f"[{executable}-" in output and "process started" in output) or found:
+        s.record(started_id, True, f"{run.mode}: launch started {executable}", expected)
+    else:
+        tail = " | ".join(output.strip().splitlines()[-3:])
+        contents = run.file_contents()
+        s.record(started_id, False, f"{run.mode}: launch did not report starting {executable}; "
+                 f"{process_state(proc)}" + (f"; last output: {tail}" if tail else "")
+                 + (f"; {contents}" if contents else ""), expected)
+    seen = ", ".join(s.ros.node_names()) or "none"
+    states = "; ".join(f"{p.name}: {process_state(p)}" for p in run.processes)
+    s.record(node_id, found, f"node /{node} is running ({run.mode})" if found else
+             f"no node named {node} after {time.monotonic() - began:.1f} s; nodes seen: {seen}; {states}",
+             f"a node named {node} (Node(name=...) renames the node)")
+    if not run.any_running():
+        raise Unmet(f"nothing the launch file started is running: {states}")
+    return found
