@@ -91,7 +91,7 @@ def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300, env: dict
             ) -> subprocess.CompletedProcess:
     """Run ``python -m course ARGS`` as a learner would run ``ros2course``; never hangs past ``timeout``."""
     return subprocess.run([sys.executable, "-m", "course", *args], cwd=cwd, capture_output=True, text=True,
-                          timeout=timeout, env={**os.environ, **(env or {}), "COLUMNS": "200"},
+                          timeout=timeout, env={**os.environ, **(env or {}), "COLUMNS": "320"},
                           stdin=subprocess.DEVNULL, check=False)
 
 

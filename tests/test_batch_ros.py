@@ -110,6 +110,11 @@ def test_cross_talk_two_at_once(tmp_path: Path) -> None:
     assert (out / "alice" / "results.json").is_file() and (out / "junit.xml").is_file()
     assert (out / "bob" / "logs" / "print-forever-node" / "print_forever_node.stdout.log").is_file()
     assert str(out / "bob" / "logs") in by["bob"].log_dir
+    # the recording of bob's check stays with his logs, and his failed checks name it
+    recording = out / "bob" / "logs" / "print-forever-node" / "observed.mcap"
+    assert recording.is_file() and recording.stat().st_size > 0
+    failed = [c for c in by["bob"].checks if not c.passed and not c.skipped]
+    assert failed and all(c.evidence and c.evidence["recording"] == str(recording) for c in failed), failed
     if not report.isolation.get("netns"):
         pytest.skip(f"graded without network namespaces: {report.isolation.get('reason')}")
 

@@ -53,7 +53,7 @@ def progress_of(root: Path) -> dict:
 def assert_clean_error(proc, code: int, *needles: str, one_line: bool = False) -> str:
     """Exit ``code``; stderr holds one ``error:`` message then one ``hint:`` line; no traceback anywhere.
 
-    Messages that embed a tmp path can be longer than the 200 columns the ``cli``
+    Messages that embed a tmp path can be longer than the 320 columns the ``cli``
     fixture forces, and the CLI currently wraps them (see
     ``test_long_error_message_stays_on_one_line``): continuation lines of the
     error are tolerated unless ``one_line``. Returns the error message (unwrapped);

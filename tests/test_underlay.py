@@ -115,8 +115,8 @@ def test_an_interrupted_build_leaves_nothing_a_later_run_trusts(tmp_path, mirror
     tiny = make_archive(mirror, "tiny", {"tiny_pkg": "ok"})
     real = underlay._run_colcon
 
-    def interrupted(args, env, cwd, log, timeout):
-        real(args, env, cwd, log, timeout)  # the packages get installed, then Ctrl+C before the stamp
+    def interrupted(args, env, cwd, log, timeout, packages=None):
+        real(args, env, cwd, log, timeout, packages)  # the packages get installed, then Ctrl+C before the stamp
         raise KeyboardInterrupt
 
     monkeypatch.setattr(underlay, "_run_colcon", interrupted)

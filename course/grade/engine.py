@@ -26,7 +26,7 @@ from typing import Any
 
 from course.build import colcon as build_mod
 from course.errors import CourseError, NotGradable
-from course.grade.results import CheckResult, LessonResult, Plot, Status
+from course.grade.results import NOT_CHECKED, CheckResult, LessonResult, Plot, Status
 from course.lesson.catalog import Lesson, content_root
 from course.ros import env as env_mod
 from course.ros import index as ament_index
@@ -226,7 +226,7 @@ class GradingSession:
     def _not_checked(self, check_id: str, reason: str) -> None:
         check = self.checks[check_id]
         self.results[check_id] = CheckResult(check.id, check.name, 0.0, check.points, False,
-                                             f"not checked: {reason}", "(depends on the failed check above)",
+                                             f"{NOT_CHECKED}{reason}", "(depends on the failed check above)",
                                              check.hint, skipped=True)
 
     def require(self, *check_ids: str) -> None:

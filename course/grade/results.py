@@ -52,6 +52,10 @@ class Status(str, enum.Enum):
 GRADED = "graded"
 
 
+#: How the engine's "not checked" verdicts begin (a check whose need failed, or whose part stopped).
+NOT_CHECKED = "not checked: "
+
+
 @dataclasses.dataclass
 class CheckResult:
     """The verdict on one check (the JSON shape of ``check --json``'s ``checks``)."""
@@ -83,9 +87,12 @@ class CheckResult:
     def from_dict(cls, data: dict[str, Any]) -> CheckResult:
         """The inverse of :meth:`to_dict` (unknown keys ignored)."""
         evidence = data.get("evidence")
+        observed = str(data.get("observed", ""))
         return cls(str(data.get("id", "")), str(data.get("name", "")), float(data.get("points", 0.0)),
-                   float(data.get("max_points", 0.0)), bool(data.get("passed")), str(data.get("observed", "")),
+                   float(data.get("max_points", 0.0)), bool(data.get("passed")), observed,
                    str(data.get("expected", "")), str(data.get("hint", "")),
+                   # the JSON has no "skipped": the engine's "not checked" verdicts say it in their text
+                   skipped=not data.get("passed") and observed.startswith(NOT_CHECKED),
                    evidence=dict(evidence) if isinstance(evidence, dict) else None)
 
     def output_text(self) -> str:
