@@ -84,7 +84,7 @@ def _root(debug: Annotated[bool, typer.Option("--debug", help="Show tracebacks o
 
 def _env():
     """:mod:`course.ros.env`, imported on first use (start time, see the imports)."""
-    from course.ros import env  # noqa: PLC0415
+    from course.ros import env  # noqa: PLC0415 - start time, see the imports
 
     return env
 
@@ -106,7 +106,7 @@ def _workspace(workspace: Path | None) -> Workspace:
 
 def load_catalog():
     """The course's lessons (:func:`course.lesson.catalog.load_catalog`), imported on first use for start time."""
-    from course.lesson.catalog import load_catalog as load  # noqa: PLC0415
+    from course.lesson.catalog import load_catalog as load  # noqa: PLC0415 - start time, see the imports
 
     return load()
 
@@ -140,7 +140,7 @@ def init(directory: Annotated[Path, typer.Argument(help="Workspace folder to cre
 @_handle_errors
 def list_(workspace: WorkspaceOpt = None) -> None:
     """Every lesson, its status and best score."""
-    from course.report.table import render_list  # noqa: PLC0415
+    from course.report.table import render_list  # noqa: PLC0415 - start time, see the imports
 
     catalog = load_catalog()
     ws = _workspace(workspace)
@@ -152,7 +152,7 @@ def list_(workspace: WorkspaceOpt = None) -> None:
 def show(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", help="Lesson id (default: current).")] = None,
          workspace: WorkspaceOpt = None) -> None:
     """Show a lesson's instructions again (changes no file)."""
-    from course.report.table import lesson_files, render_lesson  # noqa: PLC0415
+    from course.report.table import lesson_files, render_lesson  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     lesson = _lesson_for(lesson_id, ws)
@@ -167,8 +167,8 @@ def show(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", he
 @_handle_errors
 def next_(workspace: WorkspaceOpt = None) -> None:
     """Move to the next lesson: show its instructions and copy its starter files."""
-    from course.lesson.starter import copy_starter
-    from course.report.table import render_lesson  # noqa: PLC0415
+    from course.lesson.starter import copy_starter  # noqa: PLC0415 - start time, see the imports
+    from course.report.table import render_lesson  # noqa: PLC0415 - start time, see the imports
 
     catalog = load_catalog()
     ws = _workspace(workspace)
@@ -221,7 +221,7 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
           ) -> None:
     """Build the lesson's packages, run your nodes, grade them. Exit 0 only on full marks."""
     _ros()
-    from course.report.table import render_result, result_json  # noqa: PLC0415
+    from course.report.table import render_result, result_json  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     if all_passed:
@@ -246,7 +246,7 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
 
 def _grade(ws: Workspace, lesson, quiet: bool = False):
     """Grade ``lesson`` in ``ws`` (building SmartArmStack first where its packages need it) and record the attempt."""
-    from course.grade.engine import grade_lesson  # noqa: PLC0415
+    from course.grade.engine import grade_lesson  # noqa: PLC0415 - start time, see the imports
 
     err = stderr_console()
     # the sas lesson's C++ path: build SmartArmStack once, on demand (minutes; course.ros.env)
@@ -263,7 +263,7 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
 
 def _exit_status(result) -> ExitStatus:
     """The exit status of one lesson's grade: 0 only on full marks (see :class:`~course.errors.ExitStatus`)."""
-    from course.grade.results import Status  # noqa: PLC0415
+    from course.grade.results import Status  # noqa: PLC0415 - start time, see the imports
 
     codes = {Status.PASSED: ExitStatus.OK, Status.NOT_GRADABLE: ExitStatus.NOT_GRADABLE,
              Status.GRADER_ERROR: ExitStatus.GRADER_ERROR}
@@ -272,10 +272,10 @@ def _exit_status(result) -> ExitStatus:
 
 def _check_all(ws: Workspace, as_json: bool) -> None:
     """``check --all``: every passed lesson re-graded after one build; exit 0 only when all still pass."""
-    import json  # noqa: PLC0415
+    import json  # noqa: PLC0415 - start time, see the imports
 
-    from course.grade import regrade as regrade_mod  # noqa: PLC0415
-    from course.report.table import render_regrades  # noqa: PLC0415
+    from course.grade import regrade as regrade_mod  # noqa: PLC0415 - start time, see the imports
+    from course.report.table import render_regrades  # noqa: PLC0415 - start time, see the imports
 
     _require_initialised(ws)
     catalog = load_catalog()
@@ -312,7 +312,7 @@ def _check_all(ws: Workspace, as_json: bool) -> None:
 @_handle_errors
 def watch(workspace: WorkspaceOpt = None) -> None:
     """Re-check the current lesson whenever you save one of its files (keys: h n l c q)."""
-    from course.lesson.watch import Watcher  # noqa: PLC0415
+    from course.lesson.watch import Watcher  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     _require_initialised(ws)
@@ -326,7 +326,7 @@ def evidence(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON"
                                                                       help="Check ids (default: the failed ones).")] = None,
              workspace: WorkspaceOpt = None) -> None:
     """What a check saw: the recorded messages and rates of the last check of LESSON."""
-    from course.report.evidence import latest_log_dir, render  # noqa: PLC0415
+    from course.report.evidence import latest_log_dir, render  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     lesson = _lesson_for(lesson_id, ws)
@@ -345,7 +345,7 @@ def hint(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON")] =
     index = min(record.hints_shown, len(lesson.hints) - 1)
     out = stdout_console()
     out.print(f"[bold cyan]Hint {index + 1}/{len(lesson.hints)}[/] for {lesson.id}:")
-    from rich.markdown import Markdown  # noqa: PLC0415
+    from rich.markdown import Markdown  # noqa: PLC0415 - start time, see the imports
 
     out.print(Markdown(lesson.hints[index]))
     if record.hints_shown >= len(lesson.hints):
@@ -359,7 +359,7 @@ def hint(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON")] =
 def reset(lesson_id: Annotated[str, typer.Argument(metavar="LESSON")],
           workspace: WorkspaceOpt = None) -> None:
     """Restore the lesson's starter files; your versions are backed up first."""
-    from course.lesson.starter import reset_starter  # noqa: PLC0415
+    from course.lesson.starter import reset_starter  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     lesson = load_catalog().get(lesson_id)
@@ -383,7 +383,7 @@ def doctor(fix: Annotated[bool, typer.Option("--fix", help="Repair the ROS wheel
            ) -> None:
     """Report what is installed (rclpy, RMW, colcon, cmake, C++, rclcpp, launch, ros2) and repair with --fix."""
     _ros()
-    from rich.table import Table  # noqa: PLC0415
+    from rich.table import Table  # noqa: PLC0415 - start time, see the imports
 
     rows = _env().doctor(fix=fix, sources=sources)
     table = Table(title="ros2course doctor", title_justify="left")
@@ -416,7 +416,7 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
          ) -> None:
     """The learner's ROS 2 environment: source "$(ros2course env --path)" in a terminal."""
     _ros()
-    from course.ros import underlay  # noqa: PLC0415
+    from course.ros import underlay  # noqa: PLC0415 - start time, see the imports
 
     if not (path or build):
         raise CourseError("say what to do: --path or --build", 'e.g. source "$(ros2course env --path)"')
@@ -452,11 +452,11 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
              as_json: Annotated[bool, typer.Option("--json", help="Print the outcomes as JSON.")] = False) -> None:
     """Grade every lesson's reference (full marks), starter (not full) and wrong solutions (named checks fail)."""
     _ros()
-    from course.grade.validate import render_outcomes, validate_course  # noqa: PLC0415
+    from course.grade.validate import render_outcomes, validate_course  # noqa: PLC0415 - start time, see the imports
 
     outcomes = validate_course(lesson_ids or None, progress=stderr_console())
     if as_json:
-        import json  # noqa: PLC0415
+        import json  # noqa: PLC0415 - start time, see the imports
 
         sys.stdout.write(json.dumps([o.to_dict() for o in outcomes], indent=2) + "\n")
     else:
@@ -484,7 +484,7 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
           ) -> None:
     """Grade a whole class: each submission isolated, in parallel, resumable; writes a gradebook."""
     _ros()
-    from course.batch.runner import render_summary, run_batch  # noqa: PLC0415
+    from course.batch.runner import render_summary, run_batch  # noqa: PLC0415 - start time, see the imports
 
     err = stderr_console()
     if memory_mb < 0:
@@ -510,7 +510,7 @@ def gradescope(lesson: Annotated[Optional[list[str]], typer.Option("--lesson", "
                ) -> None:
     """Grade one submission inside a Gradescope autograder container (writes results.json)."""
     _ros()
-    from course.batch.gradescope import run_gradescope  # noqa: PLC0415
+    from course.batch.gradescope import run_gradescope  # noqa: PLC0415 - start time, see the imports
 
     score = run_gradescope(lesson or [], submission, results, timeout=timeout, pids_limit=pids_limit,
                            require_isolation=require_isolation)

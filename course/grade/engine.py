@@ -30,6 +30,9 @@ from course.grade.results import NOT_CHECKED, CheckResult, LessonResult, Plot, S
 from course.lesson.catalog import Lesson, content_root
 from course.ros import env as env_mod
 from course.ros import index as ament_index
+from course.ros.interfaces import workspace_type
+from course.run import sandbox
+from course.run.probes import RosSession
 from course.run.process import LearnerProcess, sweep_stale_fastdds_shm
 from course.run.recording import CHECKS_METADATA, Recorder
 from course.run.recording import FILE_NAME as RECORDING_FILE
@@ -307,9 +310,7 @@ class GradingSession:
     def ros(self):
         """The private ROS graph of this check (created on first use)."""
         if self._ros is None:
-            from course.run.probes import RosSession  # noqa: PLC0415 - rclpy import only when grading
-
-            self._ros = self._stack.enter_context(RosSession(recorder=self._recording()))
+                self._ros = self._stack.enter_context(RosSession(recorder=self._recording()))
         return self._ros
 
     def _recording(self) -> Recorder | None:
@@ -345,8 +346,6 @@ class GradingSession:
             NotGradable: the interface package is not built or does not load.
             CourseError: submission code runs sandboxed and the course has no build of ``package``.
         """
-        from course.ros.interfaces import workspace_type
-        from course.run import sandbox  # noqa: PLC0415
 
         if self.trusted_interfaces is not None:
             return workspace_type(build_mod.overlay_env(self.trusted_interfaces, self.base_env), package, kind, name)
@@ -391,8 +390,6 @@ class GradingSession:
         ~3 s later than one joining a fresh graph (Fast DDS, localhost discovery).
         Pass it as ``graph=`` to the kit steps and :meth:`launch`.
         """
-        from course.run.probes import RosSession  # noqa: PLC0415
-
         return self._stack.enter_context(RosSession(recorder=self._recording()))
 
     def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:

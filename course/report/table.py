@@ -126,7 +126,7 @@ def render_lesson(lesson: Lesson, console: Console) -> None:
                               Text(f"lesson id: {lesson.id}   seed chapter(s): {chapters}", style="dim")),
                         expand=False))
     # rich.markdown pulls in markdown_it (~50 ms): only the commands that show instructions pay for it
-    from rich.markdown import Markdown  # noqa: PLC0415
+    from rich.markdown import Markdown  # noqa: PLC0415 - start time of list
 
     console.print(Markdown(lesson.instructions))
 

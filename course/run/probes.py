@@ -163,10 +163,11 @@ class RosSession:
         return env
 
     def __enter__(self) -> RosSession:
-        import domain_coordinator  # noqa: PLC0415 - ROS imports stay lazy: list/hint must not pay for them
-        import rclpy
-        from rclpy.executors import MultiThreadedExecutor
-        from rclpy.signals import SignalHandlerOptions
+        # ROS imports stay lazy: list/hint must not pay for them
+        import domain_coordinator  # noqa: PLC0415 - rclpy only when grading
+        import rclpy  # noqa: PLC0415 - rclpy only when grading
+        from rclpy.executors import MultiThreadedExecutor  # noqa: PLC0415 - rclpy only when grading
+        from rclpy.signals import SignalHandlerOptions  # noqa: PLC0415 - rclpy only when grading
 
         try:
             self.domain_id = self._stack.enter_context(domain_coordinator.domain_id(_domain_selector()))
@@ -175,7 +176,7 @@ class RosSession:
             rclpy.init(context=self.context, domain_id=self.domain_id,
                        signal_handler_options=SignalHandlerOptions.NO)
             self._stack.callback(self._shutdown_context)
-            from rclpy.parameter import Parameter  # noqa: PLC0415
+            from rclpy.parameter import Parameter  # noqa: PLC0415 - rclpy only when grading (list/show stay light)
 
             # The grader's node needs no type description service (saves ~70 ms per check).
             self.node = rclpy.create_node(
@@ -191,13 +192,13 @@ class RosSession:
         return self
 
     def _spin(self) -> None:
-        from rclpy.executors import ExternalShutdownException  # noqa: PLC0415
+        from rclpy.executors import ExternalShutdownException  # noqa: PLC0415 - rclpy only when grading (list/show stay light)
 
         with contextlib.suppress(ExternalShutdownException, RuntimeError):
             self._executor.spin()
 
     def _shutdown_context(self) -> None:
-        import rclpy  # noqa: PLC0415
+        import rclpy  # noqa: PLC0415 - rclpy only when grading (list/show stay light)
 
         if self._executor is not None:
             self._executor.shutdown(timeout_sec=2.0)
@@ -347,8 +348,8 @@ class RosoutProbe(TopicProbe):
     """
 
     def __init__(self, session: RosSession) -> None:
-        from rcl_interfaces.msg import Log  # noqa: PLC0415
-        from rclpy.qos import (
+        from rcl_interfaces.msg import Log  # noqa: PLC0415 - rclpy only when grading (list/show stay light)
+        from rclpy.qos import (  # noqa: PLC0415 - rclpy only when grading
             DurabilityPolicy,
             HistoryPolicy,
             QoSProfile,
@@ -420,7 +421,7 @@ def parameter_client(session: RosSession, node_name: str, timeout: float = 5.0) 
     Raises:
         TimeoutError: the node's parameter services did not appear within ``timeout`` s.
     """
-    from rclpy.parameter_client import AsyncParameterClient  # noqa: PLC0415
+    from rclpy.parameter_client import AsyncParameterClient  # noqa: PLC0415 - rclpy only when grading (list/show stay light)
 
     # AsyncParameterClient has no destroy(); its clients go with the session's node.
     client = AsyncParameterClient(session.node, node_name)
