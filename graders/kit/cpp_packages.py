@@ -51,6 +51,15 @@ def _cache_value(build: Path, name: str) -> str | None:
     return match.group(1).strip() if match else None
 
 
+def _errors(run, paths: dict[str, str]) -> str:
+    """:func:`compile_errors` without lines repeating part of an earlier one (CMake's explanations often do)."""
+    kept: list[str] = []
+    for line in compile_errors(run, paths=paths).splitlines():
+        if not any(line.strip() in earlier for earlier in kept):
+            kept.append(line)
+    return "\n".join(kept)
+
+
 def build_consumer(s: GradingSession, configure_check: str, build_check: str, template: Path, package: str,
                    library_file: str) -> Path:
     """Configure and build the CMake project ``template`` against the learner's install of ``package``.
@@ -88,7 +97,7 @@ def build_consumer(s: GradingSession, configure_check: str, build_check: str, te
     config = prefix / "share" / package / "cmake"
     if configure.returncode != 0 or configure.timed_out:
         s.record(configure_check, False, f"cmake configure: {configure.ending()} ({package}_DIR = {found})\n"
-                 + compile_errors(configure, paths=short), expected)
+                 + _errors(configure, short), expected)
         raise Unmet("the consumer package does not configure")
     s.record(configure_check, Path(found).resolve() == config.resolve(),
              f"configured; {package}_DIR = {found}".replace(str(s.workspace_root), "<workspace>"), expected)
@@ -97,7 +106,7 @@ def build_consumer(s: GradingSession, configure_check: str, build_check: str, te
                         timeout=BUILD_TIMEOUT, env=env)
     expected = f"the consumer compiles and links {prefix.name}/lib/{library_file} from install/"
     if built.returncode != 0 or built.timed_out:
-        s.record(build_check, False, f"cmake --build: {built.ending()}\n" + compile_errors(built, paths=short),
+        s.record(build_check, False, f"cmake --build: {built.ending()}\n" + _errors(built, short),
                  expected)
         raise Unmet("the consumer package does not build")
     links = " ".join(p.read_text(encoding="utf-8", errors="replace") for p in build.glob("CMakeFiles/*.dir/link.txt"))
@@ -173,7 +182,8 @@ def uses_library(s: GradingSession, check_id: str, executable: Path, library_fil
         return s.record(check_id, False, f"readelf/nm could not read {executable.name}", expected)
     problems = []
     if library_file not in needed:
-        problems.append(f"it does not load {library_file} (NEEDED: {', '.join(needed) or 'none'})")
+        shown = ", ".join(needed[:4]) + (" ..." if len(needed) > 4 else "")
+        problems.append(f"it does not load {library_file} (NEEDED: {shown or 'none'})")
     if own:
         problems.append(f"it compiled its own copy of {', '.join(own[:3])}" + (" ..." if len(own) > 3 else ""))
     return s.record(check_id, not problems, "; ".join(problems) if problems else
