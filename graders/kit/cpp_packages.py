@@ -104,7 +104,7 @@ def build_consumer(s: GradingSession, configure_check: str, build_check: str, te
     s.require(configure_check)
     built = run_program(s, ["cmake", "--build", str(build), "--parallel", "2"], "consumer-build",
                         timeout=BUILD_TIMEOUT, env=env)
-    expected = f"the consumer compiles and links {prefix.name}/lib/{library_file} from install/"
+    expected = f"the consumer compiles and links install/{prefix.name}/lib/{library_file}"
     if built.returncode != 0 or built.timed_out:
         s.record(build_check, False, f"cmake --build: {built.ending()}\n" + _errors(built, short),
                  expected)
