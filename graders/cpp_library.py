@@ -40,7 +40,7 @@ CONSUMER = Path(__file__).parent / "data" / "cpp_library" / "consumer"
 #: What the consumer must print (graders/data/cpp_library/consumer/consumer.cpp), seed ch. 27.2.
 LIBRARY_FACTS = {"square_of_sum(2,3)": "25", "square_of_sum(-1.5,0.25)": "1.5625", "initial_member": "0",
                  "member_after_set": "42", "stream_matches_to_string": "yes"}
-SUM = re.compile(r"^square_of_sum = (\S+)$")
+SUM = re.compile(r"^square_of_sum = (-?\d+(?:\.\d*)?(?:[eE][-+]?\d+)?)$")
 OBJECT = re.compile(r"(?s)^(.*?)(-?\d+) times\.\s*$")
 MATRIX = re.compile(r"1\s+2\s*\n\s*3\s+4")
 CONTENTS = (("a_private_member_ = 0", "a_private_member_ = 0"), ("I am a QString", "the QString"))
