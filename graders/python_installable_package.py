@@ -129,6 +129,6 @@ def _console_script(s: GradingSession, command: Path, env: dict[str, str]) -> No
         howdies = ran.stdout.count("Howdy!")
         s.record("console_script", howdies >= 2,
                  f"'{SCRIPT}' printed Howdy! {howdies} time(s) in {WINDOW} s after its first line"
-                 + (f"; {kpip.last_error(ran.stderr)}" if ran.traceback.strip() else ""),
+                 + (f"; {kpip.last_error(ran.stderr.replace(str(s.log_dir), '<grader>'))}" if ran.traceback.strip() else ""),
                  f"it runs minimalist_package.minimalist_script:main, which prints Howdy! twice a second "
                  f"(the first line and >= 1 more in the {WINDOW} s after it)")

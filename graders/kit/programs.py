@@ -18,12 +18,15 @@ from pathlib import Path
 
 from course.grade.engine import GradingSession
 from course.run.probes import wait_until
+from course.run.process import last_traceback
 
 #: What a signal that ended a program usually means, for C++ programs (signal(7)).
 _SIGNAL_MEANING = {"SIGABRT": " (abort: an assertion failed or an exception nothing caught)",
                    "SIGSEGV": " (segmentation fault: memory that is not yours was touched)"}
 #: Lines of a build's output that say what went wrong (compiler, linker, CMake).
 _ERROR_KEYS = ("error", "Error", "undefined reference", "not found", "No such file", "Could not find")
+#: Lines of a ``CMake Error``'s indented explanation quoted with it.
+_CMAKE_DETAIL_LINES = 3
 #: make's own "make[2]: *** ... Error 1" lines: they repeat that something failed, never what.
 _MAKE_LINE = re.compile(r"g?make(\[\d+\])?: ")
 
@@ -64,11 +67,19 @@ class ProgramRun:
             name = f"signal {-self.returncode}"
         return f"ended by {name}" if name == "SIGINT" else f"killed by {name}{_SIGNAL_MEANING.get(name, '')}"
 
+    def exception(self) -> str:
+        """The traceback's last line (``ValueError: ...``), "" without one.
+
+        Read from stderr, where Python writes tracebacks: :attr:`traceback` runs from the
+        marker to the end of stderr + stdout, so its last line may be an ordinary print.
+        """
+        return last_line(last_traceback(self.stderr) or self.traceback)
+
     def describe(self) -> str:
-        """One sentence for an "observed" text: how it ended, after how long, with the traceback's last line."""
+        """One sentence for an "observed" text: how it ended, after how long, with the exception it raised."""
         if self.timed_out:
             return self.ending()
-        last = last_line(self.traceback)
+        last = self.exception()
         return f"{self.ending()} after {self.seconds:.1f} s" + (f" ({last})" if last else "")
 
 
@@ -93,11 +104,18 @@ def compile_errors(run: ProgramRun, *, paths: Mapping[str, str] | None = None, l
         return run.describe()
     lines = [line.rstrip() for line in (run.stderr + "\n" + run.stdout).splitlines() if line.strip()]
     picked: list[str] = []
+    consumed = -1  # the last line already quoted as a CMake Error's explanation
     for i, line in enumerate(lines):
-        if _MAKE_LINE.match(line) or not any(key in line for key in _ERROR_KEYS):
+        if i <= consumed or _MAKE_LINE.match(line) or line.startswith("-- Configuring incomplete") \
+                or not any(key in line for key in _ERROR_KEYS):
             continue
-        detail = [more.strip() for more in lines[i + 1:i + 4] if more.startswith(" ")] \
-            if line.startswith("CMake Error") else []
+        detail = []
+        if line.startswith("CMake Error"):
+            for more in lines[i + 1:i + 1 + _CMAKE_DETAIL_LINES]:  # CMake indents the explanation under the line
+                if not more.startswith(" "):
+                    break
+                detail.append(more.strip())
+            consumed = i + len(detail)
         picked.append(" ".join([line.strip(), *detail]))
         if len(picked) >= limit:
             break
@@ -175,7 +193,7 @@ def sigint_exit(s: GradingSession, check_id: str, run: ProgramRun, exit_timeout:
     elif run.timed_out:
         observed = f"still running {exit_timeout:.0f} s after Ctrl+C (stopped)"
     elif run.traceback:
-        observed = f"{run.ending()} with a traceback: {last_line(run.traceback)}"
+        observed = f"{run.ending()} with a traceback: {run.exception()}"
     else:
         observed = f"{run.ending()}, no traceback"
     return s.record(check_id, run.interrupted and not run.timed_out and run.returncode == 0 and not run.traceback,
@@ -226,6 +244,6 @@ def printed_lines(s: GradingSession, check_id: str, run: ProgramRun, line: str, 
     observed = f"ran {how}: {count} {line!r} line(s)" + (
         f", other output: {', '.join(repr(o) for o in others[:3])}" if others else "")
     if not count and (run.traceback or run.stderr.strip()):
-        observed += f"; it crashed: {last_line(run.traceback)}" if run.traceback else f"; stderr: {last_line(run.stderr)!r}"
+        observed += f"; it crashed: {run.exception()}" if run.traceback else f"; stderr: {last_line(run.stderr)!r}"
     s.record(check_id, count > 0, observed, f"lines that read exactly {line!r} on stdout")
     return count
