@@ -32,7 +32,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from course.run.probes import RateStats, wait_until
+from course.run.probes import RateStats, record, wait_until
 
 #: Reader history depth: 4 s of a 500 Hz stream; the probe never drops for lack of room.
 READER_DEPTH = 2000
@@ -74,18 +74,21 @@ class JointStreamProbe:
         node_name: the probe's node (a leading underscore hides it from "nodes seen" lists).
         msg_type: ``sensor_msgs/JointState`` (default) or ``std_msgs/Float64MultiArray``
             (recorded with ``data`` as the positions and a zero stamp).
+        graph: the :class:`~course.run.probes.RosSession` whose recording (the check's
+            ``observed.mcap``) gets every message, with its send stamp; None: not recorded.
 
     Use :meth:`close` (or ``with``) to stop its thread before the context is shut down.
     """
 
     def __init__(self, context: Any, topic: str, node_name: str = "_ros2course_joint_stream",
-                 msg_type: type | None = None) -> None:
+                 msg_type: type | None = None, graph: Any = None) -> None:
         import rclpy  # noqa: PLC0415
         from rclpy.executors import SingleThreadedExecutor
         from rclpy.parameter import Parameter
         from sensor_msgs.msg import JointState
 
         self.topic = topic
+        self._graph = graph
         self._lock = threading.Lock()
         self._samples: list[JointSample] = []
         self._node = rclpy.create_node(
@@ -114,6 +117,8 @@ class JointStreamProbe:
                              tuple(msg.position), msg.header.frame_id)
         with self._lock:
             self._samples.append(sample)
+        if self._graph is not None:
+            record(self._graph, self.topic, msg, info["source_timestamp"])
 
     def _on_array(self, msg: Any, info: Any) -> None:
         """For ``std_msgs/Float64MultiArray`` (e.g. sas targets): ``data`` as positions, no stamp."""
@@ -121,6 +126,8 @@ class JointStreamProbe:
         sample = JointSample(now, info["source_timestamp"] * 1e-9, 0.0, tuple(msg.data), "")
         with self._lock:
             self._samples.append(sample)
+        if self._graph is not None:
+            record(self._graph, self.topic, msg, info["source_timestamp"])
 
     def samples(self, since: float | None = None) -> list[JointSample]:
         """Samples so far, oldest first (only those that arrived at or after ``since``, monotonic s)."""

@@ -238,7 +238,7 @@ def start_driver(s: GradingSession, check_id: str, driver: SasDriver, *, sigint_
         Unmet: the executable is not found, or the process died before its node appeared.
     """
     rosout = s.ros.rosout()
-    probe = JointStreamProbe(s.ros.context, driver.joint_states)
+    probe = JointStreamProbe(s.ros.context, driver.joint_states, graph=s.ros)
     s.on_close(probe.close)  # closers run newest first: after the Ctrl+C below
     proc, reason = start_node_action(s, driver.action(), driver.executable)
     if proc is None:
@@ -509,7 +509,8 @@ class StandInDriver:
         self.states = node.create_publisher(JointState, driver.joint_states, sas_qos)
         self.limits_min = node.create_publisher(Float64MultiArray, driver.limits_min, sas_qos)
         self.limits_max = node.create_publisher(Float64MultiArray, driver.limits_max, sas_qos)
-        self.targets = JointStreamProbe(graph.context, driver.target, "_ros2course_targets", Float64MultiArray)
+        self.targets = JointStreamProbe(graph.context, driver.target, "_ros2course_targets", Float64MultiArray,
+                                        graph=graph)
         self._node = node
         self._timer = None
 
