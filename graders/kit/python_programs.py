@@ -54,7 +54,7 @@ def json_output(run: ProgramRun, what: str) -> object:
     try:
         return json.loads(last_line(run.stdout))
     except ValueError:
-        detail = last_line(run.traceback) or last_line(run.stderr) or run.describe()
+        detail = run.exception() or last_line(run.stderr) or run.describe()
         raise Unmet(f"{what} did not finish: {detail}") from None
 
 
