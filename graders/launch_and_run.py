@@ -1,0 +1,62 @@
+"""Grader for ``launch-and-run`` (tutorial ch. 10 and 23; contract in shared/LESSONS.md).
+
+The learner's ``cli/run_and_launch.sh`` starts ``print_forever_node`` with
+``ros2 run`` and the launch-files lesson's launch file with ``ros2 launch``, both
+in the background, and waits. It runs in the check's graph (as kit.scripts runs scripts, with SIGINT
+at its default action as in a terminal) while a
+:class:`~graders.kit.node_watch.NodeWatch` lists the nodes that join; after
+:data:`RUN_SECONDS` the grader presses Ctrl+C (SIGINT to the script's process
+group, as a terminal does) and expects the script to end by itself, exit code
+0 and no traceback, once its nodes have stopped.
+"""
+
+from __future__ import annotations
+
+from graders.kit import Check, GradingSession, scripts
+from graders.kit.node_watch import NodeWatch, node_appeared, run_until_ctrl_c
+from graders.kit.programs import sigint_exit
+from graders.kit.quotes import LAUNCH_FILE, LAUNCH_NODE
+from graders.kit.quotes import PACKAGE as LAUNCH_PACKAGE
+
+SCRIPT = "cli/run_and_launch.sh"
+RUN_PACKAGE = "python_package_with_a_node"
+RUN_NODE = "print_forever"  # shared/LESSONS.md, print-forever-node
+RUN_COMMAND = f"ros2 run {RUN_PACKAGE} print_forever_node &"
+LAUNCH_COMMAND = f"ros2 launch {LAUNCH_PACKAGE} {LAUNCH_FILE} &"
+#: Seconds the script runs before Ctrl+C: `ros2 launch` and two Python nodes start in 2-4 s on a busy machine.
+RUN_SECONDS = 7.0
+#: Seconds it may take to end after Ctrl+C (launch's own escalation starts at 5 s; ROS_ENV.md).
+EXIT_SECONDS = 5.0
+
+SCRIPTED = ("script",)
+CHECKS = [
+    Check("build", "The packages build with colcon", 1),
+    Check("script", f"{SCRIPT} exists and is valid bash", 1),
+    Check("run_node", f"`ros2 run` starts the node /{RUN_NODE}", 2, RUN_COMMAND, needs=SCRIPTED),
+    Check("launch_node", f"`ros2 launch` starts the node /{LAUNCH_NODE}", 2,
+          f"{LAUNCH_COMMAND} (on its own line, after the `ros2 run ... &` line)", needs=SCRIPTED),
+    Check("keeps_running", "The script keeps running until Ctrl+C (it waits for its nodes)", 1,
+          "end the script with `wait`: without it, bash reaches the end at once and the nodes lose their terminal",
+          needs=SCRIPTED),
+    Check("sigint_exit", "Ctrl+C ends the script with exit code 0 and no traceback, after its nodes stopped", 2,
+          "`trap '...' INT` before the commands keeps bash alive when Ctrl+C comes; then a second `wait` waits "
+          "for the nodes to finish", needs=("keeps_running",)),
+]
+
+
+def grade(s: GradingSession) -> None:
+    path = scripts.script(s, "script", SCRIPT)
+    watch = NodeWatch(s)
+    run = run_until_ctrl_c(s, path, RUN_SECONDS, EXIT_SECONDS)
+    watch.stop()
+    node_appeared(s, "run_node", watch, f"/{RUN_NODE}", RUN_COMMAND, before=RUN_SECONDS)
+    node_appeared(s, "launch_node", watch, f"/{LAUNCH_NODE}", LAUNCH_COMMAND, before=RUN_SECONDS)
+    expected = f"still running {RUN_SECONDS:.0f} s after it started (Ctrl+C ends it)"
+    if run.interrupted:
+        s.record("keeps_running", True, f"it was still running after {RUN_SECONDS:.0f} s", expected)
+    else:
+        s.record("keeps_running", False, f"it ended by itself ({run.describe()}) before Ctrl+C; its last output: "
+                 f"{scripts.excerpt(run.stderr or run.stdout, 200)}", expected)
+    if not sigint_exit(s, "sigint_exit", run, EXIT_SECONDS) and run.returncode is not None and run.returncode < 0:
+        s.amend("sigint_exit", hint="bash itself was ended by Ctrl+C while its nodes were still stopping: "
+                "`trap 'echo stopping' INT` keeps it alive, and a second `wait` waits for them")
