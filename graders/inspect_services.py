@@ -45,8 +45,8 @@ CHECKS = [
 
 
 def grade(s: GradingSession) -> None:
-    srv_type = workspace_types(s, "srv", "WhatIsThePoint")
     path = scripts.script(s, "script", SCRIPT)
+    srv_type = workspace_types(s, "srv", "WhatIsThePoint")
     oracle = PointOracle(s, srv_type)
     run = scripts.run_script(s, path, timeout=TIMEOUT)
     scripts.ended(s, "ends", run, "it ends by itself with exit code 0 (each `ros2 service call` ends after one answer)")
