@@ -80,19 +80,5 @@ def grade(s: GradingSession) -> None:
             s.record(check_id, False, f"{name} is not installed here", f"{name} is installed",
                      hint="this is a fault of the course's ROS install, not of your script")
             continue
-        printed_lines(s, check_id, run, field_lines(found), name)
-
-
-def printed_lines(s: GradingSession, check_id: str, run, wanted: list[str], name: str) -> None:
-    """Record ``check_id``: each of ``wanted`` is a whole, unindented line of the script's output.
-
-    Whole lines: ``show`` prints a nested message's fields indented under the
-    field that holds it (``WhatIsThePoint`` shows ``float64 x`` of its Point
-    that way), which is not the definition of that message itself.
-    """
-    lines = {line.rstrip() for line in run.stdout.splitlines()}
-    missing = [line for line in wanted if line not in lines]
-    expected = f"your script prints the definition of {name}: the lines {', '.join(wanted)}"
-    s.record(check_id, not missing, f"your script printed no definition of {name}: no line {', '.join(missing)}; "
-             f"it printed: {scripts.excerpt(run.stdout)}" if missing else f"it printed the definition of {name}",
-             expected, hint=f"`ros2 interface show {name}` prints it")
+        scripts.printed(s, check_id, run, field_lines(found), f"definition of {name}", f"ros2 interface show {name}",
+                        whole_lines=True)

@@ -14,6 +14,8 @@ from __future__ import annotations
 import time
 from typing import Any
 
+import yaml
+
 from graders.kit import Check, GradingSession, params, scripts
 from graders.kit.mystery import (
     CONFIGURABLE_NODE,
@@ -92,7 +94,6 @@ def judge_set(s: GradingSession, node: ConfigurableQuotePublisher, run: Any) -> 
 
 def judge_dump(s: GradingSession, dump, started: float, current: dict[str, Any]) -> None:
     """Record ``dump_file`` (written by this run, the dump format, the node's parameters) and ``dump_after_set``."""
-    import yaml  # noqa: PLC0415
 
     expected = f"{DUMP} written by your script: '{NODE}:' -> 'ros__parameters:' -> the node's parameters"
     if not dump.is_file() or dump.stat().st_mtime < started - 1.0:

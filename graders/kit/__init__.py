@@ -12,6 +12,17 @@ raises :class:`Unmet`; the engine then records every check that needs the
 failed one as "not checked" with the reason, and still runs the closing
 checks (Ctrl+C of a started node). Graders never write skip logic. See
 graders/README.md for a whole grader.
+
+The kit's modules, by what they observe (graders import the ones they use,
+``from graders.kit import scripts``):
+
+* nodes, node_watch, judge, checks, parts: executables, nodes, rates, Ctrl+C, shared check declarations;
+* topics_services, services, quotes, params, launch: the Python track's topics, services, parameters, launch;
+* scripts, mystery, mystery_services: the ``ros2`` command-line lessons and the grader's own "mystery" nodes;
+* dds: Fast DDS profiles tried by grader nodes in child processes;
+* joint_stream, sas: the SmartArmStack driver's 500 Hz stream and the stand-in driver;
+* packages, packaging, cpp_packages, cmake: package.xml, setup.py, CMake installs and consumers;
+* programs, python_programs, asyncio_trace, pip, files: learner programs that are not nodes.
 """
 
 from course.grade.engine import Check, GradingSession, Unmet

@@ -59,7 +59,7 @@ class JointSample:
 
 def best_effort_qos(depth: int = READER_DEPTH) -> Any:
     """Best-effort, volatile, keep-last ``depth`` reader QoS (matches reliable and best-effort writers)."""
-    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: PLC0415
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.BEST_EFFORT,
                       durability=DurabilityPolicy.VOLATILE)
@@ -82,10 +82,10 @@ class JointStreamProbe:
 
     def __init__(self, context: Any, topic: str, node_name: str = "_ros2course_joint_stream",
                  msg_type: type | None = None, graph: Any = None) -> None:
-        import rclpy  # noqa: PLC0415
-        from rclpy.executors import SingleThreadedExecutor
-        from rclpy.parameter import Parameter
-        from sensor_msgs.msg import JointState
+        import rclpy  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
+        from rclpy.executors import SingleThreadedExecutor  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
+        from rclpy.parameter import Parameter  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
+        from sensor_msgs.msg import JointState  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
         self.topic = topic
         self._graph = graph
@@ -104,7 +104,7 @@ class JointStreamProbe:
         self._thread.start()
 
     def _spin(self) -> None:
-        from rclpy.executors import ExternalShutdownException  # noqa: PLC0415
+        from rclpy.executors import ExternalShutdownException  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
         with contextlib.suppress(ExternalShutdownException, RuntimeError, Exception):
             while not self._stop.is_set():

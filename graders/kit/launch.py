@@ -24,8 +24,15 @@ from __future__ import annotations
 import ast
 import dataclasses
 import sys
+import time
 from pathlib import Path
 from typing import Any
+
+import yaml
+
+from course.grade.engine import Unmet
+from course.ros.env import probe_requirement, require
+from graders.kit.nodes import process_state
 
 MODE_LAUNCH_ROS = "run with launch_ros"
 
@@ -372,7 +379,6 @@ class LaunchRun:
 
 def launch_ros_available() -> bool:
     """True when ROS 2's ``launch`` and ``launch_ros`` import (not PyPI's unrelated ``launch``)."""
-    from course.ros.env import probe_requirement  # noqa: PLC0415
 
     return probe_requirement("launch")[0]
 
@@ -388,7 +394,6 @@ def start_node_action(s: Any, action: NodeAction, label: str) -> tuple[Any | Non
     Returns:
         ``(process, "")``, or ``(None, reason)`` when the executable is not found.
     """
-    import yaml  # noqa: PLC0415
 
     path, observed = s.find_executable(action.package, action.executable)
     if path is None:
@@ -421,7 +426,6 @@ def start_launch_file(s: Any, launch_file: Path, label: str = "launch") -> Launc
             doctor --fix`` builds them).
     """
     if not launch_ros_available():
-        from course.ros.env import require  # noqa: PLC0415
 
         require(["launch"], f"running {launch_file.name}")
     proc = s.launch(Path(sys.executable), label, ["-c", _LAUNCH_SCRIPT, str(launch_file)])
@@ -448,7 +452,6 @@ def installed_launch_file(s: Any, check_id: str, package: str, name: str, source
     Raises:
         Unmet: the package has no such launch file at all.
     """
-    from course.grade.engine import Unmet  # noqa: PLC0415
 
     share = s.find_share(package)
     installed = share / "launch" / name if share else None
@@ -481,10 +484,7 @@ def launched_node(s: Any, started_id: str, node_id: str, run: LaunchRun, package
     Raises:
         Unmet: nothing the launch file started is still running.
     """
-    import time  # noqa: PLC0415
 
-    from course.grade.engine import Unmet  # noqa: PLC0415
-    from graders.kit.nodes import process_state  # noqa: PLC0415
 
     began = time.monotonic()
     first_other: list[float] = []

@@ -80,8 +80,8 @@ class MysteryNode:
 
     def __init__(self, s: GradingSession, name: str, *, parameter_services: bool = False,
                  parameters: dict[str, Any] | None = None) -> None:
-        import rclpy  # noqa: PLC0415 - ROS imports stay lazy
-        from rclpy.executors import SingleThreadedExecutor  # noqa: PLC0415
+        import rclpy  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
+        from rclpy.executors import SingleThreadedExecutor  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
         context = s.ros.context
         self.node = rclpy.create_node(name, context=context, enable_rosout=False,
@@ -95,7 +95,7 @@ class MysteryNode:
         s.on_close(self.close)
 
     def _spin(self) -> None:
-        from rclpy.executors import ExternalShutdownException  # noqa: PLC0415
+        from rclpy.executors import ExternalShutdownException  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
         try:
             self._executor.spin()

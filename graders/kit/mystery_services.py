@@ -104,8 +104,8 @@ class PointOracle(MysteryNode):
     def _introspect(self) -> None:
         """Let ``ros2 service echo`` show the calls (Jazzy service introspection; best effort)."""
         try:
-            from rclpy.qos import qos_profile_system_default  # noqa: PLC0415
-            from rclpy.service_introspection import ServiceIntrospectionState  # noqa: PLC0415
+            from rclpy.qos import qos_profile_system_default  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
+            from rclpy.service_introspection import ServiceIntrospectionState  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
             self.service.configure_introspection(self.node.get_clock(), qos_profile_system_default,
                                                  ServiceIntrospectionState.CONTENTS)

@@ -19,6 +19,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from course.build.colcon import colcon_command
 from course.grade.engine import GradingSession, Unmet
 from course.ros import index as ament_index
 from course.run import sandbox
@@ -93,8 +94,6 @@ def colcon_python(s: GradingSession) -> str:
     It has setuptools (colcon needs it to build ``ament_python`` packages); the course's own
     interpreter may not (a Python 3.12 venv ships without setuptools).
     """
-    from course.build.colcon import colcon_command
-
     command = colcon_command(s.base_env)[0]
     script = command if os.path.isabs(command) else shutil.which(command, path=s.base_env.get("PATH"))
     try:

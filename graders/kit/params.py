@@ -11,11 +11,16 @@ the checks that needed the answer become "not checked" with the reason.
 from __future__ import annotations
 
 import dataclasses
+import time
 from pathlib import Path
 from typing import Any
 
+import yaml
+
 from course.grade.engine import GradingSession, Unmet
+from course.lesson.catalog import yaml_error_text
 from course.run.probes import wait_future, wait_until
+from graders.kit.launch import flatten_parameters
 from graders.kit.nodes import process_state
 
 #: rcl_interfaces/msg/ParameterType values -> the words ``ros2 param describe`` uses.
@@ -25,7 +30,7 @@ PARAMETER_TYPES = {0: "not set", 1: "boolean", 2: "integer", 3: "double", 4: "st
 
 def parameter_value(value_msg: Any) -> tuple[str, Any]:
     """``(type word, Python value)`` of an ``rcl_interfaces/msg/ParameterValue`` (words of :data:`PARAMETER_TYPES`)."""
-    from rclpy.parameter import parameter_value_to_python  # noqa: PLC0415
+    from rclpy.parameter import parameter_value_to_python  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
     kind = PARAMETER_TYPES.get(value_msg.type, f"type {value_msg.type}")
     try:
@@ -112,7 +117,7 @@ class NodeParameters:
         The node applies the values before it answers, so a message sent after
         this returns was sent after the change.
         """
-        from rclpy.parameter import Parameter  # noqa: PLC0415
+        from rclpy.parameter import Parameter  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
         return self._set([Parameter(name, value=value).to_parameter_msg() for name, value in values.items()])
 
@@ -127,8 +132,7 @@ class NodeParameters:
             ValueError: rclpy cannot turn the file into parameters (message: its first line).
             Unmet: no answer.
         """
-        import yaml  # noqa: PLC0415
-        from rclpy.parameter import parameter_dict_from_yaml_file  # noqa: PLC0415
+        from rclpy.parameter import parameter_dict_from_yaml_file  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
         try:
             loaded = parameter_dict_from_yaml_file(str(path), target_nodes=[node_key])
@@ -159,7 +163,7 @@ def connect(s: GradingSession, node: str | None, *, proc: Any = None, why: str =
     """
     if node is None:
         raise Unmet(f"no node to ask: {why}" if why else "no node to ask")
-    from rclpy.parameter_client import AsyncParameterClient  # noqa: PLC0415
+    from rclpy.parameter_client import AsyncParameterClient  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
     # AsyncParameterClient has no destroy(); its clients go with the session's node.
     client = AsyncParameterClient(s.ros.node, node)
@@ -182,7 +186,6 @@ def dump_section(data: Any, node_key: str) -> tuple[dict[str, Any] | None, str]:
     Returns:
         ``(parameters, "")``, or ``(None, what is wrong)`` in the learner's terms.
     """
-    from graders.kit.launch import flatten_parameters  # noqa: PLC0415
 
     if node_key not in data:
         note = ""
@@ -219,9 +222,7 @@ def read_dump(s: GradingSession, present_id: str, valid_id: str, key_id: str, pa
     Raises:
         Unmet: no file, not valid YAML, or not a non-empty mapping.
     """
-    import yaml  # noqa: PLC0415
 
-    from course.lesson.catalog import yaml_error_text  # noqa: PLC0415
 
     if path is None or not path.is_file():
         root = s.workspace_root
@@ -248,7 +249,6 @@ def read_dump(s: GradingSession, present_id: str, valid_id: str, key_id: str, pa
 
 def _reparsed_type(text: str) -> str:
     """The type rclpy's ``get_parameter_value`` guesses for ``text`` (``ros2 param load`` re-parses values)."""
-    import yaml  # noqa: PLC0415
 
     try:
         return python_type_name(yaml.safe_load(text))
@@ -295,7 +295,6 @@ def load_file(s: GradingSession, check_id: str, services: NodeParameters, path: 
     Raises:
         Unmet: rclpy cannot read the file, or ``check_id`` failed (``s.require``).
     """
-    import time  # noqa: PLC0415
 
     read_only = services.read_only(services.names())
     expected = "every parameter set successfully (read-only ones like start_type_description_service excepted)"

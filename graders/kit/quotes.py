@@ -9,12 +9,17 @@ from __future__ import annotations
 
 import os
 import random
+import time
 from pathlib import Path
 from typing import Any
 
 from course.grade.engine import GradingSession, Unmet
-from course.run.probes import wait_until
+from course.run.probes import LATE_DELIVERY, wait_until
+from graders.kit.judge import topics_seen
+from graders.kit.launch import NodeAction, start_node_action
+from graders.kit.nodes import process_state
 from graders.kit.packages import source_package
+from graders.kit.topics_services import has_integer, publisher
 
 PACKAGE = "python_package_that_uses_parameters_and_launch_files"
 EXECUTABLE = "amazing_quote_configurable_publisher_node"
@@ -87,7 +92,6 @@ def quote_after(s: GradingSession, check_id: str, probe: Any, since: float, *, c
         prefix: opens the observed text (e.g. "set_parameters succeeded; ").
         stale: appended when a value did not change (a likely cause for the learner).
     """
-    from graders.kit.nodes import process_state  # noqa: PLC0415
 
     with s.phase("observe"):
         later = probe.wait_sent_after(since, count, period, abort=lambda: proc.poll() is not None)
@@ -137,8 +141,6 @@ def subscriber_logs(s: GradingSession, quotes_id: str, details_id: str, node: An
     Raises:
         Unmet: no quote was logged (``details_id`` cannot be judged).
     """
-    from graders.kit.nodes import process_state  # noqa: PLC0415
-    from graders.kit.topics_services import has_integer, publisher  # noqa: PLC0415
 
     quotes = made_up(msg_type, count)
 
@@ -190,10 +192,6 @@ def start_as_launched(s: GradingSession, check_id: str, probe: Any) -> Any:
     Raises:
         Unmet: no executable, no node, or no message on the topic.
     """
-    from course.run.probes import LATE_DELIVERY  # noqa: PLC0415
-    from graders.kit.judge import topics_seen  # noqa: PLC0415
-    from graders.kit.launch import NodeAction, start_node_action  # noqa: PLC0415
-    from graders.kit.nodes import process_state  # noqa: PLC0415
 
     action = NodeAction(line=0, package=PACKAGE, executable=EXECUTABLE, name=LAUNCH_NODE,
                         parameters=[dict(LAUNCH_PARAMETERS)])
@@ -229,7 +227,6 @@ def set_at_runtime(s: GradingSession, check_id: str, services: Any, probe: Any, 
         services: the node's :class:`~graders.kit.params.NodeParameters`.
         probe: the TopicProbe of ``topic``; proc: the publisher's process.
     """
-    import time  # noqa: PLC0415
 
     expected = (f"within {count} messages after the change, quote {short(quote)} "
                 f"and philosopher_name {philosopher!r}")

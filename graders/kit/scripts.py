@@ -114,15 +114,19 @@ def ended(s: GradingSession, check_id: str, run: ProgramRun, expected: str) -> b
 
 
 def printed(s: GradingSession, check_id: str, run: ProgramRun, needles: Iterable[str], what: str,
-            command: str) -> bool:
+            command: str, whole_lines: bool = False) -> bool:
     """Record ``check_id``: every one of ``needles`` appears in the script's standard output.
 
     Args:
         needles: texts that only the real command can print (the check's random values).
         what: what they are, for feedback ("the message on /amazing_quote_8341").
         command: the command that prints them, quoted in the hint ("ros2 topic echo --once /amazing_quote_8341").
+        whole_lines: each needle must be a whole output line, unindented (``ros2 interface show``
+            prints a nested message's fields indented under the field holding it: those are not
+            the nested message's own definition).
     """
-    missing = [needle for needle in needles if needle not in run.stdout]
+    lines = {line.rstrip() for line in run.stdout.splitlines()}
+    missing = [needle for needle in needles if (needle not in lines if whole_lines else needle not in run.stdout)]
     expected = f"your script prints {what} (`{command}` prints it)"
     if missing:
         s.record(check_id, False, f"your script printed no {what}: missing {', '.join(map(repr, missing))}; "

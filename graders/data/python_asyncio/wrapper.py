@@ -15,7 +15,15 @@ In ``probe`` mode it imports the module, checks ``unlikely_to_return`` and calls
 it in three scenarios (default likelihood, likelihood=0.4, two calls gathered);
 in ``module`` mode it runs the module as ``__main__``.
 """
-import asyncio, inspect, io, json, os, random, runpy, sys, time, traceback
+import asyncio
+import inspect
+import io
+import json
+import os
+import random
+import runpy
+import sys
+import time
 
 TRACE, MODE, TARGET, PLANS = sys.argv[1], sys.argv[2], sys.argv[3], json.loads(sys.argv[4])
 EXTRA_DRAWS = 30  # draws allowed after a plan ends (each then rolls 0.99) before giving up
