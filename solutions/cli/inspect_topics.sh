@@ -15,8 +15,10 @@ echo "The mystery topic is ${TOPIC}"
 # 2. Its type and how many publishers and subscriptions it has.
 ros2 topic info "${TOPIC}"
 
-# 3. One message, then stop (--once).
-ros2 topic echo --once "${TOPIC}"
+# 3. One message, then stop (--once). Naming the type (the one `info` printed) lets echo
+#    subscribe at once; without it, echo asks the graph for the type and gives up with
+#    "does not appear to be published yet" when discovery has not caught up.
+ros2 topic echo --once "${TOPIC}" package_with_interfaces/msg/AmazingQuote
 
 # 4. Send one quote to the inbox, then stop (--once).
 ros2 topic pub --once /amazing_quote_in package_with_interfaces/msg/AmazingQuote \
