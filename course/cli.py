@@ -249,9 +249,7 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
     from course.grade.engine import grade_lesson  # noqa: PLC0415 - start time, see the imports
 
     err = stderr_console()
-    # the sas lesson's C++ path: build SmartArmStack once, on demand (minutes; course.ros.env)
-    _env().ensure_components_for(ws.root, lesson.packages,
-                                 progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
+    _ensure_components(ws, lesson.packages)
     status = err.status(f"grading {lesson.id} in {ws.root} ...") if not quiet and err.is_terminal else None
     with status or contextlib.nullcontext():
         progress = (lambda line: status.update(f"{lesson.id}: {line}")) if status is not None else None
@@ -259,6 +257,13 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
     if ws.initialised:
         ws.record_attempt(lesson.id, result.status.value, result.score, result.max_score)
     return result
+
+
+def _ensure_components(ws: Workspace, packages: list[str]) -> None:
+    """Build the optional components ``packages`` need first (the sas lesson's SmartArmStack: minutes, once)."""
+    err = stderr_console()
+    _env().ensure_components_for(ws.root, packages,
+                                 progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
 
 
 def _exit_status(result) -> ExitStatus:
@@ -288,9 +293,7 @@ def _check_all(ws: Workspace, as_json: bool) -> None:
             stdout_console().print("No lesson passed yet: nothing to re-grade. 'ros2course check' grades the current one.")
         return
     err = stderr_console()
-    for lesson in lessons:
-        _env().ensure_components_for(ws.root, lesson.packages,
-                                     progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
+    _ensure_components(ws, sorted({name for lesson in lessons for name in lesson.packages}))
 
     def shown(item) -> None:
         ws.record_attempt(item.lesson.id, item.result.status.value, item.result.score, item.result.max_score)
