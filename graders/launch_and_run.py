@@ -13,7 +13,7 @@ group, as a terminal does) and expects the script to end by itself, exit code
 from __future__ import annotations
 
 from graders.kit import Check, GradingSession, scripts
-from graders.kit.node_watch import NodeWatch, node_appeared, run_until_ctrl_c
+from graders.kit.node_watch import NodeWatch, node_appeared
 from graders.kit.programs import sigint_exit
 from graders.kit.quotes import LAUNCH_FILE, LAUNCH_NODE
 from graders.kit.quotes import PACKAGE as LAUNCH_PACKAGE
@@ -47,7 +47,7 @@ CHECKS = [
 def grade(s: GradingSession) -> None:
     path = scripts.script(s, "script", SCRIPT)
     watch = NodeWatch(s)
-    run = run_until_ctrl_c(s, path, RUN_SECONDS, EXIT_SECONDS)
+    run = scripts.run_script(s, path, interrupt_after_s=RUN_SECONDS, exit_timeout=EXIT_SECONDS)
     watch.stop()
     node_appeared(s, "run_node", watch, f"/{RUN_NODE}", RUN_COMMAND, before=RUN_SECONDS)
     node_appeared(s, "launch_node", watch, f"/{LAUNCH_NODE}", LAUNCH_COMMAND, before=RUN_SECONDS)

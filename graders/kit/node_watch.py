@@ -9,14 +9,11 @@ asks the graph API, what ``ros2 node list`` shows; no ``ros2`` daemon involved).
 
 from __future__ import annotations
 
-import shutil
 import threading
 import time
-from pathlib import Path
 from typing import Any
 
 from course.grade.engine import GradingSession
-from graders.kit.programs import ProgramRun, interrupt_after
 
 
 class NodeWatch:
@@ -88,23 +85,4 @@ def node_appeared(s: GradingSession, check_id: str, watch: NodeWatch, node: str,
                     expected)
 
 
-def run_until_ctrl_c(s: GradingSession, path: Path, seconds: float, exit_timeout: float) -> ProgramRun:
-    """Run ``bash path`` as a terminal would, press Ctrl+C after ``seconds``, wait ``exit_timeout`` s for its end.
-
-    Like :func:`graders.kit.scripts.run_script` with ``interrupt_after_s`` (the check's
-    graph, the sourced workspace, own process group, everything with the run's marker
-    killed at the end), but bash starts with SIGINT at its default action
-    (``env --default-signal=INT``, GNU coreutils >= 8.31): a grader started from a
-    background job inherits SIGINT *ignored*, and a bash that starts with it ignored
-    can neither die of Ctrl+C nor trap it (bash(1), SIGNALS), so a script without
-    ``trap`` would look right. In a terminal SIGINT is never ignored.
-    """
-    env = s.ros.learner_env(s.overlay())
-    env.setdefault("ROS_HOME", str(s.log_dir / "ros_home"))
-    argv = ["bash", str(path)]
-    if shutil.which("env", path=env.get("PATH")):
-        argv = ["env", "--default-signal=INT", *argv]
-    return interrupt_after(s, argv, path.stem, seconds, exit_timeout=exit_timeout, env=env, cwd=s.workspace_root)
-
-
-__all__ = ["NodeWatch", "node_appeared", "run_until_ctrl_c"]
+__all__ = ["NodeWatch", "node_appeared"]
