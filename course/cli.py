@@ -23,7 +23,7 @@ from course.errors import CourseError, ExitStatus
 if TYPE_CHECKING:
     from rich.console import Console
 
-    from course.lesson.progress import Workspace
+    from course.lesson.workspace import Workspace
 
 # Start time (issue 13: `--help` and `list` in under 0.25 s): the catalog
 # (pydantic, yaml), the ROS environment and grading are imported inside the
@@ -99,7 +99,7 @@ def _ros() -> None:
 
 
 def _workspace(workspace: Path | None) -> Workspace:
-    from course.lesson.progress import find_workspace  # noqa: PLC0415 - start time, see the imports
+    from course.lesson.workspace import find_workspace  # noqa: PLC0415 - start time, see the imports
 
     return find_workspace(explicit=workspace)
 
@@ -124,7 +124,7 @@ def init(directory: Annotated[Path, typer.Argument(help="Workspace folder to cre
     """Create a workspace (DIR/src) and its progress file."""
     if directory.exists() and not directory.is_dir():
         raise CourseError(f"{directory} exists and is not a folder", "choose another name")
-    from course.lesson.progress import Workspace  # noqa: PLC0415 - start time, see the imports
+    from course.lesson.workspace import Workspace  # noqa: PLC0415 - start time, see the imports
 
     ws = Workspace(directory)
     created = ws.init()
@@ -140,11 +140,14 @@ def init(directory: Annotated[Path, typer.Argument(help="Workspace folder to cre
 @_handle_errors
 def list_(workspace: WorkspaceOpt = None) -> None:
     """Every lesson, its status and best score."""
-    from course.report.table import render_list  # noqa: PLC0415 - start time, see the imports
+    # the catalog index and a plain read of progress.json: no pydantic, no yaml (course/lesson/index.py)
+    from course.lesson import content_root  # noqa: PLC0415 - start time, see the imports
+    from course.lesson.index import catalog_entries, progress_view  # noqa: PLC0415 - same
+    from course.report.listing import render_list  # noqa: PLC0415 - same
 
-    catalog = load_catalog()
+    lessons = catalog_entries(content_root() / "chapters")
     ws = _workspace(workspace)
-    render_list(catalog.lessons, ws.load_progress(), stdout_console(), root=ws.root if ws.initialised else None)
+    render_list(lessons, progress_view(ws), stdout_console(), root=ws.root if ws.initialised else None)
 
 
 @app.command()
@@ -152,7 +155,8 @@ def list_(workspace: WorkspaceOpt = None) -> None:
 def show(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", help="Lesson id (default: current).")] = None,
          workspace: WorkspaceOpt = None) -> None:
     """Show a lesson's instructions again (changes no file)."""
-    from course.report.table import lesson_files, render_lesson  # noqa: PLC0415 - start time, see the imports
+    from course.report.listing import lesson_files  # noqa: PLC0415 - start time, see the imports
+    from course.report.table import render_lesson  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     lesson = _lesson_for(lesson_id, ws)

@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from course.lesson.catalog import content_root, load_catalog
-from course.lesson.progress import Workspace
+from course.lesson.workspace import Workspace
 from course.ros import env as env_mod
 
 ROOT = content_root()
@@ -24,6 +24,13 @@ env_mod.activate()
 #: 20 grades in a row). They are collected first so that, with pytest-xdist's work
 #: stealing, the longest tests start first and the short ones fill the gaps at the end.
 LONG_MODULES = ("test_determinism.py", "test_validate.py", "test_batch_ros.py")
+
+
+@pytest.fixture(autouse=True, scope="session")
+def private_cache_dir(tmp_path_factory: pytest.TempPathFactory):
+    """ros2course's cache folder (the catalog index of ``list``) under pytest's temp folder, not ~/.cache."""
+    os.environ["ROS2COURSE_CACHE_DIR"] = str(tmp_path_factory.mktemp("cache"))
+    yield
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:

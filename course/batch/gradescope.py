@@ -33,7 +33,7 @@ from course.batch.runner import (
 )
 from course.errors import CourseError
 from course.lesson.catalog import content_root, load_catalog
-from course.lesson.progress import atomic_write_text
+from course.lesson.workspace import atomic_write_text
 from course.report import gradebook
 from course.run import sandbox
 

@@ -63,7 +63,7 @@ from course.grade.engine import load_grader
 from course.grade.results import LessonResult, Status
 from course.grade.validate import lesson_dependencies, reference_workspace
 from course.lesson.catalog import content_root, load_catalog
-from course.lesson.progress import atomic_write_text
+from course.lesson.workspace import atomic_write_text
 from course.report import gradebook
 from course.ros import env as env_mod
 from course.run import sandbox

@@ -30,7 +30,7 @@ from typing import Any
 from course.grade.engine import grade_lesson
 from course.grade.results import LessonResult, Status
 from course.lesson.catalog import load_catalog
-from course.lesson.progress import atomic_write_text
+from course.lesson.workspace import atomic_write_text
 from course.ros import env as env_mod
 from course.run import sandbox
 

@@ -31,7 +31,7 @@ from catkin_pkg.package import InvalidPackage
 from catkin_pkg.packages import find_packages as catkin_find
 
 from course.errors import NotGradable
-from course.lesson.progress import atomic_write_text
+from course.lesson.workspace import atomic_write_text
 from course.run import sandbox
 
 FINGERPRINTS = ".ros2course-fingerprints.json"

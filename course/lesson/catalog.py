@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import difflib
 import functools
-import os
 import re
 from pathlib import Path
 from typing import Annotated
@@ -19,18 +18,10 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from course.errors import LessonFormatError, UnknownLesson
+from course.lesson import content_root  # noqa: F401 - re-exported: callers import it from here
 from course.ros.requirements import KNOWN_REQUIREMENTS
 
 _ID = r"^[a-z][a-z0-9]*(-[a-z0-9]+)*$"
-
-
-def content_root() -> Path:
-    """The folder holding ``chapters/``, ``graders/`` and ``solutions/``.
-
-    ``ROS2COURSE_CONTENT`` overrides it (tests, instructors with their own course).
-    """
-    override = os.environ.get("ROS2COURSE_CONTENT")
-    return Path(override).resolve() if override else Path(__file__).resolve().parents[2]
 
 
 class ReferenceSolution(BaseModel):

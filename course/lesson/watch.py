@@ -36,7 +36,7 @@ from rich.rule import Rule
 
 from course.errors import CourseError
 from course.lesson.catalog import Catalog, Lesson
-from course.lesson.progress import Workspace
+from course.lesson.workspace import Workspace
 from course.run.process import kill_marked
 
 #: Milliseconds watchfiles waits for more changes before reporting a batch (an editor's save is several events).

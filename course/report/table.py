@@ -7,7 +7,6 @@ Every renderer takes an injected rich ``Console`` (rich's own testing idiom:
 from __future__ import annotations
 
 import json
-from pathlib import Path
 
 from rich.console import Console, Group
 from rich.panel import Panel
@@ -16,14 +15,10 @@ from rich.text import Text
 
 from course.grade.results import LessonResult, Plot, Status
 from course.lesson.catalog import Lesson
-from course.lesson.progress import Progress
+from course.report.listing import points_text
 
 _STATUS_STYLE = {Status.PASSED: "bold green", Status.FAILED: "bold yellow", Status.NOT_GRADABLE: "bold red",
                  Status.GRADER_ERROR: "bold magenta"}
-
-
-def _points(value: float) -> str:
-    return f"{value:g}"
 
 
 #: Eight block glyphs, lowest to highest. rich has no sparkline renderable and a plotting
@@ -71,7 +66,7 @@ def render_result(result: LessonResult, console: Console) -> None:
     """Print the table of checks; under it, for each failed check, observed / expected / hint."""
     style = _STATUS_STYLE.get(result.status, "bold")
     title = Text.assemble((f"{result.lesson}: ", "bold"), (result.status.value, style),
-                          f"  {_points(result.score)}/{_points(result.max_score)} points")
+                          f"  {points_text(result.score)}/{points_text(result.max_score)} points")
     if result.checks:
         table = Table(title=title, title_justify="left", show_lines=False, expand=False)
         table.add_column("", width=2)
@@ -80,7 +75,7 @@ def render_result(result: LessonResult, console: Console) -> None:
         table.add_column("observed", overflow="fold")
         for check in result.checks:
             mark = Text("✔", "green") if check.passed else Text("✘", "red")
-            table.add_row(mark, check.name, f"{_points(check.points)}/{_points(check.max_points)}",
+            table.add_row(mark, check.name, f"{points_text(check.points)}/{points_text(check.max_points)}",
                           Text(check.observed, style="" if check.passed else "yellow"))
         console.print(table)
     else:
@@ -131,44 +126,6 @@ def render_lesson(lesson: Lesson, console: Console) -> None:
     console.print(Markdown(lesson.instructions))
 
 
-def render_list(lessons: list[Lesson], progress: Progress, console: Console, root: Path | None = None) -> None:
-    """Every lesson with its status, best score and where its files are in the workspace ``root``.
-
-    A path that exists is printed plain, one not made yet dim (``next`` copies
-    the starter there).
-    """
-    table = Table(title="ros2course lessons", title_justify="left")
-    table.add_column("#", justify="right")
-    table.add_column("lesson", overflow="fold")  # ids are typed back: never cut them with an ellipsis
-    table.add_column("title")
-    table.add_column("status")
-    table.add_column("best", justify="right")
-    if root is not None:
-        table.add_column("files", overflow="fold")
-    styles = {"done": "green", "current": "bold cyan", "started": "yellow", "not started": "dim"}
-    for index, lesson in enumerate(lessons, 1):
-        status = progress.status(lesson.id)
-        record = progress.lessons.get(lesson.id)
-        best = (f"{_points(record.best_score)}/{_points(record.max_score)}"
-                if record and record.best_score is not None and record.max_score is not None else "-")
-        row = [str(index), lesson.id, lesson.title, Text(status, styles[status]), best]
-        if root is not None:
-            row.append(lesson_files(lesson, root))
-        table.add_row(*row)
-    console.print(table)
-
-
-def lesson_files(lesson: Lesson, root: Path) -> Text:
-    """The lesson's workspace paths (:attr:`Lesson.workspace_paths`), dim where not made yet."""
-    text = Text()
-    for index, relative in enumerate(lesson.workspace_paths):
-        if index:
-            text.append(", ")
-        text.append(relative + ("/" if (root / relative).is_dir() else ""),
-                    style="" if (root / relative).exists() else "dim")
-    return text
-
-
 def render_regrades(items: list, console: Console) -> None:
     """``check --all``'s summary: each passed lesson's new grade, regressions first in red.
 
@@ -186,8 +143,8 @@ def render_regrades(items: list, console: Console) -> None:
         failed = next((c for c in result.checks if not c.passed and not c.skipped), None)
         first = (f"{failed.name}: {failed.observed}" if failed is not None
                  else (result.message.splitlines()[0] if result.message else ""))
-        table.add_row(item.lesson.id, "-" if item.before is None else _points(item.before),
-                      f"{_points(result.score)}/{_points(result.max_score)}",
+        table.add_row(item.lesson.id, "-" if item.before is None else points_text(item.before),
+                      f"{points_text(result.score)}/{points_text(result.max_score)}",
                       Text("REGRESSION", "bold red") if item.regression else Text("still passes", "green"),
                       first if item.regression else "")
     console.print(table)

@@ -1,0 +1,131 @@
+"""``list`` reads a cached catalog index and progress.json without pydantic (course/lesson/index.py).
+
+The index must never show something the validated catalog would not: it is
+rebuilt whenever a lesson file, a starter folder or the loader changes, and a
+malformed lesson is reported exactly as without it.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+import yaml
+
+from course.errors import ProgressError
+from course.lesson.catalog import Catalog, content_root
+from course.lesson.index import catalog_entries, progress_view
+from course.lesson.progress import Progress
+from course.lesson.workspace import Workspace
+from tests.test_cli import assert_clean_error, copy_course
+
+CHAPTERS = content_root() / "chapters"
+
+
+@pytest.fixture
+def learner_ws(tmp_path: Path, cli) -> Path:
+    """A workspace made by ``ros2course init``."""
+    assert cli("init", "ws", cwd=tmp_path).returncode == 0
+    return tmp_path / "ws"
+
+
+def test_entries_match_the_validated_catalog_from_miss_and_hit(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROS2COURSE_CACHE_DIR", str(tmp_path / "cache"))
+    expected = [(lesson.id, lesson.title, lesson.chapters, lesson.workspace_paths)
+                for lesson in Catalog(CHAPTERS).lessons]
+    first = catalog_entries(CHAPTERS)  # miss: full load, index written
+    assert [tuple(e) for e in first] == expected
+    files = list((tmp_path / "cache").iterdir())
+    assert len(files) == 1 and files[0].name.startswith("catalog-index-")
+    second = catalog_entries(CHAPTERS)  # hit
+    assert [tuple(e) for e in second] == expected
+
+
+def test_a_changed_title_is_seen_at_once(tmp_path, monkeypatch):
+    monkeypatch.setenv("ROS2COURSE_CACHE_DIR", str(tmp_path / "cache"))
+    course = copy_course(tmp_path / "c")
+    chapters = course / "chapters"
+    first = catalog_entries(chapters)
+    path = chapters / sorted(p.name for p in chapters.iterdir())[0] / "lesson.yaml"
+    data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    data["title"] = "A title the index has never seen"
+    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    assert catalog_entries(chapters)[0].title == "A title the index has never seen" != first[0].title
+
+
+def test_list_reports_a_lesson_broken_after_the_index_was_written(tmp_path, learner_ws, cli):
+    course = copy_course(tmp_path / "c")
+    env = {"ROS2COURSE_CONTENT": str(course), "ROS2COURSE_CACHE_DIR": str(tmp_path / "cache")}
+    assert cli("list", cwd=learner_ws, env=env).returncode == 0
+    assert any((tmp_path / "cache").iterdir())
+    path = course / "chapters" / sorted(p.name for p in (course / "chapters").iterdir())[0] / "lesson.yaml"
+    data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    data["hints"] = data["hints"][:1]
+    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    assert_clean_error(cli("list", cwd=learner_ws, env=env), 5, str(path.resolve()), "hints")
+
+
+def test_list_works_when_the_cache_folder_cannot_be_written(tmp_path, learner_ws, cli):
+    blocker = tmp_path / "not-a-folder"
+    blocker.write_text("a file where the cache folder would be\n", encoding="utf-8")
+    proc = cli("list", cwd=learner_ws, env={"ROS2COURSE_CACHE_DIR": str(blocker / "cache")})
+    assert proc.returncode == 0, proc.stderr
+    assert "terminal-basics" in proc.stdout and not proc.stderr
+
+
+def test_list_imports_neither_pydantic_nor_yaml_once_indexed(learner_ws, cli):
+    assert cli("list", cwd=learner_ws).returncode == 0  # writes the index if this run has none yet
+    probe = ("import sys; from course.cli import main; sys.argv = ['ros2course', 'list']\n"
+             "try:\n    main()\nexcept SystemExit:\n    pass\n"
+             "print('LOADED', sorted(m for m in ('pydantic', 'yaml', 'rclpy') if m in sys.modules), file=sys.stderr)")
+    proc = subprocess.run([sys.executable, "-c", probe], cwd=learner_ws, capture_output=True, text=True, timeout=60,
+                          env={**os.environ, "COLUMNS": "320"}, check=False)
+    assert "LOADED []" in proc.stderr, proc.stderr
+
+
+PROGRESS_FILES = [
+    {"version": 1, "current": "parameters", "lessons": {}},
+    {"version": 1, "current": "parameters",
+     "lessons": {"parameters": {"attempts": 2, "best_score": 4.0, "max_score": 9.0, "started": True},
+                 "terminal-basics": {"best_score": 7, "max_score": 7, "attempts": 1, "hints_shown": 2},
+                 "cpp-node": {"started": True}, "cpp-library": {"attempts": 1, "last_status": "failed"}}},
+    # types pydantic coerces: the plain reader declines, the validating loader decides
+    {"version": 1, "current": None, "lessons": {"parameters": {"attempts": "2", "best_score": "9", "max_score": 9}}},
+    {"version": 1, "lessons": {"parameters": {"started": "yes", "best_score": 1, "max_score": 1}}},
+    {"version": 1, "lessons": {"parameters": {"attempts": True}}},
+]
+
+
+@pytest.mark.parametrize("data", PROGRESS_FILES)
+def test_progress_view_gives_the_validated_statuses(tmp_path, data):
+    workspace = Workspace(tmp_path)
+    workspace.init()
+    workspace.progress_path.write_text(json.dumps(data), encoding="utf-8")
+    view, validated = progress_view(workspace), Progress.model_validate(data)
+    for lesson_id in ("parameters", "terminal-basics", "cpp-node", "cpp-library", "sas-robot-driver"):
+        assert view.status(lesson_id) == validated.status(lesson_id), lesson_id
+        record, truth = view.lessons.get(lesson_id), validated.lessons.get(lesson_id)
+        assert (record is None) == (truth is None)
+        if record is not None:
+            assert (record.best_score, record.max_score) == (truth.best_score, truth.max_score)
+
+
+@pytest.mark.parametrize("data", [{"version": 2, "lessons": {}}, {"version": 1, "lessons": {"x": {"attempts": -1}}},
+                                  {"version": 1, "lessons": []}])
+def test_progress_view_raises_what_the_validating_loader_raises(tmp_path, data):
+    workspace = Workspace(tmp_path)
+    workspace.init()
+    workspace.progress_path.write_text(json.dumps(data), encoding="utf-8")
+    with pytest.raises(ProgressError):
+        workspace.load_progress()
+    with pytest.raises(ProgressError):
+        progress_view(workspace)
+
+
+def test_no_progress_file_means_nothing_started(tmp_path):
+    view = progress_view(Workspace(tmp_path))
+    assert view.status("terminal-basics") == "not started" and not view.lessons
