@@ -20,6 +20,7 @@ import tomllib
 
 from graders.kit import Check, GradingSession, Unmet
 from graders.kit import pip as kpip
+from graders.kit.parts import at_once
 from graders.kit.programs import interrupt_after, last_line, run_program
 from graders.kit.python_programs import python_env
 
@@ -75,7 +76,7 @@ def _project_file(s: GradingSession) -> None:
 
 
 def grade(s: GradingSession) -> None:
-    """Install into a fresh venv, import from /, run the command, uninstall (about 3 s warm)."""
+    """Install into a fresh venv, import from /, then run the command while a copy of the venv uninstalls."""
     _project_file(s)
     tools = kpip.tools_folder(s)
     source = s.log_dir / "source" / "minimalist_package"
@@ -83,7 +84,7 @@ def grade(s: GradingSession) -> None:
     shutil.copytree(s.workspace_root / FOLDER, source, symlinks=True,
                     ignore=shutil.ignore_patterns("__pycache__", "*.egg-info", "build", "dist", ".venv", "venv"))
     python = kpip.fresh_venv(s)
-    venv, env, root = python.parent.parent, python_env(s), Path("/")
+    venv, env = python.parent.parent, python_env(s)
 
     install = kpip.pip(s, python, tools, ["install", "--no-build-isolation", "--no-deps", "--no-compile", str(source)],
                        "pip_install", cwd=source.parent)
@@ -93,8 +94,17 @@ def grade(s: GradingSession) -> None:
              "'pip install ./minimalist_package' ends with 'Successfully installed minimalist-package-...'")
     s.require("installs")
 
+    # the import and the uninstall (in a copy of the venv: graders.kit.pip.venv_copy) are judged while the command runs
+    removal = kpip.venv_copy(python, "uninstall_venv")
+    at_once(s, "install", lambda: (_importable(s, python, env), _uninstall(s, removal, tools, env)), "command",
+            lambda: _console_script(s, venv / "bin" / SCRIPT, env))
+
+
+def _importable(s: GradingSession, python: Path, env: dict[str, str]) -> None:
+    """``importable``: from ``/``, the venv's python imports minimalist_package from the venv's site-packages."""
+    venv = python.parent.parent
     probe = "import minimalist_package, minimalist_package.minimalist_script as m; print(minimalist_package.__file__)"
-    imported = run_program(s, [str(python), "-c", probe], "import_from_root", timeout=30.0, env=env, cwd=root)
+    imported = run_program(s, [str(python), "-c", probe], "import_from_root", timeout=30.0, env=env, cwd=Path("/"))
     where = last_line(imported.stdout)
     inside = bool(where) and Path(where).resolve().is_relative_to(venv.resolve())
     s.record("importable", imported.returncode == 0 and inside,
@@ -102,9 +112,10 @@ def grade(s: GradingSession) -> None:
              f"from /, 'import minimalist_package' failed: {kpip.last_error(imported.stderr)}",
              f"it imports from the venv's site-packages ({venv}/lib/...), i.e. pip installed the package's modules")
 
-    command = venv / "bin" / SCRIPT
-    _console_script(s, command, env)
 
+def _uninstall(s: GradingSession, python: Path, tools: Path, env: dict[str, str]) -> None:
+    """``uninstall``: ``pip uninstall -y`` exits 0, then neither the command nor the import is left in that venv."""
+    command, root = python.parent / SCRIPT, Path("/")
     removed = kpip.pip(s, python, tools, ["uninstall", "-y", PACKAGE], "pip_uninstall", cwd=root)
     after = run_program(s, [str(python), "-c", "import minimalist_package"], "import_after_uninstall", timeout=30.0,
                         env=env, cwd=root)

@@ -125,6 +125,23 @@ def fresh_venv(s: GradingSession, name: str = "fresh_venv") -> Path:
     return python
 
 
+def venv_copy(python: Path, name: str) -> Path:
+    """A copy of ``python``'s venv next to it, named ``name``; the copy's python.
+
+    For judging ``pip uninstall`` while the original venv's command still
+    runs (the two take about the same time, so the check takes the longer,
+    not the sum): a venv is found from its interpreter's path (``pyvenv.cfg``
+    beside ``bin/``), and pip's ``RECORD`` files name what it installed
+    relative to ``site-packages``, so an uninstall in the copy removes the
+    copy's files only. Symlinks (``bin/python``, ``lib64``) are copied as links.
+    """
+    venv = python.parent.parent
+    copy = venv.parent / name
+    shutil.rmtree(copy, ignore_errors=True)
+    shutil.copytree(venv, copy, symlinks=True)
+    return copy / "bin" / python.name
+
+
 def pip(s: GradingSession, python: Path, tools: Path, args: list[str], label: str, *, cwd: Path) -> ProgramRun:
     """Run ``<python> -m pip <args>`` offline with ``tools`` (:func:`tools_folder`) on PYTHONPATH; never asks or
     downloads."""
