@@ -187,6 +187,15 @@ def test_last_traceback_picks_the_last_one():
     assert "what():  bad" in last_traceback(cpp)
 
 
+def test_last_traceback_ends_at_the_exception_line():
+    text = ("Traceback (most recent call last):\n  File \"a.py\", line 3, in <module>\n    main()\n    ^^^^^^\n"
+            "ValueError: bad value\nHowdy! printed afterwards\n")
+    assert last_traceback(text).splitlines()[-1] == "ValueError: bad value"
+    cpp = "terminate called after throwing an instance of 'std::out_of_range'\n  what():  vector\nlater output\n"
+    assert last_traceback(cpp).splitlines() == ["terminate called after throwing an instance of 'std::out_of_range'",
+                                                "  what():  vector"]
+
+
 # --- children --------------------------------------------------------------
 
 

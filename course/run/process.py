@@ -108,11 +108,31 @@ class OutputDrain(threading.Thread):
 
 
 def last_traceback(text: str) -> str:
-    """The last Python traceback (or C++ terminate message) in ``text``, or ""."""
-    for marker in ("Traceback (most recent call last):", "terminate called after throwing"):
+    """The last Python traceback (or C++ terminate message) in ``text``, or "".
+
+    Only the traceback itself: from ``Traceback (most recent call last):``
+    through its indented frames to the exception line (``ValueError: ...``),
+    or from ``terminate called after throwing ...`` through its indented
+    ``what():`` line. Output printed after it (the other stream, a later
+    ``print``) is not part of it. Formats: CPython's ``traceback`` module,
+    libstdc++'s verbose terminate handler.
+    """
+    for marker, ends_with_unindented in (("Traceback (most recent call last):", True),
+                                         ("terminate called after throwing", False)):
         index = text.rfind(marker)
-        if index >= 0:
-            return text[index:].strip()
+        if index < 0:
+            continue
+        first, *rest = text[index:].splitlines()
+        kept = [first]
+        for line in rest:
+            if line[:1] in (" ", "\t"):
+                kept.append(line)
+            elif ends_with_unindented and line.strip():
+                kept.append(line)  # the exception line ends a Python traceback
+                break
+            else:
+                break
+        return "\n".join(kept).strip()
     return ""
 
 
@@ -264,8 +284,9 @@ class LearnerProcess:
         kill_marked(self.marker)
         for drain in self._drains:
             drain.join(timeout=2.0)
-        text = self.stderr() + "\n" + self.stdout()
-        self.report = ExitReport(self.popen.poll(), signal_used, seconds, last_traceback(text))
+        # Python writes tracebacks to stderr; stdout only when a program prints one itself
+        trace = last_traceback(self.stderr()) or last_traceback(self.stdout())
+        self.report = ExitReport(self.popen.poll(), signal_used, seconds, trace)
         return self.report
 
     def __enter__(self) -> LearnerProcess:

@@ -43,7 +43,7 @@ def process_state(proc: LearnerProcess) -> str:
     code = proc.poll()
     if code is None:
         return "the process is still running"
-    trace = last_traceback(proc.stderr() + "\n" + proc.stdout())
+    trace = last_traceback(proc.stderr()) or last_traceback(proc.stdout())
     last = trace.strip().splitlines()[-1] if trace else (proc.stderr().strip().splitlines() or [""])[-1]
     return f"the process exited with code {code}" + (f" ({last})" if last else "")
 

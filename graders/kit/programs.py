@@ -18,7 +18,6 @@ from pathlib import Path
 
 from course.grade.engine import GradingSession
 from course.run.probes import wait_until
-from course.run.process import last_traceback
 
 #: What a signal that ended a program usually means, for C++ programs (signal(7)).
 _SIGNAL_MEANING = {"SIGABRT": " (abort: an assertion failed or an exception nothing caught)",
@@ -70,10 +69,9 @@ class ProgramRun:
     def exception(self) -> str:
         """The traceback's last line (``ValueError: ...``), "" without one.
 
-        Read from stderr, where Python writes tracebacks: :attr:`traceback` runs from the
-        marker to the end of stderr + stdout, so its last line may be an ordinary print.
+        :attr:`traceback` is :func:`course.run.process.last_traceback`: it ends at the exception line.
         """
-        return last_line(last_traceback(self.stderr) or self.traceback)
+        return last_line(self.traceback)
 
     def describe(self) -> str:
         """One sentence for an "observed" text: how it ended, after how long, with the exception it raised."""
