@@ -181,7 +181,7 @@ def build_trusted_interfaces(lessons: list[Any]) -> Path | None:
         return None
     dest = Path(tempfile.mkdtemp(prefix="ros2course-trusted-")) / "ws"
     dest.parent.chmod(0o755)
-    reference_workspace(lessons[0], dest, deps)
+    reference_workspace(lessons[0], dest, deps, with_folders=False)
     env = dict(os.environ)
     env_mod.activate(env)
     built = build_packages(dest, deps, env, dest / "log" / "build.log")

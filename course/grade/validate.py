@@ -145,12 +145,14 @@ def apply_edits(workspace_root: Path, edits: list[Edit]) -> None:
         target.write_text(text.replace(edit.replace, edit.with_), encoding="utf-8")
 
 
-def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None = None) -> Path:
+def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None = None, *,
+                        with_folders: bool = True) -> Path:
     """Copy reference packages from ``solutions/src`` into ``dest/src``, and the lesson's ``folders``.
 
     Args:
-        packages: which ones (default: the lesson's packages and their dependencies,
-            plus the lesson's non-ROS ``folders`` from ``solutions/``).
+        packages: which ones (default: the lesson's packages and their dependencies).
+        with_folders: also copy the lesson's non-ROS ``folders`` from ``solutions/`` (a case's
+            workspace needs them; an underlay of dependencies does not).
 
     Raises:
         ValidationFailed: a folder the lesson names is not in ``solutions/``.
@@ -161,7 +163,7 @@ def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None =
     ignore = shutil.ignore_patterns("__pycache__", "*.egg-info")
     for name in (dependency_closure(lesson.packages, found) if packages is None else packages):
         shutil.copytree(found[name][0], dest / "src" / found[name][0].name, ignore=ignore)
-    for folder in lesson.folders if packages is None else ():
+    for folder in lesson.folders if with_folders else ():
         if not (solutions / folder).is_dir():
             raise ValidationFailed(f"lesson {lesson.id} names folder {folder!r}, which is not in solutions/")
         shutil.copytree(solutions / folder, dest / folder, ignore=ignore, dirs_exist_ok=True)
@@ -187,7 +189,7 @@ def build_underlay(lesson: Lesson, dest: Path) -> Path | None:
     deps = lesson_dependencies(lesson)
     if not deps:
         return None
-    reference_workspace(lesson, dest, deps)
+    reference_workspace(lesson, dest, deps, with_folders=False)
     env = dict(os.environ)
     env_mod.activate(env)
     built = build_packages(dest, deps, env, dest / "log" / "underlay-build.log")
