@@ -312,6 +312,39 @@ def test_starter_includes_lay_earlier_starters_under_the_lessons_own(tmp_path):
     assert (ws / "src/p/setup.py").read_text() == "gamma"
 
 
+def test_starter_solutions_offer_finished_packages_under_the_lessons_own(tmp_path, monkeypatch):
+    from course.lesson.catalog import Catalog  # noqa: PLC0415
+
+    course = tmp_path / "course"
+    (course / "solutions/src/ifaces/msg").mkdir(parents=True)
+    (course / "solutions/src/ifaces/msg/Quote.msg").write_text("string quote\n")
+    (course / "solutions/src/ifaces/package.xml").write_text("finished")
+    _tiny_lesson(course / "chapters", "01-pub", "starter_solutions: [src/ifaces]\n",
+                 files={"src/ifaces/package.xml": "the lesson's own", "src/pub/node.py": "TODO"})
+    monkeypatch.setenv("ROS2COURSE_CONTENT", str(course))
+    lesson = Catalog(course / "chapters").get("pub")
+    assert {str(rel): src.read_text() for rel, src in starter_sources(lesson).items()} == {
+        "src/ifaces/msg/Quote.msg": "string quote\n", "src/ifaces/package.xml": "the lesson's own",
+        "src/pub/node.py": "TODO"}
+    ws = tmp_path / "ws"
+    (ws / "src/ifaces/msg").mkdir(parents=True)
+    (ws / "src/ifaces/msg/Quote.msg").write_text("the learner's own quote\n")
+    copied, kept = copy_starter(lesson, ws)
+    assert [str(p) for p in kept] == ["src/ifaces/msg/Quote.msg"]
+    assert (ws / "src/ifaces/msg/Quote.msg").read_text() == "the learner's own quote\n"
+    assert sorted(map(str, copied)) == ["src/ifaces/package.xml", "src/pub/node.py"]
+
+
+def test_the_publisher_lesson_offers_the_finished_interfaces():
+    from course.lesson.catalog import content_root, load_catalog  # noqa: PLC0415
+
+    solution = content_root() / "solutions/src/package_with_interfaces"
+    for lesson_id in ("publisher-subscriber", "service-server-client"):
+        sources = starter_sources(load_catalog().get(lesson_id))
+        for name in ("CMakeLists.txt", "package.xml", "msg/AmazingQuote.msg", "srv/WhatIsThePoint.srv"):
+            assert sources[Path("src/package_with_interfaces") / name] == solution / name
+
+
 @pytest.mark.parametrize("include, problem", [("delta", "no such lesson"),
                                               ("gamma", "does not come earlier")])
 def test_starter_includes_must_name_an_earlier_lesson(tmp_path, include, problem):

@@ -6,22 +6,28 @@ import datetime as dt
 import shutil
 from pathlib import Path
 
+from course.lesson import content_root
 from course.lesson.catalog import Lesson
 
 
 def starter_sources(lesson: Lesson) -> dict[Path, Path]:
     """Workspace-relative path -> the file it is copied from, over every starter layer.
 
-    Layers are :attr:`course.lesson.catalog.Lesson.starter_layers`: the starters of
-    ``starter_includes`` first, the lesson's own last (a later layer's file
-    wins on the same path).
+    Layers, lowest first: the finished packages of ``starter_solutions`` (from
+    ``solutions/``), then :attr:`course.lesson.catalog.Lesson.starter_layers`: the
+    starters of ``starter_includes``, the lesson's own last (a later layer's
+    file wins on the same path).
     """
+    solutions = content_root() / "solutions"
+    trees = [(solutions, solutions / folder) for folder in lesson.starter_solutions]
+    trees += [(root, root) for root in lesson.starter_layers]
     sources: dict[Path, Path] = {}
-    for root in lesson.starter_layers:
-        if root.is_dir():
-            for path in root.rglob("*"):
-                if path.is_file() and "__pycache__" not in path.parts:
-                    sources[path.relative_to(root)] = path
+    for base, tree in trees:
+        if tree.is_dir():
+            for path in tree.rglob("*"):
+                if path.is_file() and not any(part == "__pycache__" or part.endswith(".egg-info")
+                                              for part in path.relative_to(tree).parts):
+                    sources[path.relative_to(base)] = path
     return dict(sorted(sources.items()))
 
 
