@@ -62,11 +62,9 @@ def grade(s: GradingSession) -> None:
     started = time.time()
     run = scripts.run_script(s, path, timeout=TIMEOUT)
     scripts.ended(s, "ends", run, "it ends by itself with exit code 0")
-    lines = {line.rstrip().split(" (type: ")[0] for line in run.stdout.splitlines()}  # --param-type adds it
-    missing = [name for name in NAMES if f"  {name}" not in lines]
-    s.record("listed", not missing, f"its output lacks the line(s) {', '.join(missing)}; it printed: "
-             f"{scripts.excerpt(run.stdout)}" if missing else f"it printed the names {', '.join(NAMES)}",
-             f"the names of {NODE}'s parameters, one per line (`ros2 param list {NODE}`)")
+    scripts.printed(s, "listed", run, [f"  {name}" for name in NAMES],  # --param-type appends " (type: ...)"
+                    f"the names of {NODE}'s parameters, one per line", f"ros2 param list {NODE}", whole_lines=True,
+                    line_text=lambda line: line.rstrip().split(" (type: ")[0])
     scripts.printed(s, "got", run, [node.initial_quote], f"current quote of {NODE} ({short(node.initial_quote)})",
                     f"ros2 param get {NODE} quote")
     judge_set(s, node, run)

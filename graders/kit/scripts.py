@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import shutil
 import subprocess
-from collections.abc import Iterable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from course.grade.engine import GradingSession, Unmet
@@ -121,7 +121,7 @@ def ended(s: GradingSession, check_id: str, run: ProgramRun, expected: str) -> b
 
 
 def printed(s: GradingSession, check_id: str, run: ProgramRun, needles: Iterable[str], what: str,
-            command: str, whole_lines: bool = False) -> bool:
+            command: str, whole_lines: bool = False, line_text: Callable[[str], str] = str.rstrip) -> bool:
     """Record ``check_id``: every one of ``needles`` appears in the script's standard output.
 
     Args:
@@ -131,8 +131,10 @@ def printed(s: GradingSession, check_id: str, run: ProgramRun, needles: Iterable
         whole_lines: each needle must be a whole output line, unindented (``ros2 interface show``
             prints a nested message's fields indented under the field holding it: those are not
             the nested message's own definition).
+        line_text: with ``whole_lines``, what of an output line is compared (default: the line
+            without trailing blanks; ``ros2 param list --param-type`` appends `` (type: ...)``).
     """
-    lines = {line.rstrip() for line in run.stdout.splitlines()}
+    lines = {line_text(line) for line in run.stdout.splitlines()}
     missing = [needle for needle in needles if (needle not in lines if whole_lines else needle not in run.stdout)]
     expected = f"your script prints {what} (`{command}` prints it)"
     if missing:
