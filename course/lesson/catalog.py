@@ -50,10 +50,11 @@ class Lesson(BaseModel):
             (e.g. launch-files builds on the parameters package); its own ``starter``
             files win where both have the same path.
         reference: how ``dev validate`` readies the reference solution.
-        starter_solutions: finished packages of earlier lessons offered with the starter, as
-            ``src/<package>`` folders of ``solutions/`` (the publisher lesson offers lesson 16's
-            interfaces to a learner who skipped it; like every starter file, a learner's own
-            version is kept). Below ``starter_includes`` and ``starter`` where paths overlap.
+        starter_solutions: finished work offered with the starter, as ``src/<package>`` folders or
+            files of ``solutions/``: an earlier lesson's package (the publisher lesson offers lesson
+            16's interfaces to a learner who skipped it) or a module the lesson gives whole (sas's
+            ``sas_lite.py``). Like every starter file, a learner's own version is kept. Below
+            ``starter_includes`` and ``starter`` where paths overlap.
         folders: workspace folders holding the lesson's files outside any ROS package
             (the preamble's ``python/minimalist_package``); ``dev validate`` copies them
             from ``solutions/`` for the reference and its wrong solutions.
@@ -73,7 +74,8 @@ class Lesson(BaseModel):
     starter_includes: list[Annotated[str, Field(pattern=_ID)]] = Field(default_factory=list)
     reference: ReferenceSolution = Field(default_factory=ReferenceSolution)
     folders: list[Annotated[str, Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_./-]*$")]] = Field(default_factory=list)
-    starter_solutions: list[Annotated[str, Field(pattern=r"^src/[A-Za-z0-9_]+$")]] = Field(default_factory=list)
+    starter_solutions: list[Annotated[str, Field(pattern=r"^src/[A-Za-z0-9_]+(/[A-Za-z0-9_][A-Za-z0-9_.-]*)*$")]] = (
+        Field(default_factory=list))
 
     #: The lesson's folder; set by the loader, not read from YAML.
     folder: Path = Field(default=Path("."), exclude=True)

@@ -23,7 +23,9 @@ def starter_sources(lesson: Lesson) -> dict[Path, Path]:
     trees += [(root, root) for root in lesson.starter_layers]
     sources: dict[Path, Path] = {}
     for base, tree in trees:
-        if tree.is_dir():
+        if tree.is_file():
+            sources[tree.relative_to(base)] = tree
+        elif tree.is_dir():
             for path in tree.rglob("*"):
                 if path.is_file() and not any(part == "__pycache__" or part.endswith(".egg-info")
                                               for part in path.relative_to(tree).parts):
