@@ -3,6 +3,8 @@
 Pure C++, no ROS: everything lives in ``cpp/cpp_demystified/`` of the
 workspace. Two independent parts:
 
+They run at the same time (:func:`graders.kit.parts.at_once`).
+
 * ``cmake``: the learner's own ``CMakeLists.txt`` is configured and built out
   of source under ``s.log_dir`` (nothing is written into their folder), and the
   demo program ``demystified_demo`` is run once.
@@ -27,6 +29,7 @@ import yaml
 from graders import kit
 from graders.kit import Check, GradingSession, Unmet
 from graders.kit import cmake as ck
+from graders.kit.parts import at_once
 from graders.kit.programs import last_line, run_program, verdict_test
 
 PROJECT = Path("cpp") / "cpp_demystified"
@@ -78,10 +81,8 @@ CHECKS = [
 def grade(s: GradingSession) -> None:
     """Check the files, build and run the learner's CMake project, then run the test harness on their functions."""
     project = kit.project_files(s, "layout", PROJECT, FILES)
-    with s.part("cmake"):
-        _judge_cmake(s, project)
-    with s.part("harness"):
-        _judge_harness(s, project)
+    # two single-threaded compiles on 2 cores: the parts run at the same time (own scratch folders each)
+    at_once(s, "cmake", lambda: _judge_cmake(s, project), "harness", lambda: _judge_harness(s, project))
 
 
 def _judge_cmake(s: GradingSession, project: Path) -> None:

@@ -24,6 +24,7 @@ from course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
 from graders import kit
 from graders.kit import Check, GradingSession
 from graders.kit import cpp_packages as cpp
+from graders.kit.parts import at_once
 from graders.kit.programs import run_program
 
 PACKAGE = "cpp_package_with_a_library"
@@ -139,15 +140,20 @@ def judge_logs(s: GradingSession, rosout, started) -> None:
 
 
 def grade(s: GradingSession) -> None:
-    """package.xml, then the library part (install + consumer package), then the node part."""
+    """package.xml, then the library part (install + consumer package, CPU-bound) on a worker thread while
+    the node part (mostly waiting for its 3 s of ticks) runs here (kit.parts.at_once)."""
     kit.depends(s, "depends", PACKAGE, DEPENDENCIES)
-    with s.part("library"):
+
+    def library() -> None:
         cpp.installed_library(s, ("library_installed", "header_installed", "exported_target"), PACKAGE,
                               LIBRARY_FILE, HEADER, TARGET)
         judge_consumer(s)
-    with s.part("node"):
+
+    def node() -> None:
         path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)
         cpp.uses_library(s, "node_uses_library", path, LIBRARY_FILE, "SampleClass::")
         rosout = s.ros.rosout()
         started = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit", need_node=False)
         judge_logs(s, rosout, started)
+
+    at_once(s, "library", library, "node", node)
