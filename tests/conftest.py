@@ -42,14 +42,30 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
     items.sort(key=rank)
 
 
+def pytest_configure(config: pytest.Config) -> None:
+    """The controller makes the run's CPU lock file (see :func:`cpu_lock`); xdist workers inherit its path."""
+    if not hasattr(config, "workerinput") and "ROS2COURSE_TESTS_CPU_LOCK" not in os.environ:
+        import tempfile  # noqa: PLC0415
+
+        folder = tempfile.mkdtemp(prefix="ros2course-tests-")
+        os.environ["ROS2COURSE_TESTS_CPU_LOCK"] = os.path.join(folder, "cpu.lock")
+        config._ros2course_lock_folder = folder  # removed by pytest_unconfigure
+
+
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """Remove the run's CPU lock folder (only the controller made one)."""
+    folder = getattr(config, "_ros2course_lock_folder", None)
+    if folder:
+        shutil.rmtree(folder, ignore_errors=True)
+        os.environ.pop("ROS2COURSE_TESTS_CPU_LOCK", None)
+
+
 @contextlib.contextmanager
 def cpu_lock():
     """Hold one lock shared by every xdist worker of this run (see :func:`cpu_exclusive`)."""
     import fcntl  # noqa: PLC0415
-    import tempfile  # noqa: PLC0415
 
-    run = os.environ.get("PYTEST_XDIST_TESTRUNUID", str(os.getpid()))
-    with open(Path(tempfile.gettempdir()) / f"ros2course-tests-{run}.lock", "w") as lock:
+    with open(os.environ["ROS2COURSE_TESTS_CPU_LOCK"], "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
         try:
             yield
