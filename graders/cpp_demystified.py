@@ -1,9 +1,8 @@
 """Grader for ``cpp-demystified`` (seed ch. 28.5-28.6; contract in shared/LESSONS.md).
 
 Pure C++, no ROS: everything lives in ``cpp/cpp_demystified/`` of the
-workspace. Two independent parts:
-
-They run at the same time (:func:`graders.kit.parts.at_once`).
+workspace. Two independent parts, graded at the same time on two threads
+(:func:`graders.kit.parts.at_once`; each writes only its own scratch folder):
 
 * ``cmake``: the learner's own ``CMakeLists.txt`` is configured and built out
   of source under ``s.log_dir`` (nothing is written into their folder), and the
@@ -81,7 +80,7 @@ CHECKS = [
 def grade(s: GradingSession) -> None:
     """Check the files, build and run the learner's CMake project, then run the test harness on their functions."""
     project = kit.project_files(s, "layout", PROJECT, FILES)
-    # two single-threaded compiles on 2 cores: the parts run at the same time (own scratch folders each)
+    # two mostly single-threaded compiles: on 2 cores they overlap; cmake-build/ and harness/ keep them apart
     at_once(s, "cmake", lambda: _judge_cmake(s, project), "harness", lambda: _judge_harness(s, project))
 
 
