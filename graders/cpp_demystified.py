@@ -7,10 +7,11 @@ workspace. Two independent parts, graded at the same time on two threads
 * ``cmake``: the learner's own ``CMakeLists.txt`` is configured and built out
   of source under ``s.log_dir`` (nothing is written into their folder), and the
   demo program ``demystified_demo`` is run once.
-* ``harness``: their ``src/demystified.cpp`` is compiled in one ``g++`` call
-  with the course's test harness (``graders/data/cpp_demystified/harness.cpp``)
-  in a scratch copy under ``s.log_dir`` where ``potato.hpp`` is replaced by a
-  twin with the same interface that counts how each Potato is constructed.
+* ``harness``: their ``src/demystified.cpp`` is compiled and linked with ``g++``
+  with the course's test harness (``graders/data/cpp_demystified/harness.cpp``;
+  its object is reused while it and the headers it reads stay the same) in a
+  scratch copy under ``s.log_dir`` where ``potato.hpp`` is replaced by a twin
+  with the same interface that counts how each Potato is constructed.
   The harness is compiled with ``-D_GLIBCXX_ASSERTIONS``, so ``operator[]``
   past the end aborts deterministically instead of reading garbage. The binary
   is run once per test of ``tests.yaml`` (an abort ends only that test) and
@@ -122,18 +123,21 @@ def _scratch_copy(s: GradingSession, project: Path) -> Path:
 
 
 def _judge_harness(s: GradingSession, project: Path) -> None:
-    """Compile src/demystified.cpp with the harness (one g++ call, -O0), then run each test in its own process."""
+    """Compile src/demystified.cpp with the harness (-O0), then run each test in its own process."""
     if not (project / SOURCE).is_file():
         s.record("harness_compiles", False, f"there is no {PROJECT}/{SOURCE}", f"{SOURCE} with the four functions")
         raise Unmet(f"there is no {SOURCE}")
-    gxx = ck.tool(s.base_env, "g++", "c++")
-    scratch = _scratch_copy(s, project)
-    argv = [gxx, "-std=c++17", "-O0", "-D_GLIBCXX_ASSERTIONS", "-I", "include", "harness.cpp", str(SOURCE),
-            "-o", "harness"]
-    ck.step(s, "harness_compiles", argv, "harness_compile", shown=f"g++ -std=c++17 harness.cpp {SOURCE}",
-            passed="compiled with the harness", cwd=scratch, paths={str(scratch) + os.sep: ""},
-            expected="your functions compile against the signatures of the lesson's demystified.hpp "
-                     "(with the course's copy of potato.hpp)")
+    gxx, scratch = ck.tool(s.base_env, "g++", "c++"), _scratch_copy(s, project)
+    flags, shown = ["-std=c++17", "-O0", "-D_GLIBCXX_ASSERTIONS", "-I", "include"], f"g++ harness.cpp {SOURCE}"
+    expected = ("your functions compile against the signatures of the lesson's demystified.hpp (with the course's "
+                "copy of potato.hpp)")
+    # harness.cpp changes only with the headers: reused from the last check when they are the same (kit.cmake)
+    harness = ck.reused_object(s, "harness_compiles", [gxx, *flags, "-c", "harness.cpp"], "harness_main",
+                               cwd=scratch, cache=ck.object_cache(s), shown=shown, expected=expected,
+                               paths={str(scratch) + os.sep: ""})
+    ck.step(s, "harness_compiles", [gxx, *flags, str(harness), str(SOURCE), "-o", "harness"], "harness_compile",
+            shown=shown, passed="compiled with the harness", cwd=scratch, expected=expected,
+            paths={str(scratch) + os.sep: "", str(harness.parent) + os.sep: ""})
 
     for test in yaml.safe_load((DATA / "tests.yaml").read_text(encoding="utf-8")):
         verdict_test(s, test["check"], [str(scratch / "harness"), test["test"]], f"harness_{test['test']}",

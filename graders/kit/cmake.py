@@ -16,13 +16,18 @@ Typical use::
 
 from __future__ import annotations
 
+import contextlib
+import hashlib
+import json
 import os
 import re
 import shutil
+import threading
 from collections.abc import Mapping
 from pathlib import Path
 
 from course.grade.engine import GradingSession, Unmet
+from course.run import sandbox
 from graders.kit.programs import ProgramRun, compile_errors, run_program
 
 #: Seconds for each configure, build, install or compiler call.
@@ -66,6 +71,77 @@ def step(s: GradingSession, check_id: str, argv: list[str], label: str, *, shown
     if passed is not None:
         s.record(check_id, True, passed, expected)
     return run
+
+
+def reused_object(s: GradingSession, check_id: str, argv: list[str], label: str, *, cwd: Path, cache: Path | None,
+                  shown: str, expected: str, paths: Mapping[str, str] | None = None) -> Path:
+    """Compile one translation unit (``argv`` = compiler, flags, ``-c``, source, run in ``cwd``) to an object,
+    reusing the one a previous check of the same workspace made from identical input.
+
+    The compiler writes its dependency list (``-MD``: every header it read, system ones included); the
+    object is reused only when the compiler (path, size, mtime), ``argv`` and the content of the source and
+    every listed header are byte for byte the same, so a reused object is the one a compile would give (what
+    ccache's "direct mode" does). The cache (object + manifest) belongs to ONE workspace: pass ``cache=None``
+    to always compile, and :func:`object_cache` gives None in batch grading (course.run.sandbox), where one
+    submission must not plant an object another submission's check would link.
+
+    Args:
+        argv: e.g. ``["/usr/bin/g++", "-std=c++17", "-I", "include", "-c", "harness.cpp"]`` (no ``-o``).
+        cache: folder for ``<label>.o`` and ``<label>.json`` (made when missing), or None.
+
+    Returns:
+        the object file (in ``cache``, or in ``cwd`` without one).
+
+    Raises:
+        Unmet: the compile failed (``check_id`` recorded with the compiler's errors, as :func:`step`).
+    """
+    identity = {"argv": argv, "compiler": _file_identity(Path(argv[0]))}
+    manifest = cache / f"{label}.json" if cache else None
+    if manifest is not None and (cache / f"{label}.o").is_file():
+        with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):
+            known = json.loads(manifest.read_text(encoding="utf-8"))
+            if known["identity"] == identity and all(_digest(cwd / dep) == digest
+                                                     for dep, digest in known["inputs"].items()):
+                return cache / f"{label}.o"
+    out = cwd / f"{label}.o"
+    step(s, check_id, [*argv, "-o", out.name, "-MD", "-MF", f"{label}.d"], label, shown=shown, expected=expected,
+         cwd=cwd, paths=paths)
+    if manifest is None:
+        return out
+    listed = (cwd / f"{label}.d").read_text(encoding="utf-8", errors="replace").replace("\\\n", " ")
+    inputs = {dep: _digest(cwd / dep) for dep in listed.partition(":")[2].split()}
+    cache.mkdir(parents=True, exist_ok=True)
+    for name, data in ((f"{label}.o", out.read_bytes()), (f"{label}.json", json.dumps(
+            {"identity": identity, "inputs": inputs}).encode())):  # each replaced whole: a reader sees old or new
+        partial = cache / f"{name}.{os.getpid()}.{threading.get_ident()}"
+        partial.write_bytes(data)
+        os.replace(partial, cache / name)
+    return out
+
+
+def object_cache(s: GradingSession) -> Path | None:
+    """The workspace's cache folder for :func:`reused_object`: ``log/ros2course/<lesson>/objects``, beside the
+    lesson's check logs; None in batch grading (:func:`course.run.sandbox.current` has an identity)."""
+    if sandbox.current() is not None:
+        return None
+    return s.workspace_root / "log" / "ros2course" / s.lesson.id / "objects"
+
+
+def _digest(path: Path) -> str | None:
+    """sha256 of the file's bytes; None when it cannot be read."""
+    try:
+        return hashlib.sha256(path.read_bytes()).hexdigest()
+    except OSError:
+        return None
+
+
+def _file_identity(path: Path) -> list:
+    """The resolved path, size and mtime (ns) of a program: a reinstalled compiler differs."""
+    try:
+        info = path.resolve().stat()
+    except OSError:
+        return [str(path)]
+    return [str(path.resolve()), info.st_size, info.st_mtime_ns]
 
 
 def cache_value(cache: Path, name: str) -> str | None:
