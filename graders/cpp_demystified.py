@@ -5,8 +5,9 @@ workspace. Two independent parts, graded at the same time on two threads
 (:func:`graders.kit.parts.at_once`; each writes only its own scratch folder):
 
 * ``cmake``: the learner's own ``CMakeLists.txt`` is configured and built out
-  of source under ``s.log_dir`` (nothing is written into their folder), and the
-  demo program ``demystified_demo`` is run once.
+  of source (nothing is written into their folder; the build folder of the
+  last check is kept when :func:`graders.kit.cmake.kept_build` allows it), and
+  the demo program ``demystified_demo`` is run once.
 * ``harness``: their ``src/demystified.cpp`` is compiled and linked with ``g++``
   with the course's test harness (``graders/data/cpp_demystified/harness.cpp``;
   its object is reused while it and the headers it reads stay the same) in a
@@ -86,25 +87,26 @@ def grade(s: GradingSession) -> None:
 
 
 def _judge_cmake(s: GradingSession, project: Path) -> None:
-    """Configure and build the learner's CMakeLists.txt under log_dir, then run the demo once."""
-    cmake, build = ck.tool(s.base_env, "cmake"), s.log_dir / "cmake-build"
-    expected = f"cmake configures the project and builds {DEMO}"
-    ck.step(s, "cmake_build", [cmake, "-S", str(project), "-B", str(build)], "cmake_configure",
-            shown="cmake -S . -B build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
-    ck.step(s, "cmake_build", [cmake, "--build", str(build), "--parallel", "2"], "cmake_build",
-            shown="cmake --build build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
-    found = sorted(p for p in build.rglob(DEMO) if p.is_file() and os.access(p, os.X_OK))
-    if not s.record("cmake_build", bool(found), f"configured and built {found[0].relative_to(build)}" if found
-                    else f"the build succeeded but made no executable named {DEMO} (add_executable({DEMO} ...))",
-                    expected):
-        raise Unmet(f"no {DEMO} was built")
-    run = run_program(s, [str(found[0])], DEMO, timeout=RUN_TIMEOUT, cwd=build)
-    out = [line for line in run.stdout.splitlines() if line.strip()]
-    problem = last_line(run.stderr)[:160]
-    s.record("demo_runs", run.returncode == 0 and not run.timed_out, f"./{DEMO}: {run.ending()}"
-             + (f"; it printed {len(out)} line(s), the last: {out[-1].strip()[:120]!r}" if out else "")
-             + (f"; stderr: {problem!r}" if run.returncode != 0 and problem else ""),
-             f"exit code 0 within {RUN_TIMEOUT:.0f} s")
+    """Configure and build the learner's CMakeLists.txt out of their folder, then run the demo once."""
+    cmake, expected = ck.tool(s.base_env, "cmake"), f"cmake configures the project and builds {DEMO}"
+    # the build folder of the last check is kept when nothing forbids it (kit.cmake.kept_build says when)
+    with ck.kept_build(s, project, s.log_dir / "cmake-build", products=(DEMO,)) as build:
+        ck.step(s, "cmake_build", [cmake, "-S", str(project), "-B", str(build)], "cmake_configure",
+                shown="cmake -S . -B build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
+        ck.step(s, "cmake_build", [cmake, "--build", str(build), "--parallel", "2"], "cmake_build",
+                shown="cmake --build build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
+        found = sorted(p for p in build.rglob(DEMO) if p.is_file() and os.access(p, os.X_OK))
+        if not s.record("cmake_build", bool(found), f"configured and built {found[0].relative_to(build)}" if found
+                        else f"the build succeeded but made no executable named {DEMO} (add_executable({DEMO} ...))",
+                        expected):
+            raise Unmet(f"no {DEMO} was built")
+        run = run_program(s, [str(found[0])], DEMO, timeout=RUN_TIMEOUT, cwd=build)
+        out = [line for line in run.stdout.splitlines() if line.strip()]
+        problem = last_line(run.stderr)[:160]
+        s.record("demo_runs", run.returncode == 0 and not run.timed_out, f"./{DEMO}: {run.ending()}"
+                 + (f"; it printed {len(out)} line(s), the last: {out[-1].strip()[:120]!r}" if out else "")
+                 + (f"; stderr: {problem!r}" if run.returncode != 0 and problem else ""),
+                 f"exit code 0 within {RUN_TIMEOUT:.0f} s")
 
 
 def _scratch_copy(s: GradingSession, project: Path) -> Path:

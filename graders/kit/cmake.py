@@ -17,13 +17,15 @@ Typical use::
 from __future__ import annotations
 
 import contextlib
+import fcntl
 import hashlib
 import json
 import os
 import re
 import shutil
 import threading
-from collections.abc import Mapping
+import time
+from collections.abc import Iterator, Mapping
 from pathlib import Path
 
 from course.grade.engine import GradingSession, Unmet
@@ -125,6 +127,60 @@ def object_cache(s: GradingSession) -> Path | None:
     if sandbox.current() is not None:
         return None
     return s.workspace_root / "log" / "ros2course" / s.lesson.id / "objects"
+
+
+@contextlib.contextmanager
+def kept_build(s: GradingSession, project: Path, fresh: Path, products: tuple[str, ...]) -> Iterator[Path]:
+    """The build folder to configure and build the learner's CMake ``project`` in: kept from the last check of
+    this workspace when that is safe (CMake's and make's own dependency tracking then rebuild only what
+    changed), else ``fresh`` or an emptied kept one. Use it around the configure, build and run steps.
+
+    Kept only when: not batch grading (:func:`object_cache`; a submission must not plant a build another's
+    check reuses); no other check of this workspace holds it (else ``fresh``); the last build there ended
+    without error; the cmake binary, the C++ compiler, the CMakeLists.txt files and the project's set of
+    files are the same (a cache variable kept from an older CMakeLists.txt is not what a fresh configure
+    gives); and every file whose content (sha256) changed was modified after that build ended (make
+    compares mtimes: a file restored with an old mtime, ``cp -p`` or ``tar``, would keep a stale object).
+    Files named in ``products`` (e.g. the executable the grader looks for) are deleted before the build, so a
+    product comes from this build, never from an older CMakeLists.txt.
+    """
+    cache = object_cache(s)
+    if cache is None:
+        yield fresh
+        return
+    cache.mkdir(parents=True, exist_ok=True)
+    build, manifest = cache / "cmake-build", cache / "cmake-build.json"
+    with open(cache / "cmake-build.lock", "w") as lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            yield fresh
+            return
+        tools = [_file_identity(Path(tool(s.base_env, name))) for name in ("cmake", "c++")]
+        files = _snapshot(project)
+        try:
+            known = json.loads(manifest.read_text(encoding="utf-8"))
+            kept = known["tools"] == tools and known["files"].keys() == files.keys() and all(
+                known["files"][name][0] == digest or (not name.endswith("CMakeLists.txt") and mtime > known["ended"])
+                for name, (digest, mtime) in files.items())
+        except (OSError, ValueError, TypeError, KeyError, IndexError):
+            kept = False
+        manifest.unlink(missing_ok=True)  # written again only when this build ends without error
+        if not kept:
+            shutil.rmtree(build, ignore_errors=True)
+        for product in (p for p in build.rglob("*") if p.name in products and p.is_file()):
+            product.unlink()
+        yield build
+        manifest.write_text(json.dumps({"tools": tools, "files": {n: [d, m] for n, (d, m) in files.items()},
+                                        "ended": time.time_ns()}), encoding="utf-8")
+
+
+def _snapshot(project: Path) -> dict[str, tuple[str | None, int]]:
+    """Every file of ``project`` (relative path -> (sha256, mtime ns)) but the learner's own build folders
+    (those holding a CMakeCache.txt)."""
+    builds = [c.parent for c in project.glob("*/CMakeCache.txt")]
+    return {str(p.relative_to(project)): (_digest(p), p.stat().st_mtime_ns) for p in sorted(project.rglob("*"))
+            if p.is_file() and not any(b in p.parents for b in builds)}
 
 
 def _digest(path: Path) -> str | None:
