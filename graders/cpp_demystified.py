@@ -137,9 +137,9 @@ def _judge_harness(s: GradingSession, project: Path) -> None:
     harness = ck.reused_object(s, "harness_compiles", [gxx, *flags, "-c", "harness.cpp"], "harness_main",
                                cwd=scratch, cache=ck.object_cache(s), shown=shown, expected=expected,
                                paths={str(scratch) + os.sep: ""})
-    ck.step(s, "harness_compiles", [gxx, *flags, str(harness), str(SOURCE), "-o", "harness"], "harness_compile",
+    ck.step(s, "harness_compiles", [gxx, *flags, harness.name, str(SOURCE), "-o", "harness"], "harness_compile",
             shown=shown, passed="compiled with the harness", cwd=scratch, expected=expected,
-            paths={str(scratch) + os.sep: "", str(harness.parent) + os.sep: ""})
+            paths={str(scratch) + os.sep: ""})
 
     for test in yaml.safe_load((DATA / "tests.yaml").read_text(encoding="utf-8")):
         verdict_test(s, test["check"], [str(scratch / "harness"), test["test"]], f"harness_{test['test']}",

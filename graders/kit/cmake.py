@@ -92,20 +92,21 @@ def reused_object(s: GradingSession, check_id: str, argv: list[str], label: str,
         cache: folder for ``<label>.o`` and ``<label>.json`` (made when missing), or None.
 
     Returns:
-        the object file (in ``cache``, or in ``cwd`` without one).
+        ``cwd/<label>.o`` (compiled, or copied from ``cache`` and checked against the manifest's sha256).
 
     Raises:
         Unmet: the compile failed (``check_id`` recorded with the compiler's errors, as :func:`step`).
     """
     identity = {"argv": argv, "compiler": _file_identity(Path(argv[0]))}
-    manifest = cache / f"{label}.json" if cache else None
+    manifest, out = cache / f"{label}.json" if cache else None, cwd / f"{label}.o"
     if manifest is not None and (cache / f"{label}.o").is_file():
-        with contextlib.suppress(OSError, ValueError, TypeError, AttributeError):
+        with contextlib.suppress(OSError, ValueError, TypeError, AttributeError, KeyError):
             known = json.loads(manifest.read_text(encoding="utf-8"))
             if known["identity"] == identity and all(_digest(cwd / dep) == digest
                                                      for dep, digest in known["inputs"].items()):
-                return cache / f"{label}.o"
-    out = cwd / f"{label}.o"
+                shutil.copyfile(cache / f"{label}.o", out)  # the copy is checked: another check may replace it
+                if _digest(out) == known["object"]:
+                    return out
     step(s, check_id, [*argv, "-o", out.name, "-MD", "-MF", f"{label}.d"], label, shown=shown, expected=expected,
          cwd=cwd, paths=paths)
     if manifest is None:
@@ -113,8 +114,9 @@ def reused_object(s: GradingSession, check_id: str, argv: list[str], label: str,
     listed = (cwd / f"{label}.d").read_text(encoding="utf-8", errors="replace").replace("\\\n", " ")
     inputs = {dep: _digest(cwd / dep) for dep in listed.partition(":")[2].split()}
     cache.mkdir(parents=True, exist_ok=True)
-    for name, data in ((f"{label}.o", out.read_bytes()), (f"{label}.json", json.dumps(
-            {"identity": identity, "inputs": inputs}).encode())):  # each replaced whole: a reader sees old or new
+    compiled = out.read_bytes()
+    known = {"identity": identity, "inputs": inputs, "object": hashlib.sha256(compiled).hexdigest()}
+    for name, data in ((f"{label}.o", compiled), (f"{label}.json", json.dumps(known).encode())):
         partial = cache / f"{name}.{os.getpid()}.{threading.get_ident()}"
         partial.write_bytes(data)
         os.replace(partial, cache / name)
