@@ -1,18 +1,17 @@
 """Grader for ``cpp-demystified`` (seed ch. 28.5-28.6; contract in shared/LESSONS.md).
 
 Pure C++, no ROS: everything lives in ``cpp/cpp_demystified/`` of the
-workspace. Two independent parts, graded at the same time on two threads
-(:func:`graders.kit.parts.at_once`; each writes only its own scratch folder):
+workspace. Two independent parts:
+
+They run at the same time (:func:`graders.kit.parts.at_once`).
 
 * ``cmake``: the learner's own ``CMakeLists.txt`` is configured and built out
-  of source (nothing is written into their folder; the build folder of the
-  last check is kept when :func:`graders.kit.cmake.kept_build` allows it), and
-  the demo program ``demystified_demo`` is run once.
-* ``harness``: their ``src/demystified.cpp`` is compiled and linked with ``g++``
-  with the course's test harness (``graders/data/cpp_demystified/harness.cpp``;
-  its object is reused while it and the headers it reads stay the same) in a
-  scratch copy under ``s.log_dir`` where ``potato.hpp`` is replaced by a twin
-  with the same interface that counts how each Potato is constructed.
+  of source under ``s.log_dir`` (nothing is written into their folder), and the
+  demo program ``demystified_demo`` is run once.
+* ``harness``: their ``src/demystified.cpp`` is compiled in one ``g++`` call
+  with the course's test harness (``graders/data/cpp_demystified/harness.cpp``)
+  in a scratch copy under ``s.log_dir`` where ``potato.hpp`` is replaced by a
+  twin with the same interface that counts how each Potato is constructed.
   The harness is compiled with ``-D_GLIBCXX_ASSERTIONS``, so ``operator[]``
   past the end aborts deterministically instead of reading garbage. The binary
   is run once per test of ``tests.yaml`` (an abort ends only that test) and
@@ -82,31 +81,30 @@ CHECKS = [
 def grade(s: GradingSession) -> None:
     """Check the files, build and run the learner's CMake project, then run the test harness on their functions."""
     project = kit.project_files(s, "layout", PROJECT, FILES)
-    # two mostly single-threaded compiles: on 2 cores they overlap; cmake-build/ and harness/ keep them apart
+    # two single-threaded compiles on 2 cores: the parts run at the same time (own scratch folders each)
     at_once(s, "cmake", lambda: _judge_cmake(s, project), "harness", lambda: _judge_harness(s, project))
 
 
 def _judge_cmake(s: GradingSession, project: Path) -> None:
-    """Configure and build the learner's CMakeLists.txt out of their folder, then run the demo once."""
-    cmake, expected = ck.tool(s.base_env, "cmake"), f"cmake configures the project and builds {DEMO}"
-    # the build folder of the last check is kept when nothing forbids it (kit.cmake.kept_build says when)
-    with ck.kept_build(s, project, s.log_dir / "cmake-build", products=(DEMO,)) as build:
-        ck.step(s, "cmake_build", [cmake, "-S", str(project), "-B", str(build)], "cmake_configure",
-                shown="cmake -S . -B build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
-        ck.step(s, "cmake_build", [cmake, "--build", str(build), "--parallel", "2"], "cmake_build",
-                shown="cmake --build build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
-        found = sorted(p for p in build.rglob(DEMO) if p.is_file() and os.access(p, os.X_OK))
-        if not s.record("cmake_build", bool(found), f"configured and built {found[0].relative_to(build)}" if found
-                        else f"the build succeeded but made no executable named {DEMO} (add_executable({DEMO} ...))",
-                        expected):
-            raise Unmet(f"no {DEMO} was built")
-        run = run_program(s, [str(found[0])], DEMO, timeout=RUN_TIMEOUT, cwd=build)
-        out = [line for line in run.stdout.splitlines() if line.strip()]
-        problem = last_line(run.stderr)[:160]
-        s.record("demo_runs", run.returncode == 0 and not run.timed_out, f"./{DEMO}: {run.ending()}"
-                 + (f"; it printed {len(out)} line(s), the last: {out[-1].strip()[:120]!r}" if out else "")
-                 + (f"; stderr: {problem!r}" if run.returncode != 0 and problem else ""),
-                 f"exit code 0 within {RUN_TIMEOUT:.0f} s")
+    """Configure and build the learner's CMakeLists.txt under log_dir, then run the demo once."""
+    cmake, build = ck.tool(s.base_env, "cmake"), s.log_dir / "cmake-build"
+    expected = f"cmake configures the project and builds {DEMO}"
+    ck.step(s, "cmake_build", [cmake, "-S", str(project), "-B", str(build)], "cmake_configure",
+            shown="cmake -S . -B build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
+    ck.step(s, "cmake_build", [cmake, "--build", str(build), "--parallel", "2"], "cmake_build",
+            shown="cmake --build build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
+    found = sorted(p for p in build.rglob(DEMO) if p.is_file() and os.access(p, os.X_OK))
+    if not s.record("cmake_build", bool(found), f"configured and built {found[0].relative_to(build)}" if found
+                    else f"the build succeeded but made no executable named {DEMO} (add_executable({DEMO} ...))",
+                    expected):
+        raise Unmet(f"no {DEMO} was built")
+    run = run_program(s, [str(found[0])], DEMO, timeout=RUN_TIMEOUT, cwd=build)
+    out = [line for line in run.stdout.splitlines() if line.strip()]
+    problem = last_line(run.stderr)[:160]
+    s.record("demo_runs", run.returncode == 0 and not run.timed_out, f"./{DEMO}: {run.ending()}"
+             + (f"; it printed {len(out)} line(s), the last: {out[-1].strip()[:120]!r}" if out else "")
+             + (f"; stderr: {problem!r}" if run.returncode != 0 and problem else ""),
+             f"exit code 0 within {RUN_TIMEOUT:.0f} s")
 
 
 def _scratch_copy(s: GradingSession, project: Path) -> Path:
@@ -125,21 +123,18 @@ def _scratch_copy(s: GradingSession, project: Path) -> Path:
 
 
 def _judge_harness(s: GradingSession, project: Path) -> None:
-    """Compile src/demystified.cpp with the harness (-O0), then run each test in its own process."""
+    """Compile src/demystified.cpp with the harness (one g++ call, -O0), then run each test in its own process."""
     if not (project / SOURCE).is_file():
         s.record("harness_compiles", False, f"there is no {PROJECT}/{SOURCE}", f"{SOURCE} with the four functions")
         raise Unmet(f"there is no {SOURCE}")
-    gxx, scratch = ck.tool(s.base_env, "g++", "c++"), _scratch_copy(s, project)
-    flags, shown = ["-std=c++17", "-O0", "-D_GLIBCXX_ASSERTIONS", "-I", "include"], f"g++ harness.cpp {SOURCE}"
-    expected = ("your functions compile against the signatures of the lesson's demystified.hpp (with the course's "
-                "copy of potato.hpp)")
-    # harness.cpp changes only with the headers: reused from the last check when they are the same (kit.cmake)
-    harness = ck.reused_object(s, "harness_compiles", [gxx, *flags, "-c", "harness.cpp"], "harness_main",
-                               cwd=scratch, cache=ck.object_cache(s), shown=shown, expected=expected,
-                               paths={str(scratch) + os.sep: ""})
-    ck.step(s, "harness_compiles", [gxx, *flags, harness.name, str(SOURCE), "-o", "harness"], "harness_compile",
-            shown=shown, passed="compiled with the harness", cwd=scratch, expected=expected,
-            paths={str(scratch) + os.sep: ""})
+    gxx = ck.tool(s.base_env, "g++", "c++")
+    scratch = _scratch_copy(s, project)
+    argv = [gxx, "-std=c++17", "-O0", "-D_GLIBCXX_ASSERTIONS", "-I", "include", "harness.cpp", str(SOURCE),
+            "-o", "harness"]
+    ck.step(s, "harness_compiles", argv, "harness_compile", shown=f"g++ -std=c++17 harness.cpp {SOURCE}",
+            passed="compiled with the harness", cwd=scratch, paths={str(scratch) + os.sep: ""},
+            expected="your functions compile against the signatures of the lesson's demystified.hpp "
+                     "(with the course's copy of potato.hpp)")
 
     for test in yaml.safe_load((DATA / "tests.yaml").read_text(encoding="utf-8")):
         verdict_test(s, test["check"], [str(scratch / "harness"), test["test"]], f"harness_{test['test']}",

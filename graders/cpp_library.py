@@ -4,7 +4,7 @@ Package ``cpp_package_with_a_library``: a shared library (target and file
 ``libcpp_package_with_a_library.so``, header
 ``cpp_package_with_a_library/sample_class.hpp``, class ``SampleClass`` on
 Eigen3 and Qt5Core) exported with ``ament_export_targets``, and a local node
-``sample_class_local_node`` that uses it. Two independent parts, graded at the same time:
+``sample_class_local_node`` that uses it. Two independent parts:
 
 * **library**: what the install holds, then a small package of the grader's
   (graders/data/cpp_library/consumer) that finds the library with
@@ -25,6 +25,7 @@ from graders import kit
 from graders.kit import Check, GradingSession
 from graders.kit import cpp_packages as cpp
 from graders.kit.parts import at_once
+from graders.kit.programs import run_program
 
 PACKAGE = "cpp_package_with_a_library"
 LIBRARY_FILE = f"lib{PACKAGE}.so"
@@ -88,29 +89,26 @@ CHECKS = [
 ]
 
 
-def judge_library(s: GradingSession) -> None:
-    """What the install holds, then the grader's consumer package built against it; compare what it prints."""
-    cpp.installed_library(s, ("library_installed", "header_installed", "exported_target"), PACKAGE, LIBRARY_FILE,
-                          HEADER, TARGET)
+def judge_consumer(s: GradingSession) -> None:
+    """Build the grader's consumer package against the install and compare what its program prints."""
     build = cpp.build_consumer(s, "consumer_configures", "consumer_builds", CONSUMER, PACKAGE, LIBRARY_FILE)
-    got, text, ended = cpp.run_consumer(s, build / "cpp_library_consumer", PACKAGE)
-    wrong = [f"the program ended: {ended}"] if ended else []
-    wrong += [f"{key} gave {got.get(key, 'nothing')} (expected {value})" for key, value in LIBRARY_FACTS.items()
-              if got.get(key) != value]
+    run = run_program(s, [str(build / "cpp_library_consumer")], "consumer-run", timeout=10.0,
+                      env=cpp.consumer_env(s, PACKAGE))
+    facts, _, text = run.stdout.partition("to_string:\n")
+    got = dict(line.split("=", 1) for line in facts.splitlines() if "=" in line)
+    wrong = [f"{key} gave {got.get(key, 'nothing')} (expected {value})" for key, value in LIBRARY_FACTS.items()
+             if got.get(key) != value]
     wrong += [f"to_string() lacks {what}" for needle, what in CONTENTS if needle not in text]
     wrong += [] if MATRIX.search(text) else ["to_string() lacks the matrix 1 2 / 3 4"]
+    if run.returncode != 0 or run.timed_out:
+        wrong.insert(0, f"the program ended: {run.describe()}")
     s.record("library_works", not wrong, "; ".join(wrong) if wrong else "square_of_sum, the getter/setter, "
              "to_string and operator<< give the chapter's results", ", ".join(f"{k} = {v}" for k, v in
                                                                               LIBRARY_FACTS.items()))
 
 
-def judge_node(s: GradingSession) -> None:
-    """The executable and its ELF, then the node's /rosout records: ``node_logs``, ``log_values``, ``rate``."""
-    path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)
-    cpp.uses_library(s, "node_uses_library", path, LIBRARY_FILE, "SampleClass::")
-    rosout = s.ros.rosout()
-    started = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit", need_node=False)
-
+def judge_logs(s: GradingSession, rosout, started) -> None:
+    """``node_logs``, ``log_values``, ``rate`` on the node's /rosout records."""
     def mine() -> list:
         return [r for r in rosout.records(level=INFO) if r.name == (started.name or NODE)]
 
@@ -142,8 +140,20 @@ def judge_node(s: GradingSession) -> None:
 
 
 def grade(s: GradingSession) -> None:
-    """package.xml, then the library part (compiles: CPU-bound) on a worker thread while the node part (mostly
-    waiting for its ticks) runs on this one, which gives its processes the parent-death signal (kit.parts.at_once).
-    Only the node part uses the ROS graph (``s.ros``)."""
+    """package.xml, then the library part (install + consumer package, CPU-bound) on a worker thread while
+    the node part (mostly waiting for its 3 s of ticks) runs here (kit.parts.at_once)."""
     kit.depends(s, "depends", PACKAGE, DEPENDENCIES)
-    at_once(s, "library", lambda: judge_library(s), "node", lambda: judge_node(s))
+
+    def library() -> None:
+        cpp.installed_library(s, ("library_installed", "header_installed", "exported_target"), PACKAGE,
+                              LIBRARY_FILE, HEADER, TARGET)
+        judge_consumer(s)
+
+    def node() -> None:
+        path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)
+        cpp.uses_library(s, "node_uses_library", path, LIBRARY_FILE, "SampleClass::")
+        rosout = s.ros.rosout()
+        started = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit", need_node=False)
+        judge_logs(s, rosout, started)
+
+    at_once(s, "library", library, "node", node)

@@ -16,20 +16,13 @@ Typical use::
 
 from __future__ import annotations
 
-import contextlib
-import fcntl
-import hashlib
-import json
 import os
 import re
 import shutil
-import threading
-import time
-from collections.abc import Iterator, Mapping
+from collections.abc import Mapping
 from pathlib import Path
 
 from course.grade.engine import GradingSession, Unmet
-from course.run import sandbox
 from graders.kit.programs import ProgramRun, compile_errors, run_program
 
 #: Seconds for each configure, build, install or compiler call.
@@ -73,133 +66,6 @@ def step(s: GradingSession, check_id: str, argv: list[str], label: str, *, shown
     if passed is not None:
         s.record(check_id, True, passed, expected)
     return run
-
-
-def reused_object(s: GradingSession, check_id: str, argv: list[str], label: str, *, cwd: Path, cache: Path | None,
-                  shown: str, expected: str, paths: Mapping[str, str] | None = None) -> Path:
-    """Compile one translation unit (``argv`` = compiler, flags, ``-c``, source, run in ``cwd``) to an object,
-    reusing the one a previous check of the same workspace made from identical input.
-
-    The compiler writes its dependency list (``-MD``: every header it read, system ones included); the
-    object is reused only when the compiler (path, size, mtime), ``argv`` and the content of the source and
-    every listed header are byte for byte the same, so a reused object is the one a compile would give (what
-    ccache's "direct mode" does). The cache (object + manifest) belongs to ONE workspace: pass ``cache=None``
-    to always compile, and :func:`object_cache` gives None in batch grading (course.run.sandbox), where one
-    submission must not plant an object another submission's check would link.
-
-    Args:
-        argv: e.g. ``["/usr/bin/g++", "-std=c++17", "-I", "include", "-c", "harness.cpp"]`` (no ``-o``).
-        cache: folder for ``<label>.o`` and ``<label>.json`` (made when missing), or None.
-
-    Returns:
-        ``cwd/<label>.o`` (compiled, or copied from ``cache`` and checked against the manifest's sha256).
-
-    Raises:
-        Unmet: the compile failed (``check_id`` recorded with the compiler's errors, as :func:`step`).
-    """
-    identity = {"argv": argv, "compiler": _file_identity(Path(argv[0]))}
-    manifest, out = cache / f"{label}.json" if cache else None, cwd / f"{label}.o"
-    if manifest is not None and (cache / f"{label}.o").is_file():
-        with contextlib.suppress(OSError, ValueError, TypeError, AttributeError, KeyError):
-            known = json.loads(manifest.read_text(encoding="utf-8"))
-            if known["identity"] == identity and all(_digest(cwd / dep) == digest
-                                                     for dep, digest in known["inputs"].items()):
-                shutil.copyfile(cache / f"{label}.o", out)  # the copy is checked: another check may replace it
-                if _digest(out) == known["object"]:
-                    return out
-    step(s, check_id, [*argv, "-o", out.name, "-MD", "-MF", f"{label}.d"], label, shown=shown, expected=expected,
-         cwd=cwd, paths=paths)
-    if manifest is None:
-        return out
-    listed = (cwd / f"{label}.d").read_text(encoding="utf-8", errors="replace").replace("\\\n", " ")
-    inputs = {dep: _digest(cwd / dep) for dep in listed.partition(":")[2].split()}
-    cache.mkdir(parents=True, exist_ok=True)
-    compiled = out.read_bytes()
-    known = {"identity": identity, "inputs": inputs, "object": hashlib.sha256(compiled).hexdigest()}
-    for name, data in ((f"{label}.o", compiled), (f"{label}.json", json.dumps(known).encode())):
-        partial = cache / f"{name}.{os.getpid()}.{threading.get_ident()}"
-        partial.write_bytes(data)
-        os.replace(partial, cache / name)
-    return out
-
-
-def object_cache(s: GradingSession) -> Path | None:
-    """The workspace's cache folder for :func:`reused_object`: ``log/ros2course/<lesson>/objects``, beside the
-    lesson's check logs; None in batch grading (:func:`course.run.sandbox.current` has an identity)."""
-    if sandbox.current() is not None:
-        return None
-    return s.workspace_root / "log" / "ros2course" / s.lesson.id / "objects"
-
-
-@contextlib.contextmanager
-def kept_build(s: GradingSession, project: Path, fresh: Path, products: tuple[str, ...]) -> Iterator[Path]:
-    """The build folder to configure and build the learner's CMake ``project`` in: kept from the last check of
-    this workspace when that is safe (CMake's and make's own dependency tracking then rebuild only what
-    changed), else ``fresh`` or an emptied kept one. Use it around the configure, build and run steps.
-
-    Kept only when: not batch grading (:func:`object_cache`; a submission must not plant a build another's
-    check reuses); no other check of this workspace holds it (else ``fresh``); the last build there ended
-    without error; the cmake binary, the C++ compiler, the CMakeLists.txt files and the project's set of
-    files are the same (a cache variable kept from an older CMakeLists.txt is not what a fresh configure
-    gives); and every file whose content (sha256) changed was modified after that build ended (make
-    compares mtimes: a file restored with an old mtime, ``cp -p`` or ``tar``, would keep a stale object).
-    Files named in ``products`` (e.g. the executable the grader looks for) are deleted before the build, so a
-    product comes from this build, never from an older CMakeLists.txt.
-    """
-    cache = object_cache(s)
-    if cache is None:
-        yield fresh
-        return
-    cache.mkdir(parents=True, exist_ok=True)
-    build, manifest = cache / "cmake-build", cache / "cmake-build.json"
-    with open(cache / "cmake-build.lock", "w") as lock:
-        try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except OSError:
-            yield fresh
-            return
-        tools = [_file_identity(Path(tool(s.base_env, name))) for name in ("cmake", "c++")]
-        files = _snapshot(project)
-        try:
-            known = json.loads(manifest.read_text(encoding="utf-8"))
-            kept = known["tools"] == tools and known["files"].keys() == files.keys() and all(
-                known["files"][name][0] == digest or (not name.endswith("CMakeLists.txt") and mtime > known["ended"])
-                for name, (digest, mtime) in files.items())
-        except (OSError, ValueError, TypeError, KeyError, IndexError):
-            kept = False
-        manifest.unlink(missing_ok=True)  # written again only when this build ends without error
-        if not kept:
-            shutil.rmtree(build, ignore_errors=True)
-        for product in (p for p in build.rglob("*") if p.name in products and p.is_file()):
-            product.unlink()
-        yield build
-        manifest.write_text(json.dumps({"tools": tools, "files": {n: [d, m] for n, (d, m) in files.items()},
-                                        "ended": time.time_ns()}), encoding="utf-8")
-
-
-def _snapshot(project: Path) -> dict[str, tuple[str | None, int]]:
-    """Every file of ``project`` (relative path -> (sha256, mtime ns)) but the learner's own build folders
-    (those holding a CMakeCache.txt)."""
-    builds = [c.parent for c in project.glob("*/CMakeCache.txt")]
-    return {str(p.relative_to(project)): (_digest(p), p.stat().st_mtime_ns) for p in sorted(project.rglob("*"))
-            if p.is_file() and not any(b in p.parents for b in builds)}
-
-
-def _digest(path: Path) -> str | None:
-    """sha256 of the file's bytes; None when it cannot be read."""
-    try:
-        return hashlib.sha256(path.read_bytes()).hexdigest()
-    except OSError:
-        return None
-
-
-def _file_identity(path: Path) -> list:
-    """The resolved path, size and mtime (ns) of a program: a reinstalled compiler differs."""
-    try:
-        info = path.resolve().stat()
-    except OSError:
-        return [str(path)]
-    return [str(path.resolve()), info.st_size, info.st_mtime_ns]
 
 
 def cache_value(cache: Path, name: str) -> str | None:

@@ -7,7 +7,6 @@
   CMake project of the grader's in the check's log folder (inside the learner's
   workspace, nothing written elsewhere) with the learner's ``install/`` and
   the ROS install as the only ways to find anything.
-  :func:`run_consumer` runs its program and reads what it printed.
 * :func:`needed_libraries` and :func:`defined_functions` read an executable
   with binutils' ``readelf -d`` and ``nm`` (installed with g++), to tell a node
   that loads the library from one that compiled its own copy of its sources.
@@ -118,29 +117,6 @@ def build_consumer(s: GradingSession, configure_check: str, build_check: str, te
     return build
 
 
-def run_consumer(s: GradingSession, program: Path, package: str, timeout: float = 10.0
-                 ) -> tuple[dict[str, str], str, str | None]:
-    """Run the consumer's ``program`` (from :func:`build_consumer`'s build folder) and read what it printed.
-
-    The consumer prints ``key=value`` lines, then a line ``to_string:`` and free text after it
-    (graders/data/cpp_library/consumer/consumer.cpp). It runs in :func:`consumer_env`, so it loads the
-    learner's installed library.
-
-    Args:
-        program: the consumer executable.
-        package: the learner's package (its ``_DIR`` / ``_ROOT`` variables are dropped).
-        timeout: seconds it may run (it takes milliseconds).
-
-    Returns:
-        ``(facts, text, ending)``: the ``key=value`` pairs, the text after ``to_string:``, and None when it
-        exited with code 0 in time, else how it ended (:meth:`graders.kit.programs.ProgramRun.describe`).
-    """
-    run = run_program(s, [str(program)], "consumer-run", timeout=timeout, env=consumer_env(s, package))
-    facts, _, text = run.stdout.partition("to_string:\n")
-    got = dict(line.split("=", 1) for line in facts.splitlines() if "=" in line)
-    return got, text, (run.describe() if run.returncode != 0 or run.timed_out else None)
-
-
 def installed_library(s: GradingSession, check_ids: tuple[str, str, str], package: str, library_file: str,
                       header: str, target: str) -> None:
     """Record three checks on the install prefix of ``package`` (ament index): library file, header, export.
@@ -214,5 +190,5 @@ def uses_library(s: GradingSession, check_id: str, executable: Path, library_fil
                     f"loads {library_file} and takes {class_prefix}* from it", expected)
 
 
-__all__ = ["BUILD_TIMEOUT", "LEAKY_VARIABLES", "build_consumer", "consumer_env", "defined_functions",
-           "installed_library", "needed_libraries", "run_consumer", "uses_library"]
+__all__ = ["BUILD_TIMEOUT", "LEAKY_VARIABLES", "build_consumer", "consumer_env", "defined_functions", "installed_library",
+           "needed_libraries", "uses_library"]

@@ -13,10 +13,8 @@ def at_once(s: GradingSession, background: str, grade_background: Callable[[], N
     """Grade part ``background`` on a worker thread while part ``foreground`` is graded on this thread.
 
     For halves that run in private graphs of their own (``s.new_graph()``), so
-    neither sees the other nor waits for its discovery, or where only one half
-    uses ROS (e.g. a compile beside a node): the check takes about as long as
-    the longer half. Verdicts that judge timing must use send stamps, which a
-    busy second core does not shift. Processes started from the main thread get
+    neither sees the other nor waits for its discovery: the check takes about
+    as long as the longer half. Processes started from the main thread get
     the parent-death signal (course/run/process.py), so start there the half
     whose programs run longest. ``s.part`` keeps each thread's closing actions
     (Ctrl+C checks) apart; an :class:`~course.grade.engine.Unmet` ends only its
