@@ -456,12 +456,22 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
 @dev_app.command()
 @_handle_errors
 def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="[LESSON]...")] = None,
-             as_json: Annotated[bool, typer.Option("--json", help="Print the outcomes as JSON.")] = False) -> None:
+             as_json: Annotated[bool, typer.Option("--json", help="Print the outcomes as JSON.")] = False,
+             batch: Annotated[bool, typer.Option("--batch", help="Also grade each reference and a sample of wrong solutions with `ros2course grade` (the isolation this machine gives) and fail unless they get the verdicts `check` gave.")] = False,
+             sample: Annotated[int, typer.Option("--sample", help="With --batch: wrong solutions per lesson handed in to the batch.")] = 2,
+             ) -> None:
     """Grade every lesson's reference (full marks), starter (not full) and wrong solutions (named checks fail)."""
     _ros()
     from course.grade.validate import render_outcomes, validate_course  # noqa: PLC0415 - start time, see the imports
 
-    outcomes = validate_course(lesson_ids or None, progress=stderr_console())
+    if sample < 0:
+        raise CourseError(f"--sample must be 0 or more (got {sample})", "e.g. --sample 2")
+    if batch:
+        from course.batch.parity import validate_with_batch  # noqa: PLC0415 - start time, see the imports
+
+        outcomes = validate_with_batch(lesson_ids or None, sample=sample, progress=stderr_console())
+    else:
+        outcomes = validate_course(lesson_ids or None, progress=stderr_console())
     if as_json:
         import json  # noqa: PLC0415 - start time, see the imports
 

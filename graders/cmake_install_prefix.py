@@ -85,8 +85,11 @@ def grade(s: GradingSession) -> None:
         raise Unmet("the projects are missing")
     _judge_sources(s)
     _judge_learner_prefix(s)
-    scratch = s.log_dir / "cmake-install-prefix"
-    shutil.rmtree(scratch, ignore_errors=True)
+    # CMake runs as the submission and writes the builds and the prefix: a submission folder, with the
+    # app's sources copied in before it changes hands
+    scratch = s.submission_folder("cmake-install-prefix", lambda folder: shutil.copytree(
+        root / APP, folder / "app-src",
+        ignore=shutil.ignore_patterns("build*", "CMakeCache.txt", "CMakeFiles", "prefix", "install")))
     prefix, source, build = scratch / "prefix", scratch / "app-src", scratch / "app-build"
     env = ck.prefix_only_env(s.base_env, prefix, PACKAGE)
     cmake = ck.tool(env, "cmake")
@@ -97,8 +100,6 @@ def grade(s: GradingSession) -> None:
     ck.installed_file(s, "installed_library", prefix, "lib*/libgreeting.[sa]*", "<prefix>/lib/libgreeting.so (or .a)")
     ck.package_config(s, "package_config", prefix, PACKAGE, TARGET)
 
-    shutil.copytree(root / APP, source,
-                    ignore=shutil.ignore_patterns("build*", "CMakeCache.txt", "CMakeFiles", "prefix", "install"))
     expected = (f"cmake configure exits with 0 with CMAKE_PREFIX_PATH=<grader prefix> only, and {PACKAGE}_DIR "
                 f"is <grader prefix>/lib/cmake/{PACKAGE}")
     ck.step(s, "app_configures", [cmake, "-S", str(source), "-B", str(build), *ck.ISOLATED_OPTIONS],

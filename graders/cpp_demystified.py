@@ -87,7 +87,7 @@ def grade(s: GradingSession) -> None:
 
 def _judge_cmake(s: GradingSession, project: Path) -> None:
     """Configure and build the learner's CMakeLists.txt under log_dir, then run the demo once."""
-    cmake, build = ck.tool(s.base_env, "cmake"), s.log_dir / "cmake-build"
+    cmake, build = ck.tool(s.base_env, "cmake"), s.submission_folder("cmake-build")
     expected = f"cmake configures the project and builds {DEMO}"
     ck.step(s, "cmake_build", [cmake, "-S", str(project), "-B", str(build)], "cmake_configure",
             shown="cmake -S . -B build", expected=expected, cwd=s.log_dir, paths={str(project) + os.sep: ""})
@@ -108,18 +108,20 @@ def _judge_cmake(s: GradingSession, project: Path) -> None:
 
 
 def _scratch_copy(s: GradingSession, project: Path) -> Path:
-    """A folder under log_dir with the learner's include/ and src/demystified.cpp, the course's
-    potato.hpp in place of theirs, and harness.cpp."""
-    scratch = s.log_dir / "harness"
-    if (project / "include").is_dir():
-        shutil.copytree(project / "include", scratch / "include", symlinks=True)
-    (scratch / POTATO).parent.mkdir(parents=True, exist_ok=True)
-    (scratch / POTATO).unlink(missing_ok=True)
-    shutil.copyfile(DATA / "potato.hpp", scratch / POTATO)
-    (scratch / "src").mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(project / SOURCE, scratch / SOURCE)
-    shutil.copyfile(DATA / "harness.cpp", scratch / "harness.cpp")
-    return scratch
+    """A submission folder ``<log_dir>/harness`` with the learner's include/ and src/demystified.cpp, the
+    course's potato.hpp in place of theirs, and harness.cpp (the compile runs as the submission)."""
+
+    def fill(scratch: Path) -> None:
+        if (project / "include").is_dir():
+            shutil.copytree(project / "include", scratch / "include", symlinks=True)
+        (scratch / POTATO).parent.mkdir(parents=True, exist_ok=True)
+        (scratch / POTATO).unlink(missing_ok=True)
+        shutil.copyfile(DATA / "potato.hpp", scratch / POTATO)
+        (scratch / "src").mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(project / SOURCE, scratch / SOURCE)
+        shutil.copyfile(DATA / "harness.cpp", scratch / "harness.cpp")
+
+    return s.submission_folder("harness", fill)
 
 
 def _judge_harness(s: GradingSession, project: Path) -> None:

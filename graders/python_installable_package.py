@@ -79,10 +79,11 @@ def grade(s: GradingSession) -> None:
     """Install into a fresh venv, import from /, then run the command while a copy of the venv uninstalls."""
     _project_file(s)
     tools = kpip.tools_folder(s)
-    source = s.log_dir / "source" / "minimalist_package"
-    shutil.rmtree(source.parent, ignore_errors=True)
-    shutil.copytree(s.workspace_root / FOLDER, source, symlinks=True,
-                    ignore=shutil.ignore_patterns("__pycache__", "*.egg-info", "build", "dist", ".venv", "venv"))
+    # pip builds in the source tree, as the submission: a copy in a folder the submission may write
+    source = s.submission_folder("source", lambda folder: shutil.copytree(
+        s.workspace_root / FOLDER, folder / "minimalist_package", symlinks=True,
+        ignore=shutil.ignore_patterns("__pycache__", "*.egg-info", "build", "dist", ".venv", "venv"))
+    ) / "minimalist_package"
     python = kpip.fresh_venv(s)
     venv, env = python.parent.parent, python_env(s)
 
@@ -95,7 +96,7 @@ def grade(s: GradingSession) -> None:
     s.require("installs")
 
     # the import and the uninstall (in a copy of the venv: graders.kit.pip.venv_copy) are judged while the command runs
-    removal = kpip.venv_copy(python, "uninstall_venv")
+    removal = kpip.venv_copy(s, python, "uninstall_venv")
     at_once(s, "install", lambda: (_importable(s, python, env), _uninstall(s, removal, tools, env)), "command",
             lambda: _console_script(s, venv / "bin" / SCRIPT, env))
 

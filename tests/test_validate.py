@@ -1,5 +1,7 @@
 """The course checks itself: every lesson's reference gets full marks, its starter does not,
-and every wrong solution in tests/fixtures loses the points of the check that names its bug."""
+and every wrong solution in tests/fixtures loses the points of the check that names its bug;
+and ``ros2course grade`` (as root here: full isolation) gives the reference and one wrong
+solution of each lesson the verdicts ``check`` gave them (``dev validate --batch``, issue 25)."""
 
 from __future__ import annotations
 
@@ -11,14 +13,17 @@ from course.lesson.catalog import load_catalog
 
 
 @pytest.mark.ros
+@pytest.mark.timeout(1500)
 @pytest.mark.parametrize("lesson_id", load_catalog().ids())
 def test_dev_validate(lesson_id, cli):
-    proc = cli("dev", "validate", lesson_id, "--json", timeout=900)
+    proc = cli("dev", "validate", lesson_id, "--json", "--batch", "--sample", "1", timeout=1200)
     assert "Traceback" not in proc.stderr, proc.stderr
     outcomes = json.loads(proc.stdout)
     cases = {o["case"] for o in outcomes}
-    assert {"reference", "starter"} <= cases
-    wrong = [o for o in outcomes if o["case"] not in ("reference", "starter")]
+    assert {"reference", "starter", "reference (grade)"} <= cases
+    batch = [o for o in outcomes if o["case"].endswith(" (grade)")]
+    assert len(batch) == 2, batch
+    wrong = [o for o in outcomes if o["case"] not in ("reference", "starter") and o not in batch]
     assert wrong, f"{lesson_id} has no wrong-solution fixtures"
     bad = [f"{o['case']}: expected {o['expected']}, got {o['got']}" for o in outcomes if not o["ok"]]
     assert not bad, "\n".join(bad)

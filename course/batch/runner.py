@@ -57,11 +57,10 @@ from rich.progress import (
 from rich.table import Table
 
 from course.batch.archive import Submission, discover, prepare
-from course.build.colcon import build_packages
+from course.build.reference import build_reference, trusted_interface_packages
 from course.errors import CourseError, MissingRequirement, NotGradable
 from course.grade.engine import load_grader
 from course.grade.results import LessonResult, Status
-from course.grade.validate import lesson_dependencies, reference_workspace
 from course.lesson.catalog import content_root, load_catalog
 from course.lesson.workspace import atomic_write_text
 from course.report import gradebook
@@ -163,33 +162,32 @@ def refuse_without_isolation(isolate: bool = True) -> None:
 
 
 def build_trusted_interfaces(lessons: list[Any]) -> Path | None:
-    """Build the course's own copies of the packages the lessons depend on (interfaces), once per batch.
+    """Build the course's own copies of the interface packages the lessons' graders import, once per batch.
 
     The grader imports generated message types in its own process; a
     submission's build of them is code the submission controls, so under
     isolation the grader imports these reference builds instead (same
     definitions as the contract in shared/LESSONS.md, so the same wire types).
+    Which packages: each lesson's ``interfaces`` (lesson.yaml) and their
+    dependencies (:func:`course.build.reference.trusted_interface_packages`).
 
     Returns:
-        the built workspace (``install/`` inside), or None when no lesson depends on another package.
+        the built workspace (``install/`` inside), or None when no grader imports interface types.
 
     Raises:
-        CourseError: the reference packages do not build (a fault of the course or machine).
+        CourseError: a lesson declares an interface the course has no package for, or the reference
+            packages do not build (a fault of the course or machine).
     """
-    deps = list(dict.fromkeys(dep for lesson in lessons for dep in lesson_dependencies(lesson)))
-    if not deps:
+    packages = trusted_interface_packages(lessons)
+    if not packages:
         return None
     dest = Path(tempfile.mkdtemp(prefix="ros2course-trusted-")) / "ws"
     dest.parent.chmod(0o755)
-    reference_workspace(lessons[0], dest, deps, with_folders=False)
-    env = dict(os.environ)
-    env_mod.activate(env)
-    built = build_packages(dest, deps, env, dest / "log" / "build.log")
-    if not built.ok:
+    try:
+        return build_reference(lessons[0], dest, packages, "build.log")
+    except BaseException:
         shutil.rmtree(dest.parent, ignore_errors=True)
-        raise CourseError(f"the course's own packages {', '.join(deps)} do not build:\n{built.excerpt}",
-                          "run ros2course doctor; see the build log above")
-    return dest
+        raise
 
 
 # --- one job ------------------------------------------------------------------------------------
@@ -289,14 +287,6 @@ def run_job(job: Job) -> dict[str, Any]:
             "peak_rss": peak, "seconds": seconds, "cancelled": cancelled}
 
 
-def _chown_tree(folder: Path, uid: int) -> None:
-    """Give ``folder`` and everything under it (never following links) to ``uid``."""
-    os.chown(folder, uid, uid, follow_symlinks=False)
-    for root, dirs, files in os.walk(folder):
-        for name in dirs + files:
-            os.chown(os.path.join(root, name), uid, uid, follow_symlinks=False)
-
-
 def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Isolation, sandbox.PidsCgroup | None]:
     """What one job runs inside: ``(command prefix, worker arguments, isolation, pids cgroup)``.
 
@@ -340,7 +330,7 @@ def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Is
     if caps.uid_drop:
         uid = sandbox.new_uid()
         for folder in (scratch / "ws", scratch / "home", scratch / "logs" / "ros"):
-            _chown_tree(folder, uid)
+            sandbox.give_tree(folder, uid)
         (scratch / "home").chmod(0o700)
         # with a cgroup, RLIMIT_NPROC is the backstop just above it (the cgroup counts what it refuses)
         nproc = job.pids_limit + (32 if cgroup is not None else 0)
@@ -530,7 +520,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
               timeout: float = DEFAULT_TIMEOUT, scheduler: str | None = None, resume: bool = False,
               console: Any = None, memory_limit: int = DEFAULT_MEMORY_LIMIT, isolate: bool = True,
               executor: cf.Executor | None = None, pids_limit: int = sandbox.DEFAULT_PIDS_LIMIT,
-              require_isolation: bool = False) -> BatchReport:
+              require_isolation: bool = False, student_lessons: dict[str, list[str]] | None = None) -> BatchReport:
     """Grade every submission in ``submissions`` for ``lessons``; write OUTDIR as each one finishes.
 
     Args:
@@ -548,6 +538,9 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
         pids_limit: tasks (processes + threads) each submission may have at once.
         require_isolation: refuse to grade unless every protection is in effect
             (checked here and again by each job, wherever it runs).
+        student_lessons: student id -> the lessons (of ``lessons``) that student is graded for
+            (default: every lesson for every student; ``dev validate --batch`` hands in one
+            workspace per lesson and case).
 
     Raises:
         CourseError: bad input (no such folder, OUTDIR inside SUBMISSIONS or already
@@ -576,6 +569,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     for lesson_id in lessons:
         env_mod.require(catalog.get(lesson_id).requires, f"lesson {lesson_id}")
         lesson_checks(lesson_id)
+    trusted_interface_packages([catalog.get(lesson_id) for lesson_id in lessons])  # refuses a lesson batch cannot grade
     results_path = out_dir / "results.jsonl"
     existing = gradebook.read_results(results_path)
     if existing and not resume:
@@ -598,7 +592,8 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     todo: list[Job] = []
     skipped = 0
     for entry in entries:
-        missing = [lesson for lesson in lessons if (entry.student, lesson) not in done]
+        theirs = lessons if student_lessons is None else [l for l in lessons if l in student_lessons.get(entry.student, ())]
+        missing = [lesson for lesson in theirs if (entry.student, lesson) not in done]
         if not missing:
             skipped += 1
             continue

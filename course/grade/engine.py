@@ -16,11 +16,12 @@ import datetime as dt
 import importlib
 import json
 import os
+import shutil
 import sys
 import threading
 import time
 import traceback
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -347,12 +348,44 @@ class GradingSession:
             CourseError: submission code runs sandboxed and the course has no build of ``package``.
         """
 
+        if package not in self.lesson.interfaces:
+            # the same refusal under check and batch: an undeclared package fails dev validate, not a class
+            raise CourseError(f"the grader of {self.lesson.id} imports {package} types but its lesson.yaml does not "
+                              f"declare them", f"a fault of the course: add 'interfaces: [{package}]' to lesson.yaml")
         if self.trusted_interfaces is not None:
             return workspace_type(build_mod.overlay_env(self.trusted_interfaces, self.base_env), package, kind, name)
         if sandbox.current() is not None:
             raise CourseError(f"the grader needs {package} types but the batch built no trusted copy of {package}",
-                              "a fault of the course: list the package as a dependency of the lesson's packages")
+                              "a fault of the grading run: grade through ros2course grade, which builds them")
         return workspace_type(self.overlay(), package, kind, name)
+
+    def submission_folder(self, name: str, fill: Callable[[Path], None] | None = None) -> Path:
+        """A fresh folder ``log_dir/<name>`` that the programs the grader runs as the submission may write.
+
+        For every file a submission's program writes while the grader observes it: a
+        CMake build folder, a venv, a probe's trace, a copy of the learner's sources
+        that a build writes into, a ``ROS_HOME``. ``fill(folder)`` runs first, as the
+        grader (copy sources, templates); then, in batch grading, the whole tree is
+        given to the submission's uid (:func:`course.run.sandbox.give_tree`) and the
+        grader only reads it from then on (writing into a folder the submission owns
+        could follow a link it planted). Under ``check`` the learner owns everything
+        already, so both paths see the same folders.
+
+        Args:
+            name: a folder name relative to the check's log folder (``"cmake-build"``);
+                an earlier folder of that name is removed first.
+            fill: called with the new, empty folder before it changes hands.
+
+        Returns:
+            the folder (absolute).
+        """
+        folder = self.log_dir / name
+        shutil.rmtree(folder, ignore_errors=True)
+        folder.mkdir(parents=True)
+        if fill is not None:
+            fill(folder)
+        sandbox.give_tree(folder)
+        return folder
 
     def find_executable(self, package: str, executable: str) -> tuple[Path | None, str]:
         """Resolve ``package``/``executable`` the way ``ros2 run`` does.

@@ -35,8 +35,13 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from rich.console import Console
 from rich.table import Table
 
-from course.build.colcon import build_packages, dependency_closure, find_packages
-from course.errors import LessonFormatError, ValidationFailed
+from course.build.colcon import find_packages
+from course.build.reference import (
+    build_reference,
+    lesson_dependencies,
+    reference_workspace,
+)
+from course.errors import CourseError, LessonFormatError, ValidationFailed
 from course.grade.engine import grade_lesson
 from course.grade.results import LessonResult, Status
 from course.lesson.catalog import (
@@ -145,37 +150,6 @@ def apply_edits(workspace_root: Path, edits: list[Edit]) -> None:
         target.write_text(text.replace(edit.replace, edit.with_), encoding="utf-8")
 
 
-def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None = None, *,
-                        with_folders: bool = True) -> Path:
-    """Copy reference packages from ``solutions/src`` into ``dest/src``, and the lesson's ``folders``.
-
-    Args:
-        packages: which ones (default: the lesson's packages and their dependencies).
-        with_folders: also copy the lesson's non-ROS ``folders`` from ``solutions/`` (a case's
-            workspace needs them; an underlay of dependencies does not).
-
-    Raises:
-        ValidationFailed: a folder the lesson names is not in ``solutions/``.
-    """
-    solutions = content_root() / "solutions"
-    found = find_packages(solutions / "src")
-    (dest / "src").mkdir(parents=True, exist_ok=True)
-    ignore = shutil.ignore_patterns("__pycache__", "*.egg-info")
-    for name in (dependency_closure(lesson.packages, found) if packages is None else packages):
-        shutil.copytree(found[name][0], dest / "src" / found[name][0].name, ignore=ignore)
-    for folder in lesson.folders if with_folders else ():
-        if not (solutions / folder).is_dir():
-            raise ValidationFailed(f"lesson {lesson.id} names folder {folder!r}, which is not in solutions/")
-        shutil.copytree(solutions / folder, dest / folder, ignore=ignore, dirs_exist_ok=True)
-    return dest
-
-
-def lesson_dependencies(lesson: Lesson) -> list[str]:
-    """Reference packages the lesson's packages depend on but does not itself teach (e.g. interfaces)."""
-    found = find_packages(content_root() / "solutions" / "src")
-    return [name for name in dependency_closure(lesson.packages, found) if name not in lesson.packages]
-
-
 def build_underlay(lesson: Lesson, dest: Path) -> Path | None:
     """Build the lesson's dependencies once in ``dest``, as an underlay for every validation case.
 
@@ -189,14 +163,10 @@ def build_underlay(lesson: Lesson, dest: Path) -> Path | None:
     deps = lesson_dependencies(lesson)
     if not deps:
         return None
-    reference_workspace(lesson, dest, deps, with_folders=False)
-    env = dict(os.environ)
-    env_mod.activate(env)
-    built = build_packages(dest, deps, env, dest / "log" / "underlay-build.log")
-    if not built.ok:
-        raise ValidationFailed(f"the reference packages {', '.join(deps)} do not build:\n{built.excerpt}",
-                               f"see {built.log_path}")
-    return dest
+    try:
+        return build_reference(lesson, dest, deps, "underlay-build.log")
+    except CourseError as exc:
+        raise ValidationFailed(exc.message, exc.hint) from exc
 
 
 def run_commands(workspace_root: Path, commands: list[str]) -> None:

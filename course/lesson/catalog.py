@@ -55,6 +55,10 @@ class Lesson(BaseModel):
             16's interfaces to a learner who skipped it) or a module the lesson gives whole (sas's
             ``sas_lite.py``). Like every starter file, a learner's own version is kept. Below
             ``starter_includes`` and ``starter`` where paths overlap.
+        interfaces: interface packages whose generated types the grader itself imports
+            (:meth:`course.grade.engine.GradingSession.interface_type` refuses any other). Batch
+            grading builds them once from ``solutions/`` and imports that trusted build, never
+            the submission's, even when the lesson teaches the package itself.
         folders: workspace folders holding the lesson's files outside any ROS package
             (the preamble's ``python/minimalist_package``); ``dev validate`` copies them
             from ``solutions/`` for the reference and its wrong solutions.
@@ -73,6 +77,7 @@ class Lesson(BaseModel):
     starter: str = "starter"
     starter_includes: list[Annotated[str, Field(pattern=_ID)]] = Field(default_factory=list)
     reference: ReferenceSolution = Field(default_factory=ReferenceSolution)
+    interfaces: list[Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]*$")]] = Field(default_factory=list)
     folders: list[Annotated[str, Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_./-]*$")]] = Field(default_factory=list)
     starter_solutions: list[Annotated[str, Field(pattern=r"^src/[A-Za-z0-9_]+(/[A-Za-z0-9_][A-Za-z0-9_.-]*)*$")]] = (
         Field(default_factory=list))

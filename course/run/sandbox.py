@@ -522,6 +522,28 @@ def new_uid() -> int:
     return UID_BASE + secrets.randbelow(UID_SPAN)
 
 
+def give_tree(folder: Path, uid: int | None = None, gid: int | None = None) -> None:
+    """Give ``folder`` and everything under it to the submission's uid (``lchown``: links are never followed).
+
+    A no-op without a configured identity (``check``: the learner's own user
+    already owns it). After this the grader only reads the tree: writing into a
+    folder the submission owns could follow a link it planted.
+
+    Args:
+        folder: a tree the grader made (none of it may be the submission's yet).
+        uid: / gid: give it to these ids instead of the configured identity's (the batch runner).
+    """
+    if uid is None:
+        if _identity is None:
+            return
+        uid, gid = _identity.uid, _identity.gid
+    gid = uid if gid is None else gid
+    os.chown(folder, uid, gid, follow_symlinks=False)
+    for root, dirs, files in os.walk(folder):
+        for name in dirs + files:
+            os.chown(os.path.join(root, name), uid, gid, follow_symlinks=False)
+
+
 @contextlib.contextmanager
 def private_dir(prefix: str):
     """A temporary folder the submission's processes may write (owned by its uid when one is configured).

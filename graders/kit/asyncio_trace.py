@@ -92,11 +92,11 @@ def run_traced(s: GradingSession, wrapper: Path, mode: str, target: str, plans: 
                cwd: Path, timeout: float = 20.0) -> tuple[ProgramRun, Trace]:
     """Run ``python <wrapper> <trace> <mode> <target> <plans>`` in ``cwd``; return the run and its trace.
 
-    The trace file is written under ``s.log_dir`` (never in the learner's folder); a
-    run that wrote none (it crashed before) comes back with an empty trace.
+    The trace file is written into ``<log_dir>/<label>.trace/`` (a :meth:`GradingSession.submission_folder`:
+    the program runs as the submission; never the learner's folder); a run that wrote none (it crashed
+    before) comes back with an empty trace.
     """
-    trace = s.log_dir / f"{label}.trace.json"
-    trace.unlink(missing_ok=True)
+    trace = s.submission_folder(f"{label}.trace") / "trace.json"
     run = run_program(s, [sys.executable, str(wrapper), str(trace), mode, target, json.dumps(plans)], label,
                       timeout=timeout, env=python_env(s), cwd=cwd)
     try:

@@ -69,7 +69,7 @@ def build_consumer(s: GradingSession, configure_check: str, build_check: str, te
     (it compiles, and the link line names ``<install prefix>/lib/<library_file>``).
 
     Args:
-        template: folder with the consumer's CMakeLists.txt and sources (copied to ``s.log_dir``).
+        template: folder with the consumer's CMakeLists.txt and sources (copied to ``<log_dir>/<template name>/src``).
         package: the learner's package, as ``find_package`` and the ament index name it.
         library_file: the library's file name, e.g. ``libcpp_package_with_a_library.so``.
 
@@ -81,9 +81,8 @@ def build_consumer(s: GradingSession, configure_check: str, build_check: str, te
     """
     env = consumer_env(s, package)
     prefix = ament_index.package_prefix(package, env)
-    scratch = s.log_dir / template.name
-    shutil.rmtree(scratch, ignore_errors=True)
-    shutil.copytree(template, scratch / "src")
+    # the consumer is configured and built as the submission (it compiles the learner's headers)
+    scratch = s.submission_folder(template.name, lambda folder: shutil.copytree(template, folder / "src"))
     build = scratch / "build"
     short = {str(scratch): "<grader>", str(s.workspace_root): "<workspace>"}
     expected = (f"find_package({package}) in another package finds install/{package}/share/{package}/cmake "

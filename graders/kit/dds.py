@@ -113,13 +113,13 @@ def exchange(s: GradingSession, profile: Path, seconds: float = 3.0) -> DdsRun:
     They join the check's domain (``s.ros.domain_id``) on a random topic, each in
     its own process group with a deadline (:meth:`GradingSession.start_program`).
     """
+    topic = f"/udp_check_{random.SystemRandom().randrange(10000, 100000)}"
     env = dict(s.base_env)
     env.update({"ROS_DOMAIN_ID": str(s.ros.domain_id), "ROS_AUTOMATIC_DISCOVERY_RANGE": "SUBNET",
                 "RMW_IMPLEMENTATION": "rmw_fastrtps_cpp", "PYTHONUNBUFFERED": "1",
-                "ROS_HOME": str(s.log_dir / "ros_home")})  # their log files stay in the check's folder
+                "ROS_HOME": str(s.submission_folder(f"ros_home{topic.replace('/', '_')}"))})  # logs in the check's folder
     env.pop("ROS_LOCALHOST_ONLY", None)
     env.update({name: str(profile) for name in PROFILE_VARIABLES})
-    topic = f"/udp_check_{random.SystemRandom().randrange(10000, 100000)}"
     procs = [s.start_program([sys.executable, "-c", _CHILD, role, topic, str(wait)], f"dds_{role}", env=env,
                              cwd=profile.parent, deadline=wait + 20.0)
              for role, wait in (("listener", seconds + 3.0), ("talker", seconds))]

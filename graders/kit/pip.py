@@ -110,23 +110,25 @@ def tools_folder(s: GradingSession) -> Path:
 
 
 def fresh_venv(s: GradingSession, name: str = "fresh_venv") -> Path:
-    """A new, empty venv ``s.log_dir / name`` (``--without-pip``) made from the grader's interpreter; its python.
+    """A new, empty venv ``<log_dir>/<name>/venv`` (``--without-pip``) made from the grader's interpreter; its python.
+
+    Made by the submission (it installs into it) in a :meth:`GradingSession.submission_folder`.
 
     Raises:
         RuntimeError: ``python -m venv`` failed (a fault of the course's machine, not the learner's).
     """
-    venv = s.log_dir / name
-    shutil.rmtree(venv, ignore_errors=True)
+    folder = s.submission_folder(name)
+    venv = folder / "venv"
     made = run_program(s, [sys.executable, "-m", "venv", "--without-pip", str(venv)], "make_venv", timeout=60.0,
-                       env=python_env(s), cwd=s.log_dir)
+                       env=python_env(s), cwd=folder)
     python = venv / "bin" / "python"
     if made.returncode != 0 or not python.exists():
         raise RuntimeError(f"'python -m venv' failed: {made.describe()}: {last_error(made.stderr)}")
     return python
 
 
-def venv_copy(python: Path, name: str) -> Path:
-    """A copy of ``python``'s venv next to it, named ``name``; the copy's python.
+def venv_copy(s: GradingSession, python: Path, name: str) -> Path:
+    """A copy of ``python``'s venv in ``<log_dir>/<name>/venv`` (a submission folder); the copy's python.
 
     For judging ``pip uninstall`` while the original venv's command still
     runs (the two take about the same time, so the check takes the longer,
@@ -136,10 +138,8 @@ def venv_copy(python: Path, name: str) -> Path:
     copy's files only. Symlinks (``bin/python``, ``lib64``) are copied as links.
     """
     venv = python.parent.parent
-    copy = venv.parent / name
-    shutil.rmtree(copy, ignore_errors=True)
-    shutil.copytree(venv, copy, symlinks=True)
-    return copy / "bin" / python.name
+    folder = s.submission_folder(name, lambda dest: shutil.copytree(venv, dest / "venv", symlinks=True))
+    return folder / "venv" / "bin" / python.name
 
 
 def pip(s: GradingSession, python: Path, tools: Path, args: list[str], label: str, *, cwd: Path) -> ProgramRun:

@@ -78,9 +78,10 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
     daemons included).
     """
     env = (graph or s.ros).learner_env(s.overlay())
-    env.setdefault("ROS_HOME", str(s.log_dir / "ros_home"))
     argv = ["bash", str(path), *args]
     label = path.stem
+    if "ROS_HOME" not in env:  # the ros2 CLI's daemon and logs write there, as the submission
+        env["ROS_HOME"] = str(s.submission_folder(f"{label}.ros_home"))
     if interrupt_after_s is not None:
         # Ctrl+C as in a terminal: bash starts with SIGINT at its default action (GNU env
         # --default-signal, coreutils >= 8.31). A grader started from a background job inherits

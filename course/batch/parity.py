@@ -1,0 +1,152 @@
+"""``ros2course dev validate --batch``: a class graded with ``grade`` gets the verdicts ``check`` gives.
+
+``check`` grades the learner's own workspace as the learner; ``grade`` grades a
+copy, as a fresh unprivileged uid inside namespaces, with the course's own build
+of the interfaces its graders import (:mod:`course.batch.runner`). Whatever
+differs between the two paths (a folder the submission's uid cannot write, an
+interface package not built for the batch) shows up as a correct submission
+losing points in batch only, and nothing but a class's grades would show it.
+
+So the course proves parity: after ``dev validate`` has graded each lesson's
+reference and wrong solutions through ``check``
+(:func:`course.grade.validate.validate_course`), :func:`batch_parity` hands the
+reference and a sample of the wrong solutions in as one class (one student per
+lesson and case, each graded for its own lesson only), grades it with
+:func:`course.batch.runner.run_batch` with the isolation this machine gives
+(full isolation as root), and fails every case whose status, score or set of
+failed checks differs from the ``check`` result of the same case.
+"""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from pathlib import Path
+
+from course.batch.runner import run_batch
+from course.build.reference import reference_workspace
+from course.grade.results import LessonResult
+from course.grade.validate import (
+    Outcome,
+    apply_edits,
+    load_fixtures,
+    run_commands,
+    validate_course,
+)
+from course.lesson.catalog import Lesson, load_catalog
+
+#: Suffix of the parity rows' case names in ``dev validate`` output.
+BATCH_CASE = " (grade)"
+
+
+def sample_fixtures(lesson: Lesson, count: int) -> list[str]:
+    """Names of ``count`` of the lesson's fixtures, evenly spread over their sorted names (all when fewer)."""
+    names = [f.name for f in load_fixtures(lesson.id)]
+    if count >= len(names):
+        return names
+    if count <= 0:
+        return []
+    step = len(names) / count
+    return [names[int(i * step)] for i in range(count)]
+
+
+def case_workspace(lesson: Lesson, case: str, dest: Path) -> Path:
+    """A whole workspace as a student hands it in for ``case`` (``reference`` or a fixture's name).
+
+    Unlike a ``dev validate`` case (built on an underlay of the lesson's dependencies), it holds
+    every package the lesson needs, as a student's workspace does; no ``build/``/``install/``/``log/``
+    unless the lesson's reference commands make them (``workspace-setup`` hands in the build it grades).
+
+    Raises:
+        LessonFormatError: no fixture of that name, or its edits do not apply.
+    """
+    reference_workspace(lesson, dest)
+    commands = lesson.reference.commands
+    if case != "reference":
+        fixture = {f.name: f for f in load_fixtures(lesson.id)}[case]
+        apply_edits(dest, fixture.edits)
+        if fixture.commands is not None:
+            commands = fixture.commands
+    run_commands(dest, commands)
+    return dest
+
+
+def _verdict(result: LessonResult) -> tuple[str, float, tuple[str, ...]]:
+    return str(result.status), round(result.score, 6), tuple(sorted(result.failed_checks()))
+
+
+def _describe(result: LessonResult) -> str:
+    text = f"{result.status} {result.score:g}/{result.max_score:g}; failed: {', '.join(result.failed_checks()) or 'none'}"
+    if result.message and not result.status.graded:
+        text += f"; {result.message.splitlines()[0][:300]}"
+    return text
+
+
+def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, progress=None) -> list[Outcome]:
+    """Grade the ``checked`` cases of ``lessons`` again through ``grade`` (one batch); one outcome per case.
+
+    Args:
+        lessons: the lessons whose cases are in ``checked``.
+        checked: ``dev validate`` outcomes (each with its ``check`` result) of the cases to hand in:
+            typically each lesson's reference and a sample of its fixtures (:func:`sample_fixtures`).
+        jobs: submissions graded at once.
+        progress: a rich Console for one line per case (None: quiet).
+
+    Returns:
+        one :class:`~course.grade.validate.Outcome` per case, named ``<case> (grade)``: ok when the batch's
+        status, score and failed checks equal ``check``'s (``expected`` is the check result, ``got`` the batch's).
+
+    Raises:
+        CourseError: the batch refuses the lessons (e.g. an interface package the course cannot build).
+    """
+    by_id = {lesson.id: lesson for lesson in lessons}
+    cases = [o for o in checked if o.result is not None and o.lesson in by_id]
+    if not cases:
+        return []
+    root = Path(tempfile.mkdtemp(prefix="ros2course-parity-"))
+    root.chmod(0o755)
+    try:
+        submissions, out_dir = root / "submissions", root / "out"
+        submissions.mkdir()
+        student_lessons: dict[str, list[str]] = {}
+        names: dict[str, Outcome] = {}
+        for outcome in cases:
+            student = f"{outcome.lesson}.{outcome.case}"
+            case_workspace(by_id[outcome.lesson], outcome.case, submissions / student)
+            student_lessons[student] = [outcome.lesson]
+            names[student] = outcome
+        report = run_batch(submissions, list(by_id), out_dir, jobs=jobs, student_lessons=student_lessons)
+        graded = {(r.student, r.lesson): r for r in report.records}
+        out: list[Outcome] = []
+        for student, checked_case in names.items():
+            want = checked_case.result
+            got = graded.get((student, checked_case.lesson))
+            ok = got is not None and _verdict(got) == _verdict(want)
+            outcome = Outcome(checked_case.lesson, checked_case.case + BATCH_CASE, ok, "as check: " + _describe(want),
+                              _describe(got) if got is not None else "no result from the batch",
+                              float(got.timings.get("total", 0.0)) if got is not None else 0.0, got)
+            out.append(outcome)
+            if progress is not None:
+                mark = "[green]ok[/]" if ok else "[red]WRONG[/]"
+                progress.print(f"  {mark} {outcome.case}: {outcome.got}")
+        return out
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+
+
+def validate_with_batch(lesson_ids: list[str] | None, sample: int = 2, jobs: int = 1, progress=None) -> list[Outcome]:
+    """``dev validate --batch``: every case through ``check`` (:func:`course.grade.validate.validate_course`),
+    then the reference and ``sample`` fixtures of each lesson through ``grade`` in one batch
+    (:func:`batch_parity`); the outcomes of both, the batch's last.
+
+    Raises:
+        UnknownLesson: a lesson id is not in the catalog.  CourseError: the batch refuses a lesson.
+    """
+    catalog = load_catalog()
+    lessons = [catalog.get(i) for i in lesson_ids] if lesson_ids else catalog.lessons
+    outcomes = validate_course([lesson.id for lesson in lessons], progress=progress)
+    picks = {lesson.id: {"reference", *sample_fixtures(lesson, sample)} for lesson in lessons}
+    checked = [o for o in outcomes if o.case in picks.get(o.lesson, ())]
+    if progress is not None:
+        progress.print(f"grading {len(checked)} case(s) of {len(lessons)} lesson(s) again with ros2course grade ...")
+    return outcomes + batch_parity(lessons, checked, jobs=jobs, progress=progress)

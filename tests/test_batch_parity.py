@@ -1,0 +1,114 @@
+"""`ros2course grade` gives the verdicts `ros2course check` gives (issue 25).
+
+The whole-course parity run is ``dev validate --batch`` (tests/test_validate.py); these
+tests pin the two causes of the eight lessons that used to differ: the batch's trusted
+interface build, and folders the submission's uid must write.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import stat
+import tempfile
+from pathlib import Path
+
+import pytest
+
+from course.build.reference import trusted_interface_packages
+from course.errors import CourseError
+from course.grade.engine import Check, GradingSession, load_grader
+from course.lesson.catalog import load_catalog
+from course.run import sandbox
+
+
+def test_an_interface_package_the_lesson_teaches_is_still_built_for_the_batch() -> None:
+    """inspect-topics lists package_with_interfaces among its own packages and its grader imports its types."""
+    catalog = load_catalog()
+    lesson = catalog.get("inspect-topics")
+    assert "package_with_interfaces" in lesson.packages
+    assert trusted_interface_packages([lesson]) == ["package_with_interfaces"]
+    assert trusted_interface_packages([catalog.get("print-forever-node")]) == []
+    every = trusted_interface_packages(catalog.lessons)
+    assert every == ["package_with_interfaces"]
+
+
+def test_a_lesson_whose_interface_the_course_cannot_build_is_refused_up_front() -> None:
+    lesson = load_catalog().get("inspect-topics").model_copy(update={"interfaces": ["no_such_interfaces"]})
+    with pytest.raises(CourseError) as info:
+        trusted_interface_packages([lesson])
+    assert "inspect-topics cannot be graded in batch" in info.value.message and "no_such_interfaces" in info.value.message
+
+
+def test_the_grader_may_import_only_declared_interfaces(tmp_path: Path) -> None:
+    """The same refusal under check and batch, so dev validate finds an undeclared package before a class does."""
+    lesson = load_catalog().get("print-forever-node")
+    session = GradingSession(lesson, [Check("a", "a", 1)], tmp_path, tmp_path / "log", dict(os.environ))
+    with pytest.raises(CourseError) as info:
+        session.interface_type("package_with_interfaces", "msg", "AmazingQuote")
+    assert "does not declare" in info.value.message and "interfaces: [package_with_interfaces]" in info.value.hint
+
+
+needs_root = pytest.mark.skipif(os.geteuid() != 0 or not sandbox.capabilities().uid_drop,
+                                reason="runs a program as another uid: root only")
+
+
+@needs_root
+def test_submission_programs_write_only_into_submission_folders() -> None:
+    """What a submission's program writes (a build folder, a probe's trace, a venv) lands in a folder its uid
+    owns; the check's log folder stays the grader's, and a program writing there is refused. (The lessons'
+    own builds, traces and venvs as that uid: ``dev validate --batch`` in tests/test_validate.py.)"""
+    from graders.kit.programs import run_program  # noqa: PLC0415 - the course's kit, on the content root
+
+    uid = sandbox.UID_BASE + sandbox.UID_SPAN + 1
+    lesson = load_catalog().get("python-installable-package")
+    root = Path(tempfile.mkdtemp(prefix="ros2course-parity-test-"))  # pytest's tmp_path is 0700: the uid must pass
+    root.chmod(0o755)
+    log_dir = root / "log"
+    log_dir.mkdir()
+    env = {"PATH": "/usr/bin:/bin"}
+    session = GradingSession(lesson, [Check("a", "a", 1)], root, log_dir, env)
+    write = ["/bin/sh", "-c", 'echo t > "$1"', "sh"]
+    sandbox.configure(sandbox.SubmissionIdentity(uid, uid, 64))
+    try:
+        filled = session.submission_folder("probe", lambda folder: (folder / "given" / "a.txt").parent.mkdir())
+        assert filled == log_dir / "probe"
+        assert {p.lstat().st_uid for p in [filled, filled / "given"]} == {uid}
+        wrote = run_program(session, [*write, str(filled / "given" / "trace.json")], "writer", env=env, cwd=filled)
+        assert wrote.returncode == 0 and (filled / "given" / "trace.json").stat().st_uid == uid
+        refused = run_program(session, [*write, str(log_dir / "planted.txt")], "planter", env=env, cwd=filled)
+        assert refused.returncode != 0 and not (log_dir / "planted.txt").exists()
+        assert log_dir.stat().st_uid == os.geteuid() and not log_dir.stat().st_mode & stat.S_IWOTH
+        again = session.submission_folder("probe")  # fresh: what the submission left there is gone
+        assert list(again.iterdir()) == []
+    finally:
+        sandbox.configure(None)
+        session.close()
+        shutil.rmtree(root, ignore_errors=True)
+
+
+@pytest.mark.ros
+@pytest.mark.usefixtures("cpu_exclusive")
+@pytest.mark.timeout(900)
+def test_gradescope_autograder_gives_the_references_full_marks(tmp_path: Path) -> None:
+    """The Gradescope path (one upload graded for several lessons, as root with full isolation) on three of the
+    lessons that used to differ: an interface the lesson teaches, a probe's trace, a CMake build and g++."""
+    from course.batch.gradescope import run_gradescope  # noqa: PLC0415
+    from course.build.reference import reference_workspace  # noqa: PLC0415
+    from course.grade.validate import run_commands  # noqa: PLC0415
+
+    lessons = ["python-asyncio", "inspect-services", "cpp-demystified"]
+    upload = tmp_path / "autograder" / "submission"
+    catalog = load_catalog()
+    for lesson_id in lessons:  # one workspace holding the three references (no package in common)
+        lesson = catalog.get(lesson_id)
+        reference_workspace(lesson, upload)
+        run_commands(upload, lesson.reference.commands)
+    results = tmp_path / "autograder" / "results" / "results.json"
+    score = run_gradescope(lessons, upload, results, timeout=600)
+    data = json.loads(results.read_text(encoding="utf-8"))
+    lost = [t["name"] for t in data["tests"] if t.get("score") != t.get("max_score")]
+    assert not lost, lost
+    total = sum(float(sum(c.points for c in load_grader(catalog.get(i).grader).CHECKS)) for i in lessons)
+    assert score == total
