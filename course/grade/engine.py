@@ -545,21 +545,24 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     if lesson.packages:
         try:
             built = build_mod.build_packages(workspace_root, lesson.packages, base_env, log_dir / "build.log",
-                                             progress=progress)
+                                             progress=progress, also=lesson.interfaces)
         except NotGradable as exc:
             return not_gradable(exc.message, exc.hint)
         timings["build"] = built.seconds
-        if progress is not None:
-            progress("running and grading your nodes ...")
         build_info = {"ok": built.ok, "cached": built.cached, "seconds": round(built.seconds, 3),
-                      "log": str(built.log_path) if built.log_path else ""}
+                      "log": str(built.log_path) if built.log_path else "", "repairs": built.repairs}
+        if progress is not None:
+            for repair in built.repairs:
+                progress(f"repaired the build: {repair}")
+            progress("running and grading your nodes ...")
         if not built.ok:
             return not_gradable(f"colcon build failed for {', '.join(lesson.packages)}:\n{built.excerpt}",
                                 f"fix the build error; full log: {built.log_path}")
     session = GradingSession(lesson, checks, workspace_root, log_dir, base_env, trusted_interfaces)
     if lesson.packages and "build" in session.checks:
         session.record("build", True, "colcon built " + ", ".join(lesson.packages)
-                       + (" (unchanged since the last build)" if build_info.get("cached") else ""),
+                       + (" (unchanged since the last build)" if build_info.get("cached") else "")
+                       + "".join(f"; {repair}" for repair in build_info.get("repairs", [])),
                        "the package builds with colcon")
     begin = time.monotonic()
     status = None

@@ -132,7 +132,8 @@ class LessonResult:
         message: for not gradable / grader error, what happened (e.g. the build log excerpt).
         hint: for not gradable / grader error, what to do about it.
         timings: seconds spent per phase (``build``, ``grade``, ``teardown``, ``total``...).
-        build: how the build went (``ok``, ``cached``, ``seconds``, ``log``).
+        build: how the build went (``ok``, ``cached``, ``seconds``, ``log``, ``repairs``: one sentence per
+            stale install state repaired, see :func:`course.build.colcon.stale_install`).
         log_dir: where the build and node logs of this check are.
         plots: time series the grader observed (:class:`Plot`), for people; not serialised.
         student: the student id (batch grading; "" for ``check``).
