@@ -112,3 +112,37 @@ def test_gradescope_autograder_gives_the_references_full_marks(tmp_path: Path) -
     assert not lost, lost
     total = sum(float(sum(c.points for c in load_grader(catalog.get(i).grader).CHECKS)) for i in lessons)
     assert score == total
+
+
+def test_a_reference_cache_folder_others_can_write_is_never_used(tmp_path: Path, monkeypatch) -> None:
+    """Trusted interface builds are code the grader imports: never from a folder another user could swap."""
+    from course.build import reference  # noqa: PLC0415
+
+    monkeypatch.setattr(reference.sys, "prefix", str(tmp_path))
+    root = reference.reference_cache_root()
+    assert root == tmp_path / "var" / "cache" / "ros2course" / "reference" and root.is_dir()
+    root.chmod(0o777)
+    assert reference.reference_cache_root() is None
+
+
+@pytest.mark.ros
+def test_reference_interfaces_are_built_once_and_shared(tmp_path: Path, monkeypatch) -> None:
+    """dev validate's underlay and the batch's trusted interfaces: one build while the sources stay the same."""
+    from course.build import reference  # noqa: PLC0415
+
+    lesson = load_catalog().get("publisher-subscriber")
+    first = reference.shared_reference_build(lesson, ["package_with_interfaces"])
+    installed = first.path / "install" / "package_with_interfaces" / "share" / "package_with_interfaces" / "package.xml"
+    stamp = installed.stat().st_mtime_ns
+    again = reference.shared_reference_build(lesson, ["package_with_interfaces"])
+    assert again == first and not first.temporary
+    assert installed.stat().st_mtime_ns == stamp, "the shared build was built a second time"
+    assert (first.path / "install" / "package_with_interfaces").is_dir()
+    assert first.path.stat().st_mode & 0o005 == 0o005, "the submission's uid must be able to source it"
+    first.discard()
+    assert first.path.is_dir(), "discard() removed a shared build"
+    monkeypatch.setattr(reference, "reference_cache_root", lambda: None)
+    own = reference.shared_reference_build(lesson, ["package_with_interfaces"])
+    assert own.temporary and own.path != first.path and (own.path / "install" / "setup.bash").is_file()
+    own.discard()
+    assert not own.path.exists()

@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import tempfile
 import uuid
 from pathlib import Path
@@ -105,12 +104,12 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
     trusted = (build_trusted_interfaces([catalog.get(lesson_id) for lesson_id in lessons])
                if sandbox.capabilities().uid_drop else None)
     job = Job(uuid.uuid4().hex, "submission", str(entry.absolute()), "", lessons, str(results.parent), timeout, hide=hide,
-              pids_limit=pids_limit, trusted_interfaces=str(trusted or ""), require_isolation=require_isolation)
+              pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""), require_isolation=require_isolation)
     try:
         outcome = run_job(job)
     finally:
         if trusted is not None:
-            shutil.rmtree(trusted.parent, ignore_errors=True)
+            trusted.discard()
     data = gradebook.gradescope_json(outcome["records"])
     atomic_write_text(results, json.dumps(data, indent=2) + "\n")
     return float(data["score"])

@@ -57,7 +57,7 @@ from rich.progress import (
 from rich.table import Table
 
 from course.batch.archive import Submission, discover, prepare
-from course.build.reference import build_reference, trusted_interface_packages
+from course.build.reference import ReferenceBuild, shared_reference_build, trusted_interface_packages
 from course.errors import CourseError, MissingRequirement, NotGradable
 from course.grade.engine import load_grader
 from course.grade.results import LessonResult, Status
@@ -161,8 +161,8 @@ def refuse_without_isolation(isolate: bool = True) -> None:
                           "run as root on Linux with util-linux, iproute2 and dumb-init, or drop --require-isolation")
 
 
-def build_trusted_interfaces(lessons: list[Any]) -> Path | None:
-    """Build the course's own copies of the interface packages the lessons' graders import, once per batch.
+def build_trusted_interfaces(lessons: list[Any]) -> ReferenceBuild | None:
+    """The course's own builds of the interface packages the lessons' graders import.
 
     The grader imports generated message types in its own process; a
     submission's build of them is code the submission controls, so under
@@ -170,9 +170,11 @@ def build_trusted_interfaces(lessons: list[Any]) -> Path | None:
     definitions as the contract in shared/LESSONS.md, so the same wire types).
     Which packages: each lesson's ``interfaces`` (lesson.yaml) and their
     dependencies (:func:`course.build.reference.trusted_interface_packages`).
+    Built once and shared while their files and the ROS install stay the same
+    (:func:`course.build.reference.shared_reference_build`); call ``discard()`` when done.
 
     Returns:
-        the built workspace (``install/`` inside), or None when no grader imports interface types.
+        the build (``path``: a workspace with ``install/``), or None when no grader imports interface types.
 
     Raises:
         CourseError: a lesson declares an interface the course has no package for, or the reference
@@ -181,13 +183,7 @@ def build_trusted_interfaces(lessons: list[Any]) -> Path | None:
     packages = trusted_interface_packages(lessons)
     if not packages:
         return None
-    dest = Path(tempfile.mkdtemp(prefix="ros2course-trusted-")) / "ws"
-    dest.parent.chmod(0o755)
-    try:
-        return build_reference(lessons[0], dest, packages, "build.log")
-    except BaseException:
-        shutil.rmtree(dest.parent, ignore_errors=True)
-        raise
+    return shared_reference_build(lessons[0], packages, "build.log")
 
 
 # --- one job ------------------------------------------------------------------------------------
@@ -599,7 +595,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
             continue
         todo.append(Job(batch_id, entry.student, str(entry.path), entry.problem, missing, str(out_dir), timeout,
                         memory_limit, hide=hide, isolate=isolate, scratch_root=str(scratch_root),
-                        pids_limit=pids_limit, trusted_interfaces=str(trusted or ""),
+                        pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""),
                         require_isolation=require_isolation))
     records = list(existing)
     peaks: list[int] = []
@@ -649,7 +645,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
         _cancelled.discard(batch_id)
         shutil.rmtree(scratch_root, ignore_errors=True)
         if trusted is not None:
-            shutil.rmtree(trusted.parent, ignore_errors=True)
+            trusted.discard()
     return BatchReport(out_dir, list(gradebook.latest(records).values()), len(todo), skipped,
                        time.monotonic() - begin, isolation, peaks)
 

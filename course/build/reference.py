@@ -8,11 +8,17 @@ them, so the grader never imports a submission's generated code
 
 from __future__ import annotations
 
+import dataclasses
+import fcntl
+import hashlib
 import os
 import shutil
+import sys
+import tempfile
+import time
 from pathlib import Path
 
-from course.build.colcon import build_packages, dependency_closure, find_packages
+from course.build.colcon import COLCON_ARGS, build_packages, dependency_closure, find_packages
 from course.errors import CourseError, ValidationFailed
 from course.lesson.catalog import Lesson, content_root
 from course.ros import env as env_mod
@@ -94,3 +100,125 @@ def build_reference(lesson: Lesson, dest: Path, packages: list[str], log_name: s
         raise CourseError(f"the course's own packages {', '.join(packages)} do not build:\n{built.excerpt}",
                           f"run ros2course doctor; see {built.log_path}")
     return dest
+
+
+#: Builds of reference packages (interfaces) unused for this long are deleted, seconds.
+CACHE_MAX_AGE = 14 * 24 * 3600.0
+_COMPLETE = ".ros2course-complete"
+
+
+@dataclasses.dataclass(frozen=True)
+class ReferenceBuild:
+    """A built workspace of reference packages (:func:`shared_reference_build`).
+
+    Attributes:
+        path: the workspace (``install/`` inside), readable by every user (batch grading sources its
+            ``setup.bash`` as the submission's uid).
+        temporary: True when it was built for this caller only (no writable cache): :meth:`discard` removes it.
+    """
+
+    path: Path
+    temporary: bool
+
+    def discard(self) -> None:
+        """Remove the build if it was made for this caller only; a shared (cached) build stays."""
+        if self.temporary:
+            shutil.rmtree(self.path.parent, ignore_errors=True)
+
+
+def reference_cache_root() -> Path | None:
+    """Where shared reference builds live: ``<sys.prefix>/var/cache/ros2course/reference``, next to the
+    ROS install they were built against (so a new venv never reads an old build, and every uid can read it,
+    unlike ``~/.cache`` under a 0700 home). None when that folder cannot be written."""
+    root = Path(sys.prefix) / "var" / "cache" / "ros2course" / "reference"
+    try:
+        root.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None
+    if not os.access(root, os.W_OK) or root.stat().st_uid != os.geteuid() or root.stat().st_mode & 0o022:
+        return None  # someone else's folder, or writable by others: never build trusted code there
+    return root
+
+
+def _cache_key(packages: list[str], env: dict[str, str]) -> str:
+    """Hash of the packages' file contents and of the ROS install they build against."""
+    found = solution_packages()
+    digest = hashlib.sha256()
+    for name in sorted(packages):
+        folder = found[name][0]
+        for path in sorted(p for p in folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts):
+            digest.update(f"{name}/{path.relative_to(folder)}\0".encode() + path.read_bytes() + b"\0")
+    digest.update(f"{sys.executable}\0{sys.version}\0{COLCON_ARGS}\0".encode())
+    for prefix in env.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
+        index = Path(prefix) / "share" / "ament_index" / "resource_index" / "packages"
+        try:
+            digest.update(f"{prefix}\0{index.stat().st_mtime_ns}\n".encode())
+        except OSError:
+            digest.update(f"{prefix}\0-\n".encode())
+    return digest.hexdigest()[:24]
+
+
+def shared_reference_build(lesson: Lesson, packages: list[str], log_name: str = "build.log") -> ReferenceBuild:
+    """``packages`` from ``solutions/src`` built once and shared until their files or the ROS install change.
+
+    ``dev validate``'s underlay and batch grading's trusted interfaces are the same reference
+    packages built the same way; building ``package_with_interfaces`` (rosidl: C, C++ and Python
+    code, ~40 s on 2 cores) once per change instead of once per lesson or per class makes both
+    faster. The build goes straight to its final folder (colcon and CMake write absolute paths) under
+    an exclusive lock, and counts only once it is marked complete; a failed build is removed.
+
+    Args:
+        lesson: the lesson asking (for error messages and :func:`reference_workspace`).
+        packages: reference package names (with their dependencies among them).
+        log_name: name of the colcon log inside ``<build>/log``.
+
+    Raises:
+        CourseError: the packages do not build (a fault of the course or machine).
+    """
+    env = dict(os.environ)
+    env_mod.activate(env)
+    root = reference_cache_root()
+    if root is None:
+        dest = Path(tempfile.mkdtemp(prefix="ros2course-reference-")) / "ws"
+        dest.parent.chmod(0o755)
+        try:
+            return ReferenceBuild(build_reference(lesson, dest, packages, log_name), temporary=True)
+        except BaseException:
+            shutil.rmtree(dest.parent, ignore_errors=True)
+            raise
+    _prune(root)
+    key = _cache_key(packages, env)
+    folder = root / key
+    with open(root / f"{key}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # another check or batch building the same packages: wait for it
+        marker = folder / _COMPLETE
+        if marker.is_file():
+            marker.touch()
+            return ReferenceBuild(folder / "ws", temporary=False)
+        shutil.rmtree(folder, ignore_errors=True)  # a build that died half-way
+        folder.mkdir(mode=0o755)
+        try:
+            build_reference(lesson, folder / "ws", packages, log_name)
+        except BaseException:
+            shutil.rmtree(folder, ignore_errors=True)
+            raise
+        marker.write_text(" ".join(packages) + "\n", encoding="utf-8")
+        return ReferenceBuild(folder / "ws", temporary=False)
+
+
+def _prune(root: Path) -> None:
+    """Delete shared builds unused for :data:`CACHE_MAX_AGE` (never one another process holds locked)."""
+    now = time.time()
+    for marker in root.glob(f"*/{_COMPLETE}"):
+        try:
+            if now - marker.stat().st_mtime < CACHE_MAX_AGE:
+                continue
+        except OSError:
+            continue
+        folder = marker.parent
+        with open(root / f"{folder.name}.lock", "w") as lock:
+            try:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except OSError:
+                continue
+            shutil.rmtree(folder, ignore_errors=True)

@@ -37,7 +37,8 @@ from rich.table import Table
 
 from course.build.colcon import find_packages
 from course.build.reference import (
-    build_reference,
+    ReferenceBuild,
+    shared_reference_build,
     lesson_dependencies,
     reference_workspace,
 )
@@ -150,12 +151,13 @@ def apply_edits(workspace_root: Path, edits: list[Edit]) -> None:
         target.write_text(text.replace(edit.replace, edit.with_), encoding="utf-8")
 
 
-def build_underlay(lesson: Lesson, dest: Path) -> Path | None:
-    """Build the lesson's dependencies once in ``dest``, as an underlay for every validation case.
+def build_underlay(lesson: Lesson) -> ReferenceBuild | None:
+    """The lesson's dependencies, built as an underlay for every validation case (shared between
+    lessons and runs while their files do not change: :func:`~course.build.reference.shared_reference_build`).
 
     The standard ROS overlay mechanism: each case's workspace is built and
-    sourced on top of this one, so an interface package is built once per
-    lesson instead of once per case. Returns None when there is nothing to build.
+    sourced on top of this one, so an interface package is built once
+    instead of once per case. Returns None when there is nothing to build.
 
     Raises:
         ValidationFailed: the reference dependencies do not build.
@@ -164,7 +166,7 @@ def build_underlay(lesson: Lesson, dest: Path) -> Path | None:
     if not deps:
         return None
     try:
-        return build_reference(lesson, dest, deps, "underlay-build.log")
+        return shared_reference_build(lesson, deps, "underlay-build.log")
     except CourseError as exc:
         raise ValidationFailed(exc.message, exc.hint) from exc
 
@@ -220,12 +222,12 @@ def grade_case(lesson: Lesson, case: str, prepare, keep: bool = False,
 
 def validate_lesson(lesson: Lesson) -> list[Outcome]:
     """Validate one lesson: reference, starter, fixtures (see module docstring)."""
-    underlay_dir = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-underlay-"))
+    underlay = build_underlay(lesson)
     try:
-        underlay = build_underlay(lesson, underlay_dir)
-        return _validate_lesson(lesson, underlay)
+        return _validate_lesson(lesson, underlay.path if underlay is not None else None)
     finally:
-        shutil.rmtree(underlay_dir, ignore_errors=True)
+        if underlay is not None:
+            underlay.discard()
 
 
 def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
