@@ -79,8 +79,7 @@ def main() -> int:
             begin = time.monotonic()
             report = run_batch(root / "subs", [args.lesson], root / f"out-{jobs}", jobs=jobs)
             seconds = time.monotonic() - begin
-            verdicts = {r["student"]: (r["status"], tuple(c["id"] for c in r["checks"] if not c["passed"]))
-                        for r in report.records}
+            verdicts = {r.student: (r.status.value, tuple(r.failed_checks())) for r in report.records}
             runs[jobs] = (seconds, verdicts, report)
             print(f"jobs {jobs}: {args.count} submissions in {seconds:.1f} s = {60 * args.count / seconds:.1f} "
                   f"submissions/min; peak memory per job max {max(report.peak_rss) / 2**20:.0f} MiB, "
@@ -102,8 +101,7 @@ def overhead(root: Path, lesson: str, count: int) -> int:
         begin = time.monotonic()
         report = run_batch(root / "subs", [lesson], root / f"out-{isolate}-{len(runs)}", jobs=1, isolate=isolate)
         seconds = time.monotonic() - begin
-        verdicts = {r["student"]: (r["status"], tuple(c["id"] for c in r["checks"] if not c["passed"]))
-                    for r in report.records}
+        verdicts = {r.student: (r.status.value, tuple(r.failed_checks())) for r in report.records}
         runs.setdefault(isolate, []).append((seconds / count, verdicts, report.isolation))
         print(f"isolate={isolate}: {seconds / count:.2f} s per submission "
               f"({report.isolation.get('reason', '')[:120]})", flush=True)

@@ -57,6 +57,11 @@ def grade(s: GradingSession) -> None:
     else:
         s.record("keeps_running", False, f"it ended by itself ({run.describe()}) before Ctrl+C; its last output: "
                  f"{scripts.excerpt(run.stderr or run.stdout, 200)}", expected)
-    if not sigint_exit(s, "sigint_exit", run, EXIT_SECONDS) and run.returncode is not None and run.returncode < 0:
+    if sigint_exit(s, "sigint_exit", run, EXIT_SECONDS):
+        return
+    if run.returncode is not None and run.returncode < 0:
         s.amend("sigint_exit", hint="bash itself was ended by Ctrl+C while its nodes were still stopping: "
                 "`trap 'echo stopping' INT` keeps it alive, and a second `wait` waits for them")
+    elif run.left_running:
+        s.amend("sigint_exit", hint="Ctrl+C ends the first `wait` at once, while the nodes are still stopping: "
+                "a second `wait` after it waits until they have finished")

@@ -150,9 +150,12 @@ def _example(s: GradingSession, name: str, runs_check: str, concurrent_check: st
                     else f"'python -m {module}': {trace.error(run) if run.returncode else run.describe()}",
                     "it exits 0 without a traceback after two tasks called unlikely_to_return"):
         raise Unmet(f"{name} did not run")
+    sequential = "" if trace.interleaved() else (
+        "; task 2 drew only after task 1 had returned: the calls ran one after the other (a coroutine awaited "
+        "directly, or a task awaited right after its creation, runs to its end before the next line runs)")
     s.record(concurrent_check, trace.interleaved(),
              f"draws by task: {trace.describe_order()} (tasks retried {len(trace.draw_order()) - tasks} times in "
-             f"all, over {trace.draw_seconds():.1f} s)",
+             f"all, over {trace.draw_seconds():.1f} s){sequential}",
              "task 2 draws while task 1 is still retrying (1 2 1 2 1 1 ...): with 0.1 s sleeps the run takes about "
              "as long as the slower task, not the sum of both")
     return trace

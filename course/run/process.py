@@ -54,12 +54,16 @@ class ExitReport:
             or None when it had exited on its own.
         seconds: from the first signal (or the teardown call) to the exit, seconds.
         traceback: the last traceback printed on stderr/stdout, or "".
+        left_running: when the process had already exited before :meth:`LearnerProcess.stop`,
+            the processes it started that were still running then (``"<pid> <command line>"``,
+            :func:`marked_processes`): a script that ended before its children had stopped.
     """
 
     returncode: int | None
     signal_used: str | None
     seconds: float
     traceback: str
+    left_running: tuple[str, ...] = ()
 
 
 class OutputDrain(threading.Thread):
@@ -272,6 +276,7 @@ class LearnerProcess:
             return self.report
         begin = time.monotonic()
         signal_used = None
+        left = marked_processes(self.marker) if self.popen.poll() is not None else []
         if self.popen.poll() is None:
             for sig, timeout in ((signal.SIGINT, sigint_timeout), (signal.SIGTERM, sigterm_timeout),
                                  (signal.SIGKILL, 5.0)):
@@ -286,7 +291,7 @@ class LearnerProcess:
             drain.join(timeout=2.0)
         # Python writes tracebacks to stderr; stdout only when a program prints one itself
         trace = last_traceback(self.stderr()) or last_traceback(self.stdout())
-        self.report = ExitReport(self.popen.poll(), signal_used, seconds, trace)
+        self.report = ExitReport(self.popen.poll(), signal_used, seconds, trace, tuple(left))
         return self.report
 
     def __enter__(self) -> LearnerProcess:
@@ -295,6 +300,27 @@ class LearnerProcess:
     def __exit__(self, *exc) -> None:
         self.stop(sigint_timeout=1.0, sigterm_timeout=1.0)
         sweep_stale_fastdds_shm()
+
+
+def marked_processes(marker: str, var: str = MARKER_VAR) -> list[str]:
+    """Live processes (zombies and this one excepted) whose environment has ``var=marker``:
+    ``"<pid> <command line>"`` each (command line cut at 200 characters), by PID."""
+    needle = f"{var}={marker}".encode()
+    found: list[str] = []
+    me = os.getpid()
+    for proc in psutil.process_iter(["pid"]):
+        if proc.pid == me:
+            continue
+        try:
+            with open(f"/proc/{proc.pid}/environ", "rb") as handle:
+                if needle not in handle.read():
+                    continue
+            if proc.status() == psutil.STATUS_ZOMBIE:
+                continue
+            found.append(f"{proc.pid} {' '.join(proc.cmdline())[:200]}")
+        except (OSError, psutil.Error):
+            continue
+    return found
 
 
 def kill_marked(marker: str, var: str = MARKER_VAR) -> list[int]:

@@ -41,6 +41,8 @@ class ProgramRun:
         seconds: wall time from start to exit or stop.
         traceback: the last Python traceback in its output, "" if none.
         interrupted: Ctrl+C (SIGINT) was sent to it (:func:`interrupt_after`); False when it ended by itself first.
+        left_running: processes it started that were still running when it exited (``ros2`` daemons
+            excepted: they are meant to outlive the command that spawned them), ``"<pid> <command>"``.
     """
 
     returncode: int | None
@@ -50,6 +52,7 @@ class ProgramRun:
     seconds: float
     traceback: str
     interrupted: bool = False
+    left_running: tuple[str, ...] = ()
 
     def ending(self) -> str:
         """How it ended, in words: ``exit code 1``, ``ended by SIGINT``, ``killed by SIGSEGV (segmentation ...)``.
@@ -176,7 +179,16 @@ def interrupt_after(s: GradingSession, argv: list[str], label: str, seconds: flo
     elapsed = time.monotonic() - begin
     report = proc.stop(sigint_timeout=0.1, sigterm_timeout=1.0)
     return ProgramRun(report.returncode, proc.stdout(), proc.stderr(), not exited, elapsed, report.traceback,
-                      interrupted=not ended_early)
+                      interrupted=not ended_early, left_running=_children(report.left_running))
+
+
+#: The command line of a ``ros2`` daemon (ros2cli.daemon.daemonize), which outlives the command that spawned it.
+_DAEMON = "ros2cli.daemon.daemonize"
+
+
+def _children(left: tuple[str, ...]) -> tuple[str, ...]:
+    """What a program left running, ``ros2`` daemons excepted."""
+    return tuple(p for p in left if _DAEMON not in p)
 
 
 def sigint_exit(s: GradingSession, check_id: str, run: ProgramRun, exit_timeout: float = 3.0) -> bool:
@@ -192,10 +204,16 @@ def sigint_exit(s: GradingSession, check_id: str, run: ProgramRun, exit_timeout:
         observed = f"still running {exit_timeout:.0f} s after Ctrl+C (stopped)"
     elif run.traceback:
         observed = f"{run.ending()} with a traceback: {run.exception()}"
+    elif run.left_running:
+        names = "; ".join(p.split(" ", 1)[-1][:80] for p in run.left_running[:3])
+        observed = (f"{run.ending()}, but while {len(run.left_running)} process(es) it started were still "
+                    f"stopping ({names})")
     else:
         observed = f"{run.ending()}, no traceback"
-    return s.record(check_id, run.interrupted and not run.timed_out and run.returncode == 0 and not run.traceback,
-                    observed, f"exit code 0 within {exit_timeout:.0f} s of Ctrl+C, no traceback")
+    return s.record(check_id, run.interrupted and not run.timed_out and run.returncode == 0 and not run.traceback
+                    and not run.left_running,
+                    observed, f"exit code 0 within {exit_timeout:.0f} s of Ctrl+C, no traceback, "
+                    "after everything it started has stopped")
 
 
 def verdict_test(s: GradingSession, check_id: str, argv: list[str], label: str, *, expected: str,

@@ -2,8 +2,10 @@
 
 argv: trace file, mode (``probe`` or ``module``), module name, plans (JSON). It
 replaces ``random.random`` / ``random.uniform`` with a known sequence of rolls
-*per asyncio task* (plan i for the i-th task that draws; further tasks reuse
-the last plan), and records in order every roll drawn and every piece of text
+*per call* of ``unlikely_to_return`` (plan i for the i-th call that draws;
+further calls reuse the last plan; a call is told apart by a context variable
+its wrapper sets, so two calls awaited one after the other in one asyncio task
+are two calls, not one task that never stops drawing), and records in order every roll drawn and every piece of text
 printed, with the task that did it, into the trace file (a JSON list of
 events, read by :mod:`graders.kit.asyncio_trace`):
 
@@ -16,6 +18,9 @@ it in three scenarios (default likelihood, likelihood=0.4, two calls gathered);
 in ``module`` mode it runs the module as ``__main__``.
 """
 import asyncio
+import contextvars
+import functools
+import importlib
 import inspect
 import io
 import json
@@ -34,7 +39,13 @@ state = {"plans": PLANS, "tasks": {}, "counts": {}}
 start = time.monotonic()
 
 
+_call = contextvars.ContextVar("ros2course_call", default=None)
+
+
 def _task():
+    call = _call.get()
+    if call is not None:
+        return call
     try:
         return asyncio.current_task()
     except RuntimeError:
@@ -117,10 +128,31 @@ def _probe():
             events.append(["error", name, f"{type(exc).__name__}: {exc}"])
 
 
+def _count_calls():
+    """Wrap ``unlikely_to_return`` so that each call draws from its own plan (see the module docstring)."""
+    try:
+        module = importlib.import_module("minimalist_package.minimalist_async")
+    except Exception:  # noqa: BLE001 - the example's own import reports it
+        return
+    function = getattr(module, "unlikely_to_return", None)
+    if not inspect.iscoroutinefunction(function):
+        return
+
+    @functools.wraps(function)
+    async def call(*args, **kwargs):
+        token = _call.set(object())
+        try:
+            return await function(*args, **kwargs)
+        finally:
+            _call.reset(token)
+    module.unlikely_to_return = call
+
+
 try:
     if MODE == "probe":
         _probe()
     else:
+        _count_calls()
         runpy.run_module(TARGET, run_name="__main__", alter_sys=True)
 except BaseException as exc:
     if not (isinstance(exc, SystemExit) and exc.code in (0, None)):
