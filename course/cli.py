@@ -459,6 +459,9 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
              as_json: Annotated[bool, typer.Option("--json", help="Print the outcomes as JSON.")] = False,
              batch: Annotated[bool, typer.Option("--batch", help="Also grade each reference and a sample of wrong solutions with `ros2course grade` (the isolation this machine gives) and fail unless they get the verdicts `check` gave.")] = False,
              sample: Annotated[int, typer.Option("--sample", help="With --batch: wrong solutions per lesson handed in to the batch.")] = 2,
+             repeat: Annotated[int, typer.Option("--repeat", metavar="N", help="Grade each case N times and report every check whose verdict changed (a flaky grader).")] = 0,
+             load: Annotated[int, typer.Option("--load", metavar="K", help="With --repeat: K gradings at once, each on its own copy (two learners on one machine).")] = 1,
+             case: Annotated[Optional[list[str]], typer.Option("--case", metavar="CASE", help="With --repeat: only this case (reference, starter or a fixture's name; repeatable).")] = None,
              ) -> None:
     """Grade every lesson's reference (full marks), starter (not full) and wrong solutions (named checks fail)."""
     _ros()
@@ -466,6 +469,21 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
 
     if sample < 0:
         raise CourseError(f"--sample must be 0 or more (got {sample})", "e.g. --sample 2")
+    if repeat:
+        if batch:
+            raise CourseError("--repeat and --batch do not go together", "run them one after the other")
+        from course.grade.repeat import render_steadiness, repeat_lessons  # noqa: PLC0415 - start time
+
+        rows = repeat_lessons(lesson_ids or None, repeat, load, case or None, progress=stderr_console())
+        if as_json:
+            import json  # noqa: PLC0415 - start time, see the imports
+
+            sys.stdout.write(json.dumps([r.to_dict() for r in rows], indent=2) + "\n")
+        else:
+            render_steadiness(rows, stdout_console())
+        if any(not r.ok for r in rows):
+            raise typer.Exit(int(ExitStatus.VALIDATION_FAILED))
+        return
     if batch:
         from course.batch.parity import validate_with_batch  # noqa: PLC0415 - start time, see the imports
 

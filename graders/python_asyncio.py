@@ -83,18 +83,33 @@ def grade(s: GradingSession) -> None:
                                if not m)
         finished_first = "task 2" if trace.last_draw(1) < trace.last_draw(0) else "task 1"
         s.record("await_order", bool(first and second) and first[0] < second[0],
-                 f"it never printed {missing} result" if missing else
+                 f"it never printed {missing} result{_cancelled(trace)}" if missing else
                  f"{finished_first} finished first; task {1 if first[0] < second[0] else 2}'s result was printed first",
                  f"task 1's result ({EXAMPLE_RESULTS[0]}) printed before task 2's ({EXAMPLE_RESULTS[1]}), "
                  "even though task 2 finishes first")
     with s.part("callback"):
         trace = _example(s, "async_callback_example", "callback_runs", "callback_concurrent")
         second, last_first = trace.mentions(1, EXAMPLE_RESULTS[1], RESULT_TOLERANCE), trace.last_draw(0)
-        s.record("callback_as_completed", bool(second) and second[0] < last_first,
-                 f"it never printed task 2's result ({EXAMPLE_RESULTS[1]})" if not second else
-                 "task 2's result was printed while task 1 was still retrying" if second[0] < last_first else
+        first = trace.mentions(0, EXAMPLE_RESULTS[0], RESULT_TOLERANCE)
+        cancelled = _cancelled(trace)
+        s.record("callback_as_completed", bool(second and first) and second[0] < last_first,
+                 f"it never printed task 2's result ({EXAMPLE_RESULTS[1]}){cancelled}" if not second else
+                 f"task 2's result was printed, but task 1's ({EXAMPLE_RESULTS[0]}) never was{cancelled}" if not first
+                 else "task 2's result was printed while task 1 was still retrying" if second[0] < last_first else
                  "task 2's result was printed only after task 1 had finished",
                  f"task 2's result ({EXAMPLE_RESULTS[1]}) printed as soon as task 2 ends, before task 1's last roll")
+
+
+def _cancelled(trace: Trace) -> str:
+    """``"; task 1 stopped after 3 of its 8 rolls ..."`` when a task never drew its winning roll, else ""."""
+    order = trace.draw_order()
+    for index, plan in enumerate(EXAMPLE_PLANS):
+        drawn = order.count(index)
+        if 0 < drawn < len(plan):
+            return (f"; task {index + 1} stopped after {drawn} of its {len(plan)} rolls without returning: the "
+                    "program ended while it was still retrying (asyncio.run cancels every task still running when "
+                    "its coroutine returns), so await every task you created, not only the last one")
+    return ""
 
 
 def _probe(s: GradingSession) -> None:

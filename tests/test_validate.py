@@ -47,3 +47,16 @@ def test_a_fixture_that_does_not_build_fails_only_for_the_build() -> None:
     assert judge_fixture(["rate"], graded)[0]
     assert not judge_fixture(["rate", "log"], graded)[0]
     assert "unknown check ids: nope" in judge_fixture(["nope"], graded)[1]
+
+
+def test_a_fixture_can_require_the_words_its_feedback_must_contain() -> None:
+    """``says:`` in a fixture: losing the right check is not enough, the learner must be told what they did."""
+    from course.grade.results import CheckResult, LessonResult
+    from course.grade.validate import judge_fixture
+
+    graded = LessonResult("l", 1.0, 3.0, "failed", [
+        CheckResult("build", "b", 1, 1, True, "", "", ""),
+        CheckResult("order", "o", 0, 2, False, "the calls ran One after the other", "", "create tasks first")])
+    assert judge_fixture(["order"], graded, {"order": ["one after the other", "tasks"]})[0]
+    ok, expected = judge_fixture(["order"], graded, {"order": ["rolls ran out"]})
+    assert not ok and "missing: order says 'rolls ran out'" in expected

@@ -28,7 +28,7 @@ import subprocess
 import tempfile
 import time
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Callable, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
@@ -89,6 +89,9 @@ class Fixture(BaseModel):
     edits: list[Edit] = Field(default_factory=list)
     #: shell commands run in the workspace after the edits (default: the lesson's reference commands).
     commands: list[str] | None = None
+    #: check id -> words its feedback (observed text or hint) must contain, case-insensitively: a wrong
+    #: solution must lose the right check *and* be told what it did (issue 24).
+    says: dict[str, list[str]] = Field(default_factory=dict)
 
     name: str = Field(default="", exclude=True)
 
@@ -230,28 +233,54 @@ def validate_lesson(lesson: Lesson) -> list[Outcome]:
             underlay.discard()
 
 
-def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
-    outcomes = []
+@dataclasses.dataclass
+class Case:
+    """One validation case of a lesson: how to fill its workspace and how to judge its result.
+
+    Attributes:
+        lesson: the lesson.
+        name: ``reference``, ``starter`` or a fixture's name.
+        prepare: ``prepare(root)`` fills an empty folder with the case's workspace (and runs its commands).
+        underlays: built workspaces sourced before building it (the lesson's dependencies).
+        judge: ``judge(result)`` -> ``(ok, expected text)``.
+    """
+
+    lesson: Lesson
+    name: str
+    prepare: Callable[[Path], None]
+    underlays: tuple[Path, ...]
+    judge: Callable[[LessonResult], tuple[bool, str]]
+
+
+def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
+    """The lesson's reference, starter and wrong solutions (``tests/fixtures/<lesson>``) as cases.
+
+    Args:
+        underlay: the lesson's dependencies built once (:func:`build_underlay`), or None.
+
+    Raises:
+        LessonFormatError: a fixture file is malformed.
+    """
     deps = lesson_dependencies(lesson) if underlay is not None else []
-    own = [name for name in lesson.packages]
+    own = list(lesson.packages)
     underlays = (underlay,) if underlay is not None else ()
 
     def reference(root: Path) -> None:
         reference_workspace(lesson, root, own if underlay is not None else None)
         run_commands(root, lesson.reference.commands)
 
-    result, seconds = grade_case(lesson, "reference", reference, underlays=underlays)
-    outcomes.append(Outcome(lesson.id, "reference", result.status == Status.PASSED, "full marks",
-                            _describe(result), seconds, result))
-
     def starter(root: Path) -> None:
         (root / "src").mkdir(parents=True)
         copy_starter(lesson, root)
 
-    result, seconds = grade_case(lesson, "starter", starter, underlays=underlays)
-    outcomes.append(Outcome(lesson.id, "starter", result.status != Status.PASSED and result.score < result.max_score,
-                            "not full marks", _describe(result), seconds, result))
+    def full_marks(result: LessonResult) -> tuple[bool, str]:
+        return result.status == Status.PASSED, "full marks"
 
+    def not_full(result: LessonResult) -> tuple[bool, str]:
+        return result.status != Status.PASSED and result.score < result.max_score, "not full marks"
+
+    cases = [Case(lesson, "reference", reference, underlays, full_marks),
+             Case(lesson, "starter", starter, underlays, not_full)]
     for fixture in load_fixtures(lesson.id):
         # a fixture that edits a dependency builds everything itself, without the underlay
         touched = {Path(e.file or e.delete or "").parts[1:2] for e in fixture.edits}
@@ -262,12 +291,21 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
             apply_edits(root, fixture.edits)
             run_commands(root, lesson.reference.commands if fixture.commands is None else fixture.commands)
 
-        result, seconds = grade_case(lesson, fixture.name, wrong, underlays=underlays if uses_underlay else ())
-        if fixture.expect == "full_marks":
-            ok, expected = result.status == Status.PASSED, "full marks"
-        else:
-            ok, expected = judge_fixture(fixture.fails, result)
-        outcomes.append(Outcome(lesson.id, fixture.name, ok, expected, _describe(result), seconds, result))
+        def judged(result: LessonResult, fixture: Fixture = fixture) -> tuple[bool, str]:
+            if fixture.expect == "full_marks":
+                return full_marks(result)
+            return judge_fixture(fixture.fails, result, fixture.says)
+
+        cases.append(Case(lesson, fixture.name, wrong, underlays if uses_underlay else (), judged))
+    return cases
+
+
+def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
+    outcomes = []
+    for case in lesson_cases(lesson, underlay):
+        result, seconds = grade_case(lesson, case.name, case.prepare, underlays=case.underlays)
+        ok, expected = case.judge(result)
+        outcomes.append(Outcome(lesson.id, case.name, ok, expected, _describe(result), seconds, result))
     return outcomes
 
 
@@ -275,7 +313,8 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
 BUILD_CHECK = "build"
 
 
-def judge_fixture(fails: list[str], result: LessonResult) -> tuple[bool, str]:
+def judge_fixture(fails: list[str], result: LessonResult, says: dict[str, list[str]] | None = None
+                  ) -> tuple[bool, str]:
     """Whether a wrong solution failed for its stated reason: ``(ok, expected text)``.
 
     It must lose the points of every check in ``fails`` (ids the grader
@@ -295,7 +334,16 @@ def judge_fixture(fails: list[str], result: LessonResult) -> tuple[bool, str]:
     lost = [c for c in fails if c in by_id and by_id[c].points < by_id[c].max_points]
     if unknown:
         expected += f" (unknown check ids: {', '.join(unknown)})"
-    return not unknown and result.score < result.max_score and len(lost) == len(fails), expected
+    unsaid = []
+    for check_id, words in (says or {}).items():
+        check = by_id.get(check_id)
+        text = f"{check.observed} {check.hint}".lower() if check is not None else ""
+        unsaid += [f"{check_id} says {word!r}" for word in words if word.lower() not in text]
+    if says:
+        expected += "; " + ", ".join(f"{check_id} says {', '.join(map(repr, words))}" for check_id, words in says.items())
+    if unsaid:
+        expected += f" (missing: {'; '.join(unsaid)})"
+    return not unknown and not unsaid and result.score < result.max_score and len(lost) == len(fails), expected
 
 
 def _folders(packages: list[str]) -> set[str]:
