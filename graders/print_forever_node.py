@@ -70,8 +70,10 @@ def grade(s: GradingSession) -> None:
     grade_node(s, PACKAGE, NODE, "rclpy")
 
 
-def grade_node(s: GradingSession, package: str, node: str, client_library: str) -> None:
-    """The print-forever checks (:func:`make_checks`) of ``package``'s ``print_forever_node`` named ``node``.
+def grade_node(s: GradingSession, package: str, node: str, client_library: str, aliases: tuple[str, ...] = ()
+               ) -> None:
+    """The print-forever checks (:func:`make_checks`) of ``package``'s ``print_forever_node`` named ``node``
+    (or one of ``aliases``, :func:`graders.kit.nodes.wait_for_node`).
 
     Black-box: the node's /rosout records and exit; the language only shows in
     the ``package.xml`` dependency checked (``rclpy`` or ``rclcpp``).
@@ -80,7 +82,7 @@ def grade_node(s: GradingSession, package: str, node: str, client_library: str) 
     path = kit.executable(s, "executable", package, EXECUTABLE)
     rosout = s.ros.rosout()
     # a misnamed node is still graded on its records (need_node=False)
-    started = kit.start_node(s, "node_name", path, node, sigint_check="sigint_exit", need_node=False)
+    started = kit.start_node(s, "node_name", path, node, sigint_check="sigint_exit", need_node=False, aliases=aliases)
 
     def counted():
         return [r for r in rosout.records(level=INFO) if LOG.match(r.msg)]
