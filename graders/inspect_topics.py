@@ -50,7 +50,8 @@ def grade(s: GradingSession) -> None:
     path = scripts.script(s, "script", SCRIPT)
     mystery = QuotePublisher(s, msg_type)
     inbox = quote_inbox(s, msg_type)
-    run = scripts.run_script(s, path, timeout=TIMEOUT)
+    # a daemon that already lists the mystery topic, as in a learner's terminal (kit.scripts.ros2_daemon)
+    run = scripts.run_script(s, path, timeout=TIMEOUT, daemon_sees=[mystery.topic])
     scripts.ended(s, "ends", run, "it ends by itself with exit code 0 (every `echo` and `pub` with `--once`)")
     if not scripts.printed(s, "topic_found", run, [mystery.topic], "name of the topic with 'quote' in it",
                            "ros2 topic list | grep quote"):

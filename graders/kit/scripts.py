@@ -7,8 +7,9 @@ in its own process group with a deadline and capped output
 (:meth:`GradingSession.start_program`). When the script's process is stopped,
 every process carrying its run marker is killed too, so a ``ros2`` daemon that
 the script's first ``ros2 topic list`` spawned (ros2cli's ``spawn_daemon``
-detaches it with ``setsid``) does not outlive the check; the grader itself never
-uses a daemon (its probes are rclpy nodes).
+detaches it with ``setsid``) does not outlive the check. A grader whose script
+lists the graph starts a daemon first (``run_script(daemon_sees=...)``,
+:func:`ros2_daemon`); its own probes are rclpy nodes.
 
 Typical use::
 
@@ -23,10 +24,12 @@ from __future__ import annotations
 
 import shutil
 import subprocess
+import xmlrpc.client
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from course.grade.engine import GradingSession, Unmet
+from course.run.probes import wait_until
 from graders.kit.programs import ProgramRun, interrupt_after, run_program
 
 #: Characters of a script's output quoted back in feedback.
@@ -62,7 +65,7 @@ def script(s: GradingSession, check_id: str, relative: str) -> Path:
 
 def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=None,
                interrupt_after_s: float | None = None, exit_timeout: float = 5.0,
-               args: Iterable[str] = ()) -> ProgramRun:
+               args: Iterable[str] = (), daemon_sees: Iterable[str] = ()) -> ProgramRun:
     """Run ``bash path`` in the check's ROS graph and return what it did; it is stopped at ``timeout`` seconds.
 
     Args:
@@ -72,6 +75,12 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
         interrupt_after_s: for scripts that run until stopped (``ros2 run``, ``ros2 launch``): press
             Ctrl+C (SIGINT to its process group) after this many seconds, then wait ``exit_timeout``.
         args: extra arguments after the script path.
+        daemon_sees: names (nodes as ``/name``, topics, services) the grader started: when given, a
+            ``ros2`` daemon is started in the check's domain first and the script runs once that daemon
+            lists them all (:func:`ros2_daemon`), as in a learner's terminal where a daemon has been
+            running for a while. Without it, the script's first ``ros2 ... list`` would spawn one and
+            listen for the graph itself for only ``--spin-time`` seconds: on a machine running two checks
+            at once it printed nothing in 7 of 16 runs (issue 24).
 
     The working directory is the workspace root; nothing of the learner's runs
     after this returns (processes with the run's marker are killed, ``ros2``
@@ -82,6 +91,9 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
     label = path.stem
     if "ROS_HOME" not in env:  # the ros2 CLI's daemon and logs write there, as the submission
         env["ROS_HOME"] = str(s.submission_folder(f"{label}.ros_home"))
+    wanted = list(daemon_sees)
+    if wanted:
+        ros2_daemon(s, env, wanted, label)
     if interrupt_after_s is not None:
         # Ctrl+C as in a terminal: bash starts with SIGINT at its default action (GNU env
         # --default-signal, coreutils >= 8.31). A grader started from a background job inherits
@@ -92,6 +104,63 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
         return interrupt_after(s, argv, label, interrupt_after_s, exit_timeout=exit_timeout, env=env,
                                cwd=s.workspace_root)
     return run_program(s, argv, label, timeout=timeout, env=env, cwd=s.workspace_root)
+
+
+#: ros2cli's daemon serves XML-RPC on 127.0.0.1 at this port plus ROS_DOMAIN_ID (ros2cli.daemon.get_port).
+DAEMON_BASE_PORT = 11511
+#: Seconds to wait for the daemon to list the grader's names (Fast DDS discovery: well under 1 s when idle).
+DAEMON_TIMEOUT = 15.0
+
+
+class _QuickTransport(xmlrpc.client.Transport):
+    """XML-RPC over HTTP with a 2 s socket timeout (a daemon that hangs must not hang the check)."""
+
+    def make_connection(self, host):  # noqa: ANN001, ANN201 - xmlrpc.client's signature
+        connection = super().make_connection(host)
+        connection.timeout = 2.0
+        return connection
+
+
+def ros2_daemon(s: GradingSession, env: dict[str, str], names: Iterable[str], label: str,
+                timeout: float = DAEMON_TIMEOUT) -> bool:
+    """Start a ``ros2`` daemon in ``env``'s ROS domain and wait until it lists every one of ``names``.
+
+    The daemon runs as the learner's programs do (``ros2 daemon start`` through
+    :meth:`GradingSession.start_program`, so it carries that run's marker and is
+    stopped with the check). The grader asks it over its XML-RPC interface
+    (ros2cli ``daemon/__init__.py``: ``get_node_names_and_namespaces``,
+    ``get_topic_names_and_types``, ``get_service_names_and_types``), the very
+    answers ``ros2 node/topic/service list`` print from it.
+
+    Args:
+        env: the script's environment (``ROS_DOMAIN_ID`` set).
+        names: node names as ``/name``, topic or service names.
+        label: log file name prefix (``<label>.daemon``).
+        timeout: seconds to wait, then the script runs anyway (its own commands then show what happens).
+
+    Returns:
+        True when the daemon listed every name in time.
+    """
+    ros2 = shutil.which("ros2", path=env.get("PATH"))
+    domain = env.get("ROS_DOMAIN_ID", "")
+    if ros2 is None or not domain.isdigit():
+        return False
+    s.start_program([ros2, "daemon", "start"], f"{label}.daemon", env=env, deadline=timeout + 60.0)
+    proxy = xmlrpc.client.ServerProxy(f"http://127.0.0.1:{DAEMON_BASE_PORT + int(domain)}/ros2cli/",
+                                      transport=_QuickTransport(), allow_none=True)
+    wanted = set(names)
+
+    def listed() -> bool:
+        try:
+            seen = {name for name, _ in proxy.get_topic_names_and_types()}
+            seen |= {name for name, _ in proxy.get_service_names_and_types()}
+            seen |= {f"{ns.rstrip('/')}/{name}" for name, ns in proxy.get_node_names_and_namespaces()}
+        except (OSError, xmlrpc.client.Error, ValueError, TypeError):
+            return False
+        return wanted <= seen
+
+    with s.phase("start"):
+        return wait_until(listed, timeout, interval=0.2)
 
 
 def excerpt(text: str, limit: int = EXCERPT) -> str:
