@@ -1,0 +1,53 @@
+"""Every benchmark stays runnable: each runs once in its smallest mode (issue 19).
+
+Smoke runs only: they assert that the script completes and prints its figures,
+never a time (speed figures belong in the benchmarks themselves). Not run here:
+``underlay_speed.py`` (it builds the whole ROS 2 underlay from source, ~20 min;
+CI's setup builds the same underlay through ``ros2course env --build``).
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+BENCH = ROOT / "benchmarks"
+
+
+def _bench(script: str, *args: str, timeout: float = 600) -> subprocess.CompletedProcess:
+    proc = subprocess.run([sys.executable, str(BENCH / script), *args], cwd=ROOT, capture_output=True, text=True,
+                          timeout=timeout, stdin=subprocess.DEVNULL, check=False)
+    assert proc.returncode == 0, f"{script} failed:\n{proc.stdout[-2000:]}\n{proc.stderr[-3000:]}"
+    assert "Traceback" not in proc.stderr, proc.stderr[-3000:]
+    return proc
+
+
+def test_cli_start_benchmark_runs() -> None:
+    data = json.loads(_bench("cli_start.py", "--runs", "1", "--json").stdout)
+    assert data, "no figures printed"
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(600)
+def test_all_lessons_benchmark_runs_on_one_lesson() -> None:
+    rows = json.loads(_bench("all_lessons.py", "print-forever-node", "--runs", "1", "--json").stdout)
+    assert [r["lesson"] for r in rows] == ["print-forever-node"] and rows[0]["full_marks"]
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(600)
+def test_check_speed_benchmark_runs_once() -> None:
+    data = json.loads(_bench("check_speed.py", "--runs", "1", "--json").stdout)
+    assert data.get("leftover_processes_killed") == 0
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(900)
+def test_batch_speed_benchmark_runs_on_a_class_of_two() -> None:
+    proc = _bench("batch_speed.py", "--count", "2", "--jobs", "2", timeout=850)
+    assert "submissions/min" in proc.stdout and "verdicts changed between the runs: none" in proc.stdout
