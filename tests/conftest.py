@@ -23,7 +23,7 @@ env_mod.activate()
 #: Test modules whose tests each take a minute or more (the validation of every lesson,
 #: 20 grades in a row). They are collected first so that, with pytest-xdist's work
 #: stealing, the longest tests start first and the short ones fill the gaps at the end.
-LONG_MODULES = ("test_determinism.py", "test_validate.py", "test_batch_ros.py")
+LONG_MODULES = ("test_determinism.py", "test_validate.py", "test_batch_ros.py", "test_benchmarks.py", "test_repeat.py")
 
 
 @pytest.fixture(autouse=True, scope="session")
