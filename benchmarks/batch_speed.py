@@ -12,7 +12,7 @@ whether any verdict changed between the two runs. A script, not a timed test::
 Goal on the 2-core machine: speedup >= 1.7 with 2 jobs, no verdict changed.
 
 ``--overhead`` grades the class with ``--jobs 1`` twice instead, with every
-protection of :mod:`course.run.sandbox` (namespaces, submission uid, pids cgroup,
+protection of :mod:`course.sandbox` (namespaces, submission uid, pids cgroup,
 read-only mounts) and with ``isolate=False``, and prints the cost of the
 isolation per submission (seconds) and whether any verdict changed.
 """

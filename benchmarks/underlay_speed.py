@@ -26,7 +26,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from course.ros import env as env_mod  # noqa: E402
-from course.ros import underlay  # noqa: E402
+from course.ros import underlay, underlay_build  # noqa: E402
 
 
 def main() -> int:
@@ -41,10 +41,10 @@ def main() -> int:
     say = (lambda line: None) if args.json else (lambda line: print(f"  {line}", file=sys.stderr))
     try:
         begin = time.monotonic()
-        made, built = underlay.build(args.sources, force=True, progress=say, base=base)
+        made, built = underlay_build.build(args.sources, force=True, progress=say, base=base)
         cold = time.monotonic() - begin
         begin = time.monotonic()
-        _, rebuilt = underlay.build(args.sources, progress=say, base=base)
+        _, rebuilt = underlay_build.build(args.sources, progress=say, base=base)
         warm = time.monotonic() - begin
         size = underlay.installed_size(made.prefix)
         result = {"cold_s": round(cold, 1), "warm_s": round(warm, 3), "rebuilt_when_warm": rebuilt,

@@ -266,8 +266,10 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
 def _ensure_components(ws: Workspace, packages: list[str]) -> None:
     """Build the optional components ``packages`` need first (the sas lesson's SmartArmStack: minutes, once)."""
     err = stderr_console()
-    _env().ensure_components_for(ws.root, packages,
-                                 progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
+    from course.ros.doctor import ensure_components_for  # noqa: PLC0415 - start time, see the imports
+
+    ensure_components_for(ws.root, packages,
+                          progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
 
 
 def _exit_status(result) -> ExitStatus:
@@ -319,7 +321,7 @@ def _check_all(ws: Workspace, as_json: bool) -> None:
 @_handle_errors
 def watch(workspace: WorkspaceOpt = None) -> None:
     """Re-check the current lesson whenever you save one of its files (keys: h n l c q)."""
-    from course.lesson.watch import Watcher  # noqa: PLC0415 - start time, see the imports
+    from course.grade.watch import Watcher  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     _require_initialised(ws)
@@ -392,7 +394,9 @@ def doctor(fix: Annotated[bool, typer.Option("--fix", help="Repair the ROS wheel
     _ros()
     from rich.table import Table  # noqa: PLC0415 - start time, see the imports
 
-    rows = _env().doctor(fix=fix, sources=sources)
+    from course.ros import doctor as ros_doctor  # noqa: PLC0415 - start time, see the imports
+
+    rows = ros_doctor.doctor(fix=fix, sources=sources)
     table = Table(title="ros2course doctor", title_justify="left")
     table.add_column("component")
     table.add_column("")
@@ -423,7 +427,7 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
          ) -> None:
     """The learner's ROS 2 environment: source "$(ros2course env --path)" in a terminal."""
     _ros()
-    from course.ros import underlay  # noqa: PLC0415 - start time, see the imports
+    from course.ros import underlay, underlay_build  # noqa: PLC0415 - start time, see the imports
 
     if not (path or build):
         raise CourseError("say what to do: --path or --build", 'e.g. source "$(ros2course env --path)"')
@@ -442,7 +446,7 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
                 # a terminal gets a live line of the packages being built; logs and CI get the steps only
                 status = err.status(f"{component.what} ...") if err.is_terminal else None
                 with status or contextlib.nullcontext():
-                    made, built = underlay.build(
+                    made, built = underlay_build.build(
                         sources, force=rebuild, component=component,
                         progress=lambda line: err.print(line, markup=False),
                         packages=(lambda line, st=status, what=component.what: st.update(f"{what}: {line}"))

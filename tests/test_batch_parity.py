@@ -20,7 +20,7 @@ from course.build.reference import trusted_interface_packages
 from course.errors import CourseError
 from course.grade.engine import Check, GradingSession, load_grader
 from course.lesson.catalog import load_catalog
-from course.run import sandbox
+from course import sandbox
 
 
 def test_an_interface_package_the_lesson_teaches_is_still_built_for_the_batch() -> None:

@@ -191,7 +191,7 @@ def test_build_progress_follows_colcons_start_and_finish_lines(tmp_path):
     """The progress display hears each package colcon starts and finishes, in order, from the log."""
     import time  # noqa: PLC0415
 
-    from course.build.colcon import BuildProgress  # noqa: PLC0415
+    from course.ros.colcon_log import BuildProgress  # noqa: PLC0415
 
     log = tmp_path / "build.log"
     log.write_text("$ colcon build\n", encoding="utf-8")

@@ -101,20 +101,20 @@ def _workspace_depending_on(tmp_path: Path, dep: str) -> Path:
 @needs_wheels
 def test_a_package_on_sas_builds_the_sas_component_on_demand_or_says_why_not(tmp_path, monkeypatch):
     from course.errors import MissingRequirement
-    from course.ros import underlay
+    from course.ros import doctor, underlay, underlay_build
 
     calls = []
-    monkeypatch.setattr(underlay, "build", lambda **kw: calls.append(kw["component"].name))
+    monkeypatch.setattr(underlay_build, "build", lambda **kw: calls.append(kw["component"].name))
     monkeypatch.setattr(underlay, "missing_prerequisites", lambda: [])
     monkeypatch.setattr(underlay, "sas_missing_prerequisites", lambda: [])
-    monkeypatch.setattr(env_mod, "_ament_has", lambda name: False)
+    monkeypatch.setattr(env_mod, "ament_has", lambda name: False)
     ws = _workspace_depending_on(tmp_path, "sas_core")
-    assert env_mod.ensure_components_for(ws, ["sas_robot_driver_myrobot"]) == ["sas"]
+    assert doctor.ensure_components_for(ws, ["sas_robot_driver_myrobot"]) == ["sas"]
     assert calls == ["sas"]
-    assert env_mod.ensure_components_for(_workspace_depending_on(tmp_path / "py", "rclpy"),
+    assert doctor.ensure_components_for(_workspace_depending_on(tmp_path / "py", "rclpy"),
                                          ["sas_robot_driver_myrobot"]) == []
     monkeypatch.setattr(underlay, "sas_missing_prerequisites",
                         lambda: [("no Eigen 3 headers (/usr/include/eigen3)", "apt-get install libeigen3-dev")])
     with pytest.raises(MissingRequirement, match="depends on sas_core .* no Eigen 3 headers"):
-        env_mod.ensure_components_for(ws, ["sas_robot_driver_myrobot"])
+        doctor.ensure_components_for(ws, ["sas_robot_driver_myrobot"])
     assert calls == ["sas"]

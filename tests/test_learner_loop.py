@@ -15,7 +15,7 @@ import pexpect
 import psutil
 import pytest
 
-from course.lesson.watch import MARKER_VAR
+from course.grade.watch import MARKER_VAR
 
 
 def _run(ws: Path, *args: str) -> subprocess.CompletedProcess:

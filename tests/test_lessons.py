@@ -13,7 +13,6 @@ from pathlib import Path
 import pytest
 import yaml
 
-from course.build.colcon import find_packages
 from course.errors import LessonFormatError
 from course.grade.engine import Check, load_grader
 from course.grade.validate import (
@@ -24,6 +23,7 @@ from course.grade.validate import (
 )
 from course.lesson.catalog import content_root, load_catalog, load_lesson
 from course.lesson.starter import copy_starter, starter_files, starter_sources
+from course.ros.packages import find_packages
 
 ROOT = content_root()
 CATALOG = load_catalog()

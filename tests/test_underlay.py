@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from course.ros import underlay
+from course.ros import underlay, underlay_build
 from course.ros.underlay_pins import Pin
 
 #: colcon builds: never beside the determinism tests (conftest.cpu_exclusive)
@@ -79,7 +79,7 @@ def test_build_caches_switches_atomically_and_keeps_the_old_underlay_on_failure(
     base = tmp_path / "underlay"
     tiny = make_archive(mirror, "tiny", {"tiny_pkg": "ok", "tiny_fixture": "ignored"})
 
-    made, built = underlay.build(mirror, pins=(tiny,), base=base)
+    made, built = underlay_build.build(mirror, pins=(tiny,), base=base)
     assert built
     assert (base / "current").is_symlink()
     assert made.prefix == (base / "builds" / underlay.cache_key((tiny,))).resolve()
@@ -88,12 +88,12 @@ def test_build_caches_switches_atomically_and_keeps_the_old_underlay_on_failure(
     assert made.commit_of("tiny") == COMMIT
     assert not (base / "work").exists()
 
-    again, built_again = underlay.build(mirror, pins=(tiny,), base=base)
+    again, built_again = underlay_build.build(mirror, pins=(tiny,), base=base)
     assert not built_again and again.prefix == made.prefix
 
     broken = make_archive(mirror, "broken", {"broken_pkg": "broken"})
     with pytest.raises(underlay.UnderlayBuildFailed) as failure:
-        underlay.build(mirror, pins=(tiny, broken), base=base)
+        underlay_build.build(mirror, pins=(tiny, broken), base=base)
     message = failure.value.message
     assert "\n" not in message and failure.value.hint == ""
     assert "(package broken_pkg)" in message
@@ -105,7 +105,7 @@ def test_build_caches_switches_atomically_and_keeps_the_old_underlay_on_failure(
 
     missing = Pin("test", "absent", COMMIT, "0", None)
     with pytest.raises(underlay.UnderlayBuildFailed, match="is not in the sources folder"):
-        underlay.build(mirror, pins=(tiny, missing), base=base)
+        underlay_build.build(mirror, pins=(tiny, missing), base=base)
     assert underlay.current(base).prefix == made.prefix
 
 
@@ -113,22 +113,22 @@ def test_build_caches_switches_atomically_and_keeps_the_old_underlay_on_failure(
 def test_an_interrupted_build_leaves_nothing_a_later_run_trusts(tmp_path, mirror, monkeypatch):
     base = tmp_path / "underlay"
     tiny = make_archive(mirror, "tiny", {"tiny_pkg": "ok"})
-    real = underlay._run_colcon
+    real = underlay_build._run_colcon
 
     def interrupted(args, env, cwd, log, timeout, packages=None):
         real(args, env, cwd, log, timeout, packages)  # the packages get installed, then Ctrl+C before the stamp
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(underlay, "_run_colcon", interrupted)
+    monkeypatch.setattr(underlay_build, "_run_colcon", interrupted)
     with pytest.raises(KeyboardInterrupt):
-        underlay.build(mirror, pins=(tiny,), base=base)
+        underlay_build.build(mirror, pins=(tiny,), base=base)
     assert underlay.current(base) is None
     assert not (base / "current").exists()
     assert not underlay.up_to_date(base, (tiny,))
     assert list((base / "builds").iterdir()) == []
 
-    monkeypatch.setattr(underlay, "_run_colcon", real)
-    made, built = underlay.build(mirror, pins=(tiny,), base=base)
+    monkeypatch.setattr(underlay_build, "_run_colcon", real)
+    made, built = underlay_build.build(mirror, pins=(tiny,), base=base)
     assert built and underlay.up_to_date(base, (tiny,))
 
 
@@ -137,7 +137,7 @@ def test_a_damaged_archive_fails_in_one_line(tmp_path, mirror):
     pin = Pin("test", "damaged", COMMIT, "0", None)
     (mirror / pin.archive_name).write_bytes(b"not a gzip file")
     with pytest.raises(underlay.UnderlayBuildFailed) as failure:
-        underlay.build(mirror, pins=(pin,), base=tmp_path / "underlay")
+        underlay_build.build(mirror, pins=(pin,), base=tmp_path / "underlay")
     assert "cannot be unpacked" in failure.value.message and "log: " in failure.value.message
     assert "\n" not in failure.value.message
 

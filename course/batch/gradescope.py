@@ -31,10 +31,10 @@ from course.batch.runner import (
     run_job,
 )
 from course.errors import CourseError
+from course.files import atomic_write_text
 from course.lesson.catalog import content_root, load_catalog
-from course.lesson.workspace import atomic_write_text
 from course.report import gradebook
-from course.run import sandbox
+from course import sandbox
 
 
 def configured_lessons(explicit: list[str]) -> list[str]:
@@ -81,7 +81,7 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
         results: the results file (``/autograder/results/results.json``); logs go beside it under ``submission/logs``.
         timeout: wall-clock seconds for the whole grading.
         pids_limit: tasks (processes + threads) the submission may have at once.
-        require_isolation: refuse unless every protection of :mod:`course.run.sandbox` is in effect.
+        require_isolation: refuse unless every protection of :mod:`course.sandbox` is in effect.
 
     Returns:
         the total score.

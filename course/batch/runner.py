@@ -57,15 +57,19 @@ from rich.progress import (
 from rich.table import Table
 
 from course.batch.archive import Submission, discover, prepare
-from course.build.reference import ReferenceBuild, shared_reference_build, trusted_interface_packages
+from course.build.reference import (
+    ReferenceBuild,
+    shared_reference_build,
+    trusted_interface_packages,
+)
 from course.errors import CourseError, MissingRequirement, NotGradable
+from course.files import atomic_write_text
 from course.grade.engine import load_grader
 from course.grade.results import LessonResult, Status
 from course.lesson.catalog import content_root, load_catalog
-from course.lesson.workspace import atomic_write_text
 from course.report import gradebook
 from course.ros import env as env_mod
-from course.run import sandbox
+from course import sandbox
 from course.run.process import OutputDrain, kill_marked, sweep_stale_fastdds_shm
 
 #: Environment variable every process of a job carries (its value: the job's marker).
@@ -100,7 +104,7 @@ class Job:
         file_limit: bytes per written file (0: no limit).
         output_cap: bytes of worker output kept.
         hide: folders hidden from the submission (when a mount namespace is available).
-        isolate: use the protections of :mod:`course.run.sandbox` the machine allows.
+        isolate: use the protections of :mod:`course.sandbox` the machine allows.
         scratch_root: where scratch folders are made (None: the system temp folder).
         pids_limit: tasks (processes + threads) the submission may have at once.
         trusted_interfaces: a built workspace of the course's own interface packages, which the
@@ -126,7 +130,7 @@ class Job:
     require_isolation: bool = False
 
 
-# --- isolation (course.run.sandbox) -------------------------------------------------------------
+# --- isolation (course.sandbox) -------------------------------------------------------------
 
 def _hideable(folder: Path) -> bool:
     """A folder may be hidden unless it holds what the worker itself needs (Python, this package, HOME)."""
@@ -148,7 +152,7 @@ def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list
 
 
 def refuse_without_isolation(isolate: bool = True) -> None:
-    """Raise unless this machine gives a job every protection of :mod:`course.run.sandbox`.
+    """Raise unless this machine gives a job every protection of :mod:`course.sandbox`.
 
     Raises:
         CourseError: one line naming each missing protection and why.
@@ -287,7 +291,7 @@ def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Is
     """What one job runs inside: ``(command prefix, worker arguments, isolation, pids cgroup)``.
 
     The prefix is ``unshare`` (network, mount and PID namespaces) + ``dumb-init`` +
-    the mount plan (:class:`course.run.sandbox.MountPlan`), or ``[]``; the worker
+    the mount plan (:class:`course.sandbox.MountPlan`), or ``[]``; the worker
     arguments give it the submission's uid, process limit and cgroup. The
     scratch folder's ``ws/``, ``home/`` and ``logs/ros/`` go to that uid.
     """
@@ -529,7 +533,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
         resume: skip (student, lesson) pairs already in ``results.jsonl``.
         console: a rich ``Console`` for the progress bar (None: no progress shown).
         memory_limit: bytes of address space per process of a submission.
-        isolate: use the protections of :mod:`course.run.sandbox` where the machine allows them.
+        isolate: use the protections of :mod:`course.sandbox` where the machine allows them.
         executor: use this executor instead (tests); ``jobs``/``scheduler`` ignored.
         pids_limit: tasks (processes + threads) each submission may have at once.
         require_isolation: refuse to grade unless every protection is in effect

@@ -5,7 +5,7 @@ session (and, where the machine allows, its own network and mount namespace).
 It limits its own resources first (``RLIMIT_AS``, ``RLIMIT_FSIZE``; inherited by
 colcon and the learner's nodes), configures the submission's identity
 (``--run-as``: every command that runs submission code goes through
-:func:`course.run.sandbox.command`, so the worker stays the only root process
+:func:`course.sandbox.command`, so the worker stays the only root process
 in the job), then calls the same
 :func:`course.grade.engine.grade_lesson` as ``ros2course check`` for each lesson and
 rewrites ``--results`` (a JSON list, temp file + ``os.replace``) after each one,
@@ -27,12 +27,12 @@ import traceback
 from pathlib import Path
 from typing import Any
 
+from course.files import atomic_write_text
 from course.grade.engine import grade_lesson
 from course.grade.results import LessonResult, Status
 from course.lesson.catalog import load_catalog
-from course.lesson.workspace import atomic_write_text
 from course.ros import env as env_mod
-from course.run import sandbox
+from course import sandbox
 
 
 def _limit(kind: int, value: int) -> None:
@@ -52,7 +52,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--logs", required=True, type=Path)
     parser.add_argument("--memory-limit", type=int, default=0, help="bytes of address space per process (0: none)")
     parser.add_argument("--file-limit", type=int, default=0, help="bytes per written file (0: none)")
-    parser.add_argument("--run-as", default="", help="UID:GID the submission's code runs as (course.run.sandbox)")
+    parser.add_argument("--run-as", default="", help="UID:GID the submission's code runs as (course.sandbox)")
     parser.add_argument("--nproc", type=int, default=0, help="RLIMIT_NPROC of that uid (tasks at once)")
     parser.add_argument("--pids-cgroup", default="", help="cgroup.procs file of the job's pids cgroup")
     parser.add_argument("--trusted-interfaces", type=Path, default=None,

@@ -14,7 +14,6 @@
 
 from __future__ import annotations
 
-import contextlib
 import dataclasses
 import hashlib
 import json
@@ -23,17 +22,15 @@ import re
 import shutil
 import subprocess
 import sys
-import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
 
-from catkin_pkg.package import InvalidPackage
-from catkin_pkg.packages import find_packages as catkin_find
-
 from course.errors import NotGradable
-from course.lesson.workspace import atomic_write_text
-from course.run import sandbox
+from course.files import atomic_write_text
+from course.ros.colcon_log import BuildProgress
+from course.ros.packages import dependency_closure, find_packages
+from course import sandbox
 
 FINGERPRINTS = ".ros2course-fingerprints.json"
 #: colcon arguments every build uses; ``BUILD_TESTING=OFF`` because ament_lint_auto
@@ -164,39 +161,6 @@ def stale_metadata(workspace_root: Path, closure: list[str]) -> dict[str, list[s
     return out
 
 
-def find_packages(src: Path) -> dict[str, tuple[Path, object]]:
-    """Every ROS package under ``src``: name -> (folder, catkin_pkg Package).
-
-    Raises:
-        NotGradable: a ``package.xml`` that catkin_pkg cannot parse (its message included).
-    """
-    if not src.is_dir():
-        return {}
-    try:
-        found = catkin_find(str(src))
-    except InvalidPackage as exc:
-        detail = " ".join(line.strip() for line in str(exc).splitlines() if line.strip())
-        raise NotGradable(f"a package.xml under {src} is invalid: {detail[:400]}",
-                          "fix package.xml (format 3; name, version, description, maintainer with a valid email, license)") from exc
-    return {pkg.name: (src / rel, pkg) for rel, pkg in found.items()}
-
-
-def dependency_closure(packages: list[str], found: dict[str, tuple[Path, object]]) -> list[str]:
-    """``packages`` plus every workspace package they depend on, recursively (sorted)."""
-    todo = list(packages)
-    seen: set[str] = set()
-    while todo:
-        name = todo.pop()
-        if name in seen or name not in found:
-            continue
-        seen.add(name)
-        pkg = found[name][1]
-        for dep in (*pkg.build_depends, *pkg.buildtool_depends, *pkg.exec_depends, *pkg.build_export_depends):
-            if dep.name in found:
-                todo.append(dep.name)
-    return sorted(seen)
-
-
 def fingerprint(folder: Path) -> str:
     """Hash of every file's relative path, size and mtime under ``folder`` (caches skipped)."""
     digest = hashlib.sha256()
@@ -233,57 +197,6 @@ def build_log_excerpt(text: str, limit: int = 25) -> str:
             keep.extend(range(max(0, index - 1), min(len(lines), index + 3)))
     picked = sorted(set(keep)) or list(range(max(0, len(lines) - limit), len(lines)))
     return "\n".join(lines[i] for i in picked[-limit:])
-
-
-class BuildProgress(threading.Thread):
-    """Follows colcon's output in the build log and reports each package it starts and finishes.
-
-    colcon's console_start_end event handler prints ``Starting >>> pkg`` and
-    ``Finished <<< pkg [1.2s]`` (``Failed <<<``, ``Aborted <<<``) lines; each
-    becomes a call ``report("building pkg (1 of 3 done)")`` for a progress display.
-
-    Args:
-        log_path: the build log being written.
-        report: called from this thread with one short line.
-        total: packages to build (for the "n of total" count; None: unknown).
-
-    It reads from the log's size at construction, so an earlier pass in the same log is not reported again.
-    """
-
-    PATTERN = re.compile(r"^(Starting >>>|Finished <<<|Failed\s+<<<|Aborted\s+<<<)\s+(\S+)")
-
-    def __init__(self, log_path: Path, report: Callable[[str], None], total: int | None) -> None:
-        super().__init__(daemon=True, name="ros2course-build-progress")
-        self.log_path, self.report, self.total = log_path, report, total
-        self._offset = log_path.stat().st_size if log_path.is_file() else 0
-        self._stop_event = threading.Event()
-
-    def run(self) -> None:
-        done, building = 0, []
-        with contextlib.suppress(OSError), open(self.log_path, encoding="utf-8", errors="replace") as log:
-            log.seek(self._offset)
-            while True:
-                line = log.readline()
-                if not line:
-                    if self._stop_event.wait(0.2):
-                        return
-                    continue
-                match = self.PATTERN.match(line)
-                if match is None:
-                    continue
-                verb, package = match.groups()
-                if verb.startswith("Starting"):
-                    building.append(package)
-                else:
-                    done += 1
-                    building = [p for p in building if p != package]
-                count = f"{done} of {self.total} done" if self.total else f"{done} done"
-                self.report(f"building {', '.join(building) or '...'} ({count})")
-
-    def stop(self) -> None:
-        """Stop following (the thread ends within 0.2 s)."""
-        self._stop_event.set()
-        self.join(timeout=1.0)
 
 
 def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str], log_path: Path,
@@ -362,7 +275,7 @@ def _colcon(workspace_root: Path, packages: list[str], closure: list[str], env: 
         if follower is not None:
             follower.start()
         try:
-            # colcon runs the submission's setup.py and CMake code: as the submission (course.run.sandbox)
+            # colcon runs the submission's setup.py and CMake code: as the submission (course.sandbox)
             proc = sandbox.run(command, cwd=workspace_root, env=env, stdout=log, stderr=subprocess.STDOUT,
                                stdin=subprocess.DEVNULL, timeout=timeout, start_new_session=True, check=False)
             ok = proc.returncode == 0
@@ -421,7 +334,7 @@ def overlay_env(workspace_root: Path, base_env: dict[str, str]) -> dict[str, str
     cached = _overlay_cache.get(key)
     if cached is not None:
         return dict(cached)
-    # the workspace's setup.bash is the submission's code too (course.run.sandbox)
+    # the workspace's setup.bash is the submission's code too (course.sandbox)
     proc = sandbox.run(["bash", "-c", 'source "$1" >/dev/null 2>&1 && env -0', "bash", str(setup)],
                        capture_output=True, env=base_env, cwd=workspace_root, timeout=60, check=False)
     if proc.returncode != 0:

@@ -32,7 +32,7 @@ from course.lesson.catalog import Lesson, content_root
 from course.ros import env as env_mod
 from course.ros import index as ament_index
 from course.ros.interfaces import workspace_type
-from course.run import sandbox
+from course import sandbox
 from course.run.probes import RosSession
 from course.run.process import LearnerProcess, sweep_stale_fastdds_shm
 from course.run.recording import CHECKS_METADATA, Recorder
@@ -366,7 +366,7 @@ class GradingSession:
         CMake build folder, a venv, a probe's trace, a copy of the learner's sources
         that a build writes into, a ``ROS_HOME``. ``fill(folder)`` runs first, as the
         grader (copy sources, templates); then, in batch grading, the whole tree is
-        given to the submission's uid (:func:`course.run.sandbox.give_tree`) and the
+        given to the submission's uid (:func:`course.sandbox.give_tree`) and the
         grader only reads it from then on (writing into a folder the submission owns
         could follow a link it planted). Under ``check`` the learner owns everything
         already, so both paths see the same folders.
@@ -519,7 +519,7 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     grading: generated code is code the submission controls).
 
     ``progress(line)``, when given, hears what colcon is building (see
-    :class:`~course.build.colcon.BuildProgress`).
+    :class:`~course.ros.colcon_log.BuildProgress`).
 
     Never raises for problems of the submission (they become the result);
     raises :class:`~course.errors.MissingRequirement` when the machine lacks

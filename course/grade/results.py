@@ -137,7 +137,7 @@ class LessonResult:
         log_dir: where the build and node logs of this check are.
         plots: time series the grader observed (:class:`Plot`), for people; not serialised.
         student: the student id (batch grading; "" for ``check``).
-        isolation: the protections the submission ran under (batch; see :mod:`course.run.sandbox`).
+        isolation: the protections the submission ran under (batch; see :mod:`course.sandbox`).
         peak_rss: peak memory of the grading job, bytes (batch).
         seconds: wall time of this lesson in the worker, seconds (batch; None when unknown).
     """

@@ -35,12 +35,11 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from rich.console import Console
 from rich.table import Table
 
-from course.build.colcon import find_packages
 from course.build.reference import (
     ReferenceBuild,
-    shared_reference_build,
     lesson_dependencies,
     reference_workspace,
+    shared_reference_build,
 )
 from course.errors import CourseError, LessonFormatError, ValidationFailed
 from course.grade.engine import grade_lesson
@@ -53,6 +52,7 @@ from course.lesson.catalog import (
 )
 from course.lesson.starter import copy_starter
 from course.ros import env as env_mod
+from course.ros.packages import find_packages
 
 
 class Edit(BaseModel):

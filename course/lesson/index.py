@@ -34,12 +34,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
-from course.lesson.workspace import (
-    PROGRESS_VERSION,
-    Workspace,
-    atomic_write_text,
-    lesson_status,
-)
+from course.files import atomic_write_text
+from course.lesson.status import PROGRESS_VERSION, lesson_status
+from course.lesson.workspace import Workspace
 
 #: Bumped when the index's layout changes (old files are then rebuilt).
 INDEX_FORMAT = 1
@@ -145,7 +142,7 @@ class ProgressView:
     lessons: dict[str, RecordView] = field(default_factory=dict)
 
     def status(self, lesson_id: str) -> str:
-        """``done``, ``current``, ``started`` or ``not started`` (:func:`course.lesson.workspace.lesson_status`)."""
+        """``done``, ``current``, ``started`` or ``not started`` (:func:`course.lesson.status.lesson_status`)."""
         return lesson_status(self.lessons.get(lesson_id), lesson_id, self.current)
 
 

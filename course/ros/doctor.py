@@ -1,0 +1,191 @@
+"""\`\`ros2course doctor\`\` and the optional components a workspace needs, built on demand.
+
+Above both the ROS install's activation (:mod:`course.ros.env`) and the
+underlay's build (:mod:`course.ros.underlay_build`), which it calls: split
+from :mod:`course.ros.env` so that no module of the ROS layer imports another
+in a cycle (issue 23).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import importlib.util
+import subprocess
+import sys
+import sysconfig
+from collections.abc import Callable
+from pathlib import Path
+
+from course.errors import CourseError, MissingRequirement, NotGradable
+from course.ros import env as env_mod
+from course.ros import underlay as _underlay
+from course.ros import underlay_build
+from course.ros.packages import dependency_closure, find_packages
+from course.ros.requirements import KNOWN_REQUIREMENTS
+from course.ros.underlay_pins import JAZZY
+
+
+@dataclasses.dataclass
+class DoctorRow:
+    """One line of ``ros2course doctor``: a component, whether it is fine, and details."""
+
+    component: str
+    ok: bool
+    detail: str
+    hint: str = ""
+
+
+def _underlay_rows(fix: bool, sources: Path | None) -> list[DoctorRow]:
+    """Rows for the source-built underlay: one per pinned repository, plus what a build needs."""
+    rows = []
+    shared = sysconfig.get_config_var("Py_ENABLE_SHARED")
+    rows.append(DoctorRow("shared libpython", bool(shared),
+                          f"{sysconfig.get_config_var('LDLIBRARY')} in {sysconfig.get_config_var('LIBDIR')}" if shared
+                          else "this Python has no shared libpython: rclcpp and C++ nodes cannot link",
+                          "" if shared else "use a Python built with --enable-shared (Debian's python3 is)"))
+    if fix and importlib.util.find_spec("osrf_pycommon") is None:
+        subprocess.run([sys.executable, "-m", "pip", "install", "--quiet", "osrf-pycommon"], check=False,
+                       stdin=subprocess.DEVNULL, timeout=600)
+        importlib.invalidate_caches()
+    have_osrf = importlib.util.find_spec("osrf_pycommon") is not None
+    rows.append(DoctorRow("osrf_pycommon", have_osrf, "importable" if have_osrf else "not installed (launch needs it)",
+                          "" if have_osrf else "pip install osrf-pycommon (or ros2course doctor --fix)"))
+    failure = sas_failure = ""
+    if fix and _underlay.built(_underlay.JAZZY_COMPONENT) is None:
+        try:
+            underlay_build.build(sources)
+        except CourseError as exc:
+            failure = exc.message
+        env_mod.activate()
+    built = _underlay.current()
+    wanted = _underlay.cache_key()
+    if built is not None:
+        rows.append(DoctorRow("ROS 2 underlay", built.stamp.get("key") == wanted,
+                              f"{built.prefix}, built {built.stamp.get('built', '?')} in "
+                              f"{built.stamp.get('seconds', '?')} s from {built.stamp.get('sources', '?')}",
+                              "" if built.stamp.get("key") == wanted else
+                              "built for other pins, interpreter or repairs: ros2course doctor --fix"))
+    for pin in JAZZY:
+        commit = built.commit_of(pin.repo) if built is not None else None
+        if commit == pin.commit:
+            rows.append(DoctorRow(pin.repo, True, f"{pin.version}, built from {pin.org}/{pin.repo}@{commit[:12]}"))
+        elif built is not None and commit is not None:
+            rows.append(DoctorRow(pin.repo, False, f"built from {commit[:12]}, pinned {pin.commit[:12]}",
+                                  "ros2course doctor --fix (rebuilds the underlay)"))
+        else:
+            missing = _underlay.missing_prerequisites()
+            why = failure or (f"not built; cannot build: {missing[0][0]}" if missing else "not built")
+            rows.append(DoctorRow(pin.repo, False, why,
+                                  missing[0][1] if missing else "ros2course doctor --fix (about 4 min on 2 cores)"))
+    sas = _underlay.SAS_COMPONENT
+    if fix and _underlay.built(_underlay.JAZZY_COMPONENT) is not None and _underlay.built(sas) is None \
+            and not _underlay.sas_missing_prerequisites():
+        try:
+            underlay_build.build(sources, component=sas)
+        except CourseError as exc:
+            sas_failure = exc.message
+        env_mod.activate()
+    on_top = _underlay.built(sas)
+    if on_top is not None:
+        rows.append(DoctorRow("sas (optional)", True, f"{len(sas.pins)} pinned repos, built "
+                              f"{on_top.stamp.get('built', '?')} into {on_top.prefix}"))
+    else:
+        missing = _underlay.sas_missing_prerequisites()
+        why = sas_failure or (f"not built; cannot build: {missing[0][0]}" if missing else "not built")
+        rows.append(DoctorRow("sas (optional)", False, why + " (only the sas lesson's C++ path needs it)",
+                              missing[0][1] if missing else "ros2course env --build --with sas (about 6 min)"))
+    return rows
+
+
+def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
+    """Inspect (and with ``fix``, repair) the environment.
+
+    Args:
+        fix: repair the wheels' CMake files, install osrf-pycommon and build the
+            underlay (``course.ros.underlay``) when missing or out of date; idempotent.
+        sources: folder of the pinned archives for the build (default
+            :func:`course.ros.underlay.default_sources`).
+
+    Returns:
+        one :class:`DoctorRow` per component, in a stable order. A sourced system
+        ROS is reported as it is and never changed.
+    """
+    install = env_mod.activate()
+    rows = [
+        DoctorRow(
+            "ROS 2",
+            install.kind != "none",
+            f"{install.kind} install, distro {install.distro}, prefix {install.prefix}"
+            if install.kind != "none"
+            else "no ROS 2 found",
+            "" if install.kind != "none" else env_mod.INSTALL_HINTS["rclpy"],
+        )
+    ]
+    if install.kind == "system" and install.distro != "jazzy":
+        rows[0].ok = False
+        rows[0].hint = f"ros2course targets Jazzy; the sourced distro is {install.distro}"
+    if install.kind == "wheels" and install.prefix is not None:
+        if fix:
+            changed = env_mod.repair_cmake_files(install.prefix)
+            rows.append(DoctorRow("wheel CMake files", True, f"repaired {len(changed)} file(s)"))
+        else:
+            broken = env_mod.cmake_files_needing_repair(install.prefix)
+            rows.append(
+                DoctorRow(
+                    "wheel CMake files",
+                    not broken,
+                    f"{len(broken)} file(s) name the wheel build machine's Python or libraries" if broken else "clean",
+                    "run 'ros2course doctor --fix'" if broken else "",
+                )
+            )
+        rows += _underlay_rows(fix, sources)
+    for name in KNOWN_REQUIREMENTS:
+        ok, detail = env_mod.probe_requirement(name)
+        rows.append(DoctorRow(name, ok, detail, "" if ok else env_mod.INSTALL_HINTS.get(name, "")))
+    return rows
+
+
+def ensure_components_for(workspace_root: Path, packages: list[str],
+                          progress: Callable[[str], None] | None = None) -> list[str]:
+    """Build the optional underlay components the learner's packages depend on, if missing.
+
+    Today one component: sas (SmartArmStack C++, tutorial ch. 29-31). When a
+    package in ``workspace_root/src`` that ``packages`` need depends on a
+    ``sas_*`` package that neither the workspace nor the ament index has, and
+    ROS 2 comes from the wheels, the sas component is built now (minutes; once).
+
+    Args:
+        workspace_root: the learner's workspace (holding ``src/``).
+        packages: the lesson's packages.
+        progress: called with one line per build step.
+
+    Returns:
+        the names of the components built (empty: nothing was needed).
+
+    Raises:
+        MissingRequirement: sas is needed but cannot be built here (one line, why).
+    """
+    try:
+        found = find_packages(workspace_root / "src")
+    except NotGradable:
+        return []  # the check reports the broken package.xml itself
+    needed = set()
+    for name in dependency_closure([p for p in packages if p in found], found):
+        pkg = found[name][1]
+        for dep in (*pkg.build_depends, *pkg.buildtool_depends, *pkg.exec_depends, *pkg.build_export_depends):
+            if dep.name.startswith("sas_") and dep.name not in found and not env_mod.ament_has(dep.name):
+                needed.add(dep.name)
+    if not needed or env_mod.detect().kind != "wheels":
+        return []
+    what = ", ".join(sorted(needed))
+    missing = _underlay.missing_prerequisites() + _underlay.sas_missing_prerequisites()
+    if missing:
+        raise MissingRequirement(f"your package depends on {what} (SmartArmStack), which is not installed and "
+                                 f"cannot be built here: {missing[0][0]}", missing[0][1])
+    try:
+        underlay_build.build(component=_underlay.SAS_COMPONENT, progress=progress)
+    except CourseError as exc:
+        raise MissingRequirement(f"your package depends on {what}: {exc.message}",
+                                 "ros2course env --build --with sas") from None
+    env_mod.activate()
+    return ["sas"]
