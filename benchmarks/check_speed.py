@@ -217,7 +217,7 @@ def measure_floor(runs: int, folder: Path, period: float, progress: Console) -> 
     RosSession's open/close times (what a check pays around its node).
     """
     from course.run.probes import RosSession, wait_until  # noqa: PLC0415 - rclpy only when measuring
-    from course.run.process import LearnerProcess, sweep_stale_fastdds_shm
+    from course.run.process import LearnerProcess, rclpy_shutdown_race, sweep_stale_fastdds_shm
 
     folder.mkdir(parents=True, exist_ok=True)
     script = folder / "floor_node.py"
@@ -225,7 +225,7 @@ def measure_floor(runs: int, folder: Path, period: float, progress: Console) -> 
     base_env = dict(os.environ)
     env_mod.activate(base_env)
     wanted = f"/{FLOOR_NODE_NAME}"
-    rows: dict[str, list[float]] = {"first_record": [], "node_in_graph": [], "sigint_exit": [],
+    rows: dict[str, list[float]] = {"first_record": [], "node_in_graph": [], "sigint_exit": [], "rclpy_shutdown_races": [],
                                     "session_open": [], "session_close": []}
     for index in range(runs):
         progress.print(f"  floor run {index + 1}/{runs}")
@@ -253,7 +253,9 @@ def measure_floor(runs: int, folder: Path, period: float, progress: Console) -> 
                 rows["node_in_graph"].append(min(seen["node"], arrival) - proc.started_at)
             finally:
                 report = proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
-            if report.signal_used != "SIGINT" or report.returncode != 0 or report.traceback:
+            if report.signal_used == "SIGINT" and report.traceback and rclpy_shutdown_race(report.traceback):
+                rows["rclpy_shutdown_races"].append(index)  # rclpy's own Ctrl+C race (course.run.process.rclpy_shutdown_race): not the node's fault
+            elif report.signal_used != "SIGINT" or report.returncode != 0 or report.traceback:
                 raise BenchmarkFailed(f"floor node did not stop cleanly on SIGINT: {report}")
             rows["sigint_exit"].append(report.seconds)
         finally:
@@ -385,7 +387,8 @@ def benchmark(runs: int, root: Path, progress: Console) -> dict[str, Any]:
 
     progress.print("diagnostics (interpreter start, imports, overlay sourcing) ...")
     diagnostics = measure_diagnostics(runs, workspace, root / "floor")
-    diagnostics.update({f"floor_{k}": statistics.median(v) for k, v in floor_rows.items() if k != "first_record"})
+    diagnostics.update({f"floor_{k}": statistics.median(v) for k, v in floor_rows.items()
+                        if k not in ("first_record", "rclpy_shutdown_races")})
 
     return {
         "lesson": LESSON_ID,
@@ -396,6 +399,7 @@ def benchmark(runs: int, root: Path, progress: Console) -> dict[str, Any]:
         "warm_runs": warm_runs,
         "warm_builds_not_cached": uncached,
         "floor": {"first_record_median": first_record, "first_record_runs": floor_rows["first_record"],
+                  "rclpy_shutdown_races": len(floor_rows["rclpy_shutdown_races"]),
                   "samples": samples, "period": period, "observation_window": window, "floor": floor},
         "warm_overhead_above_floor": warm["total"]["median"] - floor,
         "goal_overhead_below": GOAL_SECONDS,

@@ -658,3 +658,27 @@ def test_sweep_waits_once_for_young_stale_files(tmp_path):
     removed = sweep_stale_fastdds_shm(shm_dir=tmp_path, min_age=0.3)
     assert sorted(removed) == sorted(p.name for p in files)
     assert time.monotonic() - began >= 0.3
+
+
+_RACE = '''Traceback (most recent call last):
+  File "/ws/install/pkg/lib/python3.11/site-packages/pkg/node.py", line 30, in main
+    rclpy.spin(node)
+  File "/venv/lib/python3.11/site-packages/rclpy/__init__.py", line 247, in spin
+    executor.spin_once()
+  File "/venv/lib/python3.11/site-packages/rclpy/executors.py", line 845, in spin_once
+    self._spin_once_impl(timeout_sec)
+  File "/venv/lib/python3.11/site-packages/rclpy/executors.py", line 710, in wait_for_ready_callbacks
+    wait_set = _rclpy.WaitSet(
+rclpy._rclpy_pybind11.RCLError: failed to initialize wait set: the given context is not valid, at ./src/rcl/wait.c:82
+'''
+
+
+def test_rclpys_own_ctrl_c_race_is_told_from_the_learners_traceback() -> None:
+    """Issue 19: the wait-set RCLError inside rclpy.spin is rclpy's (ros2/ros2cli PR #854), never the learner's."""
+    from course.run.process import last_traceback, rclpy_shutdown_race
+
+    assert rclpy_shutdown_race(last_traceback(_RACE))
+    learner = _RACE.replace("rclpy/executors.py", "pkg/node.py")
+    assert not rclpy_shutdown_race(learner)
+    assert not rclpy_shutdown_race(_RACE.replace("the given context is not valid", "bad alloc"))
+    assert not rclpy_shutdown_race("")

@@ -140,6 +140,23 @@ def last_traceback(text: str) -> str:
     return ""
 
 
+def rclpy_shutdown_race(trace: str) -> bool:
+    """Whether ``trace`` (a traceback, :func:`last_traceback`) is rclpy's own Ctrl+C race, not the program's.
+
+    A SIGINT that lands while Jazzy's rclpy (7.1) builds its wait set makes
+    ``rclpy.spin()`` raise ``RCLError: failed to initialize wait set: the given
+    context is not valid``, even in a node that catches ``KeyboardInterrupt``
+    and ``ExternalShutdownException`` (a known shutdown race, discussed in
+    ros2/ros2cli PR #854). True when the last frame is inside
+    ``rclpy/executors.py`` and the exception is that RCLError.
+    """
+    lines = [line for line in trace.strip().splitlines() if line.strip()]
+    frames = [line for line in lines if line.lstrip().startswith('File "')]
+    last = lines[-1] if lines else ""
+    return (bool(frames) and "rclpy/executors.py" in frames[-1] and "RCLError" in last
+            and ("context is not valid" in last or "context is invalid" in last))
+
+
 class LearnerProcess:
     """One learner executable, started in its own process group.
 

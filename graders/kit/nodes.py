@@ -18,7 +18,7 @@ from typing import Any
 
 from course.grade.engine import GradingSession, Unmet
 from course.run.probes import wait_until
-from course.run.process import LearnerProcess, last_traceback
+from course.run.process import LearnerProcess, last_traceback, rclpy_shutdown_race
 
 
 def executable(s: GradingSession, check_id: str, package: str, name: str, hint: str = "") -> Path:
@@ -159,15 +159,6 @@ def wait_for_node(s: GradingSession, check_id: str, proc: LearnerProcess, node: 
                     f"{process_state(proc)}", f"a node named {node} (the name passed to super().__init__)")
 
 
-def _rclpy_shutdown_race(trace: str) -> bool:
-    """True when ``trace`` ends inside rclpy's executor with a "context is not valid" RCLError."""
-    lines = [line for line in trace.strip().splitlines() if line.strip()]
-    frames = [line for line in lines if line.lstrip().startswith('File "')]
-    last = lines[-1] if lines else ""
-    return (bool(frames) and "rclpy/executors.py" in frames[-1] and "RCLError" in last
-            and ("context is not valid" in last or "context is invalid" in last))
-
-
 def sigint_exit(s: GradingSession, check_id: str, proc: LearnerProcess, sigint_timeout: float = 3.0) -> bool:
     """Press Ctrl+C (SIGINT) and record ``check_id``: exit code 0, no traceback, within ``sigint_timeout`` s.
 
@@ -215,7 +206,7 @@ def sigint_exit(s: GradingSession, check_id: str, proc: LearnerProcess, sigint_t
                         f"{report.signal_used or 'SIGKILL'}", expected,
                         "don't swallow Ctrl+C in a loop: let rclpy.spin() return and exit main()")
     if report.traceback:
-        if report.returncode != 0 and _rclpy_shutdown_race(report.traceback):
+        if report.returncode != 0 and rclpy_shutdown_race(report.traceback):
             return s.record(check_id, True, f"exit code {report.returncode}, {seconds:.2f} s after SIGINT{twice}, "
                             "with rclpy's own shutdown race (RCLError inside rclpy.spin: not your code)", expected)
         last = report.traceback.strip().splitlines()[-1]
