@@ -128,3 +128,44 @@ def test_a_colcon_ignore_left_in_a_package_is_named(tmp_path: Path) -> None:
     with pytest.raises(NotGradable) as info:
         build_packages(tmp_path, [PKG], _env(), tmp_path / "build.log")
     assert "COLCON_IGNORE" in info.value.message and f"delete {root / 'COLCON_IGNORE'}" in info.value.hint
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(600)
+def test_new_learner_sequence_under_watch_gets_full_marks(tmp_path: Path) -> None:
+    """The same sequence as a learner lives it in ``watch``: the starter is checked, then the tutorial's three files
+    are saved one by one (setup.py at version 0.0.0), each save re-checked; the last check gives full marks."""
+    import os  # noqa: PLC0415
+    import sys  # noqa: PLC0415
+
+    import pexpect  # noqa: PLC0415
+
+    def run(cwd: Path, *args: str) -> None:
+        proc = subprocess.run([sys.executable, "-m", "course", *args], cwd=cwd, capture_output=True, text=True,
+                              timeout=120, check=False, stdin=subprocess.DEVNULL)
+        assert proc.returncode == 0, proc.stdout[-1500:] + proc.stderr[-1500:]
+
+    run(tmp_path, "init", "ws")
+    ws = tmp_path / "ws"
+    ids = load_catalog().ids()
+    for _ in range(ids.index("print-forever-node") + 1):
+        run(ws, "next")
+    package = ws / "src" / "python_package_with_a_node"
+    assert package.is_dir()
+    child = pexpect.spawn(sys.executable, ["-m", "course", "watch"], cwd=str(ws), encoding="utf-8", timeout=240,
+                          dimensions=(60, 200), env={**os.environ, "TERM": "xterm"})
+    try:
+        child.expect("watching print-forever-node")
+        child.expect(r"\d+/14")  # the starter's verdict
+        assert "Full marks" not in child.before
+        reference = SOLUTIONS / "python_package_with_a_node"
+        setup = (reference / "setup.py").read_text().replace("version='0.0.1'", "version='0.0.0'")
+        (package / "setup.py").write_text(setup)
+        for rel in ("package.xml", "python_package_with_a_node/print_forever_node.py"):
+            (package / rel).write_text((reference / rel).read_text())
+        child.expect("Full marks", timeout=240)
+        child.send("q")
+        child.expect(pexpect.EOF, timeout=30)
+    finally:
+        child.close(force=True)
+    assert stale_metadata(ws, ["python_package_with_a_node"]) == {}
