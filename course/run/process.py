@@ -28,6 +28,7 @@ import subprocess
 import threading
 import time
 import uuid
+from collections.abc import Iterator
 from pathlib import Path
 
 import psutil
@@ -319,24 +320,29 @@ class LearnerProcess:
         sweep_stale_fastdds_shm()
 
 
-def marked_processes(marker: str, var: str = MARKER_VAR) -> list[str]:
-    """Live processes (zombies and this one excepted) whose environment has ``var=marker``:
-    ``"<pid> <command line>"`` each (command line cut at 200 characters), by PID."""
+def _marked(marker: str, var: str) -> Iterator[psutil.Process]:
+    """Processes (this one excepted) whose environment (``/proc/PID/environ``) has ``var=marker``."""
     needle = f"{var}={marker}".encode()
-    found: list[str] = []
     me = os.getpid()
     for proc in psutil.process_iter(["pid"]):
         if proc.pid == me:
             continue
         try:
             with open(f"/proc/{proc.pid}/environ", "rb") as handle:
-                if needle not in handle.read():
-                    continue
-            if proc.status() == psutil.STATUS_ZOMBIE:
-                continue
-            found.append(f"{proc.pid} {' '.join(proc.cmdline())[:200]}")
-        except (OSError, psutil.Error):
+                if needle in handle.read():
+                    yield proc
+        except OSError:
             continue
+
+
+def marked_processes(marker: str, var: str = MARKER_VAR) -> list[str]:
+    """Live processes (zombies and this one excepted) whose environment has ``var=marker``:
+    ``"<pid> <command line>"`` each (command line cut at 200 characters), by PID."""
+    found: list[str] = []
+    for proc in _marked(marker, var):
+        with contextlib.suppress(psutil.Error):
+            if proc.status() != psutil.STATUS_ZOMBIE:
+                found.append(f"{proc.pid} {' '.join(proc.cmdline())[:200]}")
     return found
 
 
@@ -345,23 +351,14 @@ def kill_marked(marker: str, var: str = MARKER_VAR) -> list[int]:
 
     Catches learner children that escaped the process group (setsid, double fork).
     """
-    needle = f"{var}={marker}".encode()
     killed: list[psutil.Process] = []
-    me = os.getpid()
-    for proc in psutil.process_iter(["pid"]):
-        if proc.pid == me:
-            continue
-        try:
-            with open(f"/proc/{proc.pid}/environ", "rb") as handle:
-                if needle not in handle.read():
-                    continue
+    for proc in _marked(marker, var):
+        with contextlib.suppress(psutil.Error):
             proc.kill()
             killed.append(proc)
-        except (OSError, psutil.Error):
-            continue
     # Our own children are reaped by their Popen.wait(): waiting here would reap them first
     # and Popen would report exit code 0 for a killed process.
-    psutil.wait_procs([p for p in killed if _parent_pid(p) != me], timeout=3)
+    psutil.wait_procs([p for p in killed if _parent_pid(p) != os.getpid()], timeout=3)
     return [proc.pid for proc in killed]
 
 
