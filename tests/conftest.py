@@ -21,9 +21,14 @@ SOLUTIONS = ROOT / "solutions" / "src"
 env_mod.activate()
 
 #: Test modules whose tests each take a minute or more (the validation of every lesson,
-#: 20 grades in a row). They are collected first so that, with pytest-xdist's work
-#: stealing, the longest tests start first and the short ones fill the gaps at the end.
-LONG_MODULES = ("test_determinism.py", "test_validate.py", "test_batch_ros.py", "test_benchmarks.py", "test_repeat.py")
+#: repeated grades). They are collected early so that, with pytest-xdist's work stealing,
+#: the longest tests start first and the short ones fill the gaps at the end.
+LONG_MODULES = ("test_validate.py", "test_batch_ros.py", "test_benchmarks.py", "test_repeat.py")
+#: Modules whose tests (or module fixtures) take :func:`cpu_lock`. They are collected before
+#: everything else: xdist's work stealing hands the first half of the collection to one worker
+#: and steals from the end of a queue, so they run one after the other on that worker instead
+#: of leaving the other worker waiting for the lock (8 worker-minutes idle in a CI run).
+CPU_LOCK_MODULES = ("test_determinism.py", "test_batch_ros.py", "test_hostile_class.py")
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -34,10 +39,15 @@ def private_cache_dir(tmp_path_factory: pytest.TempPathFactory):
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """Run the long tests first (stable order otherwise); see :data:`LONG_MODULES`."""
+    """The tests that take the CPU lock first, then the long ones, then the rest (stable order otherwise).
+
+    See :data:`CPU_LOCK_MODULES` and :data:`LONG_MODULES`.
+    """
     def rank(item: pytest.Item) -> int:
         name = item.path.name
-        return LONG_MODULES.index(name) if name in LONG_MODULES else len(LONG_MODULES)
+        if name in CPU_LOCK_MODULES or "cpu_exclusive" in getattr(item, "fixturenames", ()):
+            return 0
+        return 1 + (LONG_MODULES.index(name) if name in LONG_MODULES else len(LONG_MODULES))
 
     items.sort(key=rank)
 

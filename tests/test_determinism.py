@@ -3,7 +3,7 @@ verdicts every time (issue 3).
 
 For each lesson below the reference is
 built once into a temporary workspace (later grades reuse the build: colcon
-is skipped when the sources are unchanged), then graded 10 times. Score and
+is skipped when the sources are unchanged), then graded 6 times. Score and
 every check's verdict and points must not vary, although the grader makes up
 new quotes (subscriber) and new points (stand-in server) each time and the
 reference server answers with random points, and the parameters grader changes
@@ -22,9 +22,9 @@ from course.grade.results import Status
 from course.grade.validate import reference_workspace
 from course.lesson.catalog import load_catalog
 
-#: Gradings per lesson. 10 in the suite (CI time); 20 at two at once is the goal measured with
+#: Gradings per lesson. 6 in the suite (CI time); 20 at two at once is the goal measured with
 #: ``ros2course dev validate LESSON --repeat 20 --load 2 --case reference`` (tests/test_repeat.py runs a short one).
-RUNS = 10
+RUNS = 6
 
 
 def verdicts(result) -> list[tuple[str, bool, float]]:
