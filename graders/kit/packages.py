@@ -5,8 +5,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from course.build.colcon import find_packages
 from course.grade.engine import GradingSession, Unmet
+from course.ros.packages import find_packages
 
 
 def source_package(s: GradingSession, name: str) -> tuple[Any, Any] | None:

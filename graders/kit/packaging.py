@@ -22,7 +22,7 @@ from typing import Any
 from course.build.colcon import colcon_command
 from course.grade.engine import GradingSession, Unmet
 from course.ros import index as ament_index
-from course.run import sandbox
+from course import sandbox
 from course.run.probes import stamp_seconds
 from graders.kit.nodes import executable as executable_step
 

@@ -20,7 +20,7 @@ from typing import Any
 
 from course.errors import NotGradable
 from course.grade.engine import GradingSession, Unmet
-from course.run import sandbox
+from course import sandbox
 from course.run.probes import RateStats, wait_until
 from graders.kit.judge import STANDARD_TOPICS
 
