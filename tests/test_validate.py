@@ -18,6 +18,8 @@ from course.lesson.catalog import load_catalog
 def test_dev_validate(lesson_id, cli):
     proc = cli("dev", "validate", lesson_id, "--json", "--batch", "--sample", "1", timeout=1200)
     assert "Traceback" not in proc.stderr, proc.stderr
+    # an error before the JSON (a one-line CourseError, a signal) must say itself in the failure
+    assert proc.stdout.strip(), f"no JSON; exit status {proc.returncode}; stderr:\n{proc.stderr[-4000:]}"
     outcomes = json.loads(proc.stdout)
     cases = {o["case"] for o in outcomes}
     assert {"reference", "starter", "reference (grade)"} <= cases

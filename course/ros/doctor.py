@@ -1,4 +1,4 @@
-"""\`\`ros2course doctor\`\` and the optional components a workspace needs, built on demand.
+"""``ros2course doctor`` and the optional components a workspace needs, built on demand.
 
 Above both the ROS install's activation (:mod:`course.ros.env`) and the
 underlay's build (:mod:`course.ros.underlay_build`), which it calls: split
