@@ -31,12 +31,12 @@ from pathlib import Path
 from rich.console import Console
 from rich.table import Table
 
-from course.grade.engine import grade_lesson, load_grader
-from course.grade.results import Status
-from course.grade.validate import reference_workspace, run_commands
-from course.lesson.catalog import load_catalog
-from course.ros import env as env_mod
-from course.run.recording import FILE_NAME as RECORDING_FILE
+from ros2course.grade.engine import grade_lesson, load_grader
+from ros2course.grade.results import Status
+from ros2course.grade.validate import reference_workspace, run_commands
+from ros2course.lesson.catalog import load_catalog
+from ros2course.ros import env as env_mod
+from ros2course.run.recording import FILE_NAME as RECORDING_FILE
 
 #: issue 3: "a warm check takes at most its observation window plus 1.5 s"
 ALLOWANCE = 1.5

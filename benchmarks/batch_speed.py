@@ -1,7 +1,7 @@
 """Batch grading throughput: submissions per minute with ``--jobs 1`` and ``--jobs 2``.
 
 Generates a class (the lesson's reference solution and its wrong fixtures,
-round robin), grades it twice with :func:`course.batch.runner.run_batch` (jobs 1, then
+round robin), grades it twice with :func:`ros2course.batch.runner.run_batch` (jobs 1, then
 jobs N), and prints submissions per minute, the speedup, the peak memory of
 one job (worker + colcon + the learner's nodes, RSS sampled every 0.5 s) and
 whether any verdict changed between the two runs. A script, not a timed test::
@@ -12,7 +12,7 @@ whether any verdict changed between the two runs. A script, not a timed test::
 Goal on the 2-core machine: speedup >= 1.7 with 2 jobs, no verdict changed.
 
 ``--overhead`` grades the class with ``--jobs 1`` twice instead, with every
-protection of :mod:`course.sandbox` (namespaces, submission uid, pids cgroup,
+protection of :mod:`ros2course.sandbox` (namespaces, submission uid, pids cgroup,
 read-only mounts) and with ``isolate=False``, and prints the cost of the
 isolation per submission (seconds) and whether any verdict changed.
 """
@@ -29,15 +29,15 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from course.batch.runner import run_batch  # noqa: E402
-from course.grade.validate import (  # noqa: E402
+from ros2course.batch.runner import run_batch  # noqa: E402
+from ros2course.grade.validate import (  # noqa: E402
     apply_edits,
     load_fixtures,
     reference_workspace,
     run_commands,
 )
-from course.lesson.catalog import load_catalog  # noqa: E402
-from course.ros import env as env_mod  # noqa: E402
+from ros2course.lesson.catalog import load_catalog  # noqa: E402
+from ros2course.ros import env as env_mod  # noqa: E402
 
 
 def make_class(lesson_id: str, count: int, dest: Path) -> dict[str, str]:

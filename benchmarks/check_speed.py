@@ -16,7 +16,7 @@ Run from the repository root with the project's venv::
    (``LearnerProcess`` in a ``RosSession``'s private domain); the median time
    from Popen to its first record arriving on /rosout, plus the grader's
    observation window ((SAMPLES - 1) * PERIOD), is the least a check can take.
-5. ``python -m course check ... --json`` once, warm, through the real CLI
+5. ``python -m ros2course check ... --json`` once, warm, through the real CLI
    (interpreter start, imports, overlay sourcing included).
 6. Diagnostics: interpreter start, rclpy and CLI imports, RosSession set-up in
    a fresh process, uncached overlay sourcing, console-script entry-point lookup.
@@ -48,14 +48,14 @@ from typing import Any
 from rich.console import Console
 from rich.table import Table
 
-from course.build import colcon as build_mod
-from course.errors import CourseError
-from course.grade.engine import grade_lesson, load_grader
-from course.grade.results import LessonResult, Status
-from course.grade.validate import reference_workspace
-from course.lesson.catalog import Lesson, load_catalog
-from course.ros import env as env_mod
-from course.run.process import kill_marked
+from ros2course.build import colcon as build_mod
+from ros2course.errors import CourseError
+from ros2course.grade.engine import grade_lesson, load_grader
+from ros2course.grade.results import LessonResult, Status
+from ros2course.grade.validate import reference_workspace
+from ros2course.lesson.catalog import Lesson, load_catalog
+from ros2course.ros import env as env_mod
+from ros2course.run.process import kill_marked
 
 LESSON_ID = "print-forever-node"
 #: What "warm overhead above floor" should stay under, seconds.
@@ -216,8 +216,8 @@ def measure_floor(runs: int, folder: Path, period: float, progress: Console) -> 
     Also records, per run, Popen -> node in the graph, SIGINT -> exit, and the
     RosSession's open/close times (what a check pays around its node).
     """
-    from course.run.probes import RosSession, wait_until  # noqa: PLC0415 - rclpy only when measuring
-    from course.run.process import LearnerProcess, rclpy_shutdown_race, sweep_stale_fastdds_shm
+    from ros2course.run.probes import RosSession, wait_until  # noqa: PLC0415 - rclpy only when measuring
+    from ros2course.run.process import LearnerProcess, rclpy_shutdown_race, sweep_stale_fastdds_shm
 
     folder.mkdir(parents=True, exist_ok=True)
     script = folder / "floor_node.py"
@@ -254,7 +254,7 @@ def measure_floor(runs: int, folder: Path, period: float, progress: Console) -> 
             finally:
                 report = proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
             if report.signal_used == "SIGINT" and report.traceback and rclpy_shutdown_race(report.traceback):
-                rows["rclpy_shutdown_races"].append(index)  # rclpy's own Ctrl+C race (course.run.process.rclpy_shutdown_race): not the node's fault
+                rows["rclpy_shutdown_races"].append(index)  # rclpy's own Ctrl+C race (ros2course.run.process.rclpy_shutdown_race): not the node's fault
             elif report.signal_used != "SIGINT" or report.returncode != 0 or report.traceback:
                 raise BenchmarkFailed(f"floor node did not stop cleanly on SIGINT: {report}")
             rows["sigint_exit"].append(report.seconds)
@@ -285,7 +285,7 @@ def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, f
     out["python_start_bootstrapped"] = median_of([python, "-c", "pass"], dict(os.environ))
     out["rclpy_import_bootstrapped"] = median_of(
         [python, "-c", "import rclpy, rclpy.node, rclpy.executors"], dict(os.environ)) - out["python_start_bootstrapped"]
-    out["cli_help"] = median_of([python, "-m", "course", "--help"], shell)
+    out["cli_help"] = median_of([python, "-m", "ros2course", "--help"], shell)
 
     base_env = dict(os.environ)
     env_mod.activate(base_env)
@@ -311,12 +311,12 @@ def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, f
             rows.append([*map(float, done.stdout.decode().splitlines()[-1].split()), done.seconds - done.last_output])
         return [statistics.median(column) for column in zip(*rows)]
 
-    out["cli_import"] = self_timed("import course.cli", "import course.cli\nprint(time.perf_counter() - t)",
+    out["cli_import"] = self_timed("import ros2course.cli", "import ros2course.cli\nprint(time.perf_counter() - t)",
                                    dict(os.environ))[0]
     # What the grader's ROS graph costs in a fresh process (``ros2course check``): imports, rclpy init,
     # node (with its type description service), executor thread; then closing it, then exiting.
     out["ros_session_open_fresh"], out["ros_session_close_fresh"], out["exit_after_ros_session"] = self_timed(
-        "RosSession", "from course.run.probes import RosSession\ns = RosSession().__enter__()\n"
+        "RosSession", "from ros2course.run.probes import RosSession\ns = RosSession().__enter__()\n"
         "opened = time.perf_counter()\ns.__exit__(None, None, None)\n"
         "print(opened - t, time.perf_counter() - opened, flush=True)", dict(os.environ))
     out["exit_plain_python"] = self_timed("print", "print(0, flush=True)", dict(os.environ))[-1]
@@ -325,15 +325,15 @@ def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, f
         "entry point lookup", "from importlib.metadata import distribution\n"
         "[e for e in distribution('python-package-with-a-node').entry_points]\n"
         "print(time.perf_counter() - t)", overlay)[0]
-    from course.run.process import sweep_stale_fastdds_shm  # noqa: PLC0415
+    from ros2course.run.process import sweep_stale_fastdds_shm  # noqa: PLC0415
 
     sweep_stale_fastdds_shm()
     return out
 
 
 def run_cli_check(workspace: Path, folder: Path) -> dict[str, Any]:
-    """``python -m course check LESSON --workspace WS --json`` once, as a learner's terminal would run it."""
-    argv = [sys.executable, "-m", "course", "check", LESSON_ID, "--workspace", str(workspace), "--json"]
+    """``python -m ros2course check LESSON --workspace WS --json`` once, as a learner's terminal would run it."""
+    argv = [sys.executable, "-m", "ros2course", "check", LESSON_ID, "--workspace", str(workspace), "--json"]
     done = timed_run(argv, learner_shell_env(), folder, timeout=CLI_TIMEOUT)
     try:
         data = json.loads(done.stdout.decode())
@@ -462,8 +462,8 @@ def render(data: dict[str, Any], console: Console) -> None:
         ("python start, with the wheels' re-exec (learner's shell)", "python_start_reexec"),
         ("python start, already bootstrapped (how nodes are started)", "python_start_bootstrapped"),
         ("import rclpy (+node, executors), beyond python start", "rclpy_import_bootstrapped"),
-        ("python -m course --help (CLI start-up, wall)", "cli_help"),
-        ("import course.cli, fresh process", "cli_import"),
+        ("python -m ros2course --help (CLI start-up, wall)", "cli_help"),
+        ("import ros2course.cli, fresh process", "cli_import"),
         ("RosSession open, fresh process (imports, init, node)", "ros_session_open_fresh"),
         ("RosSession close, fresh process", "ros_session_close_fresh"),
         ("RosSession open / close, warm process", None),

@@ -25,8 +25,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from course.ros import env as env_mod  # noqa: E402
-from course.ros import underlay, underlay_build  # noqa: E402
+from ros2course.ros import env as env_mod  # noqa: E402
+from ros2course.ros import underlay, underlay_build  # noqa: E402
 
 
 def main() -> int:

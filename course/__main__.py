@@ -1,5 +1,5 @@
-"""``python -m course`` runs the ``ros2course`` command line."""
+"""``python -m ros2course`` runs the ``ros2course`` command line."""
 
-from course.cli import main
+from ros2course.cli import main
 
 main()

@@ -1,7 +1,7 @@
 """The ``ros2course`` command line: thin wiring from arguments to ``course`` functions.
 
 Data goes to stdout, diagnostics to stderr. Expected errors are
-:class:`~course.errors.CourseError`: one line plus a hint, the error's exit
+:class:`~ros2course.errors.CourseError`: one line plus a hint, the error's exit
 code, and no traceback unless ``--debug`` (httpie's rule). The only place
 that turns errors into exit codes is :func:`_handle_errors`.
 """
@@ -18,12 +18,12 @@ from typing import TYPE_CHECKING, Annotated, Any, Callable, Optional
 
 import typer
 
-from course.errors import CourseError, ExitStatus
+from ros2course.errors import CourseError, ExitStatus
 
 if TYPE_CHECKING:
     from rich.console import Console
 
-    from course.lesson.workspace import Workspace
+    from ros2course.lesson.workspace import Workspace
 
 # Start time (issue 13: `--help` and `list` in under 0.25 s): the catalog
 # (pydantic, yaml), the ROS environment and grading are imported inside the
@@ -77,20 +77,101 @@ def _handle_errors(func: Callable[..., Any]) -> Callable[..., Any]:
     return wrapper
 
 
-@app.callback()
-def _root(debug: Annotated[bool, typer.Option("--debug", help="Show tracebacks of errors.")] = False) -> None:
+CourseOpt = Annotated[Optional[str], typer.Option(
+    "--course", metavar="PATH|NAME", help="The course: its folder (holding course.yaml) or an installed course's name "
+    "(default: the one the workspace follows, else the bundled ROS 2 tutorial).")]
+
+
+def _print_version() -> None:
+    """``--version``: the engine's version and grading API, and the active course's id, version and folder."""
+    from importlib.metadata import PackageNotFoundError, version  # noqa: PLC0415 - start time, see the imports
+
+    from ros2course.kit_version import API_VERSION  # noqa: PLC0415 - same
+    from ros2course.lesson import content_root  # noqa: PLC0415 - same
+
+    try:
+        engine = version("ros2course")
+    except PackageNotFoundError:  # running from a checkout that was never installed
+        engine = "(not installed)"
+    print(f"ros2course {engine} (grading API ros2course.kit {API_VERSION})")
+    try:
+        from ros2course.lesson.courses import load_manifest  # noqa: PLC0415 - same
+
+        manifest = load_manifest(content_root())
+        print(f"course {manifest.id} {manifest.version} (ROS 2 {manifest.ros_distro}) at {content_root()}")
+    except CourseError as exc:
+        print(f"course: none ({exc.message})")
+
+
+@app.callback(invoke_without_command=True)
+def _root(ctx: typer.Context, debug: Annotated[bool, typer.Option("--debug", help="Show tracebacks of errors.")] = False,
+          course: CourseOpt = None,
+          version: Annotated[bool, typer.Option("--version", help="Print the engine's and the course's versions.")] = False,
+          ) -> None:
     _state["debug"] = debug
+    _state["course"] = course
+    if version:
+        _handle_errors(_choose_course)(None)
+        _print_version()
+        raise typer.Exit()
+    if ctx.invoked_subcommand is None:
+        typer.echo(ctx.get_help())
+        raise typer.Exit()
+
+
+def _choose_course(ws: Workspace | None, course: str | None = None) -> None:
+    """Make the course of this command the active one (:func:`ros2course.lesson.use_course`).
+
+    In order: ``--course`` (of the command, else the global one), ``ROS2COURSE_CONTENT``,
+    the course the workspace records, the bundled tutorial. A workspace that follows
+    one course is never checked against another.
+
+    Raises:
+        CourseError: the course is not found, or is not the one the workspace follows.
+    """
+    from ros2course.lesson import MANIFEST, use_course  # noqa: PLC0415 - start time, see the imports
+
+    spec = course or _state.get("course") or os.environ.get("ROS2COURSE_CONTENT")
+    record = ws.course_record() if ws is not None else None
+    if spec is None:
+        if record is None:
+            return  # the bundled tutorial course
+        recorded = Path(record.get("path") or "")
+        if record.get("path") and (recorded / MANIFEST).is_file():
+            use_course(recorded)  # no pydantic here: `list` stays fast
+            return
+        from ros2course.lesson.courses import find_course  # noqa: PLC0415 - start time, see the imports
+
+        try:
+            root = find_course(record["id"])
+        except CourseError as exc:
+            raise CourseError(f"{ws.root} follows course {record['id']} {record.get('version', '?')}, which is not at "
+                              f"{record.get('path')} any more and is not installed",
+                              "pip install the package that provides it, or pass --course PATH "
+                              "(your files and progress are kept)") from exc
+        use_course(root)
+        ws.record_course(record["id"], record.get("version", "?"), root)  # found elsewhere: remember where
+        return
+    from ros2course.lesson.courses import find_course, load_manifest  # noqa: PLC0415 - start time, see the imports
+
+    root = find_course(spec)
+    manifest = load_manifest(root)
+    if record is not None and record["id"] != manifest.id:
+        raise CourseError(f"{ws.root} follows course {record['id']} {record.get('version', '?')}, "
+                          f"not {manifest.id} {manifest.version} ({root})",
+                          "drop --course, or make another workspace: ros2course init --course ... DIR")
+    use_course(root)
 
 
 def _env():
-    """:mod:`course.ros.env`, imported on first use (start time, see the imports)."""
-    from course.ros import env  # noqa: PLC0415 - start time, see the imports
+    """:mod:`ros2course.ros.env`, imported on first use (start time, see the imports)."""
+    from ros2course.ros import env  # noqa: PLC0415 - start time, see the imports
 
     return env
 
 
 def _ros() -> None:
-    """Activate the ROS 2 environment in this process (:func:`course.ros.env.activate`).
+    """Activate the ROS 2 environment in this process (:func:`ros2course.ros.env.activate`).
 
     Only the commands that build, run or inspect ROS call it (check, doctor,
     env, grade, gradescope, dev validate); list/show/next/hint never pay for it.
@@ -99,14 +180,16 @@ def _ros() -> None:
 
 
 def _workspace(workspace: Path | None) -> Workspace:
-    from course.lesson.workspace import find_workspace  # noqa: PLC0415 - start time, see the imports
+    from ros2course.lesson.workspace import find_workspace  # noqa: PLC0415 - start time, see the imports
 
-    return find_workspace(explicit=workspace)
+    ws = find_workspace(explicit=workspace)
+    _choose_course(ws)
+    return ws
 
 
 def load_catalog():
-    """The course's lessons (:func:`course.lesson.catalog.load_catalog`), imported on first use for start time."""
-    from course.lesson.catalog import load_catalog as load  # noqa: PLC0415 - start time, see the imports
+    """The course's lessons (:func:`ros2course.lesson.catalog.load_catalog`), imported on first use for start time."""
+    from ros2course.lesson.catalog import load_catalog as load  # noqa: PLC0415 - start time, see the imports
 
     return load()
 
@@ -120,14 +203,20 @@ def _require_initialised(ws: Workspace) -> None:
 @app.command()
 @_handle_errors
 def init(directory: Annotated[Path, typer.Argument(help="Workspace folder to create.")] = Path(
-        "ros2_tutorial_workspace")) -> None:
-    """Create a workspace (DIR/src) and its progress file."""
+        "ros2_tutorial_workspace"), course: CourseOpt = None) -> None:
+    """Create a workspace (DIR/src) and its progress file, following a course (default: the bundled tutorial)."""
     if directory.exists() and not directory.is_dir():
         raise CourseError(f"{directory} exists and is not a folder", "choose another name")
-    from course.lesson.workspace import Workspace  # noqa: PLC0415 - start time, see the imports
+    from ros2course.lesson import content_root  # noqa: PLC0415 - start time, see the imports
+    from ros2course.lesson.courses import load_manifest  # noqa: PLC0415 - same
+    from ros2course.lesson.workspace import Workspace  # noqa: PLC0415 - same
 
     ws = Workspace(directory)
+    _choose_course(ws, course)
+    manifest = load_manifest(content_root())
     created = ws.init()
+    if ws.course_record() is None:
+        ws.record_course(manifest.id, manifest.version, content_root())
     out = stdout_console()
     if created:
         out.print(f"Initialised ros2course workspace at [bold]{ws.root}[/]")
@@ -141,13 +230,18 @@ def init(directory: Annotated[Path, typer.Argument(help="Workspace folder to cre
 def list_(workspace: WorkspaceOpt = None) -> None:
     """Every lesson, its status and best score."""
     # the catalog index and a plain read of progress.json: no pydantic, no yaml (course/lesson/index.py)
-    from course.lesson import content_root  # noqa: PLC0415 - start time, see the imports
-    from course.lesson.index import catalog_entries, progress_view  # noqa: PLC0415 - same
-    from course.report.listing import render_list  # noqa: PLC0415 - same
+    from ros2course.lesson import content_root  # noqa: PLC0415 - start time, see the imports
+    from ros2course.lesson.index import catalog_entries, progress_view  # noqa: PLC0415 - same
+    from ros2course.report.listing import render_list  # noqa: PLC0415 - same
 
+    ws = _workspace(workspace)  # first: it chooses the course the workspace follows
     lessons = catalog_entries(content_root() / "chapters")
-    ws = _workspace(workspace)
-    render_list(lessons, progress_view(ws), stdout_console(), root=ws.root if ws.initialised else None)
+    progress = progress_view(ws)
+    render_list(lessons, progress, stdout_console(), root=ws.root if ws.initialised else None)
+    gone = sorted(set(progress.lessons) - {lesson.id for lesson in lessons})
+    if gone:  # a newer version of the course dropped them: the record stays in progress.json
+        stderr_console().print(f"[yellow]note:[/] your progress file keeps {len(gone)} lesson(s) this version of the "
+                               f"course no longer has: {', '.join(gone)}")
 
 
 @app.command()
@@ -155,8 +249,8 @@ def list_(workspace: WorkspaceOpt = None) -> None:
 def show(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", help="Lesson id (default: current).")] = None,
          workspace: WorkspaceOpt = None) -> None:
     """Show a lesson's instructions again (changes no file)."""
-    from course.report.listing import lesson_files  # noqa: PLC0415 - start time, see the imports
-    from course.report.table import render_lesson  # noqa: PLC0415 - start time, see the imports
+    from ros2course.report.listing import lesson_files  # noqa: PLC0415 - start time, see the imports
+    from ros2course.report.table import render_lesson  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     lesson = _lesson_for(lesson_id, ws)
@@ -171,11 +265,11 @@ def show(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", he
 @_handle_errors
 def next_(workspace: WorkspaceOpt = None) -> None:
     """Move to the next lesson: show its instructions and copy its starter files."""
-    from course.lesson.starter import copy_starter  # noqa: PLC0415 - start time, see the imports
-    from course.report.table import render_lesson  # noqa: PLC0415 - start time, see the imports
+    from ros2course.lesson.starter import copy_starter  # noqa: PLC0415 - start time, see the imports
+    from ros2course.report.table import render_lesson  # noqa: PLC0415 - start time, see the imports
 
+    ws = _workspace(workspace)  # first: it chooses the course the workspace follows
     catalog = load_catalog()
-    ws = _workspace(workspace)
     _require_initialised(ws)
     progress = ws.load_progress()
     err = stderr_console()
@@ -225,7 +319,7 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
           ) -> None:
     """Build the lesson's packages, run your nodes, grade them. Exit 0 only on full marks."""
     _ros()
-    from course.report.table import render_result, result_json  # noqa: PLC0415 - start time, see the imports
+    from ros2course.report.table import render_result, result_json  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     if all_passed:
@@ -250,7 +344,7 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
 
 def _grade(ws: Workspace, lesson, quiet: bool = False):
     """Grade ``lesson`` in ``ws`` (building SmartArmStack first where its packages need it) and record the attempt."""
-    from course.grade.engine import grade_lesson  # noqa: PLC0415 - start time, see the imports
+    from ros2course.grade.engine import grade_lesson  # noqa: PLC0415 - start time, see the imports
 
     err = stderr_console()
     _ensure_components(ws, lesson.packages)
@@ -266,15 +360,15 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
 def _ensure_components(ws: Workspace, packages: list[str]) -> None:
     """Build the optional components ``packages`` need first (the sas lesson's SmartArmStack: minutes, once)."""
     err = stderr_console()
-    from course.ros.doctor import ensure_components_for  # noqa: PLC0415 - start time, see the imports
+    from ros2course.ros.doctor import ensure_components_for  # noqa: PLC0415 - start time, see the imports
 
     ensure_components_for(ws.root, packages,
                           progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
 
 
 def _exit_status(result) -> ExitStatus:
-    """The exit status of one lesson's grade: 0 only on full marks (see :class:`~course.errors.ExitStatus`)."""
-    from course.grade.results import Status  # noqa: PLC0415 - start time, see the imports
+    """The exit status of one lesson's grade: 0 only on full marks (see :class:`~ros2course.errors.ExitStatus`)."""
+    from ros2course.grade.results import Status  # noqa: PLC0415 - start time, see the imports
 
     codes = {Status.PASSED: ExitStatus.OK, Status.NOT_GRADABLE: ExitStatus.NOT_GRADABLE,
              Status.GRADER_ERROR: ExitStatus.GRADER_ERROR}
@@ -285,8 +379,8 @@ def _check_all(ws: Workspace, as_json: bool) -> None:
     """``check --all``: every passed lesson re-graded after one build; exit 0 only when all still pass."""
     import json  # noqa: PLC0415 - start time, see the imports
 
-    from course.grade import regrade as regrade_mod  # noqa: PLC0415 - start time, see the imports
-    from course.report.table import render_regrades  # noqa: PLC0415 - start time, see the imports
+    from ros2course.grade import regrade as regrade_mod  # noqa: PLC0415 - start time, see the imports
+    from ros2course.report.table import render_regrades  # noqa: PLC0415 - start time, see the imports
 
     _require_initialised(ws)
     catalog = load_catalog()
@@ -321,7 +415,7 @@ def _check_all(ws: Workspace, as_json: bool) -> None:
 @_handle_errors
 def watch(workspace: WorkspaceOpt = None) -> None:
     """Re-check the current lesson whenever you save one of its files (keys: h n l c q)."""
-    from course.grade.watch import Watcher  # noqa: PLC0415 - start time, see the imports
+    from ros2course.grade.watch import Watcher  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     _require_initialised(ws)
@@ -335,7 +429,7 @@ def evidence(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON"
                                                                       help="Check ids (default: the failed ones).")] = None,
              workspace: WorkspaceOpt = None) -> None:
     """What a check saw: the recorded messages and rates of the last check of LESSON."""
-    from course.report.evidence import latest_log_dir, render  # noqa: PLC0415 - start time, see the imports
+    from ros2course.report.evidence import latest_log_dir, render  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     lesson = _lesson_for(lesson_id, ws)
@@ -368,7 +462,7 @@ def hint(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON")] =
 def reset(lesson_id: Annotated[str, typer.Argument(metavar="LESSON")],
           workspace: WorkspaceOpt = None) -> None:
     """Restore the lesson's starter files; your versions are backed up first."""
-    from course.lesson.starter import reset_starter  # noqa: PLC0415 - start time, see the imports
+    from ros2course.lesson.starter import reset_starter  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     lesson = load_catalog().get(lesson_id)
@@ -394,7 +488,7 @@ def doctor(fix: Annotated[bool, typer.Option("--fix", help="Repair the ROS wheel
     _ros()
     from rich.table import Table  # noqa: PLC0415 - start time, see the imports
 
-    from course.ros import doctor as ros_doctor  # noqa: PLC0415 - start time, see the imports
+    from ros2course.ros import doctor as ros_doctor  # noqa: PLC0415 - start time, see the imports
 
     rows = ros_doctor.doctor(fix=fix, sources=sources)
     table = Table(title="ros2course doctor", title_justify="left")
@@ -427,7 +521,7 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
          ) -> None:
     """The learner's ROS 2 environment: source "$(ros2course env --path)" in a terminal."""
     _ros()
-    from course.ros import underlay, underlay_build  # noqa: PLC0415 - start time, see the imports
+    from ros2course.ros import underlay, underlay_build  # noqa: PLC0415 - start time, see the imports
 
     if not (path or build):
         raise CourseError("say what to do: --path or --build", 'e.g. source "$(ros2course env --path)"')
@@ -466,17 +560,19 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
              repeat: Annotated[int, typer.Option("--repeat", metavar="N", help="Grade each case N times and report every check whose verdict changed (a flaky grader).")] = 0,
              load: Annotated[int, typer.Option("--load", metavar="K", help="With --repeat: K gradings at once, each on its own copy (two learners on one machine).")] = 1,
              case: Annotated[Optional[list[str]], typer.Option("--case", metavar="CASE", help="With --repeat: only this case (reference, starter or a fixture's name; repeatable).")] = None,
+             course: CourseOpt = None,
              ) -> None:
     """Grade every lesson's reference (full marks), starter (not full) and wrong solutions (named checks fail)."""
+    _choose_course(None, course)
     _ros()
-    from course.grade.validate import render_outcomes, validate_course  # noqa: PLC0415 - start time, see the imports
+    from ros2course.grade.validate import render_outcomes, validate_course  # noqa: PLC0415 - start time, see the imports
 
     if sample < 0:
         raise CourseError(f"--sample must be 0 or more (got {sample})", "e.g. --sample 2")
     if repeat:
         if batch:
             raise CourseError("--repeat and --batch do not go together", "run them one after the other")
-        from course.grade.repeat import render_steadiness, repeat_lessons  # noqa: PLC0415 - start time
+        from ros2course.grade.repeat import render_steadiness, repeat_lessons  # noqa: PLC0415 - start time
 
         rows = repeat_lessons(lesson_ids or None, repeat, load, case or None, progress=stderr_console())
         if as_json:
@@ -489,7 +585,7 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
             raise typer.Exit(int(ExitStatus.VALIDATION_FAILED))
         return
     if batch:
-        from course.batch.parity import validate_with_batch  # noqa: PLC0415 - start time, see the imports
+        from ros2course.batch.parity import validate_with_batch  # noqa: PLC0415 - start time, see the imports
 
         outcomes = validate_with_batch(lesson_ids or None, sample=sample, progress=stderr_console())
     else:
@@ -503,6 +599,23 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
     bad = [o for o in outcomes if not o.ok]
     if bad:
         raise typer.Exit(int(ExitStatus.VALIDATION_FAILED))
+
+
+@dev_app.command("new-lesson")
+@_handle_errors
+def new_lesson(lesson_id: Annotated[str, typer.Argument(metavar="ID", help="The new lesson's id (kebab-case).")],
+               course: Annotated[Path, typer.Option("--course", metavar="PATH",
+                                                    help="The course folder (made, with its course.yaml, when missing).")],
+               title: Annotated[Optional[str], typer.Option("--title", help="The lesson's one-line title.")] = None,
+               ) -> None:
+    """Scaffold a lesson (lesson.yaml, starter, grader, reference, one wrong solution) that `dev validate` passes."""
+    from ros2course.lesson.scaffold import new_lesson as scaffold  # noqa: PLC0415 - start time, see the imports
+
+    written = scaffold(course, lesson_id, title)
+    out = stdout_console()
+    for path in written:
+        out.print(f"wrote {path}")
+    out.print(f"Next: ros2course dev validate {lesson_id} --course {course}")
 
 
 @app.command()
@@ -520,10 +633,12 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
           pids_limit: Annotated[int, typer.Option("--pids-limit", help="Processes + threads a submission may have at once.")] = 256,
           require_isolation: Annotated[bool, typer.Option("--require-isolation",
                                                           help="Refuse to grade unless every protection (namespaces, unprivileged uid, process limit) is in effect.")] = False,
+          course: CourseOpt = None,
           ) -> None:
     """Grade a whole class: each submission isolated, in parallel, resumable; writes a gradebook."""
+    _choose_course(None, course)
     _ros()
-    from course.batch.runner import render_summary, run_batch  # noqa: PLC0415 - start time, see the imports
+    from ros2course.batch.runner import render_summary, run_batch  # noqa: PLC0415 - start time, see the imports
 
     err = stderr_console()
     if memory_mb < 0:
@@ -548,8 +663,9 @@ def gradescope(lesson: Annotated[Optional[list[str]], typer.Option("--lesson", "
                                                                help="Refuse to grade unless every protection is in effect.")] = False,
                ) -> None:
     """Grade one submission inside a Gradescope autograder container (writes results.json)."""
+    _choose_course(None)
     _ros()
-    from course.batch.gradescope import run_gradescope  # noqa: PLC0415 - start time, see the imports
+    from ros2course.batch.gradescope import run_gradescope  # noqa: PLC0415 - start time, see the imports
 
     score = run_gradescope(lesson or [], submission, results, timeout=timeout, pids_limit=pids_limit,
                            require_isolation=require_isolation)

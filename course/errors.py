@@ -2,7 +2,7 @@
 
 Modelled on httpie's ``ExitStatus`` and click's exceptions-carry-their-exit-code
 design (see shared/STYLE.md): every expected failure is a :class:`CourseError`
-with a one-line message and a learner-facing hint; only ``course.cli.main``
+with a one-line message and a learner-facing hint; only ``ros2course.cli.main``
 turns it into a process exit.
 """
 

@@ -52,8 +52,8 @@ import uuid
 from pathlib import Path
 from typing import Any
 
-from course.lesson.catalog import content_root
-from course.ros import env as env_mod
+from ros2course.lesson.catalog import content_root
+from ros2course.ros import env as env_mod
 
 #: Names of the protections a job can have (keys of :attr:`Isolation.protections`).
 NETWORK = "network namespace"

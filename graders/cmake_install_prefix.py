@@ -13,7 +13,7 @@ checks the installed tree, then builds a copy of the app (copied alone, so it
 cannot reach into the library's sources) with ``CMAKE_PREFIX_PATH`` holding
 only that prefix, checks that ``find_package`` found the package there and that
 the link line uses the installed library, and runs the app. Every cmake and
-program run goes through the kit (:mod:`graders.kit.cmake`).
+program run goes through the kit (:mod:`ros2course.kit.cmake`).
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from graders.kit import Check, GradingSession, Unmet
-from graders.kit import cmake as ck
-from graders.kit.programs import run_program
+from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import cmake as ck
+from ros2course.kit.programs import run_program
 
 LIBRARY = Path("cmake") / "greeting_library"
 APP = Path("cmake") / "greeting_app"

@@ -3,7 +3,7 @@
 Pure C++, no ROS: everything lives in ``cpp/cpp_demystified/`` of the
 workspace. Two independent parts:
 
-They run at the same time (:func:`graders.kit.parts.at_once`).
+They run at the same time (:func:`ros2course.kit.parts.at_once`).
 
 * ``cmake``: the learner's own ``CMakeLists.txt`` is configured and built out
   of source under ``s.log_dir`` (nothing is written into their folder), and the
@@ -26,11 +26,11 @@ from pathlib import Path
 
 import yaml
 
-from graders import kit
-from graders.kit import Check, GradingSession, Unmet
-from graders.kit import cmake as ck
-from graders.kit.parts import at_once
-from graders.kit.programs import last_line, run_program, verdict_test
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import cmake as ck
+from ros2course.kit.parts import at_once
+from ros2course.kit.programs import last_line, run_program, verdict_test
 
 PROJECT = Path("cpp") / "cpp_demystified"
 HEADER = Path("include") / "cpp_demystified" / "demystified.hpp"

@@ -20,12 +20,12 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
-from graders import kit
-from graders.kit import Check, GradingSession
-from graders.kit import cpp_packages as cpp
-from graders.kit.parts import at_once
-from graders.kit.programs import run_program
+from ros2course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
+from ros2course import kit
+from ros2course.kit import Check, GradingSession
+from ros2course.kit import cpp_packages as cpp
+from ros2course.kit.parts import at_once
+from ros2course.kit.programs import run_program
 
 PACKAGE = "cpp_package_with_a_library"
 LIBRARY_FILE = f"lib{PACKAGE}.so"

@@ -11,9 +11,9 @@ tutorial's own listing names it), logging
 
 from __future__ import annotations
 
-from course.grade.engine import GradingSession
-from graders import print_forever_node
-from graders.print_forever_node import grade_node, make_checks
+from ros2course.grade.engine import GradingSession
+from . import print_forever_node
+from .print_forever_node import grade_node, make_checks
 
 PACKAGE = "cpp_package_with_a_node"
 NODE = "print_forever_node"

@@ -4,7 +4,7 @@ The contract is about the package itself, so this grader reads what colcon
 installed: the package manifest, the ament index entry rosidl writes
 (what ``ros2 interface package`` lists) and the generated Python types,
 imported in a fresh interpreter of the sourced workspace
-(:func:`graders.kit.topics_services.generated_fields`), the way a learner's
+(:func:`ros2course.kit.topics_services.generated_fields`), the way a learner's
 node would import them.
 """
 
@@ -12,9 +12,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from graders import kit
-from graders.kit import Check, GradingSession
-from graders.kit.topics_services import fields, generated_fields
+from ros2course import kit
+from ros2course.kit import Check, GradingSession
+from ros2course.kit.topics_services import fields, generated_fields
 
 PACKAGE = "package_with_interfaces"
 #: field -> type as ``get_fields_and_field_types()`` spells it (seed ch. 17.4 and 17.6).

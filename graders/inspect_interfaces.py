@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from graders.kit import Check, GradingSession, Unmet, scripts
+from ros2course.kit import Check, GradingSession, Unmet, scripts
 
 SCRIPT = "cli/inspect_interfaces.sh"
 PACKAGE = "package_with_interfaces"

@@ -1,7 +1,7 @@
 """Grader for ``inspect-params`` (tutorial ch. 24; contract in shared/LESSONS.md).
 
 The grader plays the launch-files lesson's node (``/peanut_butter_falcon_quote_publisher_node``,
-the parameters lesson's interface, :class:`graders.kit.mystery.ConfigurableQuotePublisher`)
+the parameters lesson's interface, :class:`ros2course.kit.mystery.ConfigurableQuotePublisher`)
 with a random initial ``quote``, runs the learner's ``cli/inspect_params.sh``
 in that graph and judges: the parameter names and the random quote in its
 output, the quote the node publishes after the script's ``ros2 param set``
@@ -16,14 +16,14 @@ from typing import Any
 
 import yaml
 
-from graders.kit import Check, GradingSession, params, scripts
-from graders.kit.mystery import (
+from ros2course.kit import Check, GradingSession, params, scripts
+from ros2course.kit.mystery import (
     CONFIGURABLE_NODE,
     CONFIGURABLE_PERIOD,
     CONFIGURABLE_TOPIC,
     ConfigurableQuotePublisher,
 )
-from graders.kit.quotes import amazing_quote, short
+from ros2course.kit.quotes import amazing_quote, short
 
 SCRIPT = "cli/inspect_params.sh"
 DUMP = "cli/params_dump.yaml"

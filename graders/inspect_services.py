@@ -2,7 +2,7 @@
 
 The grader's node ``/point_oracle_NNN`` (random name) serves ``/what_is_the_point``
 (the learner's WhatIsThePoint) and answers each request with a random point,
-summing to 42 for a quote about life (:mod:`graders.kit.mystery_services`).
+summing to 42 for a quote about life (:mod:`ros2course.kit.mystery_services`).
 The learner's ``cli/inspect_services.sh`` runs in that graph (kit.scripts); it
 is judged on the service list it printed, the requests the server received
 and the responses it printed (random values only a real call can show).
@@ -10,9 +10,9 @@ and the responses it printed (random values only a real call can show).
 
 from __future__ import annotations
 
-from graders.kit import Check, GradingSession, scripts
-from graders.kit.mystery_services import SERVICE, SERVICE_TYPE, PointOracle
-from graders.kit.topics_services import workspace_types
+from ros2course.kit import Check, GradingSession, scripts
+from ros2course.kit.mystery_services import SERVICE, SERVICE_TYPE, PointOracle
+from ros2course.kit.topics_services import workspace_types
 
 SCRIPT = "cli/inspect_services.sh"
 #: Seconds the script may run: a `ros2` command starts in ~1 s; a call to a missing service waits for ever.

@@ -10,10 +10,10 @@ it published (the message the grader's subscription received).
 
 from __future__ import annotations
 
-from course.run.probes import wait_until
-from graders.kit import Check, GradingSession, scripts
-from graders.kit.mystery import INBOX_TOPIC, QuotePublisher, quote_inbox
-from graders.kit.quotes import amazing_quote
+from ros2course.run.probes import wait_until
+from ros2course.kit import Check, GradingSession, scripts
+from ros2course.kit.mystery import INBOX_TOPIC, QuotePublisher, quote_inbox
+from ros2course.kit.quotes import amazing_quote
 
 SCRIPT = "cli/inspect_topics.sh"
 TYPE = "package_with_interfaces/msg/AmazingQuote"

@@ -2,7 +2,7 @@
 
 The launch file is taken from where ``ros2 launch`` takes it: the installed
 ``share/<pkg>/launch/`` folder, and run with the real launch_ros as ``ros2
-launch`` runs it (see :mod:`graders.kit.launch`; on the PyPI install launch_ros
+launch`` runs it (see :mod:`ros2course.kit.launch`; on the PyPI install launch_ros
 comes from the source-built underlay). Then the graph is watched, black-box:
 node name, topic, rate and message contents. The file is also read statically,
 only to say which ``Node(...)`` actions it holds when launch started too little.
@@ -10,11 +10,11 @@ only to say which ``Node(...)`` actions it holds when launch started too little.
 
 from __future__ import annotations
 
-from course.run.probes import LATE_DELIVERY
-from graders import kit
-from graders.kit import Check, GradingSession, quotes
-from graders.kit.launch import installed_launch_file, launched_node, start_launch_file
-from graders.kit.quotes import LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_TOPIC
+from ros2course.run.probes import LATE_DELIVERY
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, quotes
+from ros2course.kit.launch import installed_launch_file, launched_node, start_launch_file
+from ros2course.kit.quotes import LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_TOPIC
 
 SAMPLES = 6  # messages -> 5 intervals at 4 Hz (the minimum shared/LESSONS.md asks for)
 NODE_TIMEOUT = 10.0  # seconds for the node to appear (launch_ros start-up included)

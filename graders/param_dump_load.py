@@ -9,11 +9,11 @@ The learner keeps a parameters file in the ``ros2 param dump`` format at
    ``ros2 param dump`` writes: ``yaml.dump({"/node": {"ros__parameters": {...}}})``,
    shared/ROS_ENV.md);
 2. starts the configurable publisher as the launch-files lesson's launch file
-   starts it (node name, parameters), with :func:`graders.kit.launch.start_node_action`;
+   starts it (node name, parameters), with :func:`ros2course.kit.launch.start_node_action`;
 3. compares the file's parameters with the ones the running node declares
    (names and types, through its parameter services);
 4. loads the file into the running node as ``ros2 param load`` does
-   (:func:`graders.kit.params.load_file`: rclpy's
+   (:func:`ros2course.kit.params.load_file`: rclpy's
    ``parameter_dict_from_yaml_file`` for this node, then one non-atomic
    ``set_parameters`` call, results reported per parameter);
 5. watches ``/truly_inspirational_quote`` for the new quote.
@@ -24,8 +24,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from graders.kit import Check, GradingSession, params
-from graders.kit.quotes import (
+from ros2course.kit import Check, GradingSession, params
+from ros2course.kit.quotes import (
     LAUNCH_NODE,
     LAUNCH_PERIOD,
     LAUNCH_PHILOSOPHER,

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import time
 
-from graders import kit
-from graders.kit import Check, GradingSession, checks, params
-from graders.kit.quotes import (
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, checks, params
+from ros2course.kit.quotes import (
     DEFAULTS,
     EXECUTABLE,
     NODE,

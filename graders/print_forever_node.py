@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import re
 
-from course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
-from graders import kit
-from graders.kit import Check, GradingSession
+from ros2course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
+from ros2course import kit
+from ros2course.kit import Check, GradingSession
 
 PACKAGE = "python_package_with_a_node"
 EXECUTABLE = "print_forever_node"
@@ -73,7 +73,7 @@ def grade(s: GradingSession) -> None:
 def grade_node(s: GradingSession, package: str, node: str, client_library: str, aliases: tuple[str, ...] = ()
                ) -> None:
     """The print-forever checks (:func:`make_checks`) of ``package``'s ``print_forever_node`` named ``node``
-    (or one of ``aliases``, :func:`graders.kit.nodes.wait_for_node`).
+    (or one of ``aliases``, :func:`ros2course.kit.nodes.wait_for_node`).
 
     Black-box: the node's /rosout records and exit; the language only shows in
     the ``package.xml`` dependency checked (``rclpy`` or ``rclcpp``).

@@ -14,9 +14,9 @@ from __future__ import annotations
 
 import itertools
 
-from graders import kit
-from graders.kit import Check, GradingSession, Unmet, checks, quotes
-from graders.kit import topics_services as ts
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, Unmet, checks, quotes
+from ros2course.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_the_messages"
 PUB_EXE = "amazing_quote_publisher_node"

@@ -3,7 +3,7 @@
 The learner's ``python/minimalist_package`` is copied to ``s.log_dir`` (a pip
 build writes ``build/`` and ``*.egg-info`` next to the sources, which must not
 land in the learner's workspace) and installed with pip into a **fresh venv**
-made under ``s.log_dir``, offline (:mod:`graders.kit.pip`: ``venv
+made under ``s.log_dir``, offline (:mod:`ros2course.kit.pip`: ``venv
 --without-pip``, the grader's own pip and setuptools on PYTHONPATH for pip's
 runs only, ``--no-index --no-build-isolation --no-deps``). Then, from ``/``:
 ``import minimalist_package`` must work with the venv's interpreter, the
@@ -18,11 +18,11 @@ from pathlib import Path
 
 import tomllib
 
-from graders.kit import Check, GradingSession, Unmet
-from graders.kit import pip as kpip
-from graders.kit.parts import at_once
-from graders.kit.programs import interrupt_after, last_line, run_program
-from graders.kit.python_programs import python_env
+from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import pip as kpip
+from ros2course.kit.parts import at_once
+from ros2course.kit.programs import interrupt_after, last_line, run_program
+from ros2course.kit.python_programs import python_env
 
 #: Seconds the console script is watched after its first Howdy! (then one every 0.5 s: at least 2 expected).
 WINDOW = 1.0
@@ -95,7 +95,7 @@ def grade(s: GradingSession) -> None:
              "'pip install ./minimalist_package' ends with 'Successfully installed minimalist-package-...'")
     s.require("installs")
 
-    # the import and the uninstall (in a copy of the venv: graders.kit.pip.venv_copy) are judged while the command runs
+    # the import and the uninstall (in a copy of the venv: ros2course.kit.pip.venv_copy) are judged while the command runs
     removal = kpip.venv_copy(s, python, "uninstall_venv")
     at_once(s, "install", lambda: (_importable(s, python, env), _uninstall(s, removal, tools, env)), "command",
             lambda: _console_script(s, venv / "bin" / SCRIPT, env))

@@ -14,8 +14,8 @@ from __future__ import annotations
 import json
 import math
 
-from graders.kit import Check, GradingSession
-from graders.kit.packaging import installed_import, installed_subpackage
+from ros2course.kit import Check, GradingSession
+from ros2course.kit.packaging import installed_import, installed_subpackage
 
 PACKAGE = "python_package_with_a_library"
 SUBPACKAGE = "sample_python_library"
@@ -93,7 +93,7 @@ if cls is not None:
         out["class_error"] = text(exc)
 dump()
 """
-# (the module to import comes in sys.argv[2]: graders.kit.packaging.installed_import passes it)
+# (the module to import comes in sys.argv[2]: ros2course.kit.packaging.installed_import passes it)
 for _key, _value in {"@CASES@": json.dumps(CASES), "@NAMES@": json.dumps(NAMES), "@FUNCTION@": FUNCTION,
                      "@CLASS@": CLASS}.items():
     _PROBE = _PROBE.replace(_key, repr(_value))

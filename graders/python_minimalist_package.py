@@ -17,10 +17,10 @@ from pathlib import Path
 
 import yaml
 
-from graders import kit
-from graders.kit import Check, GradingSession, Unmet
-from graders.kit import python_programs as py
-from graders.kit.programs import interrupt_after, printed_lines, sigint_exit
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import python_programs as py
+from ros2course.kit.programs import interrupt_after, printed_lines, sigint_exit
 
 PROJECT = Path("python") / "minimalist_package"
 SCRIPT = Path("minimalist_package") / "minimalist_script.py"

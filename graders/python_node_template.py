@@ -8,10 +8,10 @@ graph is started.
 
 from __future__ import annotations
 
-from course.run.probes import wait_until
-from course.run.process import LearnerProcess
-from graders.kit import Check, GradingSession
-from graders.kit.packaging import ros2_run_executable
+from ros2course.run.probes import wait_until
+from ros2course.run.process import LearnerProcess
+from ros2course.kit import Check, GradingSession
+from ros2course.kit.packaging import ros2_run_executable
 
 PACKAGE = "python_package_with_a_node"
 EXECUTABLE = "sample_python_node"

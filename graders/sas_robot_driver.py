@@ -13,8 +13,8 @@ from __future__ import annotations
 
 import math
 
-from graders import kit
-from graders.kit import Check, GradingSession, checks, sas
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, checks, sas
 
 PACKAGE = "sas_robot_driver_myrobot"
 DRIVER_EXECUTABLE = "sas_robot_driver_myrobot_node"

@@ -18,9 +18,9 @@ Black-box, and the grader plays the other side each time:
 
 from __future__ import annotations
 
-from graders import kit
-from graders.kit import Check, GradingSession, checks, parts, services
-from graders.kit import topics_services as ts
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, checks, parts, services
+from ros2course.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_the_services"
 SERVER_EXE = "what_is_the_point_service_server_node"
@@ -129,7 +129,7 @@ def grade(s: GradingSession) -> None:
     """Grade the server (as its client) and, at the same time, the client (as its server).
 
     Each runs in a private graph of its own, so the two halves overlap
-    (:func:`graders.kit.parts.at_once`); the client, started from the main
+    (:func:`ros2course.kit.parts.at_once`); the client, started from the main
     thread, gets the parent-death signal.
     """
     kit.depends(s, "depends", PACKAGE, ("rclpy", ts.INTERFACES))

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from graders import kit
-from graders.kit import Check, GradingSession, Unmet
-from graders.kit.packaging import (
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit.packaging import (
     ament_index_packages,
     data_files_mapping,
     install_prefix,

@@ -5,16 +5,16 @@ Every 0.5 s the node logs ``sample_function_for_square_of_sum(a,b) returned c.``
 (a in [0, 1], b in [1, 2], c == (a+b)**2) and then
 ``sample_class_with_random_name.get_name() returned NAME.`` (ten random ASCII
 letters). Numbers are parsed however the node formats them; c is compared with
-(a+b)**2 within the rounding of the printed digits (``graders.kit.packaging.SquareLine``).
+(a+b)**2 within the rounding of the printed digits (``ros2course.kit.packaging.SquareLine``).
 Only ``package.xml`` is read, for the dependency on the library the contract names.
 """
 
 from __future__ import annotations
 
-from course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
-from graders import kit
-from graders.kit import Check, GradingSession
-from graders.kit.packaging import (
+from ros2course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
+from ros2course import kit
+from ros2course.kit import Check, GradingSession
+from ros2course.kit.packaging import (
     classify,
     name_lines,
     ros2_run_executable,

@@ -10,10 +10,10 @@ import re
 import subprocess
 from pathlib import Path
 
-from course.build.colcon import colcon_command, overlay_env
-from course.errors import NotGradable
-from course import sandbox
-from graders.kit import Check, GradingSession, Unmet
+from ros2course.build.colcon import colcon_command, overlay_env
+from ros2course.errors import NotGradable
+from ros2course import sandbox
+from ros2course.kit import Check, GradingSession, Unmet
 
 #: No node is observed: the checks read the folder and ask colcon and bash.
 WINDOW = 0.0
@@ -75,7 +75,7 @@ def grade(s: GradingSession) -> None:
     s.record("src_folder", has_src, f"{root} holds: {entries}", "a src/ folder for the packages")
 
     # --log-base /dev/null: 'colcon list' must not create log/ itself (colcon's documented way to disable logs)
-    # colcon list runs each setup.py: the submission's code (course.sandbox)
+    # colcon list runs each setup.py: the submission's code (ros2course.sandbox)
     proc = sandbox.run([*colcon_command(s.base_env), "--log-base", "/dev/null", "list"], cwd=root, env=s.base_env,
                        capture_output=True, text=True, timeout=120, check=False, stdin=subprocess.DEVNULL)
     packages = proc.stdout.strip().splitlines()

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from course.lesson.catalog import content_root, load_catalog
-from course.lesson.workspace import Workspace
-from course.ros import env as env_mod
+from ros2course.lesson.catalog import content_root, load_catalog
+from ros2course.lesson.workspace import Workspace
+from ros2course.ros import env as env_mod
 
 ROOT = content_root()
 SOLUTIONS = ROOT / "solutions" / "src"
@@ -122,8 +122,8 @@ def solution_workspace(workspace: Workspace) -> Workspace:
 
 def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300, env: dict | None = None
             ) -> subprocess.CompletedProcess:
-    """Run ``python -m course ARGS`` as a learner would run ``ros2course``; never hangs past ``timeout``."""
-    return subprocess.run([sys.executable, "-m", "course", *args], cwd=cwd, capture_output=True, text=True,
+    """Run ``python -m ros2course ARGS`` as a learner would run ``ros2course``; never hangs past ``timeout``."""
+    return subprocess.run([sys.executable, "-m", "ros2course", *args], cwd=cwd, capture_output=True, text=True,
                           timeout=timeout, env={**os.environ, **(env or {}), "COLUMNS": "320"},
                           stdin=subprocess.DEVNULL, check=False)
 

@@ -17,11 +17,11 @@ from pathlib import Path
 
 import pytest
 
-from course.batch.archive import Submission, discover, prepare
-from course.batch.runner import run_batch
-from course.errors import CourseError, NotGradable
-from course.grade.results import LessonResult
-from course.report import gradebook
+from ros2course.batch.archive import Submission, discover, prepare
+from ros2course.batch.runner import run_batch
+from ros2course.errors import CourseError, NotGradable
+from ros2course.grade.results import LessonResult
+from ros2course.report import gradebook
 from tests.conftest import SOLUTIONS
 
 PKG = "python_package_with_a_node"
@@ -232,11 +232,11 @@ def test_cli_grade_and_gradescope(tmp_path: Path, cli) -> None:
     assert proc.returncode == 5 and "Traceback" not in proc.stderr
 
 
-# --- isolation (course.sandbox) --------------------------------------------------------------
+# --- isolation (ros2course.sandbox) --------------------------------------------------------------
 
 
 def test_command_is_unchanged_without_a_submission_identity() -> None:
-    from course import sandbox
+    from ros2course import sandbox
 
     assert sandbox.current() is None
     assert sandbox.command(["/bin/true"], {"A": "1"}) == (["/bin/true"], {"A": "1"})
@@ -244,7 +244,7 @@ def test_command_is_unchanged_without_a_submission_identity() -> None:
 
 def test_command_drops_to_the_identity_and_keeps_the_learner_env_away_from_root() -> None:
     """The root side gets only PATH; LD_PRELOAD & co. reach the program only after the uid drop."""
-    from course import sandbox
+    from ros2course import sandbox
 
     sandbox.configure(sandbox.SubmissionIdentity(1_900_000_123, 1_900_000_123, 99, "/sys/fs/cgroup/pids/x/cgroup.procs"))
     try:
@@ -263,7 +263,7 @@ def test_command_drops_to_the_identity_and_keeps_the_learner_env_away_from_root(
 
 
 def test_mount_plan_keeps_what_a_hidden_folder_holds_read_only(tmp_path: Path) -> None:
-    from course import sandbox
+    from ros2course import sandbox
 
     home = tmp_path / "home"
     python = home / ".pyenv" / "3.11"
@@ -280,7 +280,7 @@ def test_mount_plan_keeps_what_a_hidden_folder_holds_read_only(tmp_path: Path) -
 
 
 def test_copy_logs_never_copies_links_or_fifos(tmp_path: Path) -> None:
-    from course import sandbox
+    from ros2course import sandbox
 
     src, dest = tmp_path / "logs", tmp_path / "out"
     (src / "ros").mkdir(parents=True)
@@ -300,8 +300,8 @@ def test_copy_logs_never_copies_links_or_fifos(tmp_path: Path) -> None:
 
 
 def test_require_isolation_refuses_with_the_missing_protections(tmp_path: Path, monkeypatch) -> None:
-    from course.batch import runner as batch
-    from course import sandbox
+    from ros2course.batch import runner as batch
+    from ros2course import sandbox
 
     (tmp_path / "subs" / "alice" / "src").mkdir(parents=True)
     with pytest.raises(CourseError, match="missing network namespace .isolation turned off"):
@@ -322,8 +322,8 @@ def test_require_isolation_refuses_with_the_missing_protections(tmp_path: Path, 
 def test_summary_lists_each_protection(tmp_path: Path) -> None:
     from rich.console import Console
 
-    from course.batch import runner as batch
-    from course import sandbox
+    from ros2course.batch import runner as batch
+    from ros2course import sandbox
 
     iso = sandbox.Isolation({sandbox.NETWORK: "loopback only"}, {sandbox.UID: "not root"}).to_json()
     report = batch.BatchReport(tmp_path, [], 0, 0, 0.0, iso, [])

@@ -16,11 +16,11 @@ from pathlib import Path
 
 import pytest
 
-from course.build.reference import trusted_interface_packages
-from course.errors import CourseError
-from course.grade.engine import Check, GradingSession, load_grader
-from course.lesson.catalog import load_catalog
-from course import sandbox
+from ros2course.build.reference import trusted_interface_packages
+from ros2course.errors import CourseError
+from ros2course.grade.engine import Check, GradingSession, load_grader
+from ros2course.lesson.catalog import load_catalog
+from ros2course import sandbox
 
 
 def test_an_interface_package_the_lesson_teaches_is_still_built_for_the_batch() -> None:
@@ -59,7 +59,7 @@ def test_submission_programs_write_only_into_submission_folders() -> None:
     """What a submission's program writes (a build folder, a probe's trace, a venv) lands in a folder its uid
     owns; the check's log folder stays the grader's, and a program writing there is refused. (The lessons'
     own builds, traces and venvs as that uid: ``dev validate --batch`` in tests/test_validate.py.)"""
-    from graders.kit.programs import run_program  # noqa: PLC0415 - the course's kit, on the content root
+    from ros2course.kit.programs import run_program  # noqa: PLC0415 - the course's kit, on the content root
 
     uid = sandbox.UID_BASE + sandbox.UID_SPAN + 1
     lesson = load_catalog().get("python-installable-package")
@@ -94,9 +94,9 @@ def test_submission_programs_write_only_into_submission_folders() -> None:
 def test_gradescope_autograder_gives_the_references_full_marks(tmp_path: Path) -> None:
     """The Gradescope path (one upload graded for several lessons, as root with full isolation) on three of the
     lessons that used to differ: an interface the lesson teaches, a probe's trace, a CMake build and g++."""
-    from course.batch.gradescope import run_gradescope  # noqa: PLC0415
-    from course.build.reference import reference_workspace  # noqa: PLC0415
-    from course.grade.validate import run_commands  # noqa: PLC0415
+    from ros2course.batch.gradescope import run_gradescope  # noqa: PLC0415
+    from ros2course.build.reference import reference_workspace  # noqa: PLC0415
+    from ros2course.grade.validate import run_commands  # noqa: PLC0415
 
     lessons = ["python-asyncio", "inspect-services", "cpp-demystified"]
     upload = tmp_path / "autograder" / "submission"
@@ -116,7 +116,7 @@ def test_gradescope_autograder_gives_the_references_full_marks(tmp_path: Path) -
 
 def test_a_reference_cache_folder_others_can_write_is_never_used(tmp_path: Path, monkeypatch) -> None:
     """Trusted interface builds are code the grader imports: never from a folder another user could swap."""
-    from course.build import reference  # noqa: PLC0415
+    from ros2course.build import reference  # noqa: PLC0415
 
     monkeypatch.setattr(reference.sys, "prefix", str(tmp_path))
     root = reference.reference_cache_root()
@@ -128,7 +128,7 @@ def test_a_reference_cache_folder_others_can_write_is_never_used(tmp_path: Path,
 @pytest.mark.ros
 def test_reference_interfaces_are_built_once_and_shared(tmp_path: Path, monkeypatch) -> None:
     """dev validate's underlay and the batch's trusted interfaces: one build while the sources stay the same."""
-    from course.build import reference  # noqa: PLC0415
+    from ros2course.build import reference  # noqa: PLC0415
 
     lesson = load_catalog().get("publisher-subscriber")
     first = reference.shared_reference_build(lesson, ["package_with_interfaces"])

@@ -18,16 +18,16 @@ from pathlib import Path
 import psutil
 import pytest
 
-from course.batch.runner import BATCH_MARKER_VAR, run_batch
-from course.grade.engine import grade_lesson
-from course.grade.validate import (
+from ros2course.batch.runner import BATCH_MARKER_VAR, run_batch
+from ros2course.grade.engine import grade_lesson
+from ros2course.grade.validate import (
     apply_edits,
     load_fixtures,
     reference_workspace,
     run_commands,
 )
-from course.lesson.catalog import load_catalog
-from course.report import gradebook
+from ros2course.lesson.catalog import load_catalog
+from ros2course.report import gradebook
 from tests.conftest import cpu_lock
 
 #: whole classes graded two at a time: never beside the determinism tests (conftest.cpu_exclusive)

@@ -11,9 +11,9 @@ from pathlib import Path
 
 import pytest
 
-from course.build.colcon import build_log_excerpt, build_packages, overlay_env
-from course.errors import NotGradable
-from course.ros import env as env_mod
+from ros2course.build.colcon import build_log_excerpt, build_packages, overlay_env
+from ros2course.errors import NotGradable
+from ros2course.ros import env as env_mod
 
 DATA = Path(__file__).parent / "data"
 
@@ -124,9 +124,9 @@ def test_system_ros_is_detected_and_left_alone(monkeypatch, tmp_path):
 @pytest.mark.ros
 def test_grader_process_uses_the_workspace_interfaces(tmp_path):
     """The grader imports the learner's generated types in-process and talks to a node with them."""
-    from course.ros.interfaces import workspace_type
-    from course.run.probes import RosSession, call_service
-    from course.run.process import LearnerProcess
+    from ros2course.ros.interfaces import workspace_type
+    from ros2course.run.probes import RosSession, call_service
+    from ros2course.run.process import LearnerProcess
 
     root = tmp_path / "ws"
     shutil.copytree(DATA / "interfaces_ws", root)
@@ -157,14 +157,14 @@ def test_grader_process_uses_the_workspace_interfaces(tmp_path):
 
 
 def test_ament_index_lookups_match_ament_index_python_without_touching_os_environ() -> None:
-    """course.ros.index answers as ament_index_python does, from an explicit environment."""
+    """ros2course.ros.index answers as ament_index_python does, from an explicit environment."""
     pytest.importorskip("ament_index_python")
     from ament_index_python.packages import (
         get_package_prefix,
         get_packages_with_prefixes,
     )
 
-    from course.ros import index
+    from ros2course.ros import index
 
     env = dict(os.environ)
     env_mod.activate(env)
@@ -191,7 +191,7 @@ def test_build_progress_follows_colcons_start_and_finish_lines(tmp_path):
     """The progress display hears each package colcon starts and finishes, in order, from the log."""
     import time  # noqa: PLC0415
 
-    from course.ros.colcon_log import BuildProgress  # noqa: PLC0415
+    from ros2course.ros.colcon_log import BuildProgress  # noqa: PLC0415
 
     log = tmp_path / "build.log"
     log.write_text("$ colcon build\n", encoding="utf-8")

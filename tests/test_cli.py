@@ -1,4 +1,4 @@
-"""The learner's flow and bad input, through the real command line (``python -m course`` in a subprocess).
+"""The learner's flow and bad input, through the real command line (``python -m ros2course`` in a subprocess).
 
 Every test works in ``tmp_path``; nothing is written into the repository.
 Tests that build and run real ROS 2 nodes are marked ``ros``.
@@ -14,8 +14,8 @@ from pathlib import Path
 import pytest
 import yaml
 
-from course.lesson.catalog import content_root, load_catalog
-from course.lesson.starter import starter_files, starter_sources
+from ros2course.lesson.catalog import content_root, load_catalog
+from ros2course.lesson.starter import starter_files, starter_sources
 
 ROOT = content_root()
 CATALOG = load_catalog()

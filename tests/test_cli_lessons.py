@@ -22,11 +22,11 @@ from pathlib import Path
 import psutil
 import pytest
 
-from course.grade.engine import grade_lesson
-from course.grade.validate import reference_workspace
-from course.lesson.catalog import load_catalog
-from course.run.process import MARKER_VAR, SHM_DIR, _shm_files_in_use
-from graders.kit.scripts import daemon_port
+from ros2course.grade.engine import grade_lesson
+from ros2course.grade.validate import reference_workspace
+from ros2course.lesson.catalog import load_catalog
+from ros2course.run.process import MARKER_VAR, SHM_DIR, _shm_files_in_use
+from ros2course.kit.scripts import daemon_port
 
 #: Put before the reference script: a daemon, the domain and a background process to find afterwards.
 PREAMBLE = """ros2 topic list

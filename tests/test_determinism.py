@@ -17,10 +17,10 @@ from __future__ import annotations
 
 import pytest
 
-from course.grade.engine import grade_lesson
-from course.grade.results import Status
-from course.grade.validate import reference_workspace
-from course.lesson.catalog import load_catalog
+from ros2course.grade.engine import grade_lesson
+from ros2course.grade.results import Status
+from ros2course.grade.validate import reference_workspace
+from ros2course.lesson.catalog import load_catalog
 
 #: Gradings per lesson. 6 in the suite (CI time); 20 at two at once is the goal measured with
 #: ``ros2course dev validate LESSON --repeat 20 --load 2 --case reference`` (tests/test_repeat.py runs a short one).

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from course.ros import env as env_mod
+from ros2course.ros import env as env_mod
 
 WHEELS = env_mod.detect().kind == "wheels"
 needs_wheels = pytest.mark.skipif(not WHEELS, reason="ROS 2 comes from a sourced system install, not the wheels")
@@ -100,8 +100,8 @@ def _workspace_depending_on(tmp_path: Path, dep: str) -> Path:
 
 @needs_wheels
 def test_a_package_on_sas_builds_the_sas_component_on_demand_or_says_why_not(tmp_path, monkeypatch):
-    from course.errors import MissingRequirement
-    from course.ros import doctor, underlay, underlay_build
+    from ros2course.errors import MissingRequirement
+    from ros2course.ros import doctor, underlay, underlay_build
 
     calls = []
     monkeypatch.setattr(underlay_build, "build", lambda **kw: calls.append(kw["component"].name))

@@ -13,7 +13,7 @@ attack (the node keeps doing its job afterwards, so each deserves full marks):
 * ``signaller``: sends SIGKILL to its parent, to PID 1 and to every process it can see;
 * ``alice``: the reference, beside them.
 
-Runs only where every protection of :mod:`course.sandbox` is in effect
+Runs only where every protection of :mod:`ros2course.sandbox` is in effect
 (root on Linux with util-linux, iproute2, dumb-init and a pids cgroup or a
 dedicated uid); elsewhere it says which one is missing.
 """
@@ -27,9 +27,9 @@ from pathlib import Path
 import pytest
 from test_batch_ros import NODE_FILE, make_submission, tree_digest, wait_until_gone
 
-from course.batch.runner import run_batch
-from course.lesson.catalog import content_root
-from course import sandbox
+from ros2course.batch.runner import run_batch
+from ros2course.lesson.catalog import content_root
+from ros2course import sandbox
 from tests.conftest import cpu_lock
 
 #: a fork storm and two jobs at once: never beside the determinism tests (conftest.cpu_exclusive)

@@ -12,7 +12,7 @@ import time
 import psutil
 import pytest
 
-from course.run.process import sweep_stale_fastdds_shm
+from ros2course.run.process import sweep_stale_fastdds_shm
 
 
 def _wait_for(predicate, timeout: float) -> bool:
@@ -44,7 +44,7 @@ def _node_children(pid: int) -> list[psutil.Process]:
 def test_check_killed_mid_way(solution_workspace, sig):
     ws = solution_workspace
     before = ws.progress_path.read_bytes()
-    cli = subprocess.Popen([sys.executable, "-m", "course", "check", "print-forever-node", "--workspace", str(ws.root)],
+    cli = subprocess.Popen([sys.executable, "-m", "ros2course", "check", "print-forever-node", "--workspace", str(ws.root)],
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
                            start_new_session=True)
     try:

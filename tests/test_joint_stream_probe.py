@@ -1,4 +1,4 @@
-"""graders.kit.joint_stream: the 500 Hz joint-state probe of the sas-robot-driver lesson keeps up.
+"""ros2course.kit.joint_stream: the 500 Hz joint-state probe of the sas-robot-driver lesson keeps up.
 
 A known publisher (a small rclpy script, like a sas driver: ``JointState``
 every 2 ms on a history-depth-1 publisher) runs in a private domain. It
@@ -65,7 +65,7 @@ PUBLISHER = f"""
 @pytest.fixture
 def ros_env():
     pytest.importorskip("rclpy")
-    from course.ros import env as env_mod  # noqa: PLC0415
+    from ros2course.ros import env as env_mod  # noqa: PLC0415
 
     env = dict(os.environ)
     env_mod.activate(env)
@@ -75,9 +75,9 @@ def ros_env():
 @pytest.mark.ros
 @pytest.mark.timeout(90)
 def test_probe_measures_a_known_500hz_publisher_on_send_stamps(ros_env, tmp_path):
-    from course.run.probes import RateStats, RosSession  # noqa: PLC0415
-    from course.run.process import LearnerProcess, sweep_stale_fastdds_shm
-    from graders.kit.joint_stream import JointStreamProbe, arrival_rate, source_rate
+    from ros2course.run.probes import RateStats, RosSession  # noqa: PLC0415
+    from ros2course.run.process import LearnerProcess, sweep_stale_fastdds_shm
+    from ros2course.kit.joint_stream import JointStreamProbe, arrival_rate, source_rate
 
     script = tmp_path / "known_500hz_publisher.py"
     script.write_text(textwrap.dedent(PUBLISHER), encoding="utf-8")
@@ -115,7 +115,7 @@ def test_probe_measures_a_known_500hz_publisher_on_send_stamps(ros_env, tmp_path
 
 
 class _Recorder:
-    """The one method of GradingSession that graders.kit.sas.span_rate calls."""
+    """The one method of GradingSession that ros2course.kit.sas.span_rate calls."""
 
     def __init__(self) -> None:
         self.results: dict[str, tuple] = {}
@@ -126,14 +126,14 @@ class _Recorder:
 
 
 def _samples(period: float, count: int):
-    from graders.kit.joint_stream import JointSample  # noqa: PLC0415
+    from ros2course.kit.joint_stream import JointSample  # noqa: PLC0415
 
     return [JointSample(100.0 + i * period, 50.0 + i * period, 0.0, (0.0,) * 6, "") for i in range(count)]
 
 
 def test_span_rate_judges_the_source_stamps_over_the_span():
     pytest.importorskip("rclpy")
-    from graders.kit.sas import span_rate  # noqa: PLC0415
+    from ros2course.kit.sas import span_rate  # noqa: PLC0415
 
     s = _Recorder()
     assert span_rate(s, "rate", _samples(0.002, 501), period=0.002, span=1.0, noun="message")
@@ -145,7 +145,9 @@ def test_span_rate_judges_the_source_stamps_over_the_span():
 
 def test_sas_driver_topics_and_limits_follow_the_seed():
     pytest.importorskip("rclpy")
-    from graders.sas_robot_driver import DRIVER  # noqa: PLC0415
+    from ros2course.grade.engine import load_grader  # noqa: PLC0415
+
+    DRIVER = load_grader("sas_robot_driver").DRIVER
 
     assert DRIVER.joint_states == "/myrobot_1/get/joint_states"
     assert DRIVER.target == "/myrobot_1/set/target_joint_positions"

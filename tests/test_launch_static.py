@@ -13,9 +13,9 @@ from pathlib import Path
 import pytest
 import yaml
 
-from course.lesson.catalog import content_root
-from graders.kit import launch as _launch
-from graders.kit.launch import (
+from ros2course.lesson.catalog import content_root
+from ros2course.kit import launch as _launch
+from ros2course.kit.launch import (
     MODE_LAUNCH_ROS,
     read_launch_file,
     start_launch_file,
@@ -242,10 +242,10 @@ def test_node_action_reports_a_missing_executable(tmp_path):
 
 
 def test_without_launch_ros_a_launch_file_is_not_gradable_and_nothing_starts(tmp_path, monkeypatch):
-    from course.errors import MissingRequirement
+    from ros2course.errors import MissingRequirement
 
     monkeypatch.setattr(_launch, "launch_ros_available", lambda: False)
-    monkeypatch.setattr("course.ros.env.probe_requirement", lambda name: (False, "launch/launch_ros not importable"))
+    monkeypatch.setattr("ros2course.ros.env.probe_requirement", lambda name: (False, "launch/launch_ros not importable"))
     session = FakeSession(tmp_path)
     with pytest.raises(MissingRequirement, match="needs launch"):
         start_launch_file(session, REFERENCE)

@@ -18,7 +18,7 @@ LINT = Path(sys.executable).parent / "lint-imports"
 
 
 def _lint(cwd: Path) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": str(cwd)}  # the copy's `course` before the installed one
+    env = {**os.environ, "PYTHONPATH": str(cwd)}  # the copy's `ros2course` before the installed one
     return subprocess.run([str(LINT), "--config", str(cwd / "pyproject.toml"), "--no-cache"], cwd=cwd, env=env,
                           capture_output=True, text=True, timeout=300, check=False)
 
@@ -30,12 +30,12 @@ def test_the_engine_keeps_its_layers_and_has_no_import_cycles() -> None:
 
 
 def test_a_back_import_breaks_the_layers_contract(tmp_path: Path) -> None:
-    shutil.copytree(ROOT / "course", tmp_path / "course", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(ROOT / "course", tmp_path / "ros2course", ignore=shutil.ignore_patterns("__pycache__"))
     shutil.copy(ROOT / "pyproject.toml", tmp_path / "pyproject.toml")
-    process = tmp_path / "course" / "run" / "process.py"
+    process = tmp_path / "ros2course" / "run" / "process.py"
     # run is below grade: a learner process must not know about results
-    process.write_text(process.read_text() + "\n\ndef _late() -> None:\n    from course.grade import results  # noqa\n")
+    process.write_text(process.read_text() + "\n\ndef _late() -> None:\n    from ros2course.grade import results  # noqa\n")
     proc = _lint(tmp_path)
     assert proc.returncode != 0
     assert "the engine's layers BROKEN" in proc.stdout
-    assert "course.run.process -> course.grade.results" in proc.stdout
+    assert "ros2course.run.process -> ros2course.grade.results" in proc.stdout

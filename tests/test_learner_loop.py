@@ -15,11 +15,11 @@ import pexpect
 import psutil
 import pytest
 
-from course.grade.watch import MARKER_VAR
+from ros2course.grade.watch import MARKER_VAR
 
 
 def _run(ws: Path, *args: str) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "course", *args], cwd=ws, capture_output=True, text=True,
+    return subprocess.run([sys.executable, "-m", "ros2course", *args], cwd=ws, capture_output=True, text=True,
                           timeout=120, check=False, stdin=subprocess.DEVNULL, env={**os.environ, "COLUMNS": "200"})
 
 
@@ -99,7 +99,7 @@ def test_check_all_reports_a_regression(ws: Path):
 def test_watch_rechecks_on_save_and_takes_keys(ws: Path):
     before = set(_marked_processes())
     lesson = ws / "terminal_basics"
-    child = pexpect.spawn(sys.executable, ["-m", "course", "watch"], cwd=str(ws), encoding="utf-8",
+    child = pexpect.spawn(sys.executable, ["-m", "ros2course", "watch"], cwd=str(ws), encoding="utf-8",
                           timeout=90, dimensions=(50, 160), env={**os.environ, "TERM": "xterm"})
     try:
         child.expect("watching terminal-basics")

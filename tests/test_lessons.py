@@ -1,7 +1,7 @@
 """Schema-level tests of the course content: lessons, graders, fixtures, starters.
 
 No ROS node is started here: fixtures are applied to a copy of the reference
-solution with :func:`course.grade.validate.apply_edits`, never graded.
+solution with :func:`ros2course.grade.validate.apply_edits`, never graded.
 """
 
 from __future__ import annotations
@@ -13,17 +13,17 @@ from pathlib import Path
 import pytest
 import yaml
 
-from course.errors import LessonFormatError
-from course.grade.engine import Check, load_grader
-from course.grade.validate import (
+from ros2course.errors import LessonFormatError
+from ros2course.grade.engine import Check, load_grader
+from ros2course.grade.validate import (
     apply_edits,
     fixtures_dir,
     load_fixtures,
     reference_workspace,
 )
-from course.lesson.catalog import content_root, load_catalog, load_lesson
-from course.lesson.starter import copy_starter, starter_files, starter_sources
-from course.ros.packages import find_packages
+from ros2course.lesson.catalog import content_root, load_catalog, load_lesson
+from ros2course.lesson.starter import copy_starter, starter_files, starter_sources
+from ros2course.ros.packages import find_packages
 
 ROOT = content_root()
 CATALOG = load_catalog()
@@ -157,7 +157,7 @@ def test_fixture_edits_apply_exactly_once_to_the_reference(lesson_id, fixture_na
 
 def test_apply_edits_rejects_a_replace_that_is_not_unique(tmp_path):
     """The guard the previous test relies on: a replace text found 0 or 2 times is an error."""
-    from course.grade.validate import Edit
+    from ros2course.grade.validate import Edit
 
     (tmp_path / "f.txt").write_text("a a\n")
     with pytest.raises(LessonFormatError, match="2 times"):
@@ -292,7 +292,7 @@ def _tiny_lesson(chapters: Path, folder: str, extra: str = "", files: dict[str, 
 
 
 def test_starter_includes_lay_earlier_starters_under_the_lessons_own(tmp_path):
-    from course.lesson.catalog import Catalog  # noqa: PLC0415
+    from ros2course.lesson.catalog import Catalog  # noqa: PLC0415
 
     chapters = tmp_path / "chapters"
     _tiny_lesson(chapters, "01-alpha", files={"src/p/node.py": "alpha", "src/p/setup.py": "alpha"})
@@ -313,7 +313,7 @@ def test_starter_includes_lay_earlier_starters_under_the_lessons_own(tmp_path):
 
 
 def test_starter_solutions_offer_finished_packages_under_the_lessons_own(tmp_path, monkeypatch):
-    from course.lesson.catalog import Catalog  # noqa: PLC0415
+    from ros2course.lesson.catalog import Catalog  # noqa: PLC0415
 
     course = tmp_path / "course"
     (course / "solutions/src/ifaces/msg").mkdir(parents=True)
@@ -336,7 +336,7 @@ def test_starter_solutions_offer_finished_packages_under_the_lessons_own(tmp_pat
 
 
 def test_the_publisher_lesson_offers_the_finished_interfaces():
-    from course.lesson.catalog import content_root, load_catalog  # noqa: PLC0415
+    from ros2course.lesson.catalog import content_root, load_catalog  # noqa: PLC0415
 
     solution = content_root() / "solutions/src/package_with_interfaces"
     for lesson_id in ("publisher-subscriber", "service-server-client"):
@@ -348,7 +348,7 @@ def test_the_publisher_lesson_offers_the_finished_interfaces():
 @pytest.mark.parametrize("include, problem", [("delta", "no such lesson"),
                                               ("gamma", "does not come earlier")])
 def test_starter_includes_must_name_an_earlier_lesson(tmp_path, include, problem):
-    from course.lesson.catalog import Catalog  # noqa: PLC0415
+    from ros2course.lesson.catalog import Catalog  # noqa: PLC0415
 
     chapters = tmp_path / "chapters"
     _tiny_lesson(chapters, "01-alpha")

@@ -14,8 +14,8 @@ from types import SimpleNamespace
 
 import pytest
 
-from course.grade.engine import GradingSession, Unmet, check_dependencies
-from graders.kit.packaging import (
+from ros2course.grade.engine import GradingSession, Unmet, check_dependencies, load_grader
+from ros2course.kit.packaging import (
     classify,
     data_files_mapping,
     installed_subpackage,
@@ -226,7 +226,7 @@ def test_data_files_mapping_like_colcon():
 @pytest.mark.parametrize("name", PACKAGING_GRADERS)
 def test_graders_are_ported_to_the_kit(name):
     """Valid needs, and none of the old skip helpers (issue "One grader kit")."""
-    module = importlib.import_module(f"graders.{name}")
+    module = load_grader(name)
     check_dependencies(module.CHECKS)
     source = inspect.getsource(module)
     for old in ("skip_remaining", "graders._common", "import rclpy"):
@@ -234,7 +234,7 @@ def test_graders_are_ported_to_the_kit(name):
 
 
 def _session(tmp_path, checks):
-    from graders.kit import Check
+    from ros2course.kit import Check
 
     return GradingSession(None, [Check(c, c, 1, needs=n) for c, n in checks], tmp_path, tmp_path / "log", {})
 

@@ -16,11 +16,11 @@ from pathlib import Path
 import pytest
 import yaml
 
-from course.errors import ProgressError
-from course.lesson.catalog import Catalog, content_root
-from course.lesson.index import catalog_entries, progress_view
-from course.lesson.progress import Progress
-from course.lesson.workspace import Workspace
+from ros2course.errors import ProgressError
+from ros2course.lesson.catalog import Catalog, content_root
+from ros2course.lesson.index import catalog_entries, progress_view
+from ros2course.lesson.progress import Progress
+from ros2course.lesson.workspace import Workspace
 from tests.test_cli import assert_clean_error, copy_course
 
 CHAPTERS = content_root() / "chapters"
@@ -79,7 +79,7 @@ def test_list_works_when_the_cache_folder_cannot_be_written(tmp_path, learner_ws
 
 def test_list_imports_neither_pydantic_nor_yaml_once_indexed(learner_ws, cli):
     assert cli("list", cwd=learner_ws).returncode == 0  # writes the index if this run has none yet
-    probe = ("import sys; from course.cli import main; sys.argv = ['ros2course', 'list']\n"
+    probe = ("import sys; from ros2course.cli import main; sys.argv = ['ros2course', 'list']\n"
              "try:\n    main()\nexcept SystemExit:\n    pass\n"
              "print('LOADED', sorted(m for m in ('pydantic', 'yaml', 'rclpy') if m in sys.modules), file=sys.stderr)")
     proc = subprocess.run([sys.executable, "-c", probe], cwd=learner_ws, capture_output=True, text=True, timeout=60,

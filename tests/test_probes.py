@@ -1,4 +1,4 @@
-"""course.run.probes: rate maths, and the probes against real learner-side nodes.
+"""ros2course.run.probes: rate maths, and the probes against real learner-side nodes.
 
 Each ROS test opens a :class:`RosSession` (private domain) and starts a tiny
 rclpy script with :class:`LearnerProcess` in that domain.
@@ -13,7 +13,7 @@ import textwrap
 
 import pytest
 
-from course.run.probes import RateStats, wait_until
+from ros2course.run.probes import RateStats, wait_until
 
 PY = sys.executable
 
@@ -57,7 +57,7 @@ def test_rate_stats_edge_cases():
 @pytest.fixture
 def ros_env():
     pytest.importorskip("rclpy")
-    from course.ros import env as env_mod  # noqa: PLC0415
+    from ros2course.ros import env as env_mod  # noqa: PLC0415
 
     env = dict(os.environ)
     env_mod.activate(env)
@@ -67,7 +67,7 @@ def ros_env():
 @pytest.fixture
 def learners(tmp_path):
     """Start learner scripts; every one is stopped at the end of the test."""
-    from course.run.process import LearnerProcess  # noqa: PLC0415
+    from ros2course.run.process import LearnerProcess  # noqa: PLC0415
 
     started = []
 
@@ -82,7 +82,7 @@ def learners(tmp_path):
     yield start
     for proc in started:
         proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
-    from course.run.process import sweep_stale_fastdds_shm  # noqa: PLC0415
+    from ros2course.run.process import sweep_stale_fastdds_shm  # noqa: PLC0415
 
     sweep_stale_fastdds_shm()
 
@@ -126,7 +126,7 @@ TALKER = """
 def test_topic_probe_rate(ros_env, learners):
     from std_msgs.msg import String  # noqa: PLC0415
 
-    from course.run.probes import RosSession  # noqa: PLC0415
+    from ros2course.run.probes import RosSession  # noqa: PLC0415
 
     with RosSession() as session:
         probe = session.topic("/chatter", String)
@@ -164,7 +164,7 @@ NAMED_NODE = """
 @pytest.mark.ros
 @pytest.mark.timeout(60)
 def test_two_sessions_are_isolated(ros_env, learners):
-    from course.run.probes import RosSession  # noqa: PLC0415
+    from ros2course.run.probes import RosSession  # noqa: PLC0415
 
     with RosSession() as one, RosSession() as two:
         assert one.domain_id != two.domain_id
@@ -198,7 +198,7 @@ LOGGER = """
 @pytest.mark.ros
 @pytest.mark.timeout(60)
 def test_rosout_probe_receives_learner_records(ros_env, learners):
-    from course.run.probes import RosSession  # noqa: PLC0415
+    from ros2course.run.probes import RosSession  # noqa: PLC0415
 
     with RosSession() as session:
         rosout = session.rosout()
@@ -243,7 +243,7 @@ SERVER = """
 def test_call_service_on_learner_server(ros_env, learners):
     from rcl_interfaces.srv import ListParameters  # noqa: PLC0415
 
-    from course.run.probes import RosSession, call_service  # noqa: PLC0415
+    from ros2course.run.probes import RosSession, call_service  # noqa: PLC0415
 
     with RosSession() as session:
         proc = learners(session, "server", SERVER, ros_env)
@@ -284,7 +284,7 @@ CLIENT = """
 def test_stand_in_server_records_learner_calls(ros_env, learners):
     from rcl_interfaces.srv import ListParameters  # noqa: PLC0415
 
-    from course.run.probes import RosSession, StandInServer  # noqa: PLC0415
+    from ros2course.run.probes import RosSession, StandInServer  # noqa: PLC0415
 
     def handler(request, response):
         response.result.names = ["grader:" + p for p in request.prefixes]
@@ -327,7 +327,7 @@ PARAM_NODE = """
 def test_parameter_client_lists_and_sets(ros_env, learners):
     from rclpy.parameter import Parameter  # noqa: PLC0415
 
-    from course.run.probes import RosSession, parameter_client, wait_future  # noqa: PLC0415
+    from ros2course.run.probes import RosSession, parameter_client, wait_future  # noqa: PLC0415
 
     with RosSession() as session:
         proc = learners(session, "params", PARAM_NODE, ros_env)
@@ -349,7 +349,7 @@ def test_parameter_client_lists_and_sets(ros_env, learners):
 @pytest.mark.ros
 @pytest.mark.timeout(60)
 def test_parameter_client_times_out_without_node(ros_env):
-    from course.run.probes import RosSession, parameter_client  # noqa: PLC0415
+    from ros2course.run.probes import RosSession, parameter_client  # noqa: PLC0415
 
     with RosSession() as session:
         with pytest.raises(TimeoutError):
@@ -360,7 +360,7 @@ def test_parameter_client_times_out_without_node(ros_env):
 @pytest.mark.ros
 @pytest.mark.timeout(60)
 def test_learner_env(ros_env):
-    from course.run.probes import RosSession  # noqa: PLC0415
+    from ros2course.run.probes import RosSession  # noqa: PLC0415
 
     with RosSession() as session:
         env = session.learner_env({"ROS_LOCALHOST_ONLY": "1", "ROS_DOMAIN_ID": "0", "KEEP": "me"})

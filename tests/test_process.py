@@ -1,4 +1,4 @@
-"""course.run.process: starting, stopping and cleaning up after learner processes.
+"""ros2course.run.process: starting, stopping and cleaning up after learner processes.
 
 The "learners" here are tiny ``python -c`` / ``sh -c`` programs, so these
 tests need no ROS, except the last one, which checks the Fast DDS
@@ -21,7 +21,7 @@ from pathlib import Path
 import psutil
 import pytest
 
-from course.run.process import (
+from ros2course.run.process import (
     MARKER_VAR,
     LearnerProcess,
     kill_marked,
@@ -593,7 +593,7 @@ def _owned_lock_names(pid: int) -> set[str]:
 def test_sweep_after_sigkilled_rclpy_node(tmp_path):
     pytest.importorskip("rclpy")
     domain_coordinator = pytest.importorskip("domain_coordinator")
-    from course.ros import env as env_mod  # noqa: PLC0415
+    from ros2course.ros import env as env_mod  # noqa: PLC0415
 
     shm = Path("/dev/shm")
     if not shm.is_dir():
@@ -675,7 +675,7 @@ rclpy._rclpy_pybind11.RCLError: failed to initialize wait set: the given context
 
 def test_rclpys_own_ctrl_c_race_is_told_from_the_learners_traceback() -> None:
     """Issue 19: the wait-set RCLError inside rclpy.spin is rclpy's (ros2/ros2cli PR #854), never the learner's."""
-    from course.run.process import last_traceback, rclpy_shutdown_race
+    from ros2course.run.process import last_traceback, rclpy_shutdown_race
 
     assert rclpy_shutdown_race(last_traceback(_RACE))
     learner = _RACE.replace("rclpy/executors.py", "pkg/node.py")

@@ -15,7 +15,7 @@ import pytest
 from mcap.reader import make_reader
 from mcap_ros2.decoder import DecoderFactory
 
-from course.run.recording import CHECKS_METADATA, FILE_NAME
+from ros2course.run.recording import CHECKS_METADATA, FILE_NAME
 
 pytestmark = pytest.mark.ros
 

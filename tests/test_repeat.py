@@ -6,8 +6,8 @@ import json
 
 import pytest
 
-from course.grade.repeat import Steadiness, unsteady
-from course.grade.results import CheckResult, LessonResult, Status
+from ros2course.grade.repeat import Steadiness, unsteady
+from ros2course.grade.results import CheckResult, LessonResult, Status
 
 
 def _result(listed: bool, status: Status = Status.PASSED, observed: str = "") -> LessonResult:

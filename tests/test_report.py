@@ -9,9 +9,9 @@ import math
 import pytest
 from rich.console import Console
 
-from course.grade.engine import GradingSession
-from course.grade.results import CheckResult, LessonResult, Plot
-from course.report.table import render_result, result_json, sparkline
+from ros2course.grade.engine import GradingSession
+from ros2course.grade.results import CheckResult, LessonResult, Plot
+from ros2course.report.table import render_result, result_json, sparkline
 
 
 def _console() -> Console:

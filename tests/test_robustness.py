@@ -17,11 +17,11 @@ from pathlib import Path
 import psutil
 import pytest
 
-from course.grade.engine import grade_lesson
-from course.grade.results import LessonResult, Status
-from course.grade.validate import Edit, apply_edits, reference_workspace
-from course.lesson.catalog import load_catalog
-from course.run.process import DEFAULT_OUTPUT_CAP, MARKER_VAR
+from ros2course.grade.engine import grade_lesson
+from ros2course.grade.results import LessonResult, Status
+from ros2course.grade.validate import Edit, apply_edits, reference_workspace
+from ros2course.lesson.catalog import load_catalog
+from ros2course.run.process import DEFAULT_OUTPUT_CAP, MARKER_VAR
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(600)]
 
@@ -33,7 +33,7 @@ SHM = Path("/dev/shm")
 @pytest.fixture(scope="module")
 def lesson():
     pytest.importorskip("rclpy")
-    from course.ros import env as env_mod  # noqa: PLC0415
+    from ros2course.ros import env as env_mod  # noqa: PLC0415
 
     for requirement in ("rclpy", "colcon"):
         ok, detail = env_mod.probe_requirement(requirement)
@@ -159,7 +159,7 @@ def grade(lesson, root: Path) -> LessonResult:
     with leaves_nothing_behind(root):
         result = grade_lesson(lesson, root)
     assert result.status != Status.GRADER_ERROR, f"{result.message}\n{result.hint}"
-    from graders.print_forever_node import CHECKS  # noqa: PLC0415
+    from .print_forever_node import CHECKS  # noqa: PLC0415
 
     assert [c.id for c in result.checks] == [c.id for c in CHECKS]  # every check has a verdict
     return result

@@ -2,7 +2,7 @@
 
 On the PyPI install they come from the source-built underlay (course/ros/underlay.py,
 ``ros2course env --build``); with a sourced system ROS 2 from there. Every test
-holds its own ``ROS_DOMAIN_ID`` (``course.run.probes.RosSession``), discovery on
+holds its own ``ROS_DOMAIN_ID`` (``ros2course.run.probes.RosSession``), discovery on
 localhost, and passes ``--no-daemon`` where the verb has it; a ``ros2`` daemon
 started in that domain anyway is stopped by PID at the end.
 """
@@ -21,8 +21,8 @@ from pathlib import Path
 import psutil
 import pytest
 
-from course.lesson.catalog import content_root
-from course.ros import env as env_mod
+from ros2course.lesson.catalog import content_root
+from ros2course.ros import env as env_mod
 
 ROOT = content_root()
 ROS2 = shutil.which("ros2", path=os.environ.get("PATH"))
@@ -41,7 +41,7 @@ pytestmark = [
 @pytest.fixture
 def session():
     """A private ROS domain with the grader's probes; afterwards, any ros2 daemon of that domain is stopped."""
-    from course.run.probes import RosSession  # noqa: PLC0415
+    from ros2course.run.probes import RosSession  # noqa: PLC0415
 
     with RosSession() as ros:
         yield ros
@@ -94,7 +94,7 @@ except (KeyboardInterrupt, ExternalShutdownException):
 @pytest.fixture
 def talker(session, ros_env, tmp_path):
     """A Python node publishing std_msgs/String on /cli_test_chatter with a parameter ``quote``."""
-    from course.run.process import LearnerProcess  # noqa: PLC0415
+    from ros2course.run.process import LearnerProcess  # noqa: PLC0415
 
     script = tmp_path / "talker.py"
     script.write_text(TALKER, encoding="utf-8")
@@ -186,7 +186,7 @@ def test_ros2_pkg_create_both_build_types_then_plain_colcon_build(tmp_path):
 
 @pytest.mark.timeout(300)
 def test_ros2_launch_of_the_courses_launch_file(built_solutions, session, ros_env, tmp_path):
-    from course.run.process import LearnerProcess  # noqa: PLC0415
+    from ros2course.run.process import LearnerProcess  # noqa: PLC0415
 
     launch = LearnerProcess(
         ["bash", "-c", "source install/setup.bash && exec ros2 launch "
@@ -208,8 +208,8 @@ def test_ros2_launch_of_the_courses_launch_file(built_solutions, session, ros_en
 
 @pytest.mark.timeout(600)
 def test_an_rclcpp_node_is_graded_by_the_print_forever_checks(tmp_path):
-    from course.grade.engine import grade_lesson  # noqa: PLC0415
-    from course.lesson.catalog import Lesson  # noqa: PLC0415
+    from ros2course.grade.engine import grade_lesson  # noqa: PLC0415
+    from ros2course.lesson.catalog import Lesson  # noqa: PLC0415
 
     package = Path(__file__).parents[1] / "solutions" / "src" / "cpp_package_with_a_node"
     shutil.copytree(package, tmp_path / "src" / package.name)

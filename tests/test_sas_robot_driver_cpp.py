@@ -40,8 +40,8 @@ pytestmark = [
 
 @pytest.mark.timeout(900)
 def test_grader_gives_the_seeds_cpp_driver_full_marks(tmp_path: Path):
-    from course.grade.engine import grade_lesson  # noqa: PLC0415
-    from course.lesson.catalog import load_catalog
+    from ros2course.grade.engine import grade_lesson  # noqa: PLC0415
+    from ros2course.lesson.catalog import load_catalog
 
     source = Path(__file__).parent / "data" / "sas_cpp" / "sas_robot_driver_myrobot"
     shutil.copytree(source, tmp_path / "src" / "sas_robot_driver_myrobot")

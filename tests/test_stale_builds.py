@@ -13,13 +13,13 @@ from pathlib import Path
 
 import pytest
 
-from course.build.colcon import build_packages, colcon_command, stale_metadata
-from course.errors import NotGradable
-from course.grade.engine import grade_lesson
-from course.grade.results import Status
-from course.lesson.catalog import load_catalog
-from course.lesson.starter import copy_starter
-from course.ros import env as env_mod
+from ros2course.build.colcon import build_packages, colcon_command, stale_metadata
+from ros2course.errors import NotGradable
+from ros2course.grade.engine import grade_lesson
+from ros2course.grade.results import Status
+from ros2course.lesson.catalog import load_catalog
+from ros2course.lesson.starter import copy_starter
+from ros2course.ros import env as env_mod
 from tests.conftest import SOLUTIONS
 
 PKG = "stale_demo"
@@ -141,7 +141,7 @@ def test_new_learner_sequence_under_watch_gets_full_marks(tmp_path: Path) -> Non
     import pexpect  # noqa: PLC0415
 
     def run(cwd: Path, *args: str) -> None:
-        proc = subprocess.run([sys.executable, "-m", "course", *args], cwd=cwd, capture_output=True, text=True,
+        proc = subprocess.run([sys.executable, "-m", "ros2course", *args], cwd=cwd, capture_output=True, text=True,
                               timeout=120, check=False, stdin=subprocess.DEVNULL)
         assert proc.returncode == 0, proc.stdout[-1500:] + proc.stderr[-1500:]
 
@@ -152,7 +152,7 @@ def test_new_learner_sequence_under_watch_gets_full_marks(tmp_path: Path) -> Non
         run(ws, "next")
     package = ws / "src" / "python_package_with_a_node"
     assert package.is_dir()
-    child = pexpect.spawn(sys.executable, ["-m", "course", "watch"], cwd=str(ws), encoding="utf-8", timeout=240,
+    child = pexpect.spawn(sys.executable, ["-m", "ros2course", "watch"], cwd=str(ws), encoding="utf-8", timeout=240,
                           dimensions=(60, 200), env={**os.environ, "TERM": "xterm"})
     try:
         child.expect("watching print-forever-node")

@@ -14,8 +14,8 @@ from pathlib import Path
 
 import pytest
 
-from course.ros import underlay, underlay_build
-from course.ros.underlay_pins import Pin
+from ros2course.ros import underlay, underlay_build
+from ros2course.ros.underlay_pins import Pin
 
 #: colcon builds: never beside the determinism tests (conftest.cpu_exclusive)
 pytestmark = [pytest.mark.usefixtures("cpu_exclusive"), pytest.mark.timeout(1200)]

@@ -9,7 +9,7 @@ import json
 
 import pytest
 
-from course.lesson.catalog import load_catalog
+from ros2course.lesson.catalog import load_catalog
 
 
 @pytest.mark.ros
@@ -34,8 +34,8 @@ def test_dev_validate(lesson_id, cli):
 
 def test_a_fixture_that_does_not_build_fails_only_for_the_build() -> None:
     """A not-gradable result (no checks ran) proves a fixture's bug only when the fixture names the build."""
-    from course.grade.results import CheckResult, LessonResult
-    from course.grade.validate import judge_fixture
+    from ros2course.grade.results import CheckResult, LessonResult
+    from ros2course.grade.validate import judge_fixture
 
     broken = LessonResult("l", 0.0, 10.0, "not gradable", [], "colcon build failed")
     assert judge_fixture(["build"], broken)[0]
@@ -53,8 +53,8 @@ def test_a_fixture_that_does_not_build_fails_only_for_the_build() -> None:
 
 def test_a_fixture_can_require_the_words_its_feedback_must_contain() -> None:
     """``says:`` in a fixture: losing the right check is not enough, the learner must be told what they did."""
-    from course.grade.results import CheckResult, LessonResult
-    from course.grade.validate import judge_fixture
+    from ros2course.grade.results import CheckResult, LessonResult
+    from ros2course.grade.validate import judge_fixture
 
     graded = LessonResult("l", 1.0, 3.0, "failed", [
         CheckResult("build", "b", 1, 1, True, "", "", ""),

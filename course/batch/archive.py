@@ -24,7 +24,7 @@ import tarfile
 import zipfile
 from pathlib import Path, PurePosixPath
 
-from course.errors import NotGradable
+from ros2course.errors import NotGradable
 
 #: Archive suffixes recognised, longest first.
 ARCHIVE_SUFFIXES = (".tar.gz", ".tgz", ".zip")

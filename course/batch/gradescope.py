@@ -3,7 +3,7 @@
 Gradescope copies the student's upload to ``/autograder/submission`` and
 reads ``/autograder/results/results.json`` (its autograder specification:
 ``score``, ``output``, ``tests[name, score, max_score, output, visibility]``).
-The grading is the same :func:`course.batch.runner.run_job` as ``ros2course grade``
+The grading is the same :func:`ros2course.batch.runner.run_job` as ``ros2course grade``
 (scratch copy, worker subprocess, namespaces where the container allows them,
 timeout), so a submission gets the same verdict on Gradescope as in a batch.
 
@@ -21,8 +21,8 @@ import tempfile
 import uuid
 from pathlib import Path
 
-from course.batch.archive import ARCHIVE_SUFFIXES
-from course.batch.runner import (
+from ros2course.batch.archive import ARCHIVE_SUFFIXES
+from ros2course.batch.runner import (
     Job,
     build_trusted_interfaces,
     default_hidden,
@@ -30,11 +30,11 @@ from course.batch.runner import (
     refuse_without_isolation,
     run_job,
 )
-from course.errors import CourseError
-from course.files import atomic_write_text
-from course.lesson.catalog import content_root, load_catalog
-from course.report import gradebook
-from course import sandbox
+from ros2course.errors import CourseError
+from ros2course.files import atomic_write_text
+from ros2course.lesson.catalog import content_root, load_catalog
+from ros2course.report import gradebook
+from ros2course import sandbox
 
 
 def configured_lessons(explicit: list[str]) -> list[str]:
@@ -81,7 +81,7 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
         results: the results file (``/autograder/results/results.json``); logs go beside it under ``submission/logs``.
         timeout: wall-clock seconds for the whole grading.
         pids_limit: tasks (processes + threads) the submission may have at once.
-        require_isolation: refuse unless every protection of :mod:`course.sandbox` is in effect.
+        require_isolation: refuse unless every protection of :mod:`ros2course.sandbox` is in effect.
 
     Returns:
         the total score.

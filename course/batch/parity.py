@@ -2,17 +2,17 @@
 
 ``check`` grades the learner's own workspace as the learner; ``grade`` grades a
 copy, as a fresh unprivileged uid inside namespaces, with the course's own build
-of the interfaces its graders import (:mod:`course.batch.runner`). Whatever
+of the interfaces its graders import (:mod:`ros2course.batch.runner`). Whatever
 differs between the two paths (a folder the submission's uid cannot write, an
 interface package not built for the batch) shows up as a correct submission
 losing points in batch only, and nothing but a class's grades would show it.
 
 So the course proves parity: after ``dev validate`` has graded each lesson's
 reference and wrong solutions through ``check``
-(:func:`course.grade.validate.validate_course`), :func:`batch_parity` hands the
+(:func:`ros2course.grade.validate.validate_course`), :func:`batch_parity` hands the
 reference and a sample of the wrong solutions in as one class (one student per
 lesson and case, each graded for its own lesson only), grades it with
-:func:`course.batch.runner.run_batch` with the isolation this machine gives
+:func:`ros2course.batch.runner.run_batch` with the isolation this machine gives
 (full isolation as root), and fails every case whose status, score or set of
 failed checks differs from the ``check`` result of the same case.
 """
@@ -23,17 +23,17 @@ import shutil
 import tempfile
 from pathlib import Path
 
-from course.batch.runner import run_batch
-from course.build.reference import reference_workspace
-from course.grade.results import LessonResult
-from course.grade.validate import (
+from ros2course.batch.runner import run_batch
+from ros2course.build.reference import reference_workspace
+from ros2course.grade.results import LessonResult
+from ros2course.grade.validate import (
     Outcome,
     apply_edits,
     load_fixtures,
     run_commands,
     validate_course,
 )
-from course.lesson.catalog import Lesson, load_catalog
+from ros2course.lesson.catalog import Lesson, load_catalog
 
 #: Suffix of the parity rows' case names in ``dev validate`` output.
 BATCH_CASE = " (grade)"
@@ -93,7 +93,7 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
         progress: a rich Console for one line per case (None: quiet).
 
     Returns:
-        one :class:`~course.grade.validate.Outcome` per case, named ``<case> (grade)``: ok when the batch's
+        one :class:`~ros2course.grade.validate.Outcome` per case, named ``<case> (grade)``: ok when the batch's
         status, score and failed checks equal ``check``'s (``expected`` is the check result, ``got`` the batch's).
 
     Raises:
@@ -135,7 +135,7 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
 
 
 def validate_with_batch(lesson_ids: list[str] | None, sample: int = 2, jobs: int = 1, progress=None) -> list[Outcome]:
-    """``dev validate --batch``: every case through ``check`` (:func:`course.grade.validate.validate_course`),
+    """``dev validate --batch``: every case through ``check`` (:func:`ros2course.grade.validate.validate_course`),
     then the reference and ``sample`` fixtures of each lesson through ``grade`` in one batch
     (:func:`batch_parity`); the outcomes of both, the batch's last.
 

@@ -3,9 +3,9 @@
 One submission is one *job* (:class:`Job`), run by :func:`run_job`:
 
 1. the entry is copied or safely extracted into a fresh scratch folder
-   (:mod:`course.batch.archive`); the original is never written to;
-2. a worker subprocess (:mod:`course.batch.worker`) grades it with the same
-   :func:`course.grade.engine.grade_lesson` as ``check``. It runs in its own
+   (:mod:`ros2course.batch.archive`); the original is never written to;
+2. a worker subprocess (:mod:`ros2course.batch.worker`) grades it with the same
+   :func:`ros2course.grade.engine.grade_lesson` as ``check``. It runs in its own
    session, with ``RLIMIT_AS`` / ``RLIMIT_FSIZE`` limits, its output captured
    into a capped log file, and, where the machine allows (``unshare``), in its
    own network namespace (loopback only: no internet, no DDS cross-talk) and
@@ -22,7 +22,7 @@ One submission is one *job* (:class:`Job`), run by :func:`run_job`:
 distributed cluster's executor (``--scheduler``), whose workers run the same
 :func:`run_job` (they need this package, the ROS install and a file system
 shared with the parent for the submissions and OUTDIR). The parent alone
-writes the outputs (:mod:`course.report.gradebook`) as each job finishes.
+writes the outputs (:mod:`ros2course.report.gradebook`) as each job finishes.
 """
 
 from __future__ import annotations
@@ -56,21 +56,22 @@ from rich.progress import (
 )
 from rich.table import Table
 
-from course.batch.archive import Submission, discover, prepare
-from course.build.reference import (
+from ros2course.batch.archive import Submission, discover, prepare
+from ros2course.build.reference import (
     ReferenceBuild,
     shared_reference_build,
     trusted_interface_packages,
 )
-from course.errors import CourseError, MissingRequirement, NotGradable
-from course.files import atomic_write_text
-from course.grade.engine import load_grader
-from course.grade.results import LessonResult, Status
-from course.lesson.catalog import content_root, load_catalog
-from course.report import gradebook
-from course.ros import env as env_mod
-from course import sandbox
-from course.run.process import OutputDrain, kill_marked, sweep_stale_fastdds_shm
+from ros2course.errors import CourseError, MissingRequirement, NotGradable
+from ros2course.files import atomic_write_text
+from ros2course.grade.engine import load_grader
+from ros2course.grade.results import LessonResult, Status
+from ros2course.lesson.catalog import content_root, load_catalog
+from ros2course.lesson.courses import fixtures_dir
+from ros2course.report import gradebook
+from ros2course.ros import env as env_mod
+from ros2course import sandbox
+from ros2course.run.process import OutputDrain, kill_marked, sweep_stale_fastdds_shm
 
 #: Environment variable every process of a job carries (its value: the job's marker).
 BATCH_MARKER_VAR = "ROS2COURSE_BATCH_MARKER"
@@ -104,7 +105,7 @@ class Job:
         file_limit: bytes per written file (0: no limit).
         output_cap: bytes of worker output kept.
         hide: folders hidden from the submission (when a mount namespace is available).
-        isolate: use the protections of :mod:`course.sandbox` the machine allows.
+        isolate: use the protections of :mod:`ros2course.sandbox` the machine allows.
         scratch_root: where scratch folders are made (None: the system temp folder).
         pids_limit: tasks (processes + threads) the submission may have at once.
         trusted_interfaces: a built workspace of the course's own interface packages, which the
@@ -130,7 +131,7 @@ class Job:
     require_isolation: bool = False
 
 
-# --- isolation (course.sandbox) -------------------------------------------------------------
+# --- isolation (ros2course.sandbox) -------------------------------------------------------------
 
 def _hideable(folder: Path) -> bool:
     """A folder may be hidden unless it holds what the worker itself needs (Python, this package, HOME)."""
@@ -142,7 +143,7 @@ def _hideable(folder: Path) -> bool:
 
 def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
     """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions."""
-    candidates = [scratch_root, submissions, out_dir, content_root() / "solutions", content_root() / "tests" / "fixtures"]
+    candidates = [scratch_root, submissions, out_dir, content_root() / "solutions", fixtures_dir(content_root())]
     out: list[str] = []
     for folder in candidates:
         folder = folder.resolve()
@@ -152,7 +153,7 @@ def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list
 
 
 def refuse_without_isolation(isolate: bool = True) -> None:
-    """Raise unless this machine gives a job every protection of :mod:`course.sandbox`.
+    """Raise unless this machine gives a job every protection of :mod:`ros2course.sandbox`.
 
     Raises:
         CourseError: one line naming each missing protection and why.
@@ -173,9 +174,9 @@ def build_trusted_interfaces(lessons: list[Any]) -> ReferenceBuild | None:
     isolation the grader imports these reference builds instead (same
     definitions as the contract in shared/LESSONS.md, so the same wire types).
     Which packages: each lesson's ``interfaces`` (lesson.yaml) and their
-    dependencies (:func:`course.build.reference.trusted_interface_packages`).
+    dependencies (:func:`ros2course.build.reference.trusted_interface_packages`).
     Built once and shared while their files and the ROS install stay the same
-    (:func:`course.build.reference.shared_reference_build`); call ``discard()`` when done.
+    (:func:`ros2course.build.reference.shared_reference_build`); call ``discard()`` when done.
 
     Returns:
         the build (``path``: a workspace with ``install/``), or None when no grader imports interface types.
@@ -291,7 +292,7 @@ def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Is
     """What one job runs inside: ``(command prefix, worker arguments, isolation, pids cgroup)``.
 
     The prefix is ``unshare`` (network, mount and PID namespaces) + ``dumb-init`` +
-    the mount plan (:class:`course.sandbox.MountPlan`), or ``[]``; the worker
+    the mount plan (:class:`ros2course.sandbox.MountPlan`), or ``[]``; the worker
     arguments give it the submission's uid, process limit and cgroup. The
     scratch folder's ``ws/``, ``home/`` and ``logs/ros/`` go to that uid.
     """
@@ -360,7 +361,7 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], 
         return ([_unfinished(lesson, Status.GRADER_ERROR, f"not graded: --require-isolation and missing {why}",
                              "grade on a machine that gives every protection (root, Linux, util-linux, dumb-init)")
                  for lesson in job.lessons], walls.to_json(), 0, False)
-    cmd = [sys.executable, "-m", "course.batch.worker", "--workspace", str(ws), "--results", str(result_file),
+    cmd = [sys.executable, "-m", "ros2course.batch.worker", "--workspace", str(ws), "--results", str(result_file),
            "--logs", str(logs), "--memory-limit", str(job.memory_limit), "--file-limit", str(job.file_limit),
            *worker_args]
     for lesson in job.lessons:
@@ -373,6 +374,7 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], 
     argv = ([setpriv, "--pdeathsig", "KILL"] if setpriv else []) + prefix + cmd
     env = dict(os.environ)
     env.update({BATCH_MARKER_VAR: marker, "HOME": str(scratch / "home"), "ROS_LOG_DIR": str(logs / "ros"),
+                "ROS2COURSE_CONTENT": str(content_root()),  # the worker grades on this batch's course
                 "PYTHONDONTWRITEBYTECODE": "1", "RCUTILS_COLORIZED_OUTPUT": "0"})
     if walls.uid is not None:
         # Fast DDS's shared-memory segments are made 0644 by their creator, so a grader (root)
@@ -524,7 +526,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     """Grade every submission in ``submissions`` for ``lessons``; write OUTDIR as each one finishes.
 
     Args:
-        submissions: folder with one entry per student (see :mod:`course.batch.archive`).
+        submissions: folder with one entry per student (see :mod:`ros2course.batch.archive`).
         lessons: lesson ids.
         out_dir: OUTDIR (created).
         jobs: submissions graded at once on this machine (default: number of cores).
@@ -533,7 +535,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
         resume: skip (student, lesson) pairs already in ``results.jsonl``.
         console: a rich ``Console`` for the progress bar (None: no progress shown).
         memory_limit: bytes of address space per process of a submission.
-        isolate: use the protections of :mod:`course.sandbox` where the machine allows them.
+        isolate: use the protections of :mod:`ros2course.sandbox` where the machine allows them.
         executor: use this executor instead (tests); ``jobs``/``scheduler`` ignored.
         pids_limit: tasks (processes + threads) each submission may have at once.
         require_isolation: refuse to grade unless every protection is in effect

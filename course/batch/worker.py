@@ -1,18 +1,18 @@
 """The worker process of a batch: grades one submission's workspace for one or more lessons.
 
-Run by :mod:`course.batch.runner` as ``python -m course.batch.worker ...`` in its own
+Run by :mod:`ros2course.batch.runner` as ``python -m ros2course.batch.worker ...`` in its own
 session (and, where the machine allows, its own network and mount namespace).
 It limits its own resources first (``RLIMIT_AS``, ``RLIMIT_FSIZE``; inherited by
 colcon and the learner's nodes), configures the submission's identity
 (``--run-as``: every command that runs submission code goes through
-:func:`course.sandbox.command`, so the worker stays the only root process
+:func:`ros2course.sandbox.command`, so the worker stays the only root process
 in the job), then calls the same
-:func:`course.grade.engine.grade_lesson` as ``ros2course check`` for each lesson and
+:func:`ros2course.grade.engine.grade_lesson` as ``ros2course check`` for each lesson and
 rewrites ``--results`` (a JSON list, temp file + ``os.replace``) after each one,
 so a worker killed half-way still leaves the lessons it finished.
 
 Runs ``grade_lesson`` from its main thread, so learner processes get their
-parent-death signal (see :class:`course.run.process.LearnerProcess`).
+parent-death signal (see :class:`ros2course.run.process.LearnerProcess`).
 """
 
 from __future__ import annotations
@@ -27,12 +27,12 @@ import traceback
 from pathlib import Path
 from typing import Any
 
-from course.files import atomic_write_text
-from course.grade.engine import grade_lesson
-from course.grade.results import LessonResult, Status
-from course.lesson.catalog import load_catalog
-from course.ros import env as env_mod
-from course import sandbox
+from ros2course.files import atomic_write_text
+from ros2course.grade.engine import grade_lesson
+from ros2course.grade.results import LessonResult, Status
+from ros2course.lesson.catalog import load_catalog
+from ros2course.ros import env as env_mod
+from ros2course import sandbox
 
 
 def _limit(kind: int, value: int) -> None:
@@ -45,14 +45,14 @@ def _limit(kind: int, value: int) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns 0 when every lesson produced a result (whatever its score)."""
-    parser = argparse.ArgumentParser(prog="python -m course.batch.worker")
+    parser = argparse.ArgumentParser(prog="python -m ros2course.batch.worker")
     parser.add_argument("--lesson", action="append", required=True)
     parser.add_argument("--workspace", required=True, type=Path)
     parser.add_argument("--results", required=True, type=Path)
     parser.add_argument("--logs", required=True, type=Path)
     parser.add_argument("--memory-limit", type=int, default=0, help="bytes of address space per process (0: none)")
     parser.add_argument("--file-limit", type=int, default=0, help="bytes per written file (0: none)")
-    parser.add_argument("--run-as", default="", help="UID:GID the submission's code runs as (course.sandbox)")
+    parser.add_argument("--run-as", default="", help="UID:GID the submission's code runs as (ros2course.sandbox)")
     parser.add_argument("--nproc", type=int, default=0, help="RLIMIT_NPROC of that uid (tasks at once)")
     parser.add_argument("--pids-cgroup", default="", help="cgroup.procs file of the job's pids cgroup")
     parser.add_argument("--trusted-interfaces", type=Path, default=None,
@@ -95,5 +95,5 @@ if __name__ == "__main__":
     code = main()
     sys.stdout.flush()
     sys.stderr.flush()
-    # rclpy / Fast DDS teardown at interpreter exit is slow and not needed (see course.cli.main)
+    # rclpy / Fast DDS teardown at interpreter exit is slow and not needed (see ros2course.cli.main)
     os._exit(code)

@@ -26,11 +26,11 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
-from course.errors import NotGradable
-from course.files import atomic_write_text
-from course.ros.colcon_log import BuildProgress
-from course.ros.packages import dependency_closure, find_packages
-from course import sandbox
+from ros2course.errors import NotGradable
+from ros2course.files import atomic_write_text
+from ros2course.ros.colcon_log import BuildProgress
+from ros2course.ros.packages import dependency_closure, find_packages
+from ros2course import sandbox
 
 FINGERPRINTS = ".ros2course-fingerprints.json"
 #: colcon arguments every build uses; ``BUILD_TESTING=OFF`` because ament_lint_auto
@@ -275,7 +275,7 @@ def _colcon(workspace_root: Path, packages: list[str], closure: list[str], env: 
         if follower is not None:
             follower.start()
         try:
-            # colcon runs the submission's setup.py and CMake code: as the submission (course.sandbox)
+            # colcon runs the submission's setup.py and CMake code: as the submission (ros2course.sandbox)
             proc = sandbox.run(command, cwd=workspace_root, env=env, stdout=log, stderr=subprocess.STDOUT,
                                stdin=subprocess.DEVNULL, timeout=timeout, start_new_session=True, check=False)
             ok = proc.returncode == 0
@@ -334,7 +334,7 @@ def overlay_env(workspace_root: Path, base_env: dict[str, str]) -> dict[str, str
     cached = _overlay_cache.get(key)
     if cached is not None:
         return dict(cached)
-    # the workspace's setup.bash is the submission's code too (course.sandbox)
+    # the workspace's setup.bash is the submission's code too (ros2course.sandbox)
     proc = sandbox.run(["bash", "-c", 'source "$1" >/dev/null 2>&1 && env -0', "bash", str(setup)],
                        capture_output=True, env=base_env, cwd=workspace_root, timeout=60, check=False)
     if proc.returncode != 0:

@@ -18,11 +18,11 @@ import tempfile
 import time
 from pathlib import Path
 
-from course.build.colcon import COLCON_ARGS, build_packages
-from course.errors import CourseError, ValidationFailed
-from course.lesson.catalog import Lesson, content_root
-from course.ros import env as env_mod
-from course.ros.packages import dependency_closure, find_packages
+from ros2course.build.colcon import COLCON_ARGS, build_packages
+from ros2course.errors import CourseError, ValidationFailed
+from ros2course.lesson.catalog import Lesson, content_root
+from ros2course.ros import env as env_mod
+from ros2course.ros.packages import dependency_closure, find_packages
 
 
 def solution_packages() -> dict[str, tuple[Path, object]]:

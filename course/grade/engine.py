@@ -13,7 +13,9 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import datetime as dt
+import hashlib
 import importlib
+import importlib.util
 import json
 import os
 import shutil
@@ -25,18 +27,18 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from course.build import colcon as build_mod
-from course.errors import CourseError, NotGradable
-from course.grade.results import NOT_CHECKED, CheckResult, LessonResult, Plot, Status
-from course.lesson.catalog import Lesson, content_root
-from course.ros import env as env_mod
-from course.ros import index as ament_index
-from course.ros.interfaces import workspace_type
-from course import sandbox
-from course.run.probes import RosSession
-from course.run.process import LearnerProcess, sweep_stale_fastdds_shm
-from course.run.recording import CHECKS_METADATA, Recorder
-from course.run.recording import FILE_NAME as RECORDING_FILE
+from ros2course.build import colcon as build_mod
+from ros2course.errors import CourseError, NotGradable
+from ros2course.grade.results import NOT_CHECKED, CheckResult, LessonResult, Plot, Status
+from ros2course.lesson.catalog import Lesson, content_root
+from ros2course.ros import env as env_mod
+from ros2course.ros import index as ament_index
+from ros2course.ros.interfaces import workspace_type
+from ros2course import sandbox
+from ros2course.run.probes import RosSession
+from ros2course.run.process import LearnerProcess, sweep_stale_fastdds_shm
+from ros2course.run.recording import CHECKS_METADATA, Recorder
+from ros2course.run.recording import FILE_NAME as RECORDING_FILE
 
 
 @dataclasses.dataclass(frozen=True)
@@ -95,10 +97,10 @@ class GradingSession:
     """What a grader's ``grade()`` works with.
 
     Attributes:
-        lesson: the :class:`~course.lesson.catalog.Lesson`.
+        lesson: the :class:`~ros2course.lesson.catalog.Lesson`.
         workspace_root: the colcon workspace being graded.
         log_dir: this check's log folder (node stdout/stderr go here).
-        ros: the :class:`~course.run.probes.RosSession` (private domain), started on first use.
+        ros: the :class:`~ros2course.run.probes.RosSession` (private domain), started on first use.
         base_env: the ROS install's environment (no workspace overlay).
     """
 
@@ -174,7 +176,7 @@ class GradingSession:
             fraction: partial credit in [0, 1] (default: all or nothing).
             window: the wall-clock span the verdict judged (``time.time()`` seconds: first and last
                 send stamp of a rate); default: from the previous verdict of this thread (or the
-                start of its part) to now. Kept with the check's recording (:mod:`course.run.recording`).
+                start of its part) to now. Kept with the check's recording (:mod:`ros2course.run.recording`).
 
         Raises:
             KeyError: ``check_id`` is not declared in the grader's ``CHECKS``.
@@ -337,7 +339,7 @@ class GradingSession:
         return self.ros.learner_env(self.overlay())
 
     def interface_type(self, package: str, kind: str, name: str) -> Any:
-        """A generated msg/srv class from the workspace (see :mod:`course.ros.interfaces`).
+        """A generated msg/srv class from the workspace (see :mod:`ros2course.ros.interfaces`).
 
         With ``trusted_interfaces`` (batch grading) the class comes from the
         course's own build of the package, never from the submission's: its
@@ -366,7 +368,7 @@ class GradingSession:
         CMake build folder, a venv, a probe's trace, a copy of the learner's sources
         that a build writes into, a ``ROS_HOME``. ``fill(folder)`` runs first, as the
         grader (copy sources, templates); then, in batch grading, the whole tree is
-        given to the submission's uid (:func:`course.sandbox.give_tree`) and the
+        given to the submission's uid (:func:`ros2course.sandbox.give_tree`) and the
         grader only reads it from then on (writing into a folder the submission owns
         could follow a link it planted). Under ``check`` the learner owns everything
         already, so both paths see the same folders.
@@ -391,7 +393,7 @@ class GradingSession:
         """Resolve ``package``/``executable`` the way ``ros2 run`` does.
 
         The package's prefix in the workspace overlay's ament index
-        (:func:`course.ros.index.package_prefix`, as ``get_package_prefix``), then
+        (:func:`ros2course.ros.index.package_prefix`, as ``get_package_prefix``), then
         ``<prefix>/lib/<package>/<executable>`` (ros2run source).
 
         Returns:
@@ -432,7 +434,7 @@ class GradingSession:
             path: the executable (from :meth:`find_executable`).
             name: label for its log files (``<name>.stdout.log``).
             args: extra arguments (e.g. ``["--ros-args", "-r", "__node:=x"]``).
-            graph: the :class:`~course.run.probes.RosSession` to run in (default :attr:`ros`).
+            graph: the :class:`~ros2course.run.probes.RosSession` to run in (default :attr:`ros`).
         """
         env = (graph or self.ros).learner_env(self.overlay())
         proc = LearnerProcess([str(path), *(args or [])], env, self.log_dir, name,
@@ -474,22 +476,64 @@ class GradingSession:
         sweep_stale_fastdds_shm()
 
 
-def load_grader(name: str):
-    """Import ``graders.<name>``; it must define ``CHECKS`` and ``grade``.
+def graders_package(course_root: Path | None = None) -> str:
+    """Import a course's ``graders/`` folder as a package of its own; return the package's name.
+
+    Each course folder gets a name derived from its resolved path
+    (``_ros2course_graders_<hash>``), so two courses loaded in one process never
+    see each other's graders, and graders are never looked up by a global name
+    such as ``graders.<name>`` on ``sys.path`` (issue 18). Inside a course's
+    graders, ``from . import other_grader`` reaches a sibling module; the kit is
+    imported from the engine (``from ros2course import kit``).
+
+    Args:
+        course_root: the course folder (default: :func:`content_root`, the active course).
 
     Raises:
-        CourseError: the module is missing or incomplete.
+        CourseError: the course has no ``graders/`` folder.
     """
-    root = str(content_root())
-    if root not in sys.path:
-        sys.path.insert(0, root)
+    folder = ((course_root or content_root()) / "graders").resolve()
+    name = "_ros2course_graders_" + hashlib.sha256(str(folder).encode()).hexdigest()[:12]
+    if name in sys.modules:
+        return name
+    init = folder / "__init__.py"
+    if not folder.is_dir():
+        raise CourseError(f"the course at {folder.parent} has no graders/ folder",
+                          "a course folder holds course.yaml, chapters/, graders/ and solutions/")
+    spec = importlib.util.spec_from_file_location(name, init if init.is_file() else None,
+                                                  submodule_search_locations=[str(folder)])
+    if spec is None:  # pragma: no cover - only for a folder importlib cannot describe
+        raise CourseError(f"cannot import the graders of {folder}", "check the folder's permissions")
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[name] = module
     try:
-        module = importlib.import_module(f"graders.{name}")
+        if spec.loader is not None:
+            spec.loader.exec_module(module)
+    except BaseException:
+        sys.modules.pop(name, None)
+        raise
+    return name
+
+
+def load_grader(name: str, course_root: Path | None = None):
+    """Import the grader module ``<course>/graders/<name>.py``; it must define ``CHECKS`` and ``grade``.
+
+    Args:
+        name: the lesson's ``grader:`` field (a module name).
+        course_root: the course folder (default: the active course, :func:`content_root`).
+
+    Raises:
+        CourseError: the module is missing, fails to import or is incomplete.
+    """
+    package = graders_package(course_root)
+    try:
+        module = importlib.import_module(f"{package}.{name}")
     except ImportError as exc:
-        raise CourseError(f"grader module graders.{name} cannot be imported: {exc}",
+        raise CourseError(f"grader module graders/{name}.py cannot be imported: {exc}",
                           "check the lesson's 'grader:' field") from exc
     if not hasattr(module, "CHECKS") or not hasattr(module, "grade"):
-        raise CourseError(f"grader module graders.{name} lacks CHECKS or grade()", "see graders/README.md")
+        raise CourseError(f"grader module graders/{name}.py lacks CHECKS or grade()",
+                          "a grader declares CHECKS and defines grade(session); see graders/README.md")
     return module
 
 
@@ -519,10 +563,10 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     grading: generated code is code the submission controls).
 
     ``progress(line)``, when given, hears what colcon is building (see
-    :class:`~course.ros.colcon_log.BuildProgress`).
+    :class:`~ros2course.ros.colcon_log.BuildProgress`).
 
     Never raises for problems of the submission (they become the result);
-    raises :class:`~course.errors.MissingRequirement` when the machine lacks
+    raises :class:`~ros2course.errors.MissingRequirement` when the machine lacks
     what the lesson ``requires`` (so a missing rclcpp is never a pass).
     """
     env_mod.require(lesson.requires, f"lesson {lesson.id}")

@@ -14,13 +14,13 @@ import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from course.build import colcon as build_mod
-from course.errors import NotGradable
-from course.grade.engine import grade_lesson, new_log_dir
-from course.grade.results import LessonResult, Status
-from course.lesson.catalog import Lesson
-from course.lesson.progress import Progress
-from course.ros import env as env_mod
+from ros2course.build import colcon as build_mod
+from ros2course.errors import NotGradable
+from ros2course.grade.engine import grade_lesson, new_log_dir
+from ros2course.grade.results import LessonResult, Status
+from ros2course.lesson.catalog import Lesson
+from ros2course.lesson.progress import Progress
+from ros2course.ros import env as env_mod
 
 
 @dataclasses.dataclass(frozen=True)

@@ -2,13 +2,13 @@
 
 A check that passes a right program nine times and fails it the tenth is a
 grader defect (issue 24): the learner trusts the score. This module grades
-each case of a lesson (:func:`course.grade.validate.lesson_cases`) ``N``
+each case of a lesson (:func:`ros2course.grade.validate.lesson_cases`) ``N``
 times, ``K`` gradings at once (``K`` copies of the workspace, as ``K``
 learners on one lab machine, or ``watch`` in one terminal and ``check`` in
 another), and reports every check whose verdict changed between runs, with
 the observed text of a run that passed it and of one that failed it.
 
-Each grading runs in its own process (``python -m course.grade.repeat``), as
+Each grading runs in its own process (``python -m ros2course.grade.repeat``), as
 ``ros2course check`` does: its own ROS domain, rclpy context and ``ros2``
 daemon, so the runs share nothing but the machine. A steady grader is one
 whose verdicts do not depend on what else runs; the fix for a flaky check is
@@ -30,9 +30,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from course.errors import CourseError
-from course.grade.results import LessonResult, Status
-from course.lesson.catalog import load_catalog
+from ros2course.errors import CourseError
+from ros2course.grade.results import LessonResult, Status
+from ros2course.lesson.catalog import load_catalog
 
 #: Seconds one grading may take before the run is counted as hung (a grader's own deadlines are far shorter).
 RUN_TIMEOUT = 600.0
@@ -128,8 +128,8 @@ class Steadiness:
 
 
 def _grade_in_process(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_dir: Path) -> LessonResult:
-    """Grade ``root`` in a fresh ``python -m course.grade.repeat`` process (as ``check`` would)."""
-    argv = [sys.executable, "-m", "course.grade.repeat", lesson_id, str(root), str(log_dir)]
+    """Grade ``root`` in a fresh ``python -m ros2course.grade.repeat`` process (as ``check`` would)."""
+    argv = [sys.executable, "-m", "ros2course.grade.repeat", lesson_id, str(root), str(log_dir)]
     for underlay in underlays:
         argv += ["--underlay", str(underlay)]
     try:
@@ -145,10 +145,10 @@ def _grade_in_process(lesson_id: str, root: Path, underlays: tuple[Path, ...], l
 
 
 def repeat_case(case, repeat: int, load: int, progress=None) -> Steadiness:
-    """Grade one :class:`~course.grade.validate.Case` ``repeat`` times, ``load`` at once.
+    """Grade one :class:`~ros2course.grade.validate.Case` ``repeat`` times, ``load`` at once.
 
     Args:
-        case: from :func:`course.grade.validate.lesson_cases`.
+        case: from :func:`ros2course.grade.validate.lesson_cases`.
         repeat: gradings in all (>= 2 to say anything).
         load: gradings at once, each on its own copy of the workspace (the copies are built by their
             first grading, later ones find the build up to date, as a learner's second ``check`` does).
@@ -193,7 +193,7 @@ def repeat_lessons(lesson_ids: list[str] | None, repeat: int, load: int = 1, cas
         CourseError: ``repeat`` < 2 or ``load`` < 1, or a case name no lesson has.
         ValidationFailed: a lesson's dependencies do not build.
     """
-    from course.grade.validate import build_underlay, lesson_cases  # noqa: PLC0415 - validate imports the engine
+    from ros2course.grade.validate import build_underlay, lesson_cases  # noqa: PLC0415 - validate imports the engine
 
     if repeat < 2:
         raise CourseError(f"--repeat needs at least 2 runs (got {repeat})", "e.g. --repeat 20 --load 2")
@@ -244,10 +244,10 @@ def _main(argv: list[str]) -> int:
     """One grading for :func:`repeat_case`: ``LESSON ROOT LOG_DIR [--underlay PATH]...``; prints its JSON record."""
     import argparse  # noqa: PLC0415
 
-    from course.grade.engine import grade_lesson  # noqa: PLC0415
-    from course.ros import env as env_mod  # noqa: PLC0415
+    from ros2course.grade.engine import grade_lesson  # noqa: PLC0415
+    from ros2course.ros import env as env_mod  # noqa: PLC0415
 
-    parser = argparse.ArgumentParser(prog="python -m course.grade.repeat")
+    parser = argparse.ArgumentParser(prog="python -m ros2course.grade.repeat")
     parser.add_argument("lesson")
     parser.add_argument("root", type=Path)
     parser.add_argument("log_dir", type=Path)

@@ -15,7 +15,7 @@ drift apart:
   :meth:`LessonResult.junit_suite`: a gradebook row, Gradescope's test
   entries, a JUnit ``<testsuite>``.
 
-The rich rendering for people lives in :mod:`course.report.table`.
+The rich rendering for people lives in :mod:`ros2course.report.table`.
 """
 
 from __future__ import annotations
@@ -133,11 +133,11 @@ class LessonResult:
         hint: for not gradable / grader error, what to do about it.
         timings: seconds spent per phase (``build``, ``grade``, ``teardown``, ``total``...).
         build: how the build went (``ok``, ``cached``, ``seconds``, ``log``, ``repairs``: one sentence per
-            stale install state repaired, see :func:`course.build.colcon.stale_install`).
+            stale install state repaired, see :func:`ros2course.build.colcon.stale_install`).
         log_dir: where the build and node logs of this check are.
         plots: time series the grader observed (:class:`Plot`), for people; not serialised.
         student: the student id (batch grading; "" for ``check``).
-        isolation: the protections the submission ran under (batch; see :mod:`course.sandbox`).
+        isolation: the protections the submission ran under (batch; see :mod:`ros2course.sandbox`).
         peak_rss: peak memory of the grading job, bytes (batch).
         seconds: wall time of this lesson in the worker, seconds (batch; None when unknown).
     """

@@ -35,24 +35,25 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from rich.console import Console
 from rich.table import Table
 
-from course.build.reference import (
+from ros2course.build.reference import (
     ReferenceBuild,
     lesson_dependencies,
     reference_workspace,
     shared_reference_build,
 )
-from course.errors import CourseError, LessonFormatError, ValidationFailed
-from course.grade.engine import grade_lesson
-from course.grade.results import LessonResult, Status
-from course.lesson.catalog import (
+from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
+from ros2course.grade.engine import grade_lesson
+from ros2course.grade.results import LessonResult, Status
+from ros2course.lesson.courses import fixtures_dir as course_fixtures
+from ros2course.lesson.catalog import (
     Lesson,
     content_root,
     format_validation_error,
     load_catalog,
 )
-from course.lesson.starter import copy_starter
-from course.ros import env as env_mod
-from course.ros.packages import find_packages
+from ros2course.lesson.starter import copy_starter
+from ros2course.ros import env as env_mod
+from ros2course.ros.packages import find_packages
 
 
 class Edit(BaseModel):
@@ -103,8 +104,8 @@ class Fixture(BaseModel):
 
 
 def fixtures_dir(lesson_id: str) -> Path:
-    """Where the lesson's fixture YAML files live."""
-    return content_root() / "tests" / "fixtures" / lesson_id
+    """Where the lesson's fixture YAML files live (``<course fixtures>/<lesson-id>``, see ``course.yaml``)."""
+    return course_fixtures(content_root()) / lesson_id
 
 
 def load_fixtures(lesson_id: str) -> list[Fixture]:
@@ -156,7 +157,7 @@ def apply_edits(workspace_root: Path, edits: list[Edit]) -> None:
 
 def build_underlay(lesson: Lesson) -> ReferenceBuild | None:
     """The lesson's dependencies, built as an underlay for every validation case (shared between
-    lessons and runs while their files do not change: :func:`~course.build.reference.shared_reference_build`).
+    lessons and runs while their files do not change: :func:`~ros2course.build.reference.shared_reference_build`).
 
     The standard ROS overlay mechanism: each case's workspace is built and
     sourced on top of this one, so an interface package is built once

@@ -34,10 +34,10 @@ import watchfiles
 from rich.console import Console
 from rich.rule import Rule
 
-from course.errors import CourseError
-from course.lesson.catalog import Catalog, Lesson
-from course.lesson.workspace import Workspace
-from course.run.process import kill_marked
+from ros2course.errors import CourseError
+from ros2course.lesson.catalog import Catalog, Lesson
+from ros2course.lesson.workspace import Workspace
+from ros2course.run.process import kill_marked
 
 #: Milliseconds watchfiles waits for more changes before reporting a batch (an editor's save is several events).
 DEBOUNCE_MS = 400
@@ -251,7 +251,7 @@ class Watcher:
         env = {**os.environ, "COLUMNS": str(self.console.width), MARKER_VAR: self._marker}
         if self.console.is_terminal:
             env["FORCE_COLOR"] = "1"
-        return subprocess.Popen([sys.executable, "-m", "course", *args, "--workspace", str(self.ws.root)],
+        return subprocess.Popen([sys.executable, "-m", "ros2course", *args, "--workspace", str(self.ws.root)],
                                 stdout=subprocess.PIPE, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL,
                                 text=True, env=env, cwd=self.ws.root, start_new_session=True)
 

@@ -1,16 +1,47 @@
-"""The lesson catalog: lessons, starters, the learner's progress."""
+"""The lesson catalog: courses, lessons, starters, the learner's progress."""
 
 from __future__ import annotations
 
 import os
 from pathlib import Path
 
+#: the manifest every course folder holds (issue 18): id, title, version, ROS distro, lessons in order
+MANIFEST = "course.yaml"
+
+_active: Path | None = None
+
+
+def bundled_course() -> Path:
+    """The folder of the tutorial course shipped with ros2course.
+
+    In an installed wheel it is ``ros2course/_courses/tutorial`` (setup.py copies it
+    there); in a source checkout (editable install) it is the checkout itself, which
+    holds ``course.yaml`` beside ``course/``. Registered as the ``ros2-tutorial``
+    entry point of the ``ros2course.courses`` group (pyproject.toml).
+    """
+    engine = Path(__file__).resolve().parents[1]
+    installed = engine / "_courses" / "tutorial"
+    return installed if (installed / MANIFEST).is_file() else engine.parent
+
+
+def use_course(root: Path | None) -> None:
+    """Make ``root`` the course every later :func:`content_root` call answers (None: back to the default).
+
+    The CLI calls it once per command, from ``--course`` or the workspace's record.
+    """
+    global _active  # noqa: PLW0603 - one active course per process, set by the CLI before any command
+    _active = root.resolve() if root is not None else None
+
 
 def content_root() -> Path:
-    """The folder holding ``chapters/``, ``graders/`` and ``solutions/``.
+    """The active course's folder, holding ``course.yaml``, ``chapters/``, ``graders/`` and ``solutions/``.
 
-    ``ROS2COURSE_CONTENT`` overrides it (tests, instructors with their own course).
-    Here rather than in :mod:`course.lesson.catalog` so ``list`` finds the course without pydantic.
+    In order: the course chosen with :func:`use_course` (``--course``, the workspace's
+    record); ``ROS2COURSE_CONTENT`` (how a batch worker subprocess is told its course,
+    and tests' private copies); the bundled tutorial course (:func:`bundled_course`).
+    Here rather than in :mod:`ros2course.lesson.catalog` so ``list`` finds the course without pydantic.
     """
+    if _active is not None:
+        return _active
     override = os.environ.get("ROS2COURSE_CONTENT")
-    return Path(override).resolve() if override else Path(__file__).resolve().parents[2]
+    return Path(override).resolve() if override else bundled_course()

@@ -17,9 +17,9 @@ from typing import Annotated
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
-from course.errors import LessonFormatError, UnknownLesson
-from course.lesson import content_root  # noqa: F401 - re-exported: callers import it from here
-from course.ros.requirements import KNOWN_REQUIREMENTS
+from ros2course.errors import LessonFormatError, UnknownLesson
+from ros2course.lesson import MANIFEST, content_root  # noqa: F401 - re-exported: callers import it from here
+from ros2course.ros.requirements import KNOWN_REQUIREMENTS
 
 _ID = r"^[a-z][a-z0-9]*(-[a-z0-9]+)*$"
 
@@ -40,7 +40,7 @@ class Lesson(BaseModel):
         id: stable lesson id from shared/LESSONS.md (kebab-case).
         title: one line.
         chapters: seed tutorial chapter numbers this lesson follows.
-        requires: what must be installed (see ``course.ros.env.KNOWN_REQUIREMENTS``).
+        requires: what must be installed (see ``ros2course.ros.env.KNOWN_REQUIREMENTS``).
         packages: ROS packages ``check`` builds with colcon (``--packages-up-to``).
         instructions: markdown shown by ``next``.
         hints: ordered from gentle to nearly the answer; ``hint`` shows them one at a time.
@@ -56,7 +56,7 @@ class Lesson(BaseModel):
             ``sas_lite.py``). Like every starter file, a learner's own version is kept. Below
             ``starter_includes`` and ``starter`` where paths overlap.
         interfaces: interface packages whose generated types the grader itself imports
-            (:meth:`course.grade.engine.GradingSession.interface_type` refuses any other). Batch
+            (:meth:`ros2course.grade.engine.GradingSession.interface_type` refuses any other). Batch
             grading builds them once from ``solutions/`` and imports that trusted build, never
             the submission's, even when the lesson teaches the package itself.
         folders: workspace folders holding the lesson's files outside any ROS package
@@ -180,7 +180,7 @@ class Catalog:
     def __init__(self, chapters_dir: Path) -> None:
         self.chapters_dir = chapters_dir
         if not chapters_dir.is_dir():
-            raise LessonFormatError(f"no chapters folder at {chapters_dir}", "set ROS2COURSE_CONTENT to the course folder")
+            raise LessonFormatError(f"no chapters folder at {chapters_dir}", "give the course folder with --course PATH")
         folders = sorted((p for p in chapters_dir.iterdir() if (p / "lesson.yaml").is_file()),
                          key=lambda p: (int(m.group(1)) if (m := re.match(r"^(\d+)-", p.name)) else 10**6, p.name))
         self.lessons: list[Lesson] = [load_lesson(p / "lesson.yaml") for p in folders]
@@ -189,7 +189,32 @@ class Catalog:
             if lesson.id in seen:
                 raise LessonFormatError(f"{lesson.folder}: id: duplicate lesson id {lesson.id!r}", "ids must be unique")
             seen.add(lesson.id)
+        if (chapters_dir.parent / MANIFEST).is_file():
+            self.lessons = self._in_manifest_order(chapters_dir.parent)
         self._resolve_starter_includes()
+
+    def _in_manifest_order(self, course_root: Path) -> list[Lesson]:
+        """The lessons in the order ``course.yaml`` lists them.
+
+        Raises:
+            LessonFormatError: the manifest names a lesson no chapter folder holds, or a
+                chapter folder holds a lesson the manifest does not list.
+        """
+        from ros2course.lesson.courses import load_manifest  # noqa: PLC0415 - pydantic is loaded here anyway
+
+        manifest = load_manifest(course_root)
+        by_id = {lesson.id: lesson for lesson in self.lessons}
+        path = course_root / MANIFEST
+        for lesson_id in manifest.lessons:
+            if lesson_id not in by_id:
+                close = difflib.get_close_matches(lesson_id, list(by_id), n=1)
+                raise LessonFormatError(f"{path}: lessons: {lesson_id!r} has no chapters/*/lesson.yaml",
+                                        f"did you mean {close[0]}?" if close else "add the lesson's folder or remove the id")
+        unlisted = [lesson for lesson in self.lessons if lesson.id not in manifest.lessons]
+        if unlisted:
+            raise LessonFormatError(f"{path}: lessons: {unlisted[0].id!r} ({unlisted[0].folder.name}) is not listed",
+                                    "add it to course.yaml's lessons where it belongs in the course")
+        return [by_id[lesson_id] for lesson_id in manifest.lessons]
 
     def _resolve_starter_includes(self) -> None:
         """Set each lesson's ``included_starters`` from its ``starter_includes`` (earlier lessons only).
@@ -237,7 +262,11 @@ class Catalog:
         return self.lessons[index + 1] if index + 1 < len(ids) else None
 
 
-@functools.lru_cache(maxsize=4)
 def load_catalog(root: Path | None = None) -> Catalog:
-    """The catalog under ``root/chapters`` (default :func:`content_root`)."""
-    return Catalog((root or content_root()) / "chapters")
+    """The catalog under ``root/chapters`` (default: the active course, :func:`content_root`), cached per folder."""
+    return _catalog_of(root or content_root())
+
+
+@functools.lru_cache(maxsize=4)
+def _catalog_of(root: Path) -> Catalog:
+    return Catalog(root / "chapters")

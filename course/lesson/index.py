@@ -8,7 +8,7 @@ pydantic (its import and model construction, about 90 ms) and PyYAML for every
 * a **catalog index**: a small JSON file in the user's cache folder
   (platformdirs, ``~/.cache/ros2course`` on Linux; ``ROS2COURSE_CACHE_DIR``
   overrides) with each lesson's id, title, chapters and workspace paths,
-  written after a full, validated :func:`course.lesson.catalog.load_catalog`
+  written after a full, validated :func:`ros2course.lesson.catalog.load_catalog`
   and used only while its *fingerprint* matches: the content folder and,
   per lesson folder, the ``lesson.yaml``'s size and
   mtime (ns) and the starter folder's mtime (a starter's top-level entries
@@ -18,7 +18,7 @@ pydantic (its import and model construction, about 90 ms) and PyYAML for every
   exactly as before. An unwritable cache folder only costs the speed-up.
 * a **plain read of progress.json** (:func:`progress_view`) that accepts only
   files whose every known field has the type the pydantic model declares
-  (:mod:`course.lesson.progress`); anything else goes through the validating
+  (:mod:`ros2course.lesson.progress`); anything else goes through the validating
   loader, which returns the same data or raises the same error.
 
 Like git's index, the cache is an optimisation the tool can always rebuild.
@@ -34,16 +34,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
-from course.files import atomic_write_text
-from course.lesson.status import PROGRESS_VERSION, lesson_status
-from course.lesson.workspace import Workspace
+from ros2course.files import atomic_write_text
+from ros2course.lesson.status import PROGRESS_VERSION, lesson_status
+from ros2course.lesson.workspace import Workspace
 
 #: Bumped when the index's layout changes (old files are then rebuilt).
 INDEX_FORMAT = 1
 
 
 class LessonEntry(NamedTuple):
-    """One row of ``list``: what :class:`course.lesson.catalog.Lesson` says about a lesson, nothing more."""
+    """One row of ``list``: what :class:`ros2course.lesson.catalog.Lesson` says about a lesson, nothing more."""
 
     id: str
     title: str
@@ -64,7 +64,7 @@ def cache_dir() -> Path:
 def _loader_stamp() -> list[int]:
     """mtimes (ns) of the code that turns a ``lesson.yaml`` into a row: a changed loader rebuilds the index."""
     here = Path(__file__).resolve().parent
-    return [os.stat(here / name).st_mtime_ns for name in ("catalog.py", "index.py")]
+    return [os.stat(here / name).st_mtime_ns for name in ("catalog.py", "index.py", "courses.py")]
 
 
 def fingerprint(chapters_dir: Path) -> list[list]:
@@ -85,6 +85,11 @@ def fingerprint(chapters_dir: Path) -> list[list]:
             except OSError:
                 starter = 0
             rows.append([entry.name, stat.st_size, stat.st_mtime_ns, starter])
+    try:  # the course's manifest orders the lessons (ros2course.lesson.courses)
+        manifest = os.stat(os.path.join(os.path.dirname(chapters_dir), "course.yaml"))
+        rows.append(["course.yaml", manifest.st_size, manifest.st_mtime_ns, 0])
+    except OSError:
+        pass
     return sorted(rows)
 
 
@@ -112,7 +117,7 @@ def catalog_entries(chapters_dir: Path) -> list[LessonEntry]:
             index = json.loads(path.read_text(encoding="utf-8"))
             if index["format"] == INDEX_FORMAT and index["folders"] == current and index["loader"] == _loader_stamp():
                 return [LessonEntry(*row) for row in index["lessons"]]
-    from course.lesson.catalog import Catalog  # noqa: PLC0415 - pydantic and yaml: index misses only
+    from ros2course.lesson.catalog import Catalog  # noqa: PLC0415 - pydantic and yaml: index misses only
 
     lessons = [LessonEntry(lesson.id, lesson.title, list(lesson.chapters), lesson.workspace_paths)
                for lesson in Catalog(chapters_dir).lessons]
@@ -142,7 +147,7 @@ class ProgressView:
     lessons: dict[str, RecordView] = field(default_factory=dict)
 
     def status(self, lesson_id: str) -> str:
-        """``done``, ``current``, ``started`` or ``not started`` (:func:`course.lesson.status.lesson_status`)."""
+        """``done``, ``current``, ``started`` or ``not started`` (:func:`ros2course.lesson.status.lesson_status`)."""
         return lesson_status(self.lessons.get(lesson_id), lesson_id, self.current)
 
 

@@ -1,8 +1,8 @@
 """The learner's progress file ``.ros2course/progress.json``: its schema, validated with pydantic.
 
-The file is small and versioned; :class:`course.lesson.workspace.Workspace`
+The file is small and versioned; :class:`ros2course.lesson.workspace.Workspace`
 reads and writes it (atomically). ``list`` reads it without this module
-(:mod:`course.lesson.index`) and falls back to it for any file it does not
+(:mod:`ros2course.lesson.index`) and falls back to it for any file it does not
 recognise, so both give the same statuses.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pydantic import BaseModel, Field
 
-from course.lesson.status import PROGRESS_VERSION, lesson_status
+from ros2course.lesson.status import PROGRESS_VERSION, lesson_status
 
 
 class LessonProgress(BaseModel):
@@ -24,11 +24,21 @@ class LessonProgress(BaseModel):
     started: bool = False
 
 
+class CourseRecord(BaseModel):
+    """Which course a workspace follows (issue 18): the manifest's id and version, and where it was found."""
+
+    id: str
+    version: str
+    path: str | None = None
+
+
 class Progress(BaseModel):
     """The whole progress file (``version`` guards future format changes)."""
 
     version: int = PROGRESS_VERSION
     current: str | None = None
+    #: None in workspaces made before courses were recorded: they follow the bundled tutorial course
+    course: CourseRecord | None = None
     lessons: dict[str, LessonProgress] = Field(default_factory=dict)
 
     def lesson(self, lesson_id: str) -> LessonProgress:

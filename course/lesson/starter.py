@@ -6,15 +6,15 @@ import datetime as dt
 import shutil
 from pathlib import Path
 
-from course.lesson import content_root
-from course.lesson.catalog import Lesson
+from ros2course.lesson import content_root
+from ros2course.lesson.catalog import Lesson
 
 
 def starter_sources(lesson: Lesson) -> dict[Path, Path]:
     """Workspace-relative path -> the file it is copied from, over every starter layer.
 
     Layers, lowest first: the finished packages of ``starter_solutions`` (from
-    ``solutions/``), then :attr:`course.lesson.catalog.Lesson.starter_layers`: the
+    ``solutions/``), then :attr:`ros2course.lesson.catalog.Lesson.starter_layers`: the
     starters of ``starter_includes``, the lesson's own last (a later layer's
     file wins on the same path).
     """

@@ -1,8 +1,8 @@
 """The learner's workspace: a colcon workspace (``src/``) with ``.ros2course/`` once ``ros2course init`` ran.
 
-The progress file's schema (pydantic models) lives in :mod:`course.lesson.progress`
+The progress file's schema (pydantic models) lives in :mod:`ros2course.lesson.progress`
 and is imported only by the methods that read or write it with validation:
-``list`` reads the file without pydantic (:mod:`course.lesson.index`) for its
+``list`` reads the file without pydantic (:mod:`ros2course.lesson.index`) for its
 start time (issue 13: under 0.25 s). Files are written atomically (temporary
 file, fsync, ``os.replace``), so a check killed half-way never corrupts them
 (rustlings keeps its state the same way).
@@ -14,12 +14,12 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from course.errors import ProgressError, WorkspaceNotFound
-from course.files import atomic_write_text
-from course.lesson.status import PROGRESS_VERSION
+from ros2course.errors import ProgressError, WorkspaceNotFound
+from ros2course.files import atomic_write_text
+from ros2course.lesson.status import PROGRESS_VERSION
 
 if TYPE_CHECKING:
-    from course.lesson.progress import Progress
+    from ros2course.lesson.progress import Progress
 
 STATE_DIR = ".ros2course"
 PROGRESS_FILE = "progress.json"
@@ -58,14 +58,14 @@ class Workspace:
         return self.root / "log" / "ros2course"
 
     def load_progress(self) -> Progress:
-        """Read and validate the progress file (an empty :class:`~course.lesson.progress.Progress` if none).
+        """Read and validate the progress file (an empty :class:`~ros2course.lesson.progress.Progress` if none).
 
         Raises:
             ProgressError: the file is not valid JSON or not a known version.
         """
         from pydantic import ValidationError  # noqa: PLC0415 - start time of list (module docstring)
 
-        from course.lesson.progress import Progress  # noqa: PLC0415 - same
+        from ros2course.lesson.progress import Progress  # noqa: PLC0415 - same
 
         if not self.progress_path.is_file():
             return Progress()
@@ -79,6 +79,26 @@ class Workspace:
             raise ProgressError(f"{self.progress_path}: progress file version {progress.version} is not supported",
                                 f"this ros2course reads version {PROGRESS_VERSION}; upgrade ros2course")
         return progress
+
+    def course_record(self) -> dict | None:
+        """The ``course`` record of the progress file (``{"id", "version", "path"}``), read without pydantic.
+
+        None when the workspace records no course (made before courses were recorded, or never
+        ``init``-ed) or the file cannot be read (:meth:`load_progress` reports that).
+        """
+        try:
+            record = json.loads(self.progress_path.read_text(encoding="utf-8")).get("course")
+        except (OSError, ValueError, AttributeError):
+            return None
+        return record if isinstance(record, dict) and isinstance(record.get("id"), str) else None
+
+    def record_course(self, course_id: str, version: str, path: Path) -> None:
+        """Record the course this workspace follows (its id, version and folder); saves the file."""
+        from ros2course.lesson.progress import CourseRecord  # noqa: PLC0415 - start time of list (module docstring)
+
+        progress = self.load_progress()
+        progress.course = CourseRecord(id=course_id, version=version, path=str(path))
+        self.save_progress(progress)
 
     def save_progress(self, progress: Progress) -> None:
         """Write the progress file atomically (no-op for a workspace never ``init``-ed)."""
@@ -113,7 +133,7 @@ class Workspace:
                 return False
             self.state_dir.mkdir(parents=True, exist_ok=True)
             atomic_write_text(self.state_dir / ".gitignore", "backups/\n")
-            from course.lesson.progress import Progress  # noqa: PLC0415 - start time of list (module docstring)
+            from ros2course.lesson.progress import Progress  # noqa: PLC0415 - start time of list (module docstring)
 
             self.save_progress(Progress())
         except (FileExistsError, NotADirectoryError) as exc:

@@ -2,12 +2,12 @@
 
 When a learner (or a student disputing a grade) asks "why 1.4 Hz?", the
 answer is in ``log/ros2course/<lesson>/latest/observed.mcap``
-(:mod:`course.run.recording`): every message the grader observed, with the
+(:mod:`ros2course.run.recording`): every message the grader observed, with the
 window each verdict judged. This module decodes it with ``mcap-ros2-support``
 (the ``ros2msg`` schemas are in the file, so no ROS install or workspace is
 needed to read it) and recomputes what a verdict was computed from: a rate
 from the same stamps (/rosout records' own stamps, other topics' send stamps,
-as :func:`graders.kit.judge.rate` judges them), the records of a log check.
+as :func:`ros2course.kit.judge.rate` judges them), the records of a log check.
 """
 
 from __future__ import annotations
@@ -25,9 +25,9 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from course.errors import CourseError
-from course.run.probes import RateStats
-from course.run.recording import CHECKS_METADATA, FILE_NAME
+from ros2course.errors import CourseError
+from ros2course.run.probes import RateStats
+from ros2course.run.recording import CHECKS_METADATA, FILE_NAME
 
 #: Stamps within this many nanoseconds of a window's ends count as inside it (float seconds round-trip).
 EDGE_NS = 1_000

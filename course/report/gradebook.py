@@ -5,8 +5,8 @@ written, flushed and fsync'd (a batch killed at any moment leaves at most a
 truncated last line, which :func:`read_results` skips); every other file is
 rewritten whole through a temporary file and ``os.replace``.
 
-A *record* is one line of ``results.jsonl``: a :class:`~course.grade.results.LessonResult`
-of one student and lesson as :meth:`~course.grade.results.LessonResult.to_record` writes it
+A *record* is one line of ``results.jsonl``: a :class:`~ros2course.grade.results.LessonResult`
+of one student and lesson as :meth:`~ros2course.grade.results.LessonResult.to_record` writes it
 (the ``check --json`` object plus ``student``, ``timings`` (seconds), ``isolation``,
 ``log_dir``...). Every format is rendered by the result itself; this module only
 chooses, orders and writes.
@@ -28,11 +28,11 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from course.grade.results import LessonResult
+from ros2course.grade.results import LessonResult
 
 
 def append_record(path: Path, result: LessonResult) -> None:
-    """Append ``result`` (:meth:`~course.grade.results.LessonResult.to_record`) as one JSON line, flushed and fsync'd.
+    """Append ``result`` (:meth:`~ros2course.grade.results.LessonResult.to_record`) as one JSON line, flushed and fsync'd.
 
     A previous run killed mid-line left a truncated last line: a newline is
     written first so the new record starts on a line of its own.
@@ -120,7 +120,7 @@ def gradescope_json(results: list[LessonResult]) -> dict[str, Any]:
 
 
 def junit_xml(results: Iterable[LessonResult]) -> str:
-    """JUnit XML: one ``<testsuite>`` per student and lesson (:meth:`~course.grade.results.LessonResult.junit_suite`)."""
+    """JUnit XML: one ``<testsuite>`` per student and lesson (:meth:`~ros2course.grade.results.LessonResult.junit_suite`)."""
     root = ET.Element("testsuites", name="ros2course")
     totals = {"tests": 0, "failures": 0, "errors": 0}
     for result in sorted(latest(results).values(), key=lambda r: (r.student, r.lesson)):

@@ -1,8 +1,8 @@
 """``ros2course list``'s table and the files column ``show`` prints too.
 
-Kept apart from :mod:`course.report.table` (results, plots, markdown) so
+Kept apart from :mod:`ros2course.report.table` (results, plots, markdown) so
 ``list`` imports only rich (issue 13: start under 0.25 s). Rows are
-:class:`course.lesson.index.LessonEntry` or full lessons alike.
+:class:`ros2course.lesson.index.LessonEntry` or full lessons alike.
 """
 
 from __future__ import annotations
@@ -16,9 +16,9 @@ from rich.table import Table
 from rich.text import Text
 
 if TYPE_CHECKING:
-    from course.lesson.catalog import Lesson
-    from course.lesson.index import LessonEntry, ProgressView
-    from course.lesson.progress import Progress
+    from ros2course.lesson.catalog import Lesson
+    from ros2course.lesson.index import LessonEntry, ProgressView
+    from ros2course.lesson.progress import Progress
 
 
 def points_text(value: float) -> str:

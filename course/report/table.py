@@ -13,9 +13,9 @@ from rich.panel import Panel
 from rich.table import Table
 from rich.text import Text
 
-from course.grade.results import LessonResult, Plot, Status
-from course.lesson.catalog import Lesson
-from course.report.listing import points_text
+from ros2course.grade.results import LessonResult, Plot, Status
+from ros2course.lesson.catalog import Lesson
+from ros2course.report.listing import points_text
 
 _STATUS_STYLE = {Status.PASSED: "bold green", Status.FAILED: "bold yellow", Status.NOT_GRADABLE: "bold red",
                  Status.GRADER_ERROR: "bold magenta"}
@@ -130,7 +130,7 @@ def render_regrades(items: list, console: Console) -> None:
     """``check --all``'s summary: each passed lesson's new grade, regressions first in red.
 
     Args:
-        items: :class:`course.grade.regrade.Regrade` objects, in course order.
+        items: :class:`ros2course.grade.regrade.Regrade` objects, in course order.
     """
     table = Table(title="ros2course check --all", title_justify="left")
     table.add_column("lesson")

@@ -1,7 +1,7 @@
 """Following colcon's console output in a build log, for a progress display.
 
-Used by the lesson builds (:mod:`course.build.colcon`) and the underlay build
-(:mod:`course.ros.underlay_build`), so it sits in the ROS layer both may use.
+Used by the lesson builds (:mod:`ros2course.build.colcon`) and the underlay build
+(:mod:`ros2course.ros.underlay_build`), so it sits in the ROS layer both may use.
 """
 
 from __future__ import annotations

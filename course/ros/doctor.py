@@ -1,8 +1,8 @@
 """``ros2course doctor`` and the optional components a workspace needs, built on demand.
 
-Above both the ROS install's activation (:mod:`course.ros.env`) and the
-underlay's build (:mod:`course.ros.underlay_build`), which it calls: split
-from :mod:`course.ros.env` so that no module of the ROS layer imports another
+Above both the ROS install's activation (:mod:`ros2course.ros.env`) and the
+underlay's build (:mod:`ros2course.ros.underlay_build`), which it calls: split
+from :mod:`ros2course.ros.env` so that no module of the ROS layer imports another
 in a cycle (issue 23).
 """
 
@@ -16,13 +16,13 @@ import sysconfig
 from collections.abc import Callable
 from pathlib import Path
 
-from course.errors import CourseError, MissingRequirement, NotGradable
-from course.ros import env as env_mod
-from course.ros import underlay as _underlay
-from course.ros import underlay_build
-from course.ros.packages import dependency_closure, find_packages
-from course.ros.requirements import KNOWN_REQUIREMENTS
-from course.ros.underlay_pins import JAZZY
+from ros2course.errors import CourseError, MissingRequirement, NotGradable
+from ros2course.ros import env as env_mod
+from ros2course.ros import underlay as _underlay
+from ros2course.ros import underlay_build
+from ros2course.ros.packages import dependency_closure, find_packages
+from ros2course.ros.requirements import KNOWN_REQUIREMENTS
+from ros2course.ros.underlay_pins import JAZZY
 
 
 @dataclasses.dataclass
@@ -102,9 +102,9 @@ def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
 
     Args:
         fix: repair the wheels' CMake files, install osrf-pycommon and build the
-            underlay (``course.ros.underlay``) when missing or out of date; idempotent.
+            underlay (``ros2course.ros.underlay``) when missing or out of date; idempotent.
         sources: folder of the pinned archives for the build (default
-            :func:`course.ros.underlay.default_sources`).
+            :func:`ros2course.ros.underlay.default_sources`).
 
     Returns:
         one :class:`DoctorRow` per component, in a stable order. A sourced system

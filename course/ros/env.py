@@ -8,7 +8,7 @@ Two supported set-ups (shared/ROS_ENV.md):
   prefix (a venv). The wheels keep an ament index under ``<prefix>/share``
   but do not set ``AMENT_PREFIX_PATH`` / ``CMAKE_PREFIX_PATH``;
   :func:`activate` sets them, as sourcing a ``setup.bash`` would, and adds the
-  source-built underlay (``ros2``, launch, rclcpp: :mod:`course.ros.underlay`)
+  source-built underlay (``ros2``, launch, rclcpp: :mod:`ros2course.ros.underlay`)
   when it is built. :func:`write_setup_script` writes the same as a bash
   script for the learner's terminal (``ros2course env --path``).
 """
@@ -26,8 +26,8 @@ import sys
 import sysconfig
 from pathlib import Path
 
-from course.errors import MissingRequirement
-from course.ros import underlay as _underlay
+from ros2course.errors import MissingRequirement
+from ros2course.ros import underlay as _underlay
 
 #: How to install each requirement a lesson may list under ``requires:`` (the hint of a missing one).
 INSTALL_HINTS = {
@@ -113,7 +113,7 @@ def activation(install: RosInstall | None = None, underlay: bool = True, sas: bo
 
     Args:
         install: the install to activate (default :func:`detect`).
-        underlay: include the source-built underlay (``course.ros.underlay``) when it is built.
+        underlay: include the source-built underlay (``ros2course.ros.underlay``) when it is built.
         sas: include the optional sas component too when it is built (on top of the underlay).
 
     Returns:

@@ -32,8 +32,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from course.errors import NotGradable
-from course.ros.index import package_prefix
+from ros2course.errors import NotGradable
+from ros2course.ros.index import package_prefix
 
 
 def _preload(lib_dir: Path, package: str) -> None:

@@ -13,7 +13,7 @@ from pathlib import Path
 from catkin_pkg.package import InvalidPackage
 from catkin_pkg.packages import find_packages as catkin_find
 
-from course.errors import NotGradable
+from ros2course.errors import NotGradable
 
 
 def find_packages(src: Path) -> dict[str, tuple[Path, object]]:

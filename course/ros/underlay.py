@@ -2,7 +2,7 @@
 
 What, and the repairs it needs, come from shared/ROS_ENV.md ("Building the
 missing ROS pieces from source"); which commits, from
-:mod:`course.ros.underlay_pins`. The underlay belongs to the ros2course install: it
+:mod:`ros2course.ros.underlay_pins`. The underlay belongs to the ros2course install: it
 lives under ``<venv>/opt/ros2course-jazzy`` (``ROS2COURSE_UNDERLAY`` moves it)::
 
     <root>/current -> builds/<key>     the only thing ever trusted (a symlink)
@@ -10,7 +10,7 @@ lives under ``<venv>/opt/ros2course-jazzy`` (``ROS2COURSE_UNDERLAY`` moves it)::
     <root>/builds/<key>/ros2course-underlay.json   its stamp (pins, repairs, python)
     <root>/work/                       sources, build/ and colcon logs while building
     <root>/logs/build-<time>.log       the output of every build
-    <root>/setup.bash                  the learner's activation script (course.ros.env)
+    <root>/setup.bash                  the learner's activation script (ros2course.ros.env)
     <root>/sas/...                     the optional sas component, same layout, built on top
 
 Atomic: a build goes into a fresh ``builds/<key>`` folder; only when colcon
@@ -42,8 +42,8 @@ import tarfile
 import urllib.request
 from pathlib import Path
 
-from course.errors import CourseError, ExitStatus
-from course.ros.underlay_pins import JAZZY, PATCHES, REPAIRS_VERSION, SAS, Pin
+from ros2course.errors import CourseError, ExitStatus
+from ros2course.ros.underlay_pins import JAZZY, PATCHES, REPAIRS_VERSION, SAS, Pin
 
 #: Environment variable: the underlay's root folder (default ``<sys.prefix>/opt/ros2course-jazzy``).
 ROOT_VAR = "ROS2COURSE_UNDERLAY"

@@ -1,8 +1,8 @@
-"""Building the underlay (:mod:`course.ros.underlay`): sources, colcon passes, the atomic switch.
+"""Building the underlay (:mod:`ros2course.ros.underlay`): sources, colcon passes, the atomic switch.
 
-Split from :mod:`course.ros.underlay` (where the underlay is, whether it is
+Split from :mod:`ros2course.ros.underlay` (where the underlay is, whether it is
 current, what a build needs) because a build needs the ROS install's
-activation (:mod:`course.ros.env`), which itself reads where the underlay is:
+activation (:mod:`ros2course.ros.env`), which itself reads where the underlay is:
 status below activation, building above it, no import cycle (issue 23).
 """
 
@@ -24,9 +24,9 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Callable
 
-from course.ros.colcon_log import BuildProgress
-from course.ros.env import activate, detect, repair_cmake_files
-from course.ros.underlay import (
+from ros2course.ros.colcon_log import BuildProgress
+from ros2course.ros.env import activate, detect, repair_cmake_files
+from ros2course.ros.underlay import (
     BUILD_TIMEOUT,
     EIGEN_INCLUDE,
     JAZZY_COMPONENT,
@@ -120,7 +120,7 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
         force: rebuild even when up to date.
         progress: called with one short line per step (e.g. a console's print).
         packages: called as colcon starts and finishes each package, with a short line
-            (:class:`~course.ros.colcon_log.BuildProgress`; e.g. a status display's update).
+            (:class:`~ros2course.ros.colcon_log.BuildProgress`; e.g. a status display's update).
         pins: what to build (default: the component's pins, course/ros/underlay_pins.py).
         base: the component's folder (default :func:`component_root`).
         component: :data:`JAZZY_COMPONENT` or :data:`SAS_COMPONENT` (needs the

@@ -7,7 +7,7 @@ package of the archive gets a ``COLCON_IGNORE`` (shared/ROS_ENV.md: colcon trips
 over in-tree packages the wheels already provide, and over test fixtures).
 
 Changing anything here changes the underlay's cache key
-(:func:`course.ros.underlay.cache_key`), so the next ``ros2course env --build``
+(:func:`ros2course.ros.underlay.cache_key`), so the next ``ros2course env --build``
 rebuilds; so does raising :data:`REPAIRS_VERSION` when a repair changes.
 """
 

@@ -104,7 +104,7 @@ def discovery_range() -> str:
     rmw_fastrtps's LOCALHOST mode forces Fast DDS's shared-memory transport,
     whose segments a grader and a node of two different users cannot both
     write; the job's network namespace has only loopback, so its "subnet" is
-    the namespace itself (see :mod:`course.sandbox`).
+    the namespace itself (see :mod:`ros2course.sandbox`).
     """
     return os.environ.get("ROS2COURSE_DISCOVERY_RANGE", "LOCALHOST")
 
@@ -137,7 +137,7 @@ class RosSession:
         domain_id: the ``ROS_DOMAIN_ID`` held for this session (1-100).
         context: the rclpy ``Context``.
         node: the hidden grader node.
-        recorder: where its probes write what they observe (:class:`~course.run.recording.Recorder`), or None.
+        recorder: where its probes write what they observe (:class:`~ros2course.run.recording.Recorder`), or None.
 
     Raises:
         RuntimeError: from ``domain_coordinator`` when no domain id is free.

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import psutil
 
-from course import sandbox
+from ros2course import sandbox
 
 #: Environment variable carrying the per-run marker (see module docstring).
 MARKER_VAR = "ROS2COURSE_RUN_MARKER"
@@ -194,7 +194,7 @@ class LearnerProcess:
         self.name = name
         self.marker = uuid.uuid4().hex
         self.env = {**env, MARKER_VAR: self.marker}
-        # In batch grading the submission's own uid runs it (course.sandbox); the
+        # In batch grading the submission's own uid runs it (ros2course.sandbox); the
         # drop and the parent-death signal are then set by one setpriv.
         if sandbox.current() is not None:
             self.argv, self._popen_env = sandbox.command(wrapped, self.env, pdeathsig=main_thread)

@@ -1,0 +1,106 @@
+"""Running a learner's asyncio code under a tracing wrapper, and reading the trace.
+
+The wrapper (a lesson's probe program, e.g. ``graders/data/python_asyncio/wrapper.py``)
+replaces ``random`` with known rolls per asyncio task and writes a JSON list of
+events: ``["draw", task, value, seconds]``, ``["out", task, text, seconds]``
+(text printed; task -1 outside any task), ``["scenario", name]``,
+``["result", name, value]``, ``["error", where, "Type: message"]``,
+``["function", exists, is_coroutine]``. Tasks are numbered from 0 in the order
+they first draw.
+
+Concurrency is judged on the order of events (a task draws while another one
+is still retrying), never on wall-clock times: the tutorial's point (ch. 2.5)
+is that ``await asyncio.sleep()`` lets other tasks run, ``time.sleep()`` does not.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+import sys
+from pathlib import Path
+
+from ros2course.grade.engine import GradingSession
+from ros2course.kit.programs import ProgramRun, run_program
+from ros2course.kit.python_programs import python_env
+
+_NUMBER = re.compile(r"\d*\.\d+(?:[eE][-+]?\d+)?")
+
+
+@dataclasses.dataclass(frozen=True)
+class Trace:
+    """The events of one traced run (a list of JSON arrays, see the module docstring)."""
+
+    events: list
+
+    def draw_order(self) -> list[int]:
+        """The task index of every draw, in order."""
+        return [e[1] for e in self.events if e[0] == "draw"]
+
+    def interleaved(self) -> bool:
+        """True when task 1 draws between two draws of task 0 (both were running at once)."""
+        order = self.draw_order()
+        if 0 not in order or 1 not in order:
+            return False
+        return order.index(1) < max(i for i, task in enumerate(order) if task == 0)
+
+    def describe_order(self) -> str:
+        """Draw order as text, e.g. ``1 2 1 2 1 1`` (task numbers from 1, as the learner counts)."""
+        order = self.draw_order()
+        return " ".join(str(task + 1) for task in order[:24]) + (" ..." if len(order) > 24 else "")
+
+    def draw_seconds(self) -> float:
+        """Seconds from the first draw to the last (0 without draws)."""
+        stamps = [e[3] for e in self.events if e[0] == "draw"]
+        return max(stamps) - min(stamps) if stamps else 0.0
+
+    def last_draw(self, index: int) -> int:
+        """Position of task ``index``'s last draw in the events (-1 if it never drew)."""
+        positions = [i for i, e in enumerate(self.events) if e[0] == "draw" and e[1] == index]
+        return positions[-1] if positions else -1
+
+    def mentions(self, index: int, value: float, tolerance: float) -> list[int]:
+        """Positions where text printed outside task ``index`` shows ``value`` (within ``tolerance``).
+
+        Text a task prints itself (its own "Done." line, even with the roll) is not its result being handled.
+        """
+        return [position for position, e in enumerate(self.events) if e[0] == "out" and e[1] != index
+                and any(abs(float(number) - value) <= tolerance for number in _NUMBER.findall(e[2]))]
+
+    def error(self, run: ProgramRun) -> str:
+        """What went wrong, in one sentence: the last recorded exception, else how the run ended."""
+        errors = [e[2] for e in self.events if e[0] == "error"]
+        return errors[-1] if errors else run.describe()
+
+    def first(self, kind: str) -> list | None:
+        """The first event of ``kind`` (e.g. ``"function"``), None if there is none."""
+        return next((e for e in self.events if e[0] == kind), None)
+
+    def scenario(self, name: str) -> tuple[list | None, Trace]:
+        """``(outcome, events)`` of probe scenario ``name``: its ``result`` or ``error`` event (None if it never
+        ended) and its own events."""
+        start = next((i for i, e in enumerate(self.events) if e[0] == "scenario" and e[1] == name), None)
+        if start is None:
+            return None, Trace([])
+        end = next((i for i, e in enumerate(self.events) if i > start and e[0] == "scenario"), len(self.events))
+        part = self.events[start + 1:end]
+        return next((e for e in part if e[0] in ("result", "error")), None), Trace(part)
+
+
+def run_traced(s: GradingSession, wrapper: Path, mode: str, target: str, plans: list[list[float]], label: str, *,
+               cwd: Path, timeout: float = 20.0) -> tuple[ProgramRun, Trace]:
+    """Run ``python <wrapper> <trace> <mode> <target> <plans>`` in ``cwd``; return the run and its trace.
+
+    The trace file is written into ``<log_dir>/<label>.trace/`` (a :meth:`GradingSession.submission_folder`:
+    the program runs as the submission; never the learner's folder); a run that wrote none (it crashed
+    before) comes back with an empty trace.
+    """
+    trace = s.submission_folder(f"{label}.trace") / "trace.json"
+    run = run_program(s, [sys.executable, str(wrapper), str(trace), mode, target, json.dumps(plans)], label,
+                      timeout=timeout, env=python_env(s), cwd=cwd)
+    try:
+        events = json.loads(trace.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        events = []
+    return run, Trace(events if isinstance(events, list) else [])

@@ -1,0 +1,50 @@
+"""Kit judgements over what was observed: rates on send stamps, the graph's topics."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ros2course.grade.engine import GradingSession
+from ros2course.run.probes import RateStats
+
+#: Tolerance on a mean period, as a fraction (shared/LESSONS.md: rates within ±15 %).
+RATE_TOLERANCE = 0.15
+#: Endpoints every rclpy node has; not the learner's doing, left out of "observed" lists.
+STANDARD_TOPICS = frozenset({"/rosout", "/parameter_events"})
+
+
+def rate(s: GradingSession, check_id: str, times: list[float], *, period: float, needed: int,
+         waited: float, noun: str, source: str, where: str = "", few_note: str = "") -> bool:
+    """Record ``check_id`` on the mean period of ``times`` (seconds, oldest first).
+
+    The formula is ``ros2 topic hz``'s (1 / mean delta, ros2topic/verb/hz.py),
+    over stamps taken where the event happened (a message's DDS send stamp,
+    a /rosout record's stamp, a request's send stamp), never over arrival
+    times: a loaded machine handing the grader two messages at once must not
+    change the verdict.
+
+    Args:
+        period: expected seconds between events; ±:data:`RATE_TOLERANCE` on the mean.
+        needed: events needed (``needed - 1`` intervals, at least 5 per shared/LESSONS.md).
+        waited: seconds the grader waited, shown when too few events came.
+        noun: what an event is, for the learner ("message", "record", "call").
+        source: what ``times`` are, e.g. "the messages' send stamps".
+        where: appended to the observed text (e.g. the topic the node really uses).
+        few_note: appended only when too few events came (e.g. the process state).
+    """
+    stats = RateStats.from_times(times)
+    # the span judged, for the check's recording (``ros2course evidence`` recomputes the rate from it)
+    window = (min(times), max(times)) if times else None
+    expected = (f"{1.0 / period:.2f} Hz: mean period {period:.3f} s ± {RATE_TOLERANCE:.0%}, "
+                f"over at least {needed - 1} intervals")
+    if stats is None or stats.samples < needed - 1:
+        return s.record(check_id, False, f"only {len(times)} {noun}(s) within {waited:.1f} s"
+                        + (f" ({stats.describe()})" if stats else "") + where + few_note, expected, window=window)
+    return s.record(check_id, stats.within(1.0 / period, RATE_TOLERANCE),
+                    f"{stats.describe()} (from {source}){where}", expected, window=window)
+
+
+def topics_seen(graph: Any) -> str:
+    """``/a (pkg/msg/T), /b (...)``: what ``ros2 topic list -t`` shows in ``graph``, ROS's own topics left out."""
+    topics = {name: types for name, types in graph.topic_types().items() if name not in STANDARD_TOPICS}
+    return ", ".join(f"{name} ({', '.join(types)})" for name, types in sorted(topics.items())) or "none"

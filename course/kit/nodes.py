@@ -1,0 +1,216 @@
+"""Kit steps for a learner's executables: find one as ``ros2 run`` does, start it as a node, judge Ctrl+C.
+
+Each step records its own check and returns a value the grader goes on
+with; when the value does not exist (no executable, the process died) the
+step raises :class:`ros2course.grade.engine.Unmet` and the engine marks the checks
+that need it "not checked".
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import signal
+import time
+from collections.abc import Iterable
+from pathlib import Path
+from typing import Any
+
+from ros2course.grade.engine import GradingSession, Unmet
+from ros2course.run.probes import wait_until
+from ros2course.run.process import LearnerProcess, last_traceback, rclpy_shutdown_race
+
+
+def executable(s: GradingSession, check_id: str, package: str, name: str, hint: str = "") -> Path:
+    """Record ``check_id`` on whether ``ros2 run package name`` finds the executable; return its path.
+
+    The lookup is ros2run's: the package's prefix in the ament index of the
+    sourced workspace, then ``<prefix>/lib/<package>/<name>``.
+
+    Raises:
+        Unmet: not found (nothing to run).
+    """
+    path, observed = s.find_executable(package, name)
+    s.record(check_id, path is not None, observed,
+             f"ros2 run {package} {name} finds install/{package}/lib/{package}/{name}", hint or None)
+    if path is None:
+        raise Unmet(f"there is no {name} executable to run")
+    return path
+
+
+def process_state(proc: LearnerProcess) -> str:
+    """A sentence on whether ``proc`` is still running, with its last traceback line if it died."""
+    code = proc.poll()
+    if code is None:
+        return "the process is still running"
+    trace = last_traceback(proc.stderr()) or last_traceback(proc.stdout())
+    last = trace.strip().splitlines()[-1] if trace else (proc.stderr().strip().splitlines() or [""])[-1]
+    return f"the process exited with code {code}" + (f" ({last})" if last else "")
+
+
+@dataclasses.dataclass
+class StartedNode:
+    """A learner executable started by :func:`start_node`.
+
+    Attributes:
+        proc: the running process (stopped by the engine at the end of the check).
+        name: the node to inspect: the contract's name when it appeared, else
+            the only new node of the graph (a misnamed node is still graded
+            on what it does), else None.
+        found: whether the contract's node name appeared.
+    """
+
+    proc: LearnerProcess
+    name: str | None
+    found: bool
+
+    def alive(self) -> bool:
+        """True while the process runs."""
+        return self.proc.poll() is None
+
+    def ended(self) -> bool:
+        """True once the process exited (an ``abort=`` for waits)."""
+        return self.proc.poll() is not None
+
+
+def start_node(s: GradingSession, check_id: str, path: Path, node: str, *, sigint_check: str | None = None,
+               args: Iterable[str] = (), label: str | None = None, graph: Any = None,
+               timeout: float = 10.0, grace: float = 3.0, need_node: bool = True,
+               aliases: Iterable[str] = ()) -> StartedNode:
+    """Start ``path`` and record ``check_id`` on whether a node called ``node`` appears in the graph.
+
+    Args:
+        aliases: other names accepted for the node (see :func:`wait_for_node`).
+        sigint_check: a check judged when the current part ends: Ctrl+C ends the
+            process with exit code 0 and no traceback (:func:`sigint_exit`),
+            even when a later step raised :class:`Unmet`.
+        args: extra arguments (e.g. ``["--ros-args", "-p", "period:=0.25"]``).
+        label: name of its log files (default: the executable's name).
+        graph: the :class:`~ros2course.run.probes.RosSession` to run in (default ``s.ros``).
+        timeout: seconds to wait for the node (a later process of a check can
+            take ~3 s to be discovered: Fast DDS's announcement period).
+        grace: stop waiting this many seconds after other nodes appeared without it.
+        need_node: raise :class:`Unmet` when no node to inspect appeared at all.
+
+    Raises:
+        Unmet: the process died, or (``need_node``) no node to inspect appeared.
+    """
+    graph = graph or s.ros
+    before = set(graph.node_names())
+    proc = s.launch(path, label or path.name, list(args), graph=graph)
+    if sigint_check is not None:
+        s.on_close(lambda: sigint_exit(s, sigint_check, proc))
+    found = wait_for_node(s, check_id, proc, node, timeout=timeout, grace=grace, before=before, graph=graph,
+                          aliases=aliases)
+    if found:
+        names = set(graph.node_names())
+        return StartedNode(proc, next((n for n in (node, *aliases) if f"/{n}" in names), node), True)
+    if proc.poll() is not None:
+        raise Unmet(process_state(proc))
+    plain = [n for n in graph.node_names() if n not in before and n.count("/") == 1]
+    started = StartedNode(proc, plain[0].lstrip("/") if len(plain) == 1 else None, False)
+    if started.name is None and need_node:
+        raise Unmet(f"no node to inspect: {s.results[check_id].observed}")
+    return started
+
+
+def wait_for_node(s: GradingSession, check_id: str, proc: LearnerProcess, node: str, timeout: float = 10.0,
+                  grace: float = 3.0, before: Iterable[str] = (), graph: Any = None,
+                  aliases: Iterable[str] = ()) -> bool:
+    """Record ``check_id`` on whether a node called ``node`` appears within ``timeout`` seconds.
+
+    ``aliases`` are other names accepted as that node: where the tutorial's own
+    listing and its text disagree (its C++ listing names the node
+    ``print_forever_cpp``, its printed log ``print_forever_node``), code typed as
+    the tutorial gives it must not lose the points (issue 19).
+
+    Stops waiting early if the process dies, or ``grace`` seconds after other
+    nodes appeared without it (a misnamed node will not rename itself).
+    Nodes named in ``before`` (those in the graph before ``proc`` started)
+    are ignored: a node stopped a moment ago can linger in the graph until
+    its DDS participant's lease expires. Observed lists the (new) nodes seen.
+    """
+    graph = graph or s.ros
+    ignored = set(before)
+    first_other: list[float] = []
+
+    def new_nodes() -> list[str]:
+        return [n for n in graph.node_names() if n not in ignored]
+
+    def give_up() -> bool:
+        if proc.poll() is not None:
+            return True
+        if not first_other and new_nodes():
+            first_other.append(time.monotonic())
+        return bool(first_other) and time.monotonic() - first_other[0] > grace
+
+    accepted = [f"/{name}" for name in (node, *aliases)]
+    begin = time.monotonic()
+    with s.phase("start"):
+        found = wait_until(lambda: any(name in new_nodes() for name in accepted), timeout, interval=0.05,
+                           abort=give_up)
+    waited = time.monotonic() - begin
+    if found:
+        name = next(name for name in accepted if name in new_nodes())
+        also = f" (the tutorial's listing names it so; the lesson's name is {node})" if name != f"/{node}" else ""
+        return s.record(check_id, True, f"node {name} is running{also}", f"a node named {node}")
+    seen = ", ".join(new_nodes()) or "none"
+    return s.record(check_id, False, f"no node named {node} after {waited:.1f} s; nodes seen: {seen}; "
+                    f"{process_state(proc)}", f"a node named {node} (the name passed to super().__init__)")
+
+
+def sigint_exit(s: GradingSession, check_id: str, proc: LearnerProcess, sigint_timeout: float = 3.0) -> bool:
+    """Press Ctrl+C (SIGINT) and record ``check_id``: exit code 0, no traceback, within ``sigint_timeout`` s.
+
+    The rule is the tutorial's (ch. 13: a node ends cleanly on Ctrl+C; in
+    Jazzy ``rclpy.spin()`` may raise ``ExternalShutdownException``). Observed
+    says how long the exit took; fails for an exit code other than 0, a
+    traceback, or a process still running (then stopped with SIGTERM /
+    SIGKILL). Two allowances for races inside rclpy (Jazzy 7.1) that are not
+    the learner's doing, measured here at about 1 % of SIGINTs each on nodes
+    started the way the engine starts them (SIGINT ignored at exec, so only
+    rclpy's handler reacts):
+
+    * a node with nothing to wake it (no timer: a server, a subscriber) can
+      miss the shutdown and keep waiting; if it still runs after half the
+      timeout it gets a second Ctrl+C, as a user would press it again;
+    * ``spin()`` can raise ``RCLError: ... context is not valid`` from inside
+      rclpy's executor instead of ``ExternalShutdownException``; that exit
+      counts as clean.
+
+    A node that ignores Ctrl+C still fails (it ignores the second one too).
+    """
+    expected = f"exit code 0 within {sigint_timeout:.0f} s of SIGINT (Ctrl+C), no traceback"
+    if proc.poll() is not None:
+        report = proc.stop()
+        return s.record(check_id, False, f"the process had already exited (code {report.returncode}) before SIGINT",
+                        expected, "the node must keep running until Ctrl+C")
+    presses = 0
+    with s.phase("stop"):
+        begin = time.monotonic()
+        for wait in (sigint_timeout / 2, sigint_timeout / 2):
+            presses += 1
+            try:
+                os.killpg(proc.pid, signal.SIGINT)
+            except (ProcessLookupError, PermissionError):
+                break
+            if wait_until(lambda: proc.poll() is not None, wait, interval=0.01):
+                break
+        seconds = time.monotonic() - begin
+        exited = proc.poll() is not None
+        report = proc.stop(sigint_timeout=0.1, sigterm_timeout=2.0)
+    twice = " (after a second Ctrl+C: rclpy missed the first one)" if presses > 1 else ""
+    if not exited:
+        return s.record(check_id, False,
+                        f"still running {sigint_timeout:.0f} s after SIGINT (sent twice); stopped with "
+                        f"{report.signal_used or 'SIGKILL'}", expected,
+                        "don't swallow Ctrl+C in a loop: let rclpy.spin() return and exit main()")
+    if report.traceback:
+        if report.returncode != 0 and rclpy_shutdown_race(report.traceback):
+            return s.record(check_id, True, f"exit code {report.returncode}, {seconds:.2f} s after SIGINT{twice}, "
+                            "with rclpy's own shutdown race (RCLError inside rclpy.spin: not your code)", expected)
+        last = report.traceback.strip().splitlines()[-1]
+        return s.record(check_id, False, f"exit code {report.returncode} with a traceback: {last}", expected)
+    if report.returncode != 0:
+        return s.record(check_id, False, f"exit code {report.returncode} after SIGINT", expected)
+    return s.record(check_id, True, f"exit code 0, {seconds:.2f} s after SIGINT{twice}", expected)

@@ -1,0 +1,34 @@
+"""Kit step that grades two independent parts of a lesson at the same time."""
+
+from __future__ import annotations
+
+import concurrent.futures
+from collections.abc import Callable
+
+from ros2course.grade.engine import GradingSession
+
+
+def at_once(s: GradingSession, background: str, grade_background: Callable[[], None], foreground: str,
+            grade_foreground: Callable[[], None]) -> None:
+    """Grade part ``background`` on a worker thread while part ``foreground`` is graded on this thread.
+
+    For halves that run in private graphs of their own (``s.new_graph()``), so
+    neither sees the other nor waits for its discovery: the check takes about
+    as long as the longer half. Processes started from the main thread get
+    the parent-death signal (course/run/process.py), so start there the half
+    whose programs run longest. ``s.part`` keeps each thread's closing actions
+    (Ctrl+C checks) apart; an :class:`~ros2course.grade.engine.Unmet` ends only its
+    own part. A grader fault (any other exception) of the background half is
+    raised here once both are done.
+    """
+    def run_background() -> None:
+        with s.part(background):
+            grade_background()
+
+    with concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix=f"ros2course-{background}") as pool:
+        done = pool.submit(run_background)
+        try:
+            with s.part(foreground):
+                grade_foreground()
+        finally:
+            done.result()

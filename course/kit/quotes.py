@@ -1,0 +1,262 @@
+"""AmazingQuote observations: the quote publisher's contract, shared by the parameters, launch-files and
+param-dump-load graders (seed ch. 22, 24), and a subscriber fed quotes (publisher-subscriber, seed ch. 19).
+
+Contract names come from shared/LESSONS.md; the launch file's values from the
+seed's ch. 22.9 listing.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import time
+from pathlib import Path
+from typing import Any
+
+from ros2course.grade.engine import GradingSession, Unmet
+from ros2course.run.probes import LATE_DELIVERY, wait_until
+from ros2course.kit.judge import topics_seen
+from ros2course.kit.launch import NodeAction, start_node_action
+from ros2course.kit.nodes import process_state
+from ros2course.kit.packages import source_package
+from ros2course.kit.topics_services import has_integer, publisher
+
+PACKAGE = "python_package_that_uses_parameters_and_launch_files"
+EXECUTABLE = "amazing_quote_configurable_publisher_node"
+NODE = "amazing_quote_configurable_publisher_node"
+INTERFACES = "package_with_interfaces"
+
+#: Parameters the node declares and their defaults (seed ch. 22.3).
+DEFAULTS: dict[str, Any] = {
+    "quote": "Use the force, Pikachu!",
+    "philosopher_name": "Uncle Ben",
+    "topic_name": "amazing_quote",
+    "period": 0.5,
+}
+
+#: The launch file of seed ch. 22.9.
+LAUNCH_FILE = "peanut_butter_falcon_quote_publisher_launch.py"
+LAUNCH_NODE = "peanut_butter_falcon_quote_publisher_node"
+LAUNCH_TOPIC = "truly_inspirational_quote"
+LAUNCH_PERIOD = 0.25  # seconds
+LAUNCH_PHILOSOPHER = "Tyler"
+LAUNCH_QUOTE = ("Yeah, you're gonna die, it's a matter of time. That ain't the question. The question's, "
+                "whether they're gonna have a good story to tell about you when you're gone")
+LAUNCH_PARAMETERS: dict[str, Any] = {
+    "topic_name": LAUNCH_TOPIC,
+    "period": LAUNCH_PERIOD,
+    "quote": LAUNCH_QUOTE,
+    "philosopher_name": LAUNCH_PHILOSOPHER,
+}
+
+
+def amazing_quote(s: GradingSession) -> type:
+    """The workspace's ``package_with_interfaces/msg/AmazingQuote`` class (NotGradable if not built)."""
+    return s.interface_type(INTERFACES, "msg", "AmazingQuote")
+
+
+def short(text: str, limit: int = 70) -> str:
+    """``text`` quoted, cut to ``limit`` characters."""
+    return repr(text if len(text) <= limit else text[:limit - 3] + "...")
+
+
+def first_difference(got: str, wanted: str) -> str:
+    """Where ``got`` first differs from ``wanted``, e.g. ``differs at character 73: '...question.The'``."""
+    if got == wanted:
+        return "identical"
+    index = len(os.path.commonprefix([got, wanted]))
+    start = max(0, index - 15)
+    return (f"differs from character {index + 1}: got {got[start:index + 15]!r}, "
+            f"expected {wanted[start:index + 15]!r}")
+
+
+def package_source(s: GradingSession) -> Path | None:
+    """The learner's ``src/.../python_package_that_uses_parameters_and_launch_files`` folder, if any."""
+    found = source_package(s, PACKAGE)
+    return found[0] if found else None
+
+
+def quote_after(s: GradingSession, check_id: str, probe: Any, since: float, *, count: int, period: float,
+                quote: str, philosopher: str, proc: Any, expected: str, prefix: str = "", stale: str = "") -> bool:
+    """Record ``check_id`` on the ``count``-th AmazingQuote message sent after ``since`` (wall clock, ``time.time()``).
+
+    A parameter change must show within ``count`` messages (one may already be
+    on its way when it is made: seed ch. 24.5); judged on send stamps
+    (``TopicProbe.wait_sent_after``: up to ``count * period`` s plus
+    ``LATE_DELIVERY``). Half the credit each for ``quote`` and ``philosopher``.
+
+    Args:
+        probe: the :class:`~ros2course.run.probes.TopicProbe` of the quote topic.
+        period: the publisher's period in seconds.
+        proc: the publisher's process (the wait ends if it dies; its state is shown).
+        prefix: opens the observed text (e.g. "set_parameters succeeded; ").
+        stale: appended when a value did not change (a likely cause for the learner).
+    """
+
+    with s.phase("observe"):
+        later = probe.wait_sent_after(since, count, period, abort=lambda: proc.poll() is not None)
+    if not later:
+        return s.record(check_id, False, f"{prefix}no message after the change; {process_state(proc)}", expected)
+    last = later[min(count, len(later)) - 1]
+    quote_ok, name_ok = last.quote == quote, last.philosopher_name == philosopher
+    seen = ", ".join(f"({short(m.quote, 30)}, {m.philosopher_name!r})" for m in later[:count])
+    return s.record(check_id, quote_ok and name_ok,
+                    f"{prefix}the next {len(later[:count])} message(s) were {seen}"
+                    + ("" if quote_ok and name_ok else stale), expected, fraction=(quote_ok + name_ok) / 2)
+
+
+# --- a learner's subscriber, fed quotes the grader makes up (seed ch. 19) -----------------
+
+_WORDS = ["teapot", "lantern", "cactus", "harbour", "violin", "comet", "pebble", "marmalade", "glacier",
+          "walrus", "origami", "thunder", "velvet", "compass", "biscuit", "nebula"]
+_NAMES = ["Ada", "Grace", "Alan", "Edsger", "Barbara", "Donald", "Margaret", "Linus", "Radia", "Ken"]
+
+
+def made_up(msg_type: type, count: int, rng: random.Random | None = None) -> list:
+    """``count`` AmazingQuote messages nobody hard-codes: random words, philosophers and ids (100000-999999)."""
+    rng = rng or random.Random()
+    out = []
+    for _ in range(count):
+        a, b, c = rng.sample(_WORDS, 3)
+        out.append(msg_type(id=rng.randrange(100_000, 1_000_000), quote=f"A {a} in the {b} is worth two {c}s.",
+                            philosopher_name=f"{rng.choice(_NAMES)} {rng.choice(_WORDS).capitalize()}"))
+    return out
+
+
+def subscriber_logs(s: GradingSession, quotes_id: str, details_id: str, node: Any, rosout: Any, topic: str,
+                    msg_type: type, *, count: int, where: str = "", graph: Any = None) -> None:
+    """Publish ``count`` :func:`made_up` quotes on ``topic``; record what the subscriber logged.
+
+    Like ``ros2 topic pub``: the grader's publisher waits (3 s) until the
+    subscriber is matched, then publishes each quote and waits up to 1 s for
+    its text on /rosout, publishing it once more if it did not show.
+    ``quotes_id``: each quote's text is in a record (partial credit; a note
+    when the texts went to stdout: ``print()``). ``details_id``: the
+    philosopher and the id of each logged quote are in the log too (any record).
+
+    Args:
+        node: the subscriber (:class:`~ros2course.kit.StartedNode`); rosout: its graph's /rosout probe.
+        where: appended to observed texts (a misnamed topic the quotes went to).
+
+    Raises:
+        Unmet: no quote was logged (``details_id`` cannot be judged).
+    """
+
+    quotes = made_up(msg_type, count)
+
+    def seen(msg: Any) -> bool:
+        return any(msg.quote in r.msg for r in rosout.records())
+
+    with publisher(s, topic, msg_type, graph) as pub, s.phase("observe"):
+        wait_until(lambda: pub.get_subscription_count() > 0, 3.0, abort=node.ended)  # else the first is lost
+        for msg in quotes:
+            for _ in range(2):  # a second chance if a message was lost
+                pub.publish(msg)
+                if wait_until(lambda m=msg: seen(m), 1.0, abort=node.ended):
+                    break
+    records = rosout.records()
+    logged = [m for m in quotes if any(m.quote in r.msg for r in records)]
+    expected = "each quote's text in a log record of the subscriber (the grader's own quotes)"
+    if len(logged) == len(quotes):
+        s.record(quotes_id, True, f"all {len(quotes)} quotes published were logged, e.g. {quotes[0].quote!r}" + where,
+                 expected)
+    else:
+        recent = " | ".join(r.msg.strip().replace("\n", " ")[:80] for r in records[-2:]) or "no log records"
+        on_stdout = any(m.quote in node.proc.stdout() for m in quotes)
+        s.record(quotes_id, False,
+                 f"{len(logged)} of {len(quotes)} quotes found in the log (e.g. {quotes[0].quote!r} was published)"
+                 f"{where}; last records: {recent}"
+                 + ("; the quotes appeared on stdout only (print() instead of the logger?)" if on_stdout else "")
+                 + f"; {process_state(node.proc)}", expected, fraction=len(logged) / len(quotes))
+    if not logged:
+        raise Unmet("no quote was logged")
+    items = [(m, what, ok) for m in logged
+             for what, ok in (("philosopher_name", any(m.philosopher_name in r.msg for r in records)),
+                              ("id", any(has_integer(r.msg, m.id) for r in records)))]
+    missing = [f"{what} of {m.quote!r} ({getattr(m, what)!r})" for m, what, ok in items if not ok]
+    s.record(details_id, not missing, "philosopher and id of every logged quote found" if not missing
+             else "missing: " + "; ".join(missing[:2]), "each quote's philosopher_name and id in the log too",
+             fraction=(len(items) - len(missing)) / len(items))
+
+
+# --- the configurable publisher, started and changed ---------------------------------------
+
+def start_as_launched(s: GradingSession, check_id: str, probe: Any) -> Any:
+    """Start the publisher as the launch-files lesson's launch file starts it (:data:`LAUNCH_PARAMETERS`,
+    node :data:`LAUNCH_NODE`, with :func:`ros2course.kit.launch.start_node_action`); record ``check_id``: the
+    node appears (10 s) and its first message reaches ``probe`` (the /:data:`LAUNCH_TOPIC` TopicProbe).
+
+    Returns:
+        The process (stopped by the engine at the end of the check).
+
+    Raises:
+        Unmet: no executable, no node, or no message on the topic.
+    """
+
+    action = NodeAction(line=0, package=PACKAGE, executable=EXECUTABLE, name=LAUNCH_NODE,
+                        parameters=[dict(LAUNCH_PARAMETERS)])
+    expected = (f"node /{LAUNCH_NODE} publishing the launch file's quote on /{LAUNCH_TOPIC} "
+                f"(started like the launch-files lesson's launch file)")
+    proc, reason = start_node_action(s, action, f"{EXECUTABLE}.as_launched")
+    if proc is None:
+        s.record(check_id, False, reason, expected)
+        raise Unmet("the node could not be started")
+    with s.phase("start"):
+        found = s.ros.wait_for_node(LAUNCH_NODE, 10.0, abort=lambda: proc.poll() is not None)
+        if found:
+            probe.wait_for_count(1, timeout=3.0 + LATE_DELIVERY, abort=lambda: proc.poll() is not None)
+    samples = probe.samples()
+    if not found or not samples:
+        seen = ", ".join(s.ros.node_names()) or "none"
+        s.record(check_id, False, (f"no message on /{LAUNCH_TOPIC}; topics seen: {topics_seen(s.ros)}"
+                                   if found else f"no node {LAUNCH_NODE}; nodes seen: {seen}")
+                 + f"; {process_state(proc)}", expected)
+        raise Unmet("the node is not running as the launch file would run it")
+    first = samples[0][1]
+    s.record(check_id, True, f"/{LAUNCH_NODE} publishes quote {short(first.quote, 40)} "
+             f"by {first.philosopher_name!r} on /{LAUNCH_TOPIC}", expected)
+    return proc
+
+
+def set_at_runtime(s: GradingSession, check_id: str, services: Any, probe: Any, proc: Any, *, quote: str,
+                   philosopher: str, count: int, period: float, topic: str) -> bool:
+    """``ros2 param set`` quote and philosopher_name on the running publisher; record ``check_id``:
+    the ``count``-th message sent afterwards carries them (:func:`quote_after`, on send stamps).
+
+    Args:
+        services: the node's :class:`~ros2course.kit.params.NodeParameters`.
+        probe: the TopicProbe of ``topic``; proc: the publisher's process.
+    """
+
+    expected = (f"within {count} messages after the change, quote {short(quote)} "
+                f"and philosopher_name {philosopher!r}")
+    if not probe.samples():
+        return s.record(check_id, False, f"no message on {topic} to compare with", expected)
+    results = services.set({"quote": quote, "philosopher_name": philosopher})
+    changed_at = time.time()  # the node applied the change before it answered: later send stamps are after it
+    failed = [f"{r.name}: {r.reason or 'refused'}" for r in results if not r.successful]
+    if failed:
+        return s.record(check_id, False, "set_parameters failed: " + "; ".join(failed), expected)
+    return quote_after(s, check_id, probe, changed_at, count=count, period=period, quote=quote,
+                       philosopher=philosopher, proc=proc, expected=expected, prefix="set_parameters succeeded; ",
+                       stale=" -- the node still publishes the old values: does it read the parameters only once?")
+
+
+def texts(s: GradingSession, check_id: str, messages: list, quote: str, philosopher: str, source: str) -> bool:
+    """Record ``check_id``: every AmazingQuote in ``messages`` says ``quote`` by ``philosopher``.
+
+    Observed names the first message that differs and where its quote first
+    differs from ``quote`` (:func:`first_difference`: a missing space between
+    glued string literals shows). ``source`` says where the quote comes from (e.g. "ch. 22.9").
+    """
+    wrong = [m for m in messages if m.quote != quote or m.philosopher_name != philosopher]
+    expected = f"quote {short(quote)} ({source}), philosopher_name {philosopher!r}"
+    if not wrong:
+        return s.record(check_id, True, f"all {len(messages)} messages carry the quote and {philosopher!r}", expected)
+    msg = wrong[0]
+    parts = []
+    if msg.quote != quote:
+        parts.append(f"quote {short(msg.quote)} {first_difference(msg.quote, quote)}")
+    if msg.philosopher_name != philosopher:
+        parts.append(f"philosopher_name {msg.philosopher_name!r}")
+    return s.record(check_id, False, f"{len(wrong)} of {len(messages)} messages differ: " + "; ".join(parts), expected)

@@ -1,0 +1,7 @@
+"""The version of the engine's public grading API, :mod:`ros2course.kit` (a course's ``course.yaml`` names the major version it is written for).
+
+Kept apart from the kit so reading a course manifest does not import the kit (start time of ``list``).
+"""
+
+#: bumped in its major part when a kit step changes its arguments or what it records
+API_VERSION = "1.0"

@@ -1,0 +1,1 @@
+"""This course's graders: one module per lesson."""
