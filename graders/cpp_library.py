@@ -20,10 +20,10 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from ros2course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
+from ros2course.kit import LATE_DELIVERY, stamp_seconds, wait_until
 from ros2course import kit
 from ros2course.kit import Check, GradingSession
-from ros2course.kit import cpp_packages as cpp
+from . import _cpp_packages as cpp
 from ros2course.kit.parts import at_once
 from ros2course.kit.programs import run_program
 

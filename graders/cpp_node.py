@@ -11,7 +11,7 @@ tutorial's own listing names it), logging
 
 from __future__ import annotations
 
-from ros2course.grade.engine import GradingSession
+from ros2course.kit import GradingSession
 from . import print_forever_node
 from .print_forever_node import grade_node, make_checks
 

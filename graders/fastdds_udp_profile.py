@@ -2,7 +2,7 @@
 
 ``docker/fastrtps_profile.xml`` is graded live: two grader nodes in child
 processes use it as their Fast DDS default profile and must exchange messages
-without any shared-memory segment (:mod:`ros2course.kit.dds`); Fast DDS's own
+without any shared-memory segment (:mod:`graders._dds`); Fast DDS's own
 parser errors are quoted. ``docker/compose.yml`` is read, not run: two
 services of one image, ``stop_signal: SIGINT``, the profile mounted and
 ``FASTRTPS_DEFAULT_PROFILES_FILE`` pointing at the mounted file.
@@ -12,7 +12,8 @@ from __future__ import annotations
 
 from pathlib import PurePosixPath
 
-from ros2course.kit import Check, GradingSession, Unmet, dds
+from ros2course.kit import Check, GradingSession, Unmet
+from . import _dds as dds
 
 PROFILE = "docker/fastrtps_profile.xml"
 COMPOSE = "docker/compose.yml"

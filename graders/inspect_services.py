@@ -2,7 +2,7 @@
 
 The grader's node ``/point_oracle_NNN`` (random name) serves ``/what_is_the_point``
 (the learner's WhatIsThePoint) and answers each request with a random point,
-summing to 42 for a quote about life (:mod:`ros2course.kit.mystery_services`).
+summing to 42 for a quote about life (:mod:`graders._mystery_services`).
 The learner's ``cli/inspect_services.sh`` runs in that graph (kit.scripts); it
 is judged on the service list it printed, the requests the server received
 and the responses it printed (random values only a real call can show).
@@ -11,7 +11,7 @@ and the responses it printed (random values only a real call can show).
 from __future__ import annotations
 
 from ros2course.kit import Check, GradingSession, scripts
-from ros2course.kit.mystery_services import SERVICE, SERVICE_TYPE, PointOracle
+from ._mystery_services import SERVICE, SERVICE_TYPE, PointOracle
 from ros2course.kit.topics_services import workspace_types
 
 SCRIPT = "cli/inspect_services.sh"

@@ -10,7 +10,7 @@ it published (the message the grader's subscription received).
 
 from __future__ import annotations
 
-from ros2course.run.probes import wait_until
+from ros2course.kit import wait_until
 from ros2course.kit import Check, GradingSession, scripts
 from ros2course.kit.mystery import INBOX_TOPIC, QuotePublisher, quote_inbox
 from ros2course.kit.quotes import amazing_quote

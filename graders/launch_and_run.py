@@ -4,7 +4,7 @@ The learner's ``cli/run_and_launch.sh`` starts ``print_forever_node`` with
 ``ros2 run`` and the launch-files lesson's launch file with ``ros2 launch``, both
 in the background, and waits. It runs in the check's graph (as kit.scripts runs scripts, with SIGINT
 at its default action as in a terminal) while a
-:class:`~ros2course.kit.node_watch.NodeWatch` lists the nodes that join; after
+:class:`~graders._node_watch.NodeWatch` lists the nodes that join; after
 :data:`RUN_SECONDS` the grader presses Ctrl+C (SIGINT to the script's process
 group, as a terminal does) and expects the script to end by itself, exit code
 0 and no traceback, once its nodes have stopped.
@@ -13,7 +13,7 @@ group, as a terminal does) and expects the script to end by itself, exit code
 from __future__ import annotations
 
 from ros2course.kit import Check, GradingSession, scripts
-from ros2course.kit.node_watch import NodeWatch, node_appeared
+from ._node_watch import NodeWatch, node_appeared
 from ros2course.kit.programs import sigint_exit
 from ros2course.kit.quotes import LAUNCH_FILE, LAUNCH_NODE
 from ros2course.kit.quotes import PACKAGE as LAUNCH_PACKAGE

@@ -10,7 +10,7 @@ only to say which ``Node(...)`` actions it holds when launch started too little.
 
 from __future__ import annotations
 
-from ros2course.run.probes import LATE_DELIVERY
+from ros2course.kit import LATE_DELIVERY
 from ros2course import kit
 from ros2course.kit import Check, GradingSession, quotes
 from ros2course.kit.launch import installed_launch_file, launched_node, start_launch_file

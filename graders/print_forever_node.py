@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 
-from ros2course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
+from ros2course.kit import LATE_DELIVERY, stamp_seconds, wait_until
 from ros2course import kit
 from ros2course.kit import Check, GradingSession
 

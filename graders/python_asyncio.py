@@ -6,7 +6,7 @@ wrapper ``graders/data/python_asyncio/wrapper.py``: it replaces
 ``random.random`` / ``random.uniform`` with a known sequence of rolls *per
 asyncio task* (so the verdict does not depend on luck or on scheduling) and
 records, in order, every roll drawn and every piece of text printed, with the
-task that printed it (:mod:`ros2course.kit.asyncio_trace`). The checks read that trace:
+task that printed it (:mod:`graders._asyncio_trace`). The checks read that trace:
 
 * concurrency is judged on the order of the draws (the second task draws
   while the first one is still retrying), never on wall-clock times;
@@ -19,7 +19,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ros2course.kit import Check, GradingSession, Unmet
-from ros2course.kit.asyncio_trace import Trace, run_traced
+from ._asyncio_trace import Trace, run_traced
 
 #: No continuous observation: each run ends by itself (about 1 s of asyncio.sleep at 0.1 s per retry).
 WINDOW = 3.0

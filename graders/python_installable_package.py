@@ -3,7 +3,7 @@
 The learner's ``python/minimalist_package`` is copied to ``s.log_dir`` (a pip
 build writes ``build/`` and ``*.egg-info`` next to the sources, which must not
 land in the learner's workspace) and installed with pip into a **fresh venv**
-made under ``s.log_dir``, offline (:mod:`ros2course.kit.pip`: ``venv
+made under ``s.log_dir``, offline (:mod:`graders._pip`: ``venv
 --without-pip``, the grader's own pip and setuptools on PYTHONPATH for pip's
 runs only, ``--no-index --no-build-isolation --no-deps``). Then, from ``/``:
 ``import minimalist_package`` must work with the venv's interpreter, the
@@ -19,7 +19,7 @@ from pathlib import Path
 import tomllib
 
 from ros2course.kit import Check, GradingSession, Unmet
-from ros2course.kit import pip as kpip
+from . import _pip as kpip
 from ros2course.kit.parts import at_once
 from ros2course.kit.programs import interrupt_after, last_line, run_program
 from ros2course.kit.python_programs import python_env
@@ -95,7 +95,7 @@ def grade(s: GradingSession) -> None:
              "'pip install ./minimalist_package' ends with 'Successfully installed minimalist-package-...'")
     s.require("installs")
 
-    # the import and the uninstall (in a copy of the venv: ros2course.kit.pip.venv_copy) are judged while the command runs
+    # the import and the uninstall (in a copy of the venv: graders._pip.venv_copy) are judged while the command runs
     removal = kpip.venv_copy(s, python, "uninstall_venv")
     at_once(s, "install", lambda: (_importable(s, python, env), _uninstall(s, removal, tools, env)), "command",
             lambda: _console_script(s, venv / "bin" / SCRIPT, env))

@@ -8,8 +8,8 @@ graph is started.
 
 from __future__ import annotations
 
-from ros2course.run.probes import wait_until
-from ros2course.run.process import LearnerProcess
+from ros2course.kit import wait_until
+from ros2course.kit import LearnerProcess
 from ros2course.kit import Check, GradingSession
 from ros2course.kit.packaging import ros2_run_executable
 

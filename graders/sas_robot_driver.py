@@ -14,7 +14,8 @@ from __future__ import annotations
 import math
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks, sas
+from ros2course.kit import Check, GradingSession, checks
+from . import _sas as sas
 
 PACKAGE = "sas_robot_driver_myrobot"
 DRIVER_EXECUTABLE = "sas_robot_driver_myrobot_node"

@@ -19,7 +19,8 @@ Black-box, and the grader plays the other side each time:
 from __future__ import annotations
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks, parts, services
+from ros2course.kit import Check, GradingSession, checks, parts
+from . import _services as services
 from ros2course.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_the_services"

@@ -1,7 +1,7 @@
 """Grader for ``terminal-basics`` (seed ch. 1): files and folders made in a terminal.
 
 Nothing is run: the grader looks at ``terminal_basics/`` in the learner's
-workspace and reads a few small files there through :mod:`ros2course.kit.files`.
+workspace and reads a few small files there through :mod:`graders._files`.
 It never reads anything outside that folder: a symbolic link whose target lies
 outside it is reported (check ``stays_inside``) and not followed.
 
@@ -22,7 +22,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ros2course.kit import Check, GradingSession, Unmet, files
+from ros2course.kit import Check, GradingSession, Unmet
+from . import _files as files
 
 #: No program is observed: the checks read files.
 WINDOW = 0.0

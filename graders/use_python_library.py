@@ -11,7 +11,7 @@ Only ``package.xml`` is read, for the dependency on the library the contract nam
 
 from __future__ import annotations
 
-from ros2course.run.probes import LATE_DELIVERY, stamp_seconds, wait_until
+from ros2course.kit import LATE_DELIVERY, stamp_seconds, wait_until
 from ros2course import kit
 from ros2course.kit import Check, GradingSession
 from ros2course.kit.packaging import (

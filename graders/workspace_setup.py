@@ -10,9 +10,8 @@ import re
 import subprocess
 from pathlib import Path
 
-from ros2course.build.colcon import colcon_command, overlay_env
-from ros2course.errors import NotGradable
-from ros2course import sandbox
+from ros2course.kit import colcon_command, overlay_env, sandbox_run
+from ros2course.kit import NotGradable
 from ros2course.kit import Check, GradingSession, Unmet
 
 #: No node is observed: the checks read the folder and ask colcon and bash.
@@ -76,7 +75,7 @@ def grade(s: GradingSession) -> None:
 
     # --log-base /dev/null: 'colcon list' must not create log/ itself (colcon's documented way to disable logs)
     # colcon list runs each setup.py: the submission's code (ros2course.sandbox)
-    proc = sandbox.run([*colcon_command(s.base_env), "--log-base", "/dev/null", "list"], cwd=root, env=s.base_env,
+    proc = sandbox_run([*colcon_command(s.base_env), "--log-base", "/dev/null", "list"], cwd=root, env=s.base_env,
                        capture_output=True, text=True, timeout=120, check=False, stdin=subprocess.DEVNULL)
     packages = proc.stdout.strip().splitlines()
     s.record("colcon_reads", proc.returncode == 0,

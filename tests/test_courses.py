@@ -159,3 +159,23 @@ def test_a_lesson_dropped_by_a_newer_course_version_is_reported_and_kept(tmp_pat
     assert listed.returncode == 0
     assert "no longer has: old-lesson" in listed.stderr
     assert json.loads(progress_file.read_text())["lessons"]["old-lesson"]["best_score"] == 3.0
+
+
+@pytest.mark.parametrize("course", [bundled_course(), LAB_COURSE], ids=["tutorial", "lab"])
+def test_graders_use_only_the_public_kit(course: Path) -> None:
+    """The narrow door (issues 18 and 23): a course's graders import ``ros2course.kit`` and its modules,
+    their own siblings (``from . import _helper``), and nothing else of the engine."""
+    import ast  # noqa: PLC0415
+
+    wide = []
+    for path in sorted((course / "graders").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names = ([node.module or ""] if isinstance(node, ast.ImportFrom) and not node.level else
+                     [alias.name for alias in node.names] if isinstance(node, ast.Import) else [])
+            for name in names:
+                if name.split(".")[0] in ("ros2course", "course", "graders") and not (
+                        name == "ros2course.kit" or name.startswith("ros2course.kit.")
+                        or (name == "ros2course" and isinstance(node, ast.ImportFrom)
+                            and [a.name for a in node.names] == ["kit"])):
+                    wide.append(f"{path.name}:{node.lineno} imports {name}")
+    assert not wide, wide

@@ -1,4 +1,4 @@
-"""ros2course.kit.joint_stream: the 500 Hz joint-state probe of the sas-robot-driver lesson keeps up.
+"""graders/_joint_stream.py: the 500 Hz joint-state probe of the sas-robot-driver lesson keeps up.
 
 A known publisher (a small rclpy script, like a sas driver: ``JointState``
 every 2 ms on a history-depth-1 publisher) runs in a private domain. It
@@ -29,6 +29,16 @@ import time
 import pytest
 
 PY = sys.executable
+
+
+def _lesson_module(name: str):
+    """A module of the tutorial course's graders folder (a helper of one lesson lives with its grader)."""
+    import importlib  # noqa: PLC0415
+
+    from ros2course.grade.engine import graders_package  # noqa: PLC0415
+
+    return importlib.import_module(f"{graders_package()}.{name}")
+
 PERIOD = 0.002  # seconds: the seed's thread_sampling_time_sec (500 Hz)
 SPAN = 1.0  # seconds of stream measured, as graders/sas_robot_driver.py does
 
@@ -77,7 +87,7 @@ def ros_env():
 def test_probe_measures_a_known_500hz_publisher_on_send_stamps(ros_env, tmp_path):
     from ros2course.run.probes import RateStats, RosSession  # noqa: PLC0415
     from ros2course.run.process import LearnerProcess, sweep_stale_fastdds_shm
-    from ros2course.kit.joint_stream import JointStreamProbe, arrival_rate, source_rate
+    JointStreamProbe, arrival_rate, source_rate = (getattr(_lesson_module("_joint_stream"), name) for name in ("JointStreamProbe", "arrival_rate", "source_rate"))
 
     script = tmp_path / "known_500hz_publisher.py"
     script.write_text(textwrap.dedent(PUBLISHER), encoding="utf-8")
@@ -115,7 +125,7 @@ def test_probe_measures_a_known_500hz_publisher_on_send_stamps(ros_env, tmp_path
 
 
 class _Recorder:
-    """The one method of GradingSession that ros2course.kit.sas.span_rate calls."""
+    """The one method of GradingSession that graders/_sas.py's span_rate calls."""
 
     def __init__(self) -> None:
         self.results: dict[str, tuple] = {}
@@ -126,14 +136,14 @@ class _Recorder:
 
 
 def _samples(period: float, count: int):
-    from ros2course.kit.joint_stream import JointSample  # noqa: PLC0415
+    JointSample = _lesson_module("_joint_stream").JointSample
 
     return [JointSample(100.0 + i * period, 50.0 + i * period, 0.0, (0.0,) * 6, "") for i in range(count)]
 
 
 def test_span_rate_judges_the_source_stamps_over_the_span():
     pytest.importorskip("rclpy")
-    from ros2course.kit.sas import span_rate  # noqa: PLC0415
+    span_rate = _lesson_module("_sas").span_rate
 
     s = _Recorder()
     assert span_rate(s, "rate", _samples(0.002, 501), period=0.002, span=1.0, noun="message")

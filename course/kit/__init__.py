@@ -21,17 +21,29 @@ names the major version its graders are written for (``kit: "1"``).
 The kit's modules, by what they observe (graders import the ones they use,
 ``from ros2course.kit import scripts``):
 
-* nodes, node_watch, judge, checks, parts: executables, nodes, rates, Ctrl+C, shared check declarations;
-* topics_services, services, quotes, params, launch: the Python track's topics, services, parameters, launch;
-* scripts, mystery, mystery_services: the ``ros2`` command-line lessons and the grader's own "mystery" nodes;
-* dds: Fast DDS profiles tried by grader nodes in child processes;
-* joint_stream, sas: the SmartArmStack driver's 500 Hz stream and the stand-in driver;
-* packages, packaging, cpp_packages, cmake: package.xml, setup.py, CMake installs and consumers;
-* programs, python_programs, asyncio_trace, pip, files: learner programs that are not nodes.
+* nodes, judge, checks, parts: executables, nodes, rates, Ctrl+C, shared check declarations;
+* topics_services, quotes, params, launch: the Python track's topics, services, parameters, launch;
+* scripts, mystery: the ``ros2`` command-line lessons and the grader's own "mystery" nodes;
+* packages, packaging, cmake: package.xml, setup.py, CMake installs and consumers;
+* programs, python_programs: learner programs that are not nodes.
+
+Placement rule (issue 23): a step two lessons use, or another course's author
+would, lives here; a helper of one lesson lives with that lesson's grader, as
+``graders/_<name>.py`` of its course (the tutorial's asyncio trace, C++ package
+consumers, Fast DDS profiles, file checks, the 500 Hz joint stream and the sas
+stand-in driver, the mystery services, the launch node watch, pip installs and
+the service lessons' steps), imported with ``from . import _<name>``.
 """
 
+from ros2course.build.colcon import colcon_command, overlay_env
+from ros2course.errors import NotGradable
 from ros2course.grade.engine import Check, GradingSession, Unmet
 from ros2course.kit_version import API_VERSION
+from ros2course.ros.env import foreign_python_prefix
+from ros2course.ros.index import package_prefix
+from ros2course.run.probes import LATE_DELIVERY, RateStats, call_service, record, stamp_seconds, wait_until
+from ros2course.run.process import LearnerProcess
+from ros2course.sandbox import run as sandbox_run
 from ros2course.kit.judge import RATE_TOLERANCE, STANDARD_TOPICS, rate, topics_seen
 from ros2course.kit.nodes import (
     StartedNode,
@@ -49,6 +61,8 @@ from ros2course.kit.packages import (
 )
 
 __all__ = [
+    "LATE_DELIVERY", "LearnerProcess", "NotGradable", "RateStats", "call_service", "colcon_command",
+    "foreign_python_prefix", "overlay_env", "package_prefix", "record", "sandbox_run", "stamp_seconds", "wait_until",
     "API_VERSION", "RATE_TOLERANCE", "STANDARD_TOPICS", "Check", "GradingSession", "StartedNode", "Unmet", "declared_dependencies",
     "depends", "executable", "process_state", "project_files", "rate", "sigint_exit", "source_package", "start_node", "topics_seen",
     "wait_for_node",

@@ -7,7 +7,7 @@ further calls reuse the last plan; a call is told apart by a context variable
 its wrapper sets, so two calls awaited one after the other in one asyncio task
 are two calls, not one task that never stops drawing), and records in order every roll drawn and every piece of text
 printed, with the task that did it, into the trace file (a JSON list of
-events, read by :mod:`ros2course.kit.asyncio_trace`):
+events, read by :mod:`graders._asyncio_trace`):
 
 * ``["draw", task, value, seconds]``, ``["out", task or -1, text, seconds]``;
 * ``["function", exists, is_coroutine]``, ``["scenario", name]``,

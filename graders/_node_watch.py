@@ -13,7 +13,7 @@ import threading
 import time
 from typing import Any
 
-from ros2course.grade.engine import GradingSession
+from ros2course.kit import GradingSession
 
 
 class NodeWatch:

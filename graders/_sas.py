@@ -8,7 +8,7 @@ seed's C++ driver built on the real ``sas`` packages:
 * :func:`start_driver`: the driver started the way launch_ros starts that
   ``Node`` action (``--ros-args -r __node:=NAME --params-file TMP.yaml``)
   with the seed's parameters (ch. 31.7), its ``get/joint_states`` recorded by
-  a :class:`~ros2course.kit.joint_stream.JointStreamProbe` (500 Hz). Then
+  a :class:`~graders._joint_stream.JointStreamProbe` (500 Hz). Then
   :func:`interface`, :func:`limits`, :func:`stream`, :func:`tracking` (targets
   sent on ``set/target_joint_positions``, the grader being the only publisher
   there) and :func:`wrong_size`; Ctrl+C is judged when the part ends.
@@ -32,10 +32,10 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ros2course.grade.engine import GradingSession, Unmet
-from ros2course.ros.env import foreign_python_prefix
-from ros2course.run.probes import wait_until
-from ros2course.kit.joint_stream import (
+from ros2course.kit import GradingSession, Unmet
+from ros2course.kit import foreign_python_prefix
+from ros2course.kit import wait_until
+from ._joint_stream import (
     JointSample,
     JointStreamProbe,
     arrival_rate,

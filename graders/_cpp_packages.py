@@ -21,8 +21,8 @@ import re
 import shutil
 from pathlib import Path
 
-from ros2course.grade.engine import GradingSession, Unmet
-from ros2course.ros import index as ament_index
+from ros2course.kit import GradingSession, Unmet
+from ros2course.kit import package_prefix
 from ros2course.kit.programs import compile_errors, run_program
 
 #: Seconds for each cmake configure / build step of the consumer (about 1.5 s and 2.5 s on 2 idle cores).
@@ -80,7 +80,7 @@ def build_consumer(s: GradingSession, configure_check: str, build_check: str, te
         Unmet: the package is not installed, or the consumer does not configure or build.
     """
     env = consumer_env(s, package)
-    prefix = ament_index.package_prefix(package, env)
+    prefix = package_prefix(package, env)
     # the consumer is configured and built as the submission (it compiles the learner's headers)
     scratch = s.submission_folder(template.name, lambda folder: shutil.copytree(template, folder / "src"))
     build = scratch / "build"
@@ -129,7 +129,7 @@ def installed_library(s: GradingSession, check_ids: tuple[str, str, str], packag
             as ``ament_export_targets`` writes it.
     """
     library_id, header_id, export_id = check_ids
-    prefix = ament_index.package_prefix(package, s.overlay())
+    prefix = package_prefix(package, s.overlay())
     if prefix is None:
         for check_id in check_ids:
             s.record(check_id, False, f"{package} is not in the ament index of install/", f"install/{package}/...")

@@ -32,7 +32,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ros2course.run.probes import RateStats, record, wait_until
+from ros2course.kit import RateStats, record, wait_until
 
 #: Reader history depth: 4 s of a 500 Hz stream; the probe never drops for lack of room.
 READER_DEPTH = 2000

@@ -25,7 +25,7 @@ import random
 import threading
 from typing import Any
 
-from ros2course.grade.engine import GradingSession
+from ros2course.kit import GradingSession
 from ros2course.kit.mystery import MysteryNode
 
 _RANDOM = random.SystemRandom()

@@ -22,7 +22,7 @@ import sys
 import zipfile
 from pathlib import Path
 
-from ros2course.grade.engine import GradingSession
+from ros2course.kit import GradingSession
 from ros2course.kit.programs import ProgramRun, run_program
 from ros2course.kit.python_programs import python_env
 

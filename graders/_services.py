@@ -21,8 +21,8 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ros2course.grade.engine import GradingSession
-from ros2course.run.probes import LATE_DELIVERY, call_service, wait_until
+from ros2course.kit import GradingSession
+from ros2course.kit import LATE_DELIVERY, call_service, wait_until
 from ros2course.kit.judge import RATE_TOLERANCE, rate
 from ros2course.kit.nodes import StartedNode, process_state
 from ros2course.kit.topics_services import DeferredServer, has_point

@@ -12,7 +12,7 @@ import os
 import stat
 from pathlib import Path
 
-from ros2course.grade.engine import GradingSession, Unmet
+from ros2course.kit import GradingSession, Unmet
 
 #: Largest file read, in bytes (the lessons' files are a few bytes long).
 MAX_READ = 64 * 1024

@@ -35,8 +35,8 @@ from typing import Any
 
 import yaml
 
-from ros2course.grade.engine import GradingSession
-from ros2course.run.probes import wait_until
+from ros2course.kit import GradingSession
+from ros2course.kit import wait_until
 
 #: The variable Jazzy's Fast DDS reads, and Fast DDS 3's name for it (set both for the children).
 PROFILE_VARIABLES = ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES_FILE")
