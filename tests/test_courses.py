@@ -179,3 +179,30 @@ def test_graders_use_only_the_public_kit(course: Path) -> None:
                             and [a.name for a in node.names] == ["kit"])):
                     wide.append(f"{path.name}:{node.lineno} imports {name}")
     assert not wide, wide
+
+
+def test_the_public_kit_is_documented_and_its_reference_builds(tmp_path: Path) -> None:
+    """Every public step of ``ros2course.kit`` has a docstring, and scripts/api_docs.sh builds the reference."""
+    import importlib  # noqa: PLC0415
+    import inspect  # noqa: PLC0415
+
+    import ros2course.kit as kit  # noqa: PLC0415
+
+    missing = []
+    for module_path in sorted((ROOT / "course" / "kit").glob("*.py")):
+        name = "ros2course.kit" + ("" if module_path.stem == "__init__" else f".{module_path.stem}")
+        module = importlib.import_module(name)
+        if not (module.__doc__ or "").strip():
+            missing.append(name)
+        for attr, value in vars(module).items():
+            if attr.startswith("_") or getattr(value, "__module__", None) != name:
+                continue
+            if (inspect.isfunction(value) or inspect.isclass(value)) and not (value.__doc__ or "").strip():
+                missing.append(f"{name}.{attr}")
+    assert not missing, missing
+    assert kit.API_VERSION.split(".")[0] == load_manifest(bundled_course()).kit
+    proc = subprocess.run(["bash", str(ROOT / "scripts" / "api_docs.sh"), str(tmp_path / "api")], cwd=ROOT,
+                          capture_output=True, text=True, timeout=120, env={**os.environ, "PYTHON": sys.executable})
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert (tmp_path / "api" / "ros2course" / "kit" / "nodes.html").is_file()
+    assert (ROOT / "docs" / "api" / "index.html").is_file()  # the committed reference the README links
