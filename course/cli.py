@@ -122,8 +122,9 @@ def _root(ctx: typer.Context, debug: Annotated[bool, typer.Option("--debug", hel
 def _choose_course(ws: Workspace | None, course: str | None = None) -> None:
     """Make the course of this command the active one (:func:`ros2course.lesson.use_course`).
 
-    In order: ``--course`` (of the command, else the global one), ``ROS2COURSE_CONTENT``,
-    the course the workspace records, the bundled tutorial. A workspace that follows
+    In order: ``--course`` (of the command, else the global one), ``ROS2COURSE_CONTENT``
+    (taken as it is: batch workers and tests' private copies), the course the workspace
+    records, the bundled tutorial. A workspace that follows
     one course is never checked against another.
 
     Raises:
@@ -131,7 +132,9 @@ def _choose_course(ws: Workspace | None, course: str | None = None) -> None:
     """
     from ros2course.lesson import MANIFEST, use_course  # noqa: PLC0415 - start time, see the imports
 
-    spec = course or _state.get("course") or os.environ.get("ROS2COURSE_CONTENT")
+    spec = course or _state.get("course")
+    if spec is None and os.environ.get("ROS2COURSE_CONTENT"):
+        return  # a test's or a batch worker's course folder: content_root() answers it as it is
     record = ws.course_record() if ws is not None else None
     if spec is None:
         if record is None:

@@ -12,11 +12,21 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 PYTHON="${PYTHON:-python3}"
 VENV="${VENV:-.venv}"
+# A sourced system ROS 2 (/opt/ros/jazzy/setup.bash; not our own activation script, which
+# sets ROS2COURSE_ENV): use it as it is, without the ROS wheels (the `ros` extra).
+SYSTEM_ROS=""
+if [ -n "${ROS_DISTRO:-}" ] && [ -n "${AMENT_PREFIX_PATH:-}" ] && [ -z "${ROS2COURSE_ENV:-}" ]; then
+  SYSTEM_ROS=1
+fi
 if [ ! -x "$VENV/bin/python" ]; then
-  "$PYTHON" -m venv "$VENV"
+  # With a system ROS the venv must see apt's Python packages (python3-numpy, -yaml, -lark,
+  # -empy, -catkin-pkg... that /opt/ros's rclpy, messages and launch import; only
+  # /opt/ros/jazzy/lib/python3.X/site-packages comes through PYTHONPATH): --system-site-packages,
+  # as the ROS 2 docs say for venvs (scripts/system_ros_standin.sh is the test stand-in).
+  "$PYTHON" -m venv ${SYSTEM_ROS:+--system-site-packages} "$VENV"
   "$VENV/bin/python" -m pip install --quiet --upgrade pip
 fi
-if [ -n "${ROS_DISTRO:-}" ] && [ -n "${AMENT_PREFIX_PATH:-}" ] && [ -z "${ROS2COURSE_ENV:-}" ]; then
+if [ -n "$SYSTEM_ROS" ]; then
   echo "using the sourced ROS 2 $ROS_DISTRO"
   "$VENV/bin/python" -m pip install --quiet -e '.[test,dask]'
   "$VENV/bin/ros2course" doctor --fix >/dev/null || "$VENV/bin/ros2course" doctor

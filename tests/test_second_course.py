@@ -25,9 +25,10 @@ pytestmark = pytest.mark.ros
 def test_the_scaffolded_course_validates(cli, tmp_path: Path) -> None:
     proc = cli("dev", "validate", "--course", str(LAB_COURSE), "--json", cwd=tmp_path, env={"ROS2COURSE_CONTENT": ""})
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
-    outcomes = json.loads(proc.stdout)
-    cases = {o["case"]: o for o in outcomes} if isinstance(outcomes, list) else outcomes
-    assert cases, proc.stdout
+    outcomes = {o["case"]: o for o in json.loads(proc.stdout)}
+    assert set(outcomes) == {"reference", "starter", "never-registered"}
+    assert all(o["ok"] for o in outcomes.values()), outcomes
+    assert outcomes["reference"]["result"]["score"] == 5
 
 
 def test_a_class_of_two_is_batch_graded_on_it(cli, tmp_path: Path) -> None:
@@ -38,7 +39,7 @@ def test_a_class_of_two_is_batch_graded_on_it(cli, tmp_path: Path) -> None:
     shutil.copytree(LAB_COURSE / "chapters" / "10-hello-node" / "starter" / "src" / PACKAGE, wrong)
     out = tmp_path / "out"
     proc = cli("grade", str(submissions), "--lesson", "hello-node", "--out", str(out), "--course", str(LAB_COURSE),
-               "--jobs", "2", "--no-report", cwd=tmp_path, env={"ROS2COURSE_CONTENT": ""}, timeout=600)
+               "--jobs", "2", cwd=tmp_path, env={"ROS2COURSE_CONTENT": ""}, timeout=600)
     assert proc.returncode in (0, 1), proc.stdout[-2000:] + proc.stderr[-2000:]
     rows = {row["student"]: row for row in csv.DictReader((out / "gradebook.csv").open())}
     assert set(rows) == {"ada", "bob"}
