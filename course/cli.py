@@ -621,6 +621,35 @@ def new_lesson(lesson_id: Annotated[str, typer.Argument(metavar="ID", help="The 
     out.print(f"Next: ros2course dev validate {lesson_id} --course {course}")
 
 
+@dev_app.command()
+@_handle_errors
+def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", help="Lessons whose graders to test.")],
+           sample: Annotated[Optional[int], typer.Option("--sample", metavar="K", help="Grade K mutants per lesson, picked with --seed (default: all).")] = None,
+           seed: Annotated[int, typer.Option("--seed", metavar="S", help="Random seed of --sample.")] = 1,
+           jobs: Annotated[int, typer.Option("--jobs", "-j", help="Mutants graded at once.")] = 1,
+           out: Annotated[Path, typer.Option("--out", "-o", metavar="DIR", help="Cache, batch outputs, mutation.json and survivors' diffs.")] = Path("mutation-out"),
+           timeout: Annotated[float, typer.Option("--timeout", help="Wall-clock limit per mutant, seconds.")] = 300.0,
+           as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON instead of the table.")] = False,
+           course: CourseOpt = None,
+           ) -> None:
+    """Grade mutants of each lesson's reference (universalmutator) with its grader: killed, survived, score."""
+    _choose_course(None, course)
+    _ros()
+    from ros2course.batch.mutate import as_dicts, mutate_lessons, render  # noqa: PLC0415 - start time, see the imports
+
+    if timeout <= 0:
+        raise CourseError(f"--timeout must be positive (got {timeout:g})", "e.g. --timeout 300")
+    found = mutate_lessons(lesson_ids, out, sample=sample, seed=seed, jobs=jobs, timeout=timeout,
+                           console=stderr_console())
+    if as_json:
+        import json  # noqa: PLC0415 - start time, see the imports
+
+        sys.stdout.write(json.dumps(as_dicts(found), indent=2) + "\n")
+    else:
+        render(found, stdout_console())
+    stderr_console().print(f"results: {out.absolute() / 'mutation.json'}")
+
+
 @app.command()
 @_handle_errors
 def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
@@ -636,6 +665,7 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
           pids_limit: Annotated[int, typer.Option("--pids-limit", help="Processes + threads a submission may have at once.")] = 256,
           require_isolation: Annotated[bool, typer.Option("--require-isolation",
                                                           help="Refuse to grade unless every protection (namespaces, unprivileged uid, process limit) is in effect.")] = False,
+          no_report: Annotated[bool, typer.Option("--no-report", help="Do not write OUTDIR/report.html at the end.")] = False,
           course: CourseOpt = None,
           ) -> None:
     """Grade a whole class: each submission isolated, in parallel, resumable; writes a gradebook."""
@@ -651,6 +681,37 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
                        require_isolation=require_isolation)
     render_summary(report, err)
     stdout_console().print(f"gradebook: {report.out_dir / 'gradebook.csv'}")
+    if not no_report:
+        try:
+            from ros2course.report.html import write_report  # noqa: PLC0415 - start time, see the imports
+
+            stdout_console().print(f"report: {write_report(report.out_dir, submissions=submissions)}")
+        except Exception as exc:  # noqa: BLE001 - the report never changes grade's exit status
+            err.print(f"warning: the report was not written: {exc}")
+
+
+@app.command()
+@_handle_errors
+def report(out_dir: Annotated[Path, typer.Argument(metavar="OUTDIR", help="The --out folder of `ros2course grade`.")],
+           fmt: Annotated[str, typer.Option("--format", help="html (writes OUTDIR/report.html) or md (prints a summary).")] = "html",
+           no_similarity: Annotated[bool, typer.Option("--no-similarity", help="Do not compare the submissions.")] = False,
+           submissions: Annotated[Optional[Path], typer.Option("--submissions", metavar="SUBMISSIONS",
+                                                               help="The submissions folder graded: similar submissions are looked for in it.")] = None,
+           exclude_reference: Annotated[bool, typer.Option("--exclude-reference/--no-exclude-reference",
+                                                           help="Leave the reference solution's code out of the similarity (the starter always is).")] = True,
+           ) -> None:
+    """The instructor's view of a graded class: a self-contained HTML report (or a Markdown summary)."""
+    from ros2course.report.html import write_markdown, write_report  # noqa: PLC0415 - start time, see the imports
+
+    if fmt not in ("html", "md"):
+        raise CourseError(f"unknown --format {fmt!r}", "use --format html or --format md")
+    if fmt == "md":
+        sys.stdout.write(write_markdown(out_dir))
+        return
+    if submissions is not None and not submissions.is_dir():
+        raise CourseError(f"--submissions {submissions} is not a folder", "give the folder graded by `ros2course grade`")
+    stdout_console().print(str(write_report(out_dir, similarity=not no_similarity, submissions=submissions,
+                                            exclude_reference=exclude_reference)))
 
 
 @app.command()

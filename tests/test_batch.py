@@ -6,6 +6,7 @@
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import json
 import os
@@ -129,13 +130,25 @@ def test_a_record_round_trips_through_results_jsonl() -> None:
 
 def test_gradebook_csv_columns() -> None:
     rows = list(csv.DictReader(io.StringIO(gradebook.gradebook_csv(RECORDS, {"print-forever-node": ["a", "b"]}))))
-    assert list(rows[0]) == ["student", "lesson", "score", "max_score", "status", "reason", "a", "b"]
+    assert list(rows[0]) == ["student", "lesson", "score", "max_score", "status", "reason", "total", "total_max",
+                             "a", "b"]
     by = {r["student"]: r for r in rows}
     assert by["alice"]["status"] == "graded" and by["alice"]["score"] == "4" and by["alice"]["b"] == "2"
+    assert (by["alice"]["total"], by["alice"]["total_max"], by["dave"]["total"]) == ("4", "4", "0")
     assert by["bob"]["b"] == "0"
     assert by["carol"]["status"] == "grader error"
     assert by["dave"]["status"] == "not gradable" and by["dave"]["reason"] == "colcon build failed"
     assert by["dave"]["a"] == ""
+
+
+def test_gradebook_total_across_lessons() -> None:
+    """``total`` sums a student's points over every lesson, on each of their rows."""
+    other = [dataclasses.replace(r, lesson="workspace-setup", score=1.0, max_score=5.0) for r in RECORDS[:2]]
+    text = gradebook.gradebook_csv([*RECORDS, *other], {"print-forever-node": ["a", "b"], "workspace-setup": ["c"]})
+    rows = list(csv.DictReader(io.StringIO(text)))
+    alice = [r for r in rows if r["student"] == "alice"]
+    assert len(alice) == 2 and {(r["total"], r["total_max"]) for r in alice} == {("5", "9")}
+    assert "print-forever-node:a" in rows[0] and [r["total"] for r in rows if r["student"] == "dave"] == ["0"]
 
 
 def test_jsonl_truncated_last_line(tmp_path: Path) -> None:

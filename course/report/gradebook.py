@@ -50,7 +50,19 @@ def append_record(path: Path, result: LessonResult) -> None:
 
 def read_results(path: Path) -> list[LessonResult]:
     """Every complete record of a ``results.jsonl`` (missing file: none; broken lines are skipped)."""
+    return read_results_counted(path)[0]
+
+
+def read_results_counted(path: Path) -> tuple[list[LessonResult], int]:
+    """``(records, lines skipped)`` of a ``results.jsonl``; a missing file has none.
+
+    A line is skipped when it is not a JSON object with a ``student``, or when
+    :meth:`~ros2course.grade.results.LessonResult.from_record` cannot read it: a
+    truncated last line (a batch killed mid-write), or a row of another version
+    (unknown status, a field of the wrong type).
+    """
     out: list[LessonResult] = []
+    skipped = 0
     with contextlib.suppress(FileNotFoundError):
         with open(path, encoding="utf-8", errors="replace") as handle:
             for line in handle:
@@ -61,9 +73,11 @@ def read_results(path: Path) -> list[LessonResult]:
                     record = json.loads(line)
                     if isinstance(record, dict) and "student" in record:
                         out.append(LessonResult.from_record(record))
-                except ValueError:
-                    continue
-    return out
+                    else:
+                        skipped += 1
+                except (ValueError, TypeError, AttributeError, KeyError):
+                    skipped += 1
+    return out, skipped
 
 
 def latest(results: Iterable[LessonResult]) -> dict[tuple[str, str], LessonResult]:
@@ -83,17 +97,27 @@ def gradebook_csv(results: Iterable[LessonResult], check_columns: dict[str, list
             lesson the check columns are the check ids; with several,
             ``<lesson>:<check>``.
 
-    Columns: ``student, lesson, score, max_score, status, reason``, then one per check (its points, empty
-    when the check has no result, e.g. not gradable).
+    Columns: ``student, lesson, score, max_score, status, reason, total, total_max``, then one per
+    check (its points, empty when the check has no result, e.g. not gradable). ``total`` and
+    ``total_max`` are the student's points and maximum summed over all their lessons (the same on
+    each of the student's rows).
     """
     multi = len(check_columns) > 1
     columns = [(lesson, check) for lesson, checks in check_columns.items() for check in checks]
+    rows = sorted(latest(results).values(), key=lambda r: (r.student, r.lesson))
+    totals: dict[str, list[float]] = {}
+    for result in rows:
+        total = totals.setdefault(result.student, [0.0, 0.0])
+        total[0] += result.score
+        total[1] += result.max_score
     buffer = io.StringIO()
     writer = csv.writer(buffer, lineterminator="\n")
-    writer.writerow(["student", "lesson", "score", "max_score", "status", "reason",
+    writer.writerow(["student", "lesson", "score", "max_score", "status", "reason", "total", "total_max",
                      *[f"{lesson}:{check}" if multi else check for lesson, check in columns]])
-    for result in sorted(latest(results).values(), key=lambda r: (r.student, r.lesson)):
-        writer.writerow(result.gradebook_cells(columns))
+    for result in rows:
+        cells = result.gradebook_cells(columns)
+        score, maximum = totals[result.student]
+        writer.writerow([*cells[:6], f"{round(score, 3):g}", f"{round(maximum, 3):g}", *cells[6:]])
     return buffer.getvalue()
 
 

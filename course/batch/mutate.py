@@ -1,0 +1,205 @@
+"""``ros2course dev mutate``: each mutant of a lesson's reference graded as a class through the batch engine.
+
+Mutants come from :mod:`ros2course.grade.mutate` (universalmutator). Each is laid
+out as one submission (the reference workspace, one file replaced) in a scratch
+submissions folder and graded by :func:`ros2course.batch.runner.run_batch`: the
+same isolation, limits, parallelism and resume as a class, so a mutant that
+hangs, forks or floods its output is held like a hostile submission.
+
+``OUT`` keeps:
+
+* ``mutation-cache.json``: outcome per (grader source, course content, mutant
+  content) hash: a second run grades only mutants it has not seen;
+* ``batch/<lesson>-<hash>/``: the batch's own output (``results.jsonl``); a run
+  stopped by Ctrl+C resumes from it;
+* ``mutation.json``: every lesson's counts, score and mutants;
+* ``survivors/<lesson>/<key>.diff``: each survivor's unified diff.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.table import Table
+
+from ros2course.batch.parity import case_workspace
+from ros2course.batch.runner import run_batch
+from ros2course.errors import CourseError
+from ros2course.files import atomic_write_text
+from ros2course.grade import mutate as mut
+from ros2course.lesson.catalog import Lesson, load_catalog
+
+CACHE_FILE = "mutation-cache.json"
+RESULT_FILE = "mutation.json"
+
+
+def _read_cache(path: Path) -> dict[str, Any]:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def _student(mutant: mut.Mutant) -> str:
+    return f"{Path(mutant.file).stem[:24]}.{mutant.key}"
+
+
+def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: int = 1, jobs: int = 1,
+                  timeout: float = 300.0, console: Console | None = None) -> mut.LessonMutation:
+    """Generate, grade (what the cache does not know) and classify one lesson's mutants.
+
+    Args:
+        lesson: the lesson.
+        out: the output folder (cache, batch outputs, survivors' diffs).
+        sample: grade only this many mutants, picked with ``seed`` (None: all).
+        seed: the sample's random seed.
+        jobs: mutants graded at once.
+        timeout: wall-clock seconds per mutant (the batch's per-submission limit).
+        console: progress and the batch's progress bar (None: quiet).
+
+    Raises:
+        MissingRequirement: universalmutator, or what the lesson requires, is not installed.
+        LessonFormatError: a malformed ``mutation.yaml``.
+        CourseError: no file to mutate; the batch refuses the lesson.
+    """
+    begin = time.monotonic()
+    config = mut.load_config(lesson)
+    mut.require_tool()
+    root = Path(tempfile.mkdtemp(prefix=f"ros2course-mutate-{lesson.id}-"))
+    root.chmod(0o755)
+    try:
+        reference = case_workspace(lesson, "reference", root / "reference")
+        every = mut.generate_mutants(lesson, reference, config)
+        picked = mut.sample_mutants(every, sample, seed)
+        grader, course = mut.grader_hash(lesson), mut.course_hash(reference, lesson)
+        cache_path = out / CACHE_FILE
+        cache = _read_cache(cache_path)
+        todo = [m for m in picked if mut.cache_key(grader, course, m) not in cache]
+        if console is not None:
+            console.print(f"{lesson.id}: {len(every)} mutants generated, {len(picked)} picked"
+                          f"{f' (--sample {sample} --seed {seed})' if len(picked) < len(every) else ''}, "
+                          f"{len(picked) - len(todo)} known from the cache, {len(todo)} to grade")
+        if todo:
+            submissions = root / "submissions"
+            submissions.mkdir()
+            for mutant in todo:
+                dest = submissions / _student(mutant)
+                shutil.copytree(reference, dest, symlinks=True)
+                (dest / mutant.file).write_text(mutant.content, encoding="utf-8")
+            batch_out = out / "batch" / f"{lesson.id}-{course[:8]}{grader[:8]}"
+            report = run_batch(submissions, [lesson.id], batch_out, jobs=jobs, timeout=timeout,
+                               resume=batch_out.exists(), console=console)
+            results = {r.student: r for r in report.records if r.lesson == lesson.id}
+            for mutant in todo:
+                result = results.get(_student(mutant))
+                if result is None:
+                    continue  # interrupted before this one: graded next time
+                outcome, lost = mut.classify(result)
+                cache[mut.cache_key(grader, course, mutant)] = {
+                    "outcome": outcome, "lost": lost, "score": result.score, "max_score": result.max_score,
+                    "message": (result.message or "").splitlines()[0][:300] if result.message else ""}
+            out.mkdir(parents=True, exist_ok=True)
+            atomic_write_text(cache_path, json.dumps(cache, indent=1, sort_keys=True) + "\n")
+        graded = []
+        fresh = {m.key for m in todo}
+        for mutant in picked:
+            known = cache.get(mut.cache_key(grader, course, mutant))
+            if known is None:
+                continue
+            graded.append(mut.Graded(mutant, known["outcome"], list(known["lost"]), known.get("score", 0.0),
+                                     known.get("max_score", 0.0), known.get("message", ""),
+                                     cached=mutant.key not in fresh))
+        stale = mut.apply_triage(graded, config, every)
+        originals = {m.file: (reference / m.file).read_text(encoding="utf-8") for m in picked}
+        diffs = {g.mutant.key: g.mutant.diff(originals[g.mutant.file])
+                 for g in graded if g.outcome == mut.SURVIVED and not g.triaged}
+        folder = out / "survivors" / lesson.id
+        shutil.rmtree(folder, ignore_errors=True)
+        for key, diff in diffs.items():
+            folder.mkdir(parents=True, exist_ok=True)
+            (folder / f"{key}.diff").write_text(diff, encoding="utf-8")
+        return mut.LessonMutation(lesson.id, len(every), graded, stale, len(picked) < len(every),
+                                  time.monotonic() - begin, diffs)
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+
+
+def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, seed: int = 1, jobs: int = 1,
+                   timeout: float = 300.0, console: Console | None = None) -> list[mut.LessonMutation]:
+    """:func:`mutate_lesson` for each lesson, then ``OUT/mutation.json`` (written even when one lesson fails).
+
+    Raises:
+        UnknownLesson: a lesson id is not in the catalog (before anything is graded).
+        CourseError: bad numbers; see :func:`mutate_lesson`.
+    """
+    if not lesson_ids:
+        raise CourseError("no lesson given", "e.g. ros2course dev mutate print-forever-node --sample 5")
+    if jobs < 1:
+        raise CourseError(f"--jobs must be at least 1 (got {jobs})", "e.g. --jobs 2")
+    if sample is not None and sample < 1:
+        raise CourseError(f"--sample must be at least 1 (got {sample})", "e.g. --sample 30")
+    catalog = load_catalog()
+    lessons = [catalog.get(i) for i in lesson_ids]
+    out = out.absolute()
+    out.mkdir(parents=True, exist_ok=True)
+    found: list[mut.LessonMutation] = []
+    try:
+        for lesson in lessons:
+            found.append(mutate_lesson(lesson, out, sample, seed, jobs, timeout, console))
+    finally:
+        previous = _read_cache(out / RESULT_FILE).get("lessons", {})
+        merged = {**(previous if isinstance(previous, dict) else {}), **{f.lesson: f.to_dict() for f in found}}
+        atomic_write_text(out / RESULT_FILE, json.dumps({"seed": seed, "sample": sample, "lessons": merged},
+                                                        indent=2) + "\n")
+    return found
+
+
+def render(found: list[mut.LessonMutation], console: Console, diffs: bool = True) -> None:
+    """The summary table, each survivor's diff, the triaged ones and the stale triage entries."""
+    if not console.is_terminal:
+        console.width = max(console.width, 150)  # a file or pipe: one row per lesson, whatever COLUMNS says
+    table = Table(title="ros2course dev mutate", title_justify="left")
+    table.add_column("lesson", no_wrap=True)
+    for column in ("mutants", "graded", "killed", "build", "survived", "triaged", "t/o+err", "score", "s"):
+        table.add_column(column, justify="right", no_wrap=True)
+    for f in found:
+        score = "n/a" if f.score is None else f"{100 * f.score:.0f}%"
+        table.add_row(f.lesson, str(f.generated), f"{len(f.graded)}{'*' if f.sampled else ''}",
+                      str(f.count(mut.KILLED)), str(f.count(mut.KILLED_BY_BUILD)), str(f.count(mut.SURVIVED)),
+                      str(f.triaged), f"{f.count(mut.TIMED_OUT)}+{f.count(mut.GRADER_ERROR)}", score,
+                      f"{f.seconds:.0f}")
+    console.print(table)
+    console.print("build: killed by the build (no check ran); *: a seeded sample; "
+                  "score: killed / (graded - build - triaged)")
+    for f in found:
+        killers: dict[str, int] = {}
+        for g in f.graded:
+            if g.outcome == mut.KILLED:
+                for check in g.lost:
+                    killers[check] = killers.get(check, 0) + 1
+        if killers:
+            console.print(f"{f.lesson}: checks that killed mutants: "
+                          + ", ".join(f"{c} ({n})" for c, n in sorted(killers.items(), key=lambda x: -x[1])))
+        for g in f.graded:
+            if g.outcome in (mut.TIMED_OUT, mut.GRADER_ERROR):
+                console.print(f"{f.lesson}: {g.outcome}: {g.mutant.file}:{g.mutant.line} ({g.mutant.key}): "
+                              f"{g.message}", markup=False)
+        if diffs:
+            for key, diff in f.diffs.items():
+                console.print(f"[yellow]survived[/] {f.lesson} {key}:")
+                console.print(diff.rstrip("\n"), markup=False, highlight=False, soft_wrap=True)
+        for entry in f.stale:
+            console.print(f"[yellow]stale[/] {f.lesson}: mutation.yaml entry matches no mutant: {entry.file}: "
+                          f"{entry.key or repr(entry.line) + ' -> ' + repr(entry.mutant)}")
+
+
+def as_dicts(found: list[mut.LessonMutation]) -> list[dict[str, Any]]:
+    """Each lesson's :meth:`~ros2course.grade.mutate.LessonMutation.to_dict`."""
+    return [f.to_dict() for f in found]

@@ -1,0 +1,125 @@
+"""``ros2course dev mutate``: mutants of a lesson's reference graded through the batch engine (issue 24).
+
+One smoke run on print-forever-node (5 of its node file's mutants, seed 3: three
+killed, two survivors) in a private copy of the course, whose ``mutation.yaml``
+triages one survivor and holds one stale entry; then the same command again
+(everything from the cache), and a malformed ``mutation.yaml``.
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from ros2course.grade import mutate as mut
+from ros2course.grade.results import CheckResult, LessonResult, Status
+
+ROOT = Path(__file__).resolve().parent.parent
+LESSON = "print-forever-node"
+NODE_FILE = "src/python_package_with_a_node/python_package_with_a_node/print_forever_node.py"
+TRIAGE = f"""\
+files: ["{NODE_FILE}"]
+survivors:
+  - file: {NODE_FILE}
+    line: "if __name__ == '__main__':"
+    mutant: "if __name__ <= '__main__':"
+    reason: "ros2 run starts the console_scripts entry point, which calls main() itself"
+  - file: {NODE_FILE}
+    line: "self.print_count = 0"
+    mutant: "self.print_count = 7"
+    reason: "a line the reference no longer has: reported as stale"
+"""
+
+pytest.importorskip("universalmutator")
+
+
+def _course(dest: Path, triage: str) -> Path:
+    dest.mkdir(parents=True, exist_ok=True)
+    shutil.copy(ROOT / "course.yaml", dest / "course.yaml")
+    for part in ("chapters", "graders", "solutions", "tests/fixtures"):
+        shutil.copytree(ROOT / part, dest / part, ignore=shutil.ignore_patterns(
+            "__pycache__", "*.egg-info", "build", "install", "log"))
+    (dest / "chapters" / "13-print-forever-node" / "mutation.yaml").write_text(triage, encoding="utf-8")
+    return dest
+
+
+def _result(lost: list[str], status: Status = Status.FAILED, message: str = "") -> LessonResult:
+    checks = [CheckResult(c, c, 0 if c in lost else 2, 2, c not in lost, "", "", "") for c in ("build", "rate")]
+    return LessonResult(LESSON, sum(c.points for c in checks), 4, status, checks if status.graded else [], message)
+
+
+def test_classify() -> None:
+    assert mut.classify(_result(["rate"])) == (mut.KILLED, ["rate"])
+    assert mut.classify(_result([], Status.PASSED)) == (mut.SURVIVED, [])
+    assert mut.classify(_result([], Status.NOT_GRADABLE, "colcon build failed for x")) == (mut.KILLED_BY_BUILD, ["build"])
+    assert mut.classify(_result([], Status.NOT_GRADABLE, "timed out after 300 s"))[0] == mut.TIMED_OUT
+    assert mut.classify(_result([], Status.GRADER_ERROR, "boom"))[0] == mut.GRADER_ERROR
+
+
+def test_sample_is_seeded_and_keys_ignore_line_numbers() -> None:
+    mutants = [mut.Mutant("f.py", i, f"x = {i}", f"x = {i + 1}", f"x = {i + 1}\n") for i in range(20)]
+    assert mut.sample_mutants(mutants, 5, 1) == mut.sample_mutants(mutants, 5, 1)
+    assert len(mut.sample_mutants(mutants, 5, 1)) == 5 and mut.sample_mutants(mutants, None, 1) == mutants
+    moved = mut.Mutant("f.py", 99, "x = 3", "x = 4", "\n\nx = 4\n")
+    assert moved.key == mutants[3].key and moved.content_hash != mutants[3].content_hash
+
+
+def test_the_lessons_own_files_are_mutated(tmp_path: Path) -> None:
+    """By default the files the learner completes or writes, not the ones the starter gives whole."""
+    from ros2course.batch.parity import case_workspace
+    from ros2course.lesson.catalog import load_catalog
+
+    lesson = load_catalog().get(LESSON)
+    files = mut.lesson_files(lesson, case_workspace(lesson, "reference", tmp_path / "ref"), mut.MutationConfig())
+    assert NODE_FILE in files and "src/python_package_with_a_node/package.xml" in files
+    assert not any(f.endswith(("sample_python_node.py", "__init__.py", "setup.cfg")) for f in files), files
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(400)
+def test_dev_mutate_smoke(cli, tmp_path: Path) -> None:
+    course = _course(tmp_path / "course", TRIAGE)
+    env = {"ROS2COURSE_CONTENT": str(course)}
+    out = tmp_path / "out"
+    args = ("dev", "mutate", LESSON, "--sample", "5", "--seed", "3", "--jobs", "2", "--out", str(out))
+    proc = cli(*args, "--json", env=env, timeout=380)
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    row = json.loads(proc.stdout)[0]
+    assert (row["generated"], row["graded"], row["sampled"]) == (40, 5, True), row
+    outcomes = {m["key"]: m for m in row["mutants"]}
+    killed = [m for m in outcomes.values() if m["outcome"] == mut.KILLED]
+    assert len(killed) == 3 and all(m["lost"] for m in killed), row["mutants"]
+    assert {c for m in killed for c in m["lost"]} <= {"node_name", "log_format", "counts_from_zero", "rate",
+                                                        "sigint_exit", "executable"}
+    assert (row["survived"], row["triaged"]) == (2, 1), row
+    assert row["score"] == pytest.approx(3 / 4)
+    triaged = [m for m in row["mutants"] if m["triaged"]]
+    assert triaged[0]["mutant"] == "if __name__ <= '__main__':"
+    assert [s["line"] for s in row["stale"]] == ["self.print_count = 0"]
+    survivor = next(m for m in row["mutants"] if m["outcome"] == mut.SURVIVED and not m["triaged"])
+    diff = (out / "survivors" / LESSON / f"{survivor['key']}.diff").read_text(encoding="utf-8")
+    assert f"--- a/{NODE_FILE}" in diff and "+if __name__ < '__main__':" in diff
+    assert json.loads((out / "mutation.json").read_text())["lessons"][LESSON]["score"] == pytest.approx(0.75)
+
+    again = cli(*args, env=env, timeout=120)  # the table, every outcome from the cache
+    assert again.returncode == 0, again.stderr[-3000:]
+    assert "5 known from the cache, 0 to grade" in " ".join(again.stderr.split()), again.stderr
+    assert "75%" in again.stdout and "stale" in again.stdout and "+if __name__ < '__main__':" in again.stdout
+
+
+@pytest.mark.parametrize("triage,words", [
+    ("survivors:\n  - file: x.py\n    reason: too short\n", "survivors.0"),
+    ("survivors: [\n", "not valid YAML"),
+    ("- just a list\n", "expected a mapping"),
+])
+def test_a_bad_mutation_yaml_is_a_one_line_error(cli, tmp_path: Path, triage: str, words: str) -> None:
+    course = _course(tmp_path / "course", triage)
+    proc = cli("dev", "mutate", LESSON, "--sample", "1", "--out", str(tmp_path / "out"),
+               env={"ROS2COURSE_CONTENT": str(course)})
+    assert proc.returncode == 5, proc.stderr
+    error = [line for line in proc.stderr.splitlines() if line.startswith("error:")]
+    assert len(error) == 1 and "mutation.yaml" in error[0] and words in error[0], proc.stderr
+    assert "hint:" in proc.stderr and "Traceback" not in proc.stderr
