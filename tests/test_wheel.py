@@ -27,7 +27,9 @@ def _run(argv: list[str], cwd: Path, timeout: float = 600, env: dict | None = No
     environ = {k: v for k, v in os.environ.items()
                # nothing of the test run's own install may leak into the fresh venv
                if k not in ("ROS2COURSE_CONTENT", "PYTHONPATH", "VIRTUAL_ENV", "AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH",
-                            "LD_LIBRARY_PATH", "ROS_DISTRO", "ROS2COURSE_ENV", "COLCON_PREFIX_PATH")}
+                            "LD_LIBRARY_PATH", "ROS_DISTRO", "ROS2COURSE_ENV", "COLCON_PREFIX_PATH",
+                            # the ROS wheels re-exec a new interpreter with their LD_LIBRARY_PATH unless this is set
+                            "_ROS_WHEELS_BOOTSTRAP_COMPLETE")}
     environ["PATH"] = os.pathsep.join(p for p in environ.get("PATH", "").split(os.pathsep)
                                       if not p.startswith(sys.prefix))
     proc = subprocess.run(argv, cwd=cwd, capture_output=True, text=True, timeout=timeout, check=False,
