@@ -23,7 +23,8 @@ env_mod.activate()
 #: Test modules whose tests each take a minute or more (the validation of every lesson,
 #: repeated grades). They are collected early so that, with pytest-xdist's work stealing,
 #: the longest tests start first and the short ones fill the gaps at the end.
-LONG_MODULES = ("test_validate.py", "test_batch_ros.py", "test_benchmarks.py", "test_repeat.py")
+LONG_MODULES = ("test_validate.py", "test_batch_ros.py", "test_benchmarks.py", "test_repeat.py", "test_wheel.py",
+                "test_mutate.py", "test_second_course.py", "test_report_html.py")
 #: Modules whose tests (or module fixtures) take :func:`cpu_lock`. They are collected before
 #: everything else: xdist's work stealing hands the first half of the collection to one worker
 #: and steals from the end of a queue, so they run one after the other on that worker instead
