@@ -198,16 +198,30 @@ class RosSession:
             self._executor.spin()
 
     def _shutdown_context(self) -> None:
+        """Stop the executor thread first, then destroy the node and the context.
+
+        Destroying the node (its subscriptions and their QoS event handlers) while the
+        executor thread is still inside ``wait`` crashes rclpy (Jazzy 7.1: a segfault in
+        ``event_handler.__exit__``, seen once in CI under load when ``Executor.shutdown``
+        returned at its timeout before the spin loop had left ``wait``). Shutting the
+        context down is what rclpy's own Ctrl+C does to a spinning executor, so it is
+        the second way out; a thread that still has not left is left with its node
+        (a daemon thread: a leak for this process, never a crash).
+        """
         import rclpy  # noqa: PLC0415 - rclpy only when grading (list/show stay light)
 
         if self._executor is not None:
             self._executor.shutdown(timeout_sec=2.0)
-        if self.node is not None:
+        if self._thread is not None:
+            self._thread.join(timeout=3.0)
+            if self._thread.is_alive():
+                with contextlib.suppress(Exception):
+                    rclpy.shutdown(context=self.context)
+                self._thread.join(timeout=3.0)
+        if self.node is not None and not (self._thread is not None and self._thread.is_alive()):
             self.node.destroy_node()
         with contextlib.suppress(Exception):
             rclpy.shutdown(context=self.context)
-        if self._thread is not None:
-            self._thread.join(timeout=3.0)
 
     def __exit__(self, *exc: Any) -> None:
         self._stack.close()
