@@ -32,7 +32,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ros2course.kit import RateStats, record, wait_until
+from ros2course.kit import RateStats, record, stop_spinning, wait_until
 
 #: Reader history depth: 4 s of a 500 Hz stream; the probe never drops for lack of room.
 READER_DEPTH = 2000
@@ -187,11 +187,9 @@ class JointStreamProbe:
         if self._stop.is_set():
             return
         self._stop.set()
-        self._thread.join(timeout=2.0)
-        with contextlib.suppress(Exception):
-            self._executor.shutdown(timeout_sec=1.0)
-        with contextlib.suppress(Exception):
-            self._node.destroy_node()
+        if stop_spinning(self._executor, self._thread):  # never destroy a node a thread still waits on
+            with contextlib.suppress(Exception):
+                self._node.destroy_node()
 
     def __enter__(self) -> JointStreamProbe:
         return self

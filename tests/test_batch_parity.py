@@ -146,3 +146,24 @@ def test_reference_interfaces_are_built_once_and_shared(tmp_path: Path, monkeypa
     assert own.temporary and own.path != first.path and (own.path / "install" / "setup.bash").is_file()
     own.discard()
     assert not own.path.exists()
+
+
+def test_the_batch_sample_is_the_wrong_solutions_check_graded_fastest() -> None:
+    """``dev validate --batch --sample K`` hands in the K graded fixtures ``check`` took least time on;
+    a not-gradable one (no checks to compare) is not picked; without timings the names are spread."""
+    from ros2course.batch.parity import sample_fixtures
+    from ros2course.grade.results import LessonResult
+    from ros2course.grade.validate import Outcome
+
+    lesson = load_catalog().get("inspect-topics")
+
+    def outcome(case: str, seconds: float, status: str = "failed") -> Outcome:
+        return Outcome(lesson.id, case, True, "", "", seconds, LessonResult(lesson.id, 1.0, 11.0, status, []))
+
+    checked = [outcome("reference", 1.0, "passed"), outcome("echo_without_once", 29.0),
+               outcome("grep_keeps_the_inbox", 7.9), outcome("message_type_typo", 3.0, "not gradable"),
+               outcome("pub_without_once", 26.7), outcome("wrong_topic_name", 10.3)]
+    assert sample_fixtures(lesson, 1, checked) == ["grep_keeps_the_inbox"]
+    assert sample_fixtures(lesson, 2, checked) == ["grep_keeps_the_inbox", "wrong_topic_name"]
+    assert sample_fixtures(lesson, 1) == ["echo_without_once"]
+    assert len(sample_fixtures(lesson, 9, checked)) == 5

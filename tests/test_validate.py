@@ -62,3 +62,49 @@ def test_a_fixture_can_require_the_words_its_feedback_must_contain() -> None:
     assert judge_fixture(["order"], graded, {"order": ["one after the other", "tasks"]})[0]
     ok, expected = judge_fixture(["order"], graded, {"order": ["rolls ran out"]})
     assert not ok and "missing: order says 'rolls ran out'" in expected
+
+
+def test_a_case_with_the_references_sources_is_graded_in_the_references_build(tmp_path, monkeypatch) -> None:
+    """``dev validate`` grades a wrong solution that changes no package in the reference's built
+    workspace (nothing else of the reference's survives), and one that changes a package from scratch."""
+    import shutil
+    from pathlib import Path
+
+    from ros2course.grade import validate
+
+    pristine = tmp_path / "pristine"
+    (pristine / "src" / "pkg").mkdir(parents=True)
+    (pristine / "src" / "pkg" / "package.xml").write_text(
+        '<?xml version="1.0"?><package format="3"><name>pkg</name><version>0.0.0</version>'
+        '<description>d</description><maintainer email="ta@example.com">ta</maintainer><license>MIT</license></package>')
+    (pristine / "cli").mkdir()
+    (pristine / "cli" / "run.sh").write_text("ros2 topic list\n")
+    built = tmp_path / "built"
+    shutil.copytree(pristine, built)  # copies keep mtimes, as reference_workspace's do
+    for folder in ("build/pkg", "install/pkg"):
+        (built / folder).mkdir(parents=True)
+    (built / "dump.yaml").write_text("written by the reference's grading\n")
+    reference_src = validate._src_fingerprints(built)
+    seen: list[set[str]] = []
+    monkeypatch.setattr(validate, "grade_lesson", lambda lesson, root, underlays=(): seen.append(
+        {str(p.relative_to(root)) for p in Path(root).rglob("*")}) or "graded")
+
+    def script_edited(root: Path) -> None:
+        shutil.copytree(pristine, root, dirs_exist_ok=True)
+        (root / "cli" / "run.sh").write_text("ros2 topic lst\n")
+
+    def package_edited(root: Path) -> None:
+        script_edited(root)
+        (root / "src" / "pkg" / "setup.cfg").write_text("[develop]\n")
+
+    lesson = load_catalog().get("inspect-topics")
+    case = validate.Case(lesson, "script_edited", script_edited, (), lambda r: (True, ""))
+    result, _ = validate.grade_in_built(lesson, case, built, reference_src)
+    assert result == "graded"
+    assert {"build/pkg", "install/pkg", "cli/run.sh", "src/pkg/package.xml"} <= seen[0]
+    assert "dump.yaml" not in seen[0]
+    assert (built / "cli" / "run.sh").read_text() == "ros2 topic lst\n"
+    other = validate.Case(lesson, "package_edited", package_edited, (), lambda r: (True, ""))
+    assert validate.grade_in_built(lesson, other, built, reference_src) is None
+    assert len(seen) == 1
+    assert validate.grade_in_built(lesson, case, built, None) is None, "an unparsable reference never matches"

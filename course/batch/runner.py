@@ -67,7 +67,7 @@ from ros2course.files import atomic_write_text
 from ros2course.grade.engine import load_grader
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import content_root, load_catalog
-from ros2course.lesson.courses import fixtures_dir
+from ros2course.lesson.courses import course_fixtures
 from ros2course.report import gradebook
 from ros2course.ros import env as env_mod
 from ros2course import sandbox
@@ -143,7 +143,7 @@ def _hideable(folder: Path) -> bool:
 
 def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
     """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions."""
-    candidates = [scratch_root, submissions, out_dir, content_root() / "solutions", fixtures_dir(content_root())]
+    candidates = [scratch_root, submissions, out_dir, content_root() / "solutions", course_fixtures(content_root())]
     out: list[str] = []
     for folder in candidates:
         folder = folder.resolve()

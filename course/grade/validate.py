@@ -35,6 +35,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from rich.console import Console
 from rich.table import Table
 
+from ros2course.build.colcon import fingerprint
 from ros2course.build.reference import (
     ReferenceBuild,
     lesson_dependencies,
@@ -44,7 +45,7 @@ from ros2course.build.reference import (
 from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
 from ros2course.grade.engine import grade_lesson
 from ros2course.grade.results import LessonResult, Status
-from ros2course.lesson.courses import fixtures_dir as course_fixtures
+from ros2course.lesson.courses import course_fixtures
 from ros2course.lesson.catalog import (
     Lesson,
     content_root,
@@ -301,12 +302,72 @@ def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
     return cases
 
 
+#: What a case keeps of the workspace it reuses: colcon's output (absolute paths inside, so it cannot move).
+_BUILT = ("build", "install")
+
+
+def _src_fingerprints(root: Path) -> dict[str, str] | None:
+    """``package folder -> fingerprint`` of a workspace's ``src/`` (the build cache's own key);
+    None when a ``package.xml`` there does not parse (such a case is always graded from scratch)."""
+    try:
+        found = find_packages(root / "src")
+    except CourseError:
+        return None
+    return {str(path.relative_to(root)): fingerprint(path) for path, _ in found.values()}
+
+
+def grade_in_built(lesson: Lesson, case: Case, built: Path, reference_src: dict[str, str] | None
+                   ) -> tuple[LessonResult, float] | None:
+    """Grade ``case`` in the workspace ``built`` (the reference, built), when its ``src/`` is the reference's.
+
+    Most wrong solutions of the ``ros2`` CLI and script lessons change a script,
+    not a package: their build would be the reference's, to the byte. Their
+    workspace is made fresh in a scratch folder and moved into ``built`` over
+    everything but ``build/`` and ``install/`` (nothing the reference's grading
+    wrote survives), so the engine's build cache (fingerprints of path, size
+    and mtime; copies keep mtimes) finds the packages built. A case whose
+    ``src/`` differs in any file returns None, to be graded from scratch.
+    """
+    begin = time.monotonic()
+    scratch = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-{case.name}-"))
+    try:
+        case.prepare(scratch)
+        if reference_src is None or _src_fingerprints(scratch) != reference_src:
+            return None
+        for entry in list(built.iterdir()):
+            if entry.name not in _BUILT:
+                shutil.rmtree(entry) if entry.is_dir() and not entry.is_symlink() else entry.unlink()
+        for entry in scratch.iterdir():
+            shutil.move(str(entry), built / entry.name)
+        return grade_lesson(lesson, built, underlays=case.underlays), time.monotonic() - begin
+    finally:
+        shutil.rmtree(scratch, ignore_errors=True)
+
+
 def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
+    """Grade every case; the reference's built workspace is reused by cases with the reference's ``src/``."""
     outcomes = []
-    for case in lesson_cases(lesson, underlay):
-        result, seconds = grade_case(lesson, case.name, case.prepare, underlays=case.underlays)
-        ok, expected = case.judge(result)
-        outcomes.append(Outcome(lesson.id, case.name, ok, expected, _describe(result), seconds, result))
+    cases = lesson_cases(lesson, underlay)
+    built = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-built-"))
+    try:
+        reference = cases[0]
+        begin = time.monotonic()
+        reference.prepare(built)
+        reference_src = _src_fingerprints(built)
+        graded: tuple[LessonResult, float] | None = (
+            grade_lesson(lesson, built, underlays=reference.underlays), time.monotonic() - begin)
+        for case in cases:
+            if case is not reference:
+                graded = None
+                if case.underlays == reference.underlays:
+                    graded = grade_in_built(lesson, case, built, reference_src)
+                if graded is None:
+                    graded = grade_case(lesson, case.name, case.prepare, underlays=case.underlays)
+            result, seconds = graded
+            ok, expected = case.judge(result)
+            outcomes.append(Outcome(lesson.id, case.name, ok, expected, _describe(result), seconds, result))
+    finally:
+        shutil.rmtree(built, ignore_errors=True)
     return outcomes
 
 

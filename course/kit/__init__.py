@@ -41,7 +41,15 @@ from ros2course.grade.engine import Check, GradingSession, Unmet
 from ros2course.kit_version import API_VERSION
 from ros2course.ros.env import foreign_python_prefix
 from ros2course.ros.index import package_prefix
-from ros2course.run.probes import LATE_DELIVERY, RateStats, call_service, record, stamp_seconds, wait_until
+from ros2course.run.probes import (
+    LATE_DELIVERY,
+    RateStats,
+    call_service,
+    record,
+    stamp_seconds,
+    stop_spinning,
+    wait_until,
+)
 from ros2course.run.process import LearnerProcess
 from ros2course.sandbox import run as sandbox_run
 from ros2course.kit.judge import RATE_TOLERANCE, STANDARD_TOPICS, rate, topics_seen
@@ -62,7 +70,8 @@ from ros2course.kit.packages import (
 
 __all__ = [
     "LATE_DELIVERY", "LearnerProcess", "NotGradable", "RateStats", "call_service", "colcon_command",
-    "foreign_python_prefix", "overlay_env", "package_prefix", "record", "sandbox_run", "stamp_seconds", "wait_until",
+    "foreign_python_prefix", "overlay_env", "package_prefix", "record", "sandbox_run", "stamp_seconds", "stop_spinning",
+    "wait_until",
     "API_VERSION", "RATE_TOLERANCE", "STANDARD_TOPICS", "Check", "GradingSession", "StartedNode", "Unmet", "declared_dependencies",
     "depends", "executable", "process_state", "project_files", "rate", "sigint_exit", "source_package", "start_node", "topics_seen",
     "wait_for_node",

@@ -23,7 +23,7 @@ from typing import Any
 
 from ros2course.errors import NotGradable
 from ros2course.grade.engine import GradingSession
-from ros2course.run.probes import TopicProbe
+from ros2course.run.probes import TopicProbe, stop_spinning
 
 _RANDOM = random.SystemRandom()
 
@@ -106,9 +106,9 @@ class MysteryNode:
         """Stop spinning and destroy the node (idempotent)."""
         if self._executor is None:
             return
-        self._executor.shutdown(timeout_sec=2.0)
-        self._thread.join(timeout=3.0)
-        self.node.destroy_node()
+        if stop_spinning(self._executor, self._thread):
+            self.node.destroy_node()
+        # else: still inside wait, so the node is left to the session's context shutdown (never a crash)
         self._executor = None
 
 

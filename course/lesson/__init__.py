@@ -7,6 +7,8 @@ from pathlib import Path
 
 #: the manifest every course folder holds (issue 18): id, title, version, ROS distro, lessons in order
 MANIFEST = "course.yaml"
+#: A lesson or course id: kebab-case, as rustlings and exercism name exercises (``print-forever-node``).
+ID_PATTERN = r"^[a-z][a-z0-9]*(-[a-z0-9]+)*$"
 
 _active: Path | None = None
 

@@ -18,10 +18,9 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from ros2course.errors import LessonFormatError, UnknownLesson
-from ros2course.lesson import MANIFEST, content_root  # noqa: F401 - re-exported: callers import it from here
+from ros2course.lesson import ID_PATTERN as _ID, MANIFEST, content_root  # noqa: F401 - re-exported: callers import it from here
 from ros2course.ros.requirements import KNOWN_REQUIREMENTS
 
-_ID = r"^[a-z][a-z0-9]*(-[a-z0-9]+)*$"
 
 
 class ReferenceSolution(BaseModel):

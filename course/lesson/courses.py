@@ -19,11 +19,10 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ros2course.errors import CourseError, LessonFormatError
-from ros2course.lesson import MANIFEST, bundled_course
+from ros2course.lesson import ID_PATTERN as _ID, MANIFEST, bundled_course
 
 #: the entry-point group a course package registers its folder in
 ENTRY_POINT_GROUP = "ros2course.courses"
-_ID = r"^[a-z][a-z0-9]*(-[a-z0-9]+)*$"
 
 
 class CourseManifest(BaseModel):
@@ -139,7 +138,7 @@ def find_course(spec: str) -> Path:
                       "pip install the course's package, or give its folder: --course PATH")
 
 
-def fixtures_dir(root: Path) -> Path:
+def course_fixtures(root: Path) -> Path:
     """The course's folder of wrong solutions (``course.yaml``'s ``fixtures``; ``tests/fixtures`` without a manifest).
 
     Raises:

@@ -17,9 +17,9 @@ from pathlib import Path
 import yaml
 
 from ros2course.errors import CourseError
-from ros2course.lesson import MANIFEST
+from ros2course.lesson import ID_PATTERN, MANIFEST
 
-_ID = re.compile(r"^[a-z][a-z0-9]*(-[a-z0-9]+)*$")
+_ID = re.compile(ID_PATTERN)
 
 _COURSE_YAML = """\
 # A ros2course course (ros2course.lesson.courses.CourseManifest documents each field).

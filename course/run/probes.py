@@ -130,6 +130,30 @@ def configure_process_discovery() -> None:
         os.environ.pop("ROS_LOCALHOST_ONLY", None)  # deprecated in Jazzy; it would override the range
 
 
+def stop_spinning(executor: Any, thread: threading.Thread, timeout: float = 5.0) -> bool:
+    """Shut down ``executor`` and wait for ``thread``, which spins it, to leave; True when it has.
+
+    A node must never be destroyed while a thread may still be inside the
+    executor's ``wait`` on it: rclpy (Jazzy 7.1) then crashes the whole process
+    (a segfault in ``event_handler.__exit__``, seen in CI under load, and a
+    pytest worker lost in ``inspect-services``). ``Executor.shutdown`` does not
+    wait for the spin loop to leave (rclpy ``executors.py``: it only triggers the
+    guard condition), so the join here is what makes destroying safe. Every
+    grader-side node spun on a thread of its own (the session's probe node,
+    :class:`ros2course.kit.mystery.MysteryNode`, a lesson's probe) stops this way.
+
+    Args:
+        executor: an ``rclpy.executors.Executor`` (None when it was never made).
+        thread: the thread running ``executor.spin()``.
+        timeout: seconds to wait for the thread.
+    """
+    if executor is not None:
+        with contextlib.suppress(Exception):
+            executor.shutdown(timeout_sec=timeout)
+    thread.join(timeout)
+    return not thread.is_alive()
+
+
 class RosSession:
     """One check's private ROS graph.
 
@@ -198,27 +222,21 @@ class RosSession:
             self._executor.spin()
 
     def _shutdown_context(self) -> None:
-        """Stop the executor thread first, then destroy the node and the context.
+        """Stop the executor thread first (:func:`stop_spinning`), then destroy the node and the context.
 
-        Destroying the node (its subscriptions and their QoS event handlers) while the
-        executor thread is still inside ``wait`` crashes rclpy (Jazzy 7.1: a segfault in
-        ``event_handler.__exit__``, seen once in CI under load when ``Executor.shutdown``
-        returned at its timeout before the spin loop had left ``wait``). Shutting the
-        context down is what rclpy's own Ctrl+C does to a spinning executor, so it is
-        the second way out; a thread that still has not left is left with its node
-        (a daemon thread: a leak for this process, never a crash).
+        Shutting the context down is what rclpy's own Ctrl+C does to a spinning
+        executor, so it is the second way out; a thread that still has not left
+        is left with its node (a daemon thread: a leak for this process, never a crash).
         """
         import rclpy  # noqa: PLC0415 - rclpy only when grading (list/show stay light)
 
-        if self._executor is not None:
-            self._executor.shutdown(timeout_sec=2.0)
-        if self._thread is not None:
+        stopped = self._thread is None or stop_spinning(self._executor, self._thread)
+        if not stopped:
+            with contextlib.suppress(Exception):
+                rclpy.shutdown(context=self.context)
             self._thread.join(timeout=3.0)
-            if self._thread.is_alive():
-                with contextlib.suppress(Exception):
-                    rclpy.shutdown(context=self.context)
-                self._thread.join(timeout=3.0)
-        if self.node is not None and not (self._thread is not None and self._thread.is_alive()):
+            stopped = not self._thread.is_alive()
+        if self.node is not None and stopped:
             self.node.destroy_node()
         with contextlib.suppress(Exception):
             rclpy.shutdown(context=self.context)
