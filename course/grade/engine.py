@@ -36,7 +36,7 @@ from ros2course.ros import env as env_mod
 from ros2course.ros import index as ament_index
 from ros2course.ros.interfaces import workspace_type
 from ros2course import sandbox
-from ros2course.run.diagnose import diagnose
+from ros2course.run.diagnose import Diagnosis, diagnose
 from ros2course.run.probes import RosSession
 from ros2course.run.process import LearnerProcess, sweep_stale_fastdds_shm
 from ros2course.run.recording import CHECKS_METADATA, Recorder
@@ -173,6 +173,9 @@ class GradingSession:
                fraction: float | None = None, window: tuple[float, float] | None = None) -> bool:
         """Record the verdict on ``check_id``; returns ``passed``.
 
+        A failed verdict may get the engine's diagnosis of the graph (see :meth:`_diagnosis`);
+        it never changes the verdict or the points.
+
         Args:
             observed: what the grader saw, in the learner's terms.
             expected: what the lesson's contract asks for.
@@ -204,7 +207,7 @@ class GradingSession:
                                              diagnosis=[] if passed else self._diagnosis(check))
         return passed
 
-    def _diagnosis(self, check: Check) -> list:
+    def _diagnosis(self, check: Check) -> list[Diagnosis]:
         """What the graph shows against the lesson's ``graph:`` contract, for a failed ``check`` (issue 19).
 
         Made at most once per part (the innermost open :meth:`part` of this

@@ -15,7 +15,8 @@ comes from:
   ``get_publisher_names_and_types_by_node`` and the others ``ros2 node info``
   uses), so a missing or extra leading slash shows as a namespace difference;
 * ``other_type``: the expected name is there with another type (both named;
-  what ``ros2 topic info`` shows and ``ros2 doctor``'s topic check warns of);
+  the types ``ros2 topic info`` / ``ros2 node info`` show: endpoints of two
+  types on one name never connect);
 * ``qos``: a learner's endpoint and the grader's (or another learner's) on an
   expected topic cannot match, judged by ``rclpy.qos.qos_check_compatible(publisher_qos,
   subscription_qos)`` on the profiles ``Node.get_publishers_info_by_topic`` and
@@ -25,7 +26,9 @@ comes from:
   seen from the grader's side);
 * ``duplicate_node``: two or more nodes of the graph share one fully
   qualified name (``ros2 node list`` warns of it: their parameters and
-  services are then ambiguous).
+  services are then ambiguous). A node stopped a moment ago can linger in the
+  graph until its participant's lease expires, so a grader that restarts a
+  node in one graph may see it twice for a while.
 
 Whether the learner's process is still running is not repeated here: graders
 report it with ``kit.process_state``. A node missing without any near name is
