@@ -340,3 +340,16 @@ def test_engine_diagnoses_the_first_failed_check_of_a_part(tmp_path):
     assert results["topic"].points == 0.0 and not results["topic"].passed  # the verdict is the grader's
     assert len(s.diagnose_seconds) == 1 and "diagnose" in s.timings
     print(f"diagnosis took {s.diagnose_seconds[0] * 1000:.1f} ms")
+
+
+def test_diagnosis_in_the_html_report_is_escaped(tmp_path):
+    pytest.importorskip("jinja2")
+    from ros2course.report.html import render_report  # noqa: PLC0415
+
+    result = _result()
+    result.student = "s1"
+    result.checks[0].diagnosis = [Diagnosis("near_name", "node /x publishes /<script>alert(1)</script>", {})]
+    (tmp_path / "results.jsonl").write_text(json.dumps(result.to_record()) + "\n", encoding="utf-8")
+    html = render_report(tmp_path, similarity=False)
+    assert "why: node /x publishes /&lt;script&gt;alert(1)&lt;/script&gt;" in html
+    assert "<script>alert(1)" not in html
