@@ -122,6 +122,10 @@ def test_every_fixture_file_loads_and_names_declared_checks(lesson_id):
         else:
             assert fixture.fails, fixture.name
         assert fixture.edits or fixture.commands is not None, f"{fixture.name} changes nothing"
+        diagnosed = {d.check for d in fixture.diagnosis if d.check}
+        assert diagnosed <= declared, f"{fixture.name}: diagnosis of unknown checks {diagnosed - declared}"
+        assert not fixture.diagnosis or lesson.graph is not None, (
+            f"{fixture.name} expects a diagnosis but lesson {lesson_id} declares no graph:")
 
 
 def test_print_forever_node_has_wrong_solution_fixtures():

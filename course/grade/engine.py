@@ -17,6 +17,7 @@ import hashlib
 import importlib
 import importlib.util
 import json
+import logging
 import os
 import shutil
 import sys
@@ -35,6 +36,7 @@ from ros2course.ros import env as env_mod
 from ros2course.ros import index as ament_index
 from ros2course.ros.interfaces import workspace_type
 from ros2course import sandbox
+from ros2course.run.diagnose import Diagnosis, diagnose
 from ros2course.run.probes import RosSession
 from ros2course.run.process import LearnerProcess, sweep_stale_fastdds_shm
 from ros2course.run.recording import CHECKS_METADATA, Recorder
@@ -133,6 +135,8 @@ class GradingSession:
         self._started_ns = time.time_ns()
         #: the check's MCAP recording, made when the grader first uses the ROS graph (:attr:`ros`).
         self.recorder: Recorder | None = None
+        #: seconds each diagnosis of a failed check took (:meth:`_diagnosis`), in order.
+        self.diagnose_seconds: list[float] = []
 
     def add_plot(self, title: str, times: Sequence[float], series: Mapping[str, Sequence[float]],
                  unit: str = "") -> None:
@@ -169,6 +173,9 @@ class GradingSession:
                fraction: float | None = None, window: tuple[float, float] | None = None) -> bool:
         """Record the verdict on ``check_id``; returns ``passed``.
 
+        A failed verdict may get the engine's diagnosis of the graph (see :meth:`_diagnosis`);
+        it never changes the verdict or the points.
+
         Args:
             observed: what the grader saw, in the learner's terms.
             expected: what the lesson's contract asks for.
@@ -196,8 +203,49 @@ class GradingSession:
         self.windows[check_id] = (int(window[0] * 1e9), int(window[1] * 1e9)) if window else (start, now)
         self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
                                              passed, observed, expected,
-                                             "" if passed else (hint if hint is not None else check.hint))
+                                             "" if passed else (hint if hint is not None else check.hint),
+                                             diagnosis=[] if passed else self._diagnosis(check))
         return passed
+
+    def _diagnosis(self, check: Check) -> list[Diagnosis]:
+        """What the graph shows against the lesson's ``graph:`` contract, for a failed ``check`` (issue 19).
+
+        Made at most once per part (the innermost open :meth:`part` of this
+        thread): for its first failed check recorded while the part, or a part
+        around it, runs a learner process in a graph (:meth:`launch`). That
+        graph is queried right then (:func:`ros2course.run.diagnose.diagnose`),
+        with the contract entries of the check's own part
+        (:meth:`ros2course.lesson.catalog.LessonGraph.for_part`). ``[]`` when the
+        lesson declares no graph, the check watched none, or anything fails
+        (logged at debug level): a diagnosis never changes a verdict or a score.
+        Seconds spent: each in :attr:`diagnose_seconds`, their sum in ``timings["diagnose"]``.
+        """
+        try:
+            contract = self.lesson.graph
+            states = self._part_states
+            if contract is None or not states or states[-1]["diagnosed"]:
+                return []
+            graph = next((state["graph"] for state in reversed(states) if state["graph"] is not None), None)
+            if graph is None:
+                return []
+            states[-1]["diagnosed"] = True
+            begin = time.monotonic()
+            with self.phase("diagnose"):
+                found = diagnose(graph, contract.for_part(check.part))
+            with self._timings_lock:
+                self.diagnose_seconds.append(time.monotonic() - begin)
+            return found
+        except Exception:  # noqa: BLE001 - advice only: never fail the check's recording
+            logging.getLogger(__name__).debug("diagnosis of %s failed", check.id, exc_info=True)
+            return []
+
+    @property
+    def _part_states(self) -> list[dict[str, Any]]:
+        """The calling thread's open parts, innermost last: ``{"graph": the RosSession its learner
+        processes run in or None, "diagnosed": whether a failed check of it got its diagnosis}``."""
+        if not hasattr(self._local, "parts"):
+            self._local.parts = []
+        return self._local.parts
 
     def amend(self, check_id: str, *, observed: str | None = None, hint: str | None = None) -> None:
         """Add to a recorded verdict's explanation; its points and pass/fail stay.
@@ -255,6 +303,7 @@ class GradingSession:
         node it started) run, newest first, whatever happened.
         """
         self._closers.append([])
+        self._part_states.append({"graph": None, "diagnosed": False})
         self._local.mark = time.time_ns()
         try:
             yield
@@ -263,6 +312,8 @@ class GradingSession:
             self.stop_part(name, str(stop))
         else:
             self._run_closers(self._closers.pop())
+        finally:
+            self._part_states.pop()
 
     @property
     def _closers(self) -> list[list[Any]]:
@@ -436,7 +487,10 @@ class GradingSession:
             args: extra arguments (e.g. ``["--ros-args", "-r", "__node:=x"]``).
             graph: the :class:`~ros2course.run.probes.RosSession` to run in (default :attr:`ros`).
         """
-        env = (graph or self.ros).learner_env(self.overlay())
+        graph = graph or self.ros
+        env = graph.learner_env(self.overlay())
+        if self._part_states:  # the graph a failed check of this part is diagnosed in (see _diagnosis)
+            self._part_states[-1]["graph"] = graph
         proc = LearnerProcess([str(path), *(args or [])], env, self.log_dir, name,
                               cwd=self.workspace_root, ros_sigint=True)
         self._processes.append(proc)

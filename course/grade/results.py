@@ -6,7 +6,9 @@ drift apart:
 
 * :meth:`LessonResult.to_json`: the documented ``check --json`` object
   (``lesson, score, max_score, status, checks[id, name, points, max_points,
-  passed, observed, expected, hint]``, plus ``message`` when not graded);
+  passed, observed, expected, hint]``, plus ``message`` when not graded; a failed check
+  that watched the graph may add ``diagnosis: [{kind, message, detail}]``, see
+  :mod:`ros2course.run.diagnose`);
 * :meth:`LessonResult.to_record` / :meth:`LessonResult.from_record`: one line of
   a batch's ``results.jsonl`` (the JSON object plus ``hint``, ``timings``,
   ``build``, ``log_dir`` and, in a batch, ``student``, ``isolation``,
@@ -24,6 +26,8 @@ import dataclasses
 import enum
 import xml.etree.ElementTree as ET
 from typing import Any
+
+from ros2course.run.diagnose import Diagnosis
 
 
 class Status(str, enum.Enum):
@@ -74,32 +78,47 @@ class CheckResult:
     #: "start_ns", "end_ns": the wall-clock window (ns since the epoch)}``; None when the check
     #: observed no ROS graph. In the JSON of failed checks only (``ros2course evidence`` reads it).
     evidence: dict[str, Any] | None = None
+    #: what the graph showed when a check that watched it failed (:class:`~ros2course.run.diagnose.Diagnosis`,
+    #: made by the engine, never by a grader); in the JSON of failed checks only, when not empty.
+    diagnosis: list[Diagnosis] = dataclasses.field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
-        """The documented JSON fields (plus ``evidence`` on a failed check that has a recording)."""
+        """The documented JSON fields (plus ``evidence`` and ``diagnosis`` on a failed check that has them)."""
         out = dataclasses.asdict(self)
         out.pop("skipped")
         if self.passed or self.skipped or not self.evidence:
             out.pop("evidence")
+        if self.passed or self.skipped or not self.diagnosis:
+            out.pop("diagnosis")
+        else:
+            out["diagnosis"] = [d.to_dict() for d in self.diagnosis]
         return out
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> CheckResult:
         """The inverse of :meth:`to_dict` (unknown keys ignored)."""
         evidence = data.get("evidence")
+        diagnosis = data.get("diagnosis")
         observed = str(data.get("observed", ""))
         return cls(str(data.get("id", "")), str(data.get("name", "")), float(data.get("points", 0.0)),
                    float(data.get("max_points", 0.0)), bool(data.get("passed")), observed,
                    str(data.get("expected", "")), str(data.get("hint", "")),
                    # the JSON has no "skipped": the engine's "not checked" verdicts say it in their text
                    skipped=not data.get("passed") and observed.startswith(NOT_CHECKED),
-                   evidence=dict(evidence) if isinstance(evidence, dict) else None)
+                   evidence=dict(evidence) if isinstance(evidence, dict) else None,
+                   diagnosis=[Diagnosis.from_dict(d) for d in diagnosis if isinstance(d, dict)]
+                   if isinstance(diagnosis, list) else [])
 
     def output_text(self) -> str:
-        """``observed: ...`` / ``expected: ...`` / ``hint: ...`` (Gradescope output, JUnit failure text)."""
+        """``observed: ...`` / ``expected: ...`` / ``hint: ...`` / ``why: ...`` (Gradescope output, JUnit failure text).
+
+        One ``why:`` line per :attr:`diagnosis` finding of a failed check.
+        """
         lines = [f"observed: {self.observed}", f"expected: {self.expected}"]
         if self.hint and not self.passed:
             lines.append(f"hint: {self.hint}")
+        if not self.passed:
+            lines += [f"why: {d.message}" for d in self.diagnosis]
         return "\n".join(lines)
 
 

@@ -80,6 +80,22 @@ class Edit(BaseModel):
         return self
 
 
+class ExpectedDiagnosis(BaseModel):
+    """A finding a wrong solution's result must carry (:mod:`ros2course.run.diagnose`, issue 19).
+
+    Attributes:
+        kind: the finding's kind (``near_name``, ``other_type``, ``qos``, ``no_peer``, ``duplicate_node``).
+        mentions: words its message or detail must contain, case-insensitively (e.g. the names involved).
+        check: the check id whose diagnosis holds it; "" for any failed check.
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    kind: Literal["near_name", "other_type", "qos", "no_peer", "duplicate_node"]
+    mentions: list[str] = Field(default_factory=list)
+    check: str = ""
+
+
 class Fixture(BaseModel):
     """A wrong (or alternative right) solution of one lesson."""
 
@@ -94,6 +110,8 @@ class Fixture(BaseModel):
     #: check id -> words its feedback (observed text or hint) must contain, case-insensitively: a wrong
     #: solution must lose the right check *and* be told what it did (issue 24).
     says: dict[str, list[str]] = Field(default_factory=dict)
+    #: findings the engine's diagnosis of the failed checks must hold (the bug's cause, named).
+    diagnosis: list[ExpectedDiagnosis] = Field(default_factory=list)
 
     name: str = Field(default="", exclude=True)
 
@@ -296,7 +314,7 @@ def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
         def judged(result: LessonResult, fixture: Fixture = fixture) -> tuple[bool, str]:
             if fixture.expect == "full_marks":
                 return full_marks(result)
-            return judge_fixture(fixture.fails, result, fixture.says)
+            return judge_fixture(fixture.fails, result, fixture.says, fixture.diagnosis)
 
         cases.append(Case(lesson, fixture.name, wrong, underlays if uses_underlay else (), judged))
     return cases
@@ -375,14 +393,17 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
 BUILD_CHECK = "build"
 
 
-def judge_fixture(fails: list[str], result: LessonResult, says: dict[str, list[str]] | None = None
-                  ) -> tuple[bool, str]:
+def judge_fixture(fails: list[str], result: LessonResult, says: dict[str, list[str]] | None = None,
+                  diagnosis: list[ExpectedDiagnosis] | None = None) -> tuple[bool, str]:
     """Whether a wrong solution failed for its stated reason: ``(ok, expected text)``.
 
     It must lose the points of every check in ``fails`` (ids the grader
     declares). A submission that is not gradable at all has no checks: that is
     its stated reason only when ``fails`` names the build (a fixture whose bug
     is a runtime behaviour must build, or it proves nothing about that check).
+    ``says`` maps check ids to words their feedback must contain; each of
+    ``diagnosis`` must be matched by a finding of that kind, mentioning every
+    one of its words, on a failed check (the one it names, if any).
     """
     expected = "loses the points of " + ", ".join(fails)
     if not result.checks:
@@ -403,6 +424,14 @@ def judge_fixture(fails: list[str], result: LessonResult, says: dict[str, list[s
         unsaid += [f"{check_id} says {word!r}" for word in words if word.lower() not in text]
     if says:
         expected += "; " + ", ".join(f"{check_id} says {', '.join(map(repr, words))}" for check_id, words in says.items())
+    for wanted in diagnosis or []:
+        where = [c for c in result.checks if not c.passed and (not wanted.check or c.id == wanted.check)]
+        if not any(d.kind == wanted.kind and all(d.mentions(word) for word in wanted.mentions)
+                   for c in where for d in c.diagnosis):
+            unsaid.append(f"a {wanted.kind} diagnosis" + (f" of {wanted.check}" if wanted.check else "")
+                          + (f" naming {', '.join(wanted.mentions)}" if wanted.mentions else ""))
+    if diagnosis:
+        expected += "; diagnosed: " + ", ".join(d.kind for d in diagnosis)
     if unsaid:
         expected += f" (missing: {'; '.join(unsaid)})"
     return not unknown and not unsaid and result.score < result.max_score and len(lost) == len(fails), expected

@@ -12,7 +12,7 @@ import difflib
 import functools
 import re
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
@@ -30,6 +30,84 @@ class ReferenceSolution(BaseModel):
 
     #: Shell commands run in the workspace before grading (what the learner types).
     commands: list[str] = Field(default_factory=list)
+
+
+#: A fully qualified ROS name (``/amazing_quote``, ``/ns/node``): what the graph shows.
+_ROS_NAME = r"^(/[A-Za-z_][A-Za-z0-9_]*)+$"
+#: An interface type as the graph spells it (``package_with_interfaces/msg/AmazingQuote``).
+_TYPE_NAME = r"^[A-Za-z][A-Za-z0-9_]*/(msg|srv|action)/[A-Z][A-Za-z0-9]*$"
+
+
+class GraphNode(BaseModel):
+    """A node the lesson's contract expects in the graph (``ros2 node list``).
+
+    Attributes:
+        name: fully qualified, e.g. ``/amazing_quote_publisher_node``.
+        part: the grader's part (:attr:`ros2course.grade.engine.Check.part`) whose graph holds it; "" for every part.
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: Annotated[str, Field(pattern=_ROS_NAME)]
+    part: str = ""
+
+
+class GraphTopic(BaseModel):
+    """A topic end the learner's node is expected to have (``ros2 topic info -v``).
+
+    Attributes:
+        name: fully qualified topic name.
+        type: its message type, ``pkg/msg/Name``.
+        role: ``publish`` (the learner's node publishes, the grader listens) or ``subscribe``.
+        part: as :attr:`GraphNode.part`.
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: Annotated[str, Field(pattern=_ROS_NAME)]
+    type: Annotated[str, Field(pattern=_TYPE_NAME)]
+    role: Literal["publish", "subscribe"] = "publish"
+    part: str = ""
+
+
+class GraphService(BaseModel):
+    """A service end the learner's node is expected to have (``ros2 service list -t``).
+
+    Attributes:
+        name: fully qualified service name.
+        type: its service type, ``pkg/srv/Name``.
+        role: ``serve`` (the learner's node is the server) or ``call`` (its client).
+        part: as :attr:`GraphNode.part`.
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: Annotated[str, Field(pattern=_ROS_NAME)]
+    type: Annotated[str, Field(pattern=_TYPE_NAME)]
+    role: Literal["serve", "call"] = "serve"
+    part: str = ""
+
+
+class LessonGraph(BaseModel):
+    """The graph a lesson's contract expects while its learner nodes run (``graph:`` in lesson.yaml).
+
+    Optional. When a check that watched the graph fails, the engine compares
+    these entries with what the graph shows then and attaches a diagnosis
+    (:mod:`ros2course.run.diagnose`); it never changes a verdict.
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    nodes: list[GraphNode] = Field(default_factory=list)
+    topics: list[GraphTopic] = Field(default_factory=list)
+    services: list[GraphService] = Field(default_factory=list)
+
+    def for_part(self, part: str) -> LessonGraph:
+        """The entries that apply to a check of grader part ``part`` (its own and the part-less ones)."""
+        def keep(entries: list) -> list:
+            return [e for e in entries if e.part in ("", part)]
+
+        return LessonGraph(nodes=keep(self.nodes), topics=keep(self.topics), services=keep(self.services))
 
 
 class Lesson(BaseModel):
@@ -61,6 +139,8 @@ class Lesson(BaseModel):
         folders: workspace folders holding the lesson's files outside any ROS package
             (the preamble's ``python/minimalist_package``); ``dev validate`` copies them
             from ``solutions/`` for the reference and its wrong solutions.
+        graph: the nodes, topics and services the contract expects in the graph (:class:`LessonGraph`),
+            or None; the engine diagnoses failed checks against it.
     """
 
     model_config = ConfigDict(extra="forbid")
@@ -80,6 +160,7 @@ class Lesson(BaseModel):
     folders: list[Annotated[str, Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_./-]*$")]] = Field(default_factory=list)
     starter_solutions: list[Annotated[str, Field(pattern=r"^src/[A-Za-z0-9_]+(/[A-Za-z0-9_][A-Za-z0-9_.-]*)*$")]] = (
         Field(default_factory=list))
+    graph: LessonGraph | None = None
 
     #: The lesson's folder; set by the loader, not read from YAML.
     folder: Path = Field(default=Path("."), exclude=True)

@@ -89,7 +89,7 @@ _TEMPLATE = """<!DOCTYPE html>
 {% if s.recording %}<a href="{{ s.recording }}">recording</a> (<code>ros2course evidence</code>, Foxglove){% else %}no recording{% endif %}</p>
 {% if s.message %}<pre>{{ s.message }}</pre>{% endif %}{% if s.hint %}<p>hint: {{ s.hint }}</p>{% endif %}
 {% if s.checks %}<table><tr><th>check</th><th>points</th><th>observed</th><th>expected</th><th>hint</th></tr>
-{% for c in s.checks %}<tr class="{{ 'pass' if c.passed else 'fail' }}"><td>{{ c.name }}</td><td>{{ "%g" % c.points }}/{{ "%g" % c.max_points }}</td><td><pre>{{ c.observed }}</pre></td><td><pre>{{ c.expected }}</pre></td><td>{{ c.hint if not c.passed else "" }}</td></tr>
+{% for c in s.checks %}<tr class="{{ 'pass' if c.passed else 'fail' }}"><td>{{ c.name }}</td><td>{{ "%g" % c.points }}/{{ "%g" % c.max_points }}</td><td><pre>{{ c.observed }}</pre></td><td><pre>{{ c.expected }}</pre></td><td>{{ c.hint if not c.passed else "" }}{% if not c.passed %}{% for d in c.diagnosis %}<br>why: {{ d.message }}{% endfor %}{% endif %}</td></tr>
 {% endfor %}</table>{% else %}<p>no checks recorded</p>{% endif %}
 {% if s.plots %}<div class="plots">{% for p in s.plots %}<figure>{{ p.svg }}<figcaption>{{ p.caption }}</figcaption></figure>{% endfor %}</div>{% endif %}
 {% for note in s.plot_notes %}<p class="note">{{ note }}</p>{% endfor %}

@@ -63,7 +63,7 @@ def render_plot(plot: Plot, console: Console, width: int = 60) -> None:
 
 
 def render_result(result: LessonResult, console: Console) -> None:
-    """Print the table of checks; under it, for each failed check, observed / expected / hint."""
+    """Print the table of checks; under it, for each failed check, observed / expected / hint / why (its diagnosis)."""
     style = _STATUS_STYLE.get(result.status, "bold")
     title = Text.assemble((f"{result.lesson}: ", "bold"), (result.status.value, style),
                           f"  {points_text(result.score)}/{points_text(result.max_score)} points")
@@ -93,6 +93,8 @@ def render_result(result: LessonResult, console: Console) -> None:
         console.print(Text.assemble(("    expected: ", "dim"), check.expected))
         if check.hint:
             console.print(Text.assemble(("    hint:     ", "cyan"), check.hint))
+        for finding in check.diagnosis:  # what the graph showed (ros2course.run.diagnose)
+            console.print(Text.assemble(("    why:      ", "magenta"), finding.message))
         if check.evidence:
             seconds = (check.evidence["end_ns"] - check.evidence["start_ns"]) * 1e-9
             console.print(Text.assemble(("    evidence: ", "dim"), f"ros2course evidence {result.lesson} {check.id}",

@@ -1,0 +1,355 @@
+"""The diagnosis of failed checks (issue 19): ros2course.run.diagnose and where it shows.
+
+The graph tests build real rclpy nodes in one process, inside a
+:class:`RosSession`'s context (private domain): a near-miss topic name, another
+type, a BEST_EFFORT publisher against the grader's RELIABLE subscription,
+duplicate node names, a correct graph. One engine test runs a real learner
+process through :meth:`GradingSession.launch`.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import os
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+from rich.console import Console
+
+from ros2course.grade.results import CheckResult, LessonResult, Status
+from ros2course.grade.validate import ExpectedDiagnosis, Fixture, judge_fixture
+from ros2course.lesson.catalog import LessonGraph, load_catalog
+from ros2course.report.table import render_result
+from ros2course.run.diagnose import Diagnosis, clean, edit_distance, how_near, near_names
+
+STRING = "std_msgs/msg/String"
+CONTRACT = LessonGraph.model_validate({
+    "nodes": [{"name": "/talker"}],
+    "topics": [{"name": "/amazing_quote", "type": STRING, "role": "publish"}],
+})
+
+
+# --- names (no ROS) ------------------------------------------------------------------------
+
+def test_edit_distance_and_how_near():
+    assert edit_distance("/amazing_quote", "/amazing_quotes") == 1
+    assert edit_distance("kitten", "sitting") == 3
+    assert edit_distance("", "abc") == 3
+    assert how_near("/amazing_quote", "/amazing_quotes") == "one character from /amazing_quote"
+    assert how_near("/a_b", "/a_cd") == "2 characters from /a_b"
+    assert how_near("/amazing_quote", "/ns/amazing_quote") == "the same name in namespace /ns, not /"
+
+
+def test_near_names():
+    assert near_names("/amazing_quote", ["/amazing_quotes", "/rosout", "/zzz"]) == ["/amazing_quotes"]
+    assert near_names("/amazing_quote", ["/robot/amazing_quote"]) == ["/robot/amazing_quote"]
+    assert near_names("/amazing_quote_subscriber_node", ["/quote_subscriber"]) == ["/quote_subscriber"]
+    assert near_names("/amazing_quote", ["/amazing_quote", "/joint_states"]) == []
+
+
+def test_clean_escapes_and_caps():
+    assert clean("/a\x1b[31mb") == "/a\\x1b[31mb"
+    long = clean("/" + "x" * 500)
+    assert len(long) == 80 and long.endswith("…")
+
+
+def test_lesson_graph_validates_names_and_parts():
+    with pytest.raises(ValueError):
+        LessonGraph.model_validate({"topics": [{"name": "amazing quote", "type": STRING}]})
+    with pytest.raises(ValueError):
+        LessonGraph.model_validate({"topics": [{"name": "/x", "type": "String"}]})
+    graph = LessonGraph.model_validate({"nodes": [{"name": "/a", "part": "one"}, {"name": "/b", "part": "two"},
+                                                  {"name": "/c"}]})
+    assert [n.name for n in graph.for_part("one").nodes] == ["/a", "/c"]
+
+
+def test_declared_lessons_load():
+    catalog = load_catalog()
+    for lesson_id in ("print-forever-node", "publisher-subscriber", "service-server-client", "parameters",
+                      "launch-files"):
+        assert catalog.get(lesson_id).graph is not None, lesson_id
+
+
+# --- the result model ---------------------------------------------------------------------
+
+FINDING = Diagnosis("near_name", "node /p publishes /amazing_quotes (AmazingQuote), one character from /amazing_quote",
+                    {"expected": "/amazing_quote", "found": "/amazing_quotes"})
+
+
+def _result(passed: bool = False) -> LessonResult:
+    check = CheckResult("pub_topic", "It publishes /amazing_quote", 0.0 if not passed else 2.0, 2.0, passed,
+                        "publishes /amazing_quotes", "/amazing_quote", "" if passed else "spell it",
+                        diagnosis=[] if passed else [FINDING])
+    return LessonResult("publisher-subscriber", check.points, 2.0, Status.PASSED if passed else Status.FAILED,
+                        [check])
+
+
+def test_diagnosis_json_round_trip():
+    result = _result()
+    data = json.loads(json.dumps(result.to_record()))
+    assert data["checks"][0]["diagnosis"] == [FINDING.to_dict()]
+    again = LessonResult.from_record(data)
+    assert again.checks[0].diagnosis == [FINDING]
+    assert again.to_record() == result.to_record()
+
+
+def test_no_diagnosis_keeps_the_documented_shape():
+    assert "diagnosis" not in _result(passed=True).to_json()["checks"][0]
+    plain = CheckResult("a", "A", 0.0, 1.0, False, "o", "e", "h")
+    assert "diagnosis" not in plain.to_dict()
+    assert CheckResult.from_dict(plain.to_dict()).diagnosis == []
+
+
+def test_diagnosis_in_gradescope_and_table():
+    result = _result()
+    output = result.gradescope_tests(prefix=False)[0]["output"]
+    assert output.splitlines()[-1] == f"why: {FINDING.message}"
+    console = Console(file=io.StringIO(), width=200)
+    render_result(result, console)
+    assert f"why:      {FINDING.message}" in console.file.getvalue()
+
+
+def test_judge_fixture_asserts_the_diagnosis():
+    fixture = Fixture.model_validate({"description": "typo", "fails": ["pub_topic"],
+                                      "diagnosis": [{"kind": "near_name", "mentions": ["/amazing_quotes"]}]})
+    ok, expected = judge_fixture(fixture.fails, _result(), fixture.says, fixture.diagnosis)
+    assert ok and "diagnosed: near_name" in expected
+    wrong = [ExpectedDiagnosis(kind="qos", mentions=["RELIABLE"])]
+    ok, expected = judge_fixture(fixture.fails, _result(), fixture.says, wrong)
+    assert not ok and "missing: a qos diagnosis naming RELIABLE" in expected
+    elsewhere = [ExpectedDiagnosis(kind="near_name", check="other_check")]
+    assert not judge_fixture(fixture.fails, _result(), None, elsewhere)[0]
+
+
+# --- real graphs ----------------------------------------------------------------------------
+
+@pytest.fixture
+def graph():
+    """A RosSession, and a function making extra rclpy nodes in its context (destroyed at the end)."""
+    pytest.importorskip("rclpy")
+    import rclpy  # noqa: PLC0415
+    from rclpy.parameter import Parameter  # noqa: PLC0415
+
+    from ros2course.ros import env as env_mod  # noqa: PLC0415
+    from ros2course.run.probes import RosSession  # noqa: PLC0415
+
+    env_mod.activate()
+    made = []
+    with RosSession() as session:
+        def node(name: str, namespace: str | None = None):
+            made.append(rclpy.create_node(name, namespace=namespace, context=session.context, enable_rosout=False,
+                                          start_parameter_services=False,
+                                          parameter_overrides=[Parameter("start_type_description_service",
+                                                                         value=False)]))
+            return made[-1]
+
+        yield session, node
+        for one in made:
+            one.destroy_node()
+
+
+def _kinds(findings: list[Diagnosis]) -> list[str]:
+    return [d.kind for d in findings]
+
+
+def _settled(session, contract: LessonGraph, done) -> list[Diagnosis]:
+    """Diagnose until ``done(findings)`` (in-process discovery takes a few ms), at most 10 s."""
+    from ros2course.run.diagnose import diagnose  # noqa: PLC0415
+    from ros2course.run.probes import wait_until  # noqa: PLC0415
+
+    found: list[Diagnosis] = []
+
+    def check() -> bool:
+        found[:] = diagnose(session, contract)
+        return done(found)
+
+    wait_until(check, 10.0, interval=0.05)
+    return found
+
+
+def _string():
+    from std_msgs.msg import String  # noqa: PLC0415
+
+    return String
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_near_miss_topic(graph):
+    session, node = graph
+    node("talker").create_publisher(_string(), "/amazing_quotes", 10)
+    found = _settled(session, CONTRACT, lambda f: "near_name" in _kinds(f))
+    assert _kinds(found) == ["no_peer", "near_name"], found
+    assert "no node publishes the topic /amazing_quote" in found[0].message
+    assert found[1].message == "node /talker publishes /amazing_quotes (String), one character from /amazing_quote"
+    assert found[1].detail["found"] == "/amazing_quotes"
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_near_miss_node_and_namespace(graph):
+    session, node = graph
+    node("talkr").create_publisher(_string(), "/amazing_quote", 10)
+    found = _settled(session, CONTRACT, lambda f: bool(f))
+    assert _kinds(found) == ["near_name"] and "node /talkr is running, one character from /talker" in found[0].message
+    node("talker", namespace="/robot").create_publisher(_string(), "/robot/amazing_quote", 10)
+    found = _settled(session, CONTRACT, lambda f: any("/robot/talker" in d.message for d in f))
+    assert any("the same name in namespace /robot, not /" in d.message for d in found), found
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_other_type(graph):
+    from std_msgs.msg import Int32  # noqa: PLC0415
+
+    session, node = graph
+    node("talker").create_publisher(Int32, "/amazing_quote", 10)
+    found = _settled(session, CONTRACT, lambda f: bool(f))
+    assert _kinds(found) == ["other_type"], found
+    assert found[0].message == ("node /talker publishes /amazing_quote as std_msgs/msg/Int32; "
+                                "the lesson's type is std_msgs/msg/String")
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_best_effort_publisher_against_reliable_subscription(graph):
+    from rclpy.qos import QoSProfile, ReliabilityPolicy  # noqa: PLC0415
+
+    session, node = graph
+    node("talker").create_publisher(_string(), "/amazing_quote",
+                                    QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+    session.topic("/amazing_quote", _string(), QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+    found = _settled(session, CONTRACT, lambda f: "qos" in _kinds(f))
+    assert _kinds(found) == ["qos"], found
+    message = found[0].message
+    assert "the publisher of node /talker (BEST_EFFORT, VOLATILE)" in message
+    assert "the subscription of the grader (RELIABLE, VOLATILE)" in message
+    assert message.endswith("cannot connect: ERROR: Best effort publisher and reliable subscription"), message
+    assert found[0].detail["publisher_qos"].startswith("BEST_EFFORT")
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_duplicate_node_names(graph):
+    session, node = graph
+    node("talker").create_publisher(_string(), "/amazing_quote", 10)
+    node("talker")
+    found = _settled(session, CONTRACT, lambda f: bool(f))
+    assert _kinds(found) == ["duplicate_node"], found
+    assert found[0].message.startswith("2 nodes in the graph are named /talker")
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_services(graph):
+    from rcl_interfaces.srv import ListParameters  # noqa: PLC0415
+
+    session, node = graph
+    contract = LessonGraph.model_validate({"services": [{"name": "/what_is_the_point",
+                                                         "type": "rcl_interfaces/srv/ListParameters"}]})
+    node("server").create_service(ListParameters, "/what_is_the_pont", lambda request, response: response)
+    found = _settled(session, contract, lambda f: "near_name" in _kinds(f))
+    assert _kinds(found) == ["no_peer", "near_name"], found
+    assert "node /server serves /what_is_the_pont (ListParameters), one character from /what_is_the_point" in found[1].message
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_correct_graph_has_no_diagnosis(graph):
+    from ros2course.run.diagnose import diagnose  # noqa: PLC0415
+    from ros2course.run.probes import wait_until  # noqa: PLC0415
+
+    session, node = graph
+    node("talker").create_publisher(_string(), "/amazing_quote", 10)
+    session.topic("/amazing_quote", _string(), 10)
+    assert wait_until(lambda: "/amazing_quote" in session.topic_types() and "/talker" in session.node_names(), 10.0)
+    assert diagnose(session, CONTRACT) == []
+    assert diagnose(session, LessonGraph()) == []
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_an_empty_graph_and_a_broken_query_say_nothing(graph):
+    from ros2course.run.diagnose import diagnose  # noqa: PLC0415
+
+    session, _ = graph
+    assert diagnose(session, CONTRACT) == []  # no learner node: the grader reports the process
+
+    class Broken:
+        node = None
+
+    assert diagnose(Broken(), CONTRACT) == []
+
+
+LEARNER = """
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from std_msgs.msg import String
+
+    try:
+        rclpy.init()
+        node = rclpy.create_node("amazing_quote_publisher_node")
+        node.create_publisher(String, "/amazing_quotes", 1)
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+"""
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(90)
+def test_engine_diagnoses_the_first_failed_check_of_a_part(tmp_path):
+    """GradingSession.record attaches the diagnosis once per part, in the graph the part launched into."""
+    pytest.importorskip("rclpy")
+    from ros2course.grade.engine import Check, GradingSession  # noqa: PLC0415
+    from ros2course.ros import env as env_mod  # noqa: PLC0415
+    from ros2course.run.probes import wait_until  # noqa: PLC0415
+
+    lesson = load_catalog().get("publisher-subscriber").model_copy(update={"graph": LessonGraph.model_validate({
+        "nodes": [{"name": "/amazing_quote_publisher_node", "part": "publisher"}],
+        "topics": [{"name": "/amazing_quote", "type": STRING, "part": "publisher"}]})})
+    (tmp_path / "install").mkdir()
+    (tmp_path / "install" / "setup.bash").write_text("", encoding="utf-8")
+    script = tmp_path / "learner.py"
+    script.write_text(textwrap.dedent(LEARNER), encoding="utf-8")
+    env = dict(os.environ)
+    env_mod.activate(env)
+    checks = [Check("before", "before any launch", 1, part="publisher"),
+              Check("topic", "the topic", 1, part="publisher"), Check("later", "later", 1, part="publisher")]
+    s = GradingSession(lesson, checks, tmp_path, tmp_path / "log", env)
+    try:
+        with s.part("publisher"):
+            s.record("before", False, "nothing launched yet", "-")
+            s.launch(Path(sys.executable), "learner", [str(script)])
+            # the node's own endpoints, as the grader's kit waits for them (ros2 node info)
+            assert wait_until(lambda: "/amazing_quote_publisher_node" in s.ros.node_names() and any(
+                name == "/amazing_quotes" for name, _ in s.ros.node.get_publisher_names_and_types_by_node(
+                    "amazing_quote_publisher_node", "/")), 20.0)
+            s.record("topic", False, "no message on /amazing_quote", "messages on /amazing_quote")
+            s.record("later", False, "still nothing", "-")
+    finally:
+        s.close()
+    results = s.results
+    assert results["before"].diagnosis == []  # no graph watched yet
+    assert [d.kind for d in results["topic"].diagnosis] == ["no_peer", "near_name"]
+    assert "/amazing_quotes (String), one character from /amazing_quote" in results["topic"].diagnosis[1].message
+    assert results["later"].diagnosis == []  # once per part
+    assert results["topic"].points == 0.0 and not results["topic"].passed  # the verdict is the grader's
+    assert len(s.diagnose_seconds) == 1 and "diagnose" in s.timings
+    print(f"diagnosis took {s.diagnose_seconds[0] * 1000:.1f} ms")
+
+
+def test_diagnosis_in_the_html_report_is_escaped(tmp_path):
+    pytest.importorskip("jinja2")
+    from ros2course.report.html import render_report  # noqa: PLC0415
+
+    result = _result()
+    result.student = "s1"
+    result.checks[0].diagnosis = [Diagnosis("near_name", "node /x publishes /<script>alert(1)</script>", {})]
+    (tmp_path / "results.jsonl").write_text(json.dumps(result.to_record()) + "\n", encoding="utf-8")
+    html = render_report(tmp_path, similarity=False)
+    assert "why: node /x publishes /&lt;script&gt;alert(1)&lt;/script&gt;" in html
+    assert "<script>alert(1)" not in html
