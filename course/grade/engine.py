@@ -517,10 +517,18 @@ class GradingSession:
         return proc
 
     def close(self) -> None:
-        """Stop every learner process, close the ROS graph, remove stale shared memory."""
+        """Close the grader's ROS graphs, stop every learner process, remove stale shared memory.
+
+        The graphs close first, while every learner process (and the check's ``ros2``
+        daemon) still runs: the grader's DDS participant is then destroyed among live
+        peers. Destroyed just after a peer was killed, Fast DDS 2.14 (Jazzy) may crash
+        the whole grading process in ``SharedMemChannelResource::release`` (a shared-memory
+        port the killed peer shared being regenerated meanwhile; core dump of a segfault
+        seen in 1 of about 30 ``inspect-services`` gradings under load, and in CI).
+        """
+        self._stack.close()
         for proc in self._processes:
             proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
-        self._stack.close()
         if self.recorder is not None:  # after the graphs: no callback writes any more
             self.recorder.metadata(CHECKS_METADATA, {
                 check_id: json.dumps({"start_ns": start, "end_ns": end, "passed": self.results[check_id].passed,
