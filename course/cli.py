@@ -441,6 +441,30 @@ def evidence(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON"
 
 @app.command()
 @_handle_errors
+def graph(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", help="Lesson id (default: current).")] = None,
+          mermaid_file: Annotated[Optional[Path], typer.Option("--mermaid", metavar="FILE",
+                                                               help="Also write the comparison as a Mermaid flowchart.")] = None,
+          workspace: WorkspaceOpt = None) -> None:
+    """The graph LESSON's contract expects beside the one its last check observed."""
+    from ros2course.report.evidence import latest_log_dir  # noqa: PLC0415 - start time, see the imports
+    from ros2course.report.graph import compare, load_observed, mermaid, render  # noqa: PLC0415 - start time, see the imports
+
+    ws = _workspace(workspace)
+    lesson = _lesson_for(lesson_id, ws)
+    rows = compare(lesson.graph, load_observed(latest_log_dir(ws.root, lesson.id)))
+    out = stdout_console()
+    render(rows, lesson.id, out)
+    if lesson.graph is None:
+        out.print(f"[dim]{lesson.id} declares no graph: every entry is what the check observed.[/]")
+    if mermaid_file is not None:
+        if mermaid_file.exists() and not mermaid_file.is_file():
+            raise CourseError(f"{mermaid_file} is not a file", "give a file name, e.g. --mermaid graph.mmd")
+        mermaid_file.write_text(mermaid(rows), encoding="utf-8")
+        out.print(f"wrote {mermaid_file}")
+
+
+@app.command()
+@_handle_errors
 def hint(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON")] = None,
          workspace: WorkspaceOpt = None) -> None:
     """Show the next hint for the lesson (each call reveals one more)."""

@@ -339,6 +339,13 @@ def test_engine_diagnoses_the_first_failed_check_of_a_part(tmp_path):
     assert results["later"].diagnosis == []  # once per part
     assert results["topic"].points == 0.0 and not results["topic"].passed  # the verdict is the grader's
     assert len(s.diagnose_seconds) == 1 and "diagnose" in s.timings
+    # the observed side of `ros2course graph`: one snapshot for the part, taken at its first verdict after the launch
+    import json  # noqa: PLC0415
+
+    saved = json.loads((tmp_path / "log" / "graph.json").read_text(encoding="utf-8"))
+    assert [p["part"] for p in saved["parts"]] == ["publisher"]
+    assert "/amazing_quote_publisher_node" in saved["parts"][0]["nodes"]
+    assert saved["parts"][0]["ends"]["publish"]["/amazing_quotes"] == {"/amazing_quote_publisher_node": [STRING]}
     print(f"diagnosis took {s.diagnose_seconds[0] * 1000:.1f} ms")
 
 

@@ -36,7 +36,7 @@ from ros2course.ros import env as env_mod
 from ros2course.ros import index as ament_index
 from ros2course.ros.interfaces import workspace_type
 from ros2course import sandbox
-from ros2course.run.diagnose import Diagnosis, diagnose
+from ros2course.run.diagnose import Diagnosis, diagnose, snapshot
 from ros2course.run.probes import RosSession
 from ros2course.run.process import LearnerProcess, sweep_stale_fastdds_shm
 from ros2course.run.recording import CHECKS_METADATA, Recorder
@@ -95,6 +95,10 @@ def check_dependencies(checks: Sequence[Check]) -> None:
         seen.add(check.id)
 
 
+#: What the learner's nodes showed in the graph, per part, in a check's log folder (``ros2course graph``).
+GRAPH_FILE = "graph.json"
+
+
 class GradingSession:
     """What a grader's ``grade()`` works with.
 
@@ -137,6 +141,9 @@ class GradingSession:
         self.recorder: Recorder | None = None
         #: seconds each diagnosis of a failed check took (:meth:`_diagnosis`), in order.
         self.diagnose_seconds: list[float] = []
+        #: what the graph showed in each part that launched learner nodes (:meth:`_observe_graph`):
+        #: ``{"part", "nodes", "ends"}``, written to ``graph.json`` by :meth:`close`.
+        self.graph_snapshots: list[dict[str, Any]] = []
 
     def add_plot(self, title: str, times: Sequence[float], series: Mapping[str, Sequence[float]],
                  unit: str = "") -> None:
@@ -205,7 +212,29 @@ class GradingSession:
                                              passed, observed, expected,
                                              "" if passed else (hint if hint is not None else check.hint),
                                              diagnosis=[] if passed else self._diagnosis(check))
+        self._observe_graph()
         return passed
+
+    def _observe_graph(self) -> None:
+        """Keep what the graph shows at the first verdict of a part that launched learner nodes.
+
+        The observed side of ``ros2course graph`` (issue 19): one
+        :class:`~ros2course.run.diagnose.GraphSnapshot` per part, in :attr:`graph_snapshots`,
+        written to ``graph.json`` in the check's log folder by :meth:`close`. The first
+        verdict after a launch is when the grader has waited for the learner's nodes, and
+        before any Ctrl+C it presses. Never raises; costs a few rcl graph queries per part.
+        """
+        states = self._part_states
+        if not states or states[-1]["observed"]:
+            return
+        graph = next((state["graph"] for state in reversed(states) if state["graph"] is not None), None)
+        if graph is None:
+            return
+        states[-1]["observed"] = True
+        found = snapshot(graph)
+        if found is not None:
+            with self._timings_lock:
+                self.graph_snapshots.append({"part": states[-1]["name"], **found.to_dict()})
 
     def _diagnosis(self, check: Check) -> list[Diagnosis]:
         """What the graph shows against the lesson's ``graph:`` contract, for a failed ``check`` (issue 19).
@@ -303,7 +332,7 @@ class GradingSession:
         node it started) run, newest first, whatever happened.
         """
         self._closers.append([])
-        self._part_states.append({"graph": None, "diagnosed": False})
+        self._part_states.append({"graph": None, "diagnosed": False, "observed": False, "name": name})
         self._local.mark = time.time_ns()
         try:
             yield
@@ -535,6 +564,11 @@ class GradingSession:
                                       "observed": self.results[check_id].observed})
                 for check_id, (start, end) in self.windows.items() if check_id in self.results})
             self.recorder.close()
+        if self.graph_snapshots:
+            with contextlib.suppress(OSError):
+                self.log_dir.mkdir(parents=True, exist_ok=True)
+                (self.log_dir / GRAPH_FILE).write_text(json.dumps(
+                    {"lesson": self.lesson.id, "parts": self.graph_snapshots}, indent=1), encoding="utf-8")
         sweep_stale_fastdds_shm()
 
 

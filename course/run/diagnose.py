@@ -176,14 +176,48 @@ def describe_qos(profile: Any) -> str:
 
 
 @dataclasses.dataclass
-class _Graph:
-    """What the graph shows at one moment: the learner's nodes and their own endpoints."""
+class GraphSnapshot:
+    """What the graph shows at one moment: the learner's nodes and their own endpoints.
 
-    names: list[str]  #: fully qualified names of every non-hidden node (duplicates kept)
-    ends: dict[str, dict[str, dict[str, list[str]]]]  #: role -> name -> node -> type names
+    Attributes:
+        names: fully qualified names of every non-hidden node (duplicates kept).
+        ends: ``role -> name -> node -> type names``; roles ``publish``, ``subscribe``
+            (topics), ``serve``, ``call`` (services), as ``ros2 node info`` lists them;
+            ROS's own (``/rosout``, ``/parameter_events``, parameter services) left out.
+    """
+
+    names: list[str]
+    ends: dict[str, dict[str, dict[str, list[str]]]]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON shape of ``graph.json`` (``{"nodes": [...], "ends": {...}}``)."""
+        return {"nodes": list(self.names), "ends": self.ends}
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> GraphSnapshot:
+        """Inverse of :meth:`to_dict`."""
+        ends = data.get("ends") or {}
+        return cls([str(n) for n in data.get("nodes", [])],
+                   {role: {str(name): {str(node): [str(t) for t in types] for node, types in by_node.items()}
+                           for name, by_node in (ends.get(role) or {}).items()}
+                    for role in ("publish", "subscribe", "serve", "call")})
 
 
-def _snapshot(ros_node: Any) -> _Graph:
+def snapshot(ros: Any) -> GraphSnapshot | None:
+    """The learner's nodes and endpoints in the graph of ``ros`` (an entered RosSession) right now.
+
+    For ``ros2course graph`` (the observed side, kept in the check's ``graph.json``). Never
+    raises: a failed query gives None (logged at debug level). Cost: four rcl graph queries
+    per node (no waiting, no DDS traffic), at most :data:`MAX_NODES` nodes.
+    """
+    try:
+        return _snapshot(ros.node)
+    except Exception:  # noqa: BLE001 - advice only
+        LOG.debug("graph snapshot failed", exc_info=True)
+        return None
+
+
+def _snapshot(ros_node: Any) -> GraphSnapshot:
     """Query the graph through ``ros_node`` (an rclpy ``Node``): the learner's nodes and their endpoints."""
     names = []
     pairs = []
@@ -209,10 +243,10 @@ def _snapshot(ros_node: Any) -> _Graph:
                 if end in _STANDARD_TOPICS or end.endswith(_STANDARD_SERVICE_SUFFIXES):
                     continue
                 ends[role].setdefault(end, {})[node] = list(types)
-    return _Graph(names, ends)
+    return GraphSnapshot(names, ends)
 
 
-def _endpoint_findings(kind_of_end: str, expected: str, type_name: str, role: str, graph: _Graph) -> list[Diagnosis]:
+def _endpoint_findings(kind_of_end: str, expected: str, type_name: str, role: str, graph: GraphSnapshot) -> list[Diagnosis]:
     """``other_type``, ``no_peer`` and ``near_name`` for one expected topic or service end."""
     ends = graph.ends[role]
     verb = _VERB[role]
