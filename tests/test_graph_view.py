@@ -103,3 +103,31 @@ def test_no_check_yet_is_one_line_and_a_non_zero_exit(tmp_path, cli) -> None:
     (latest / "observed.mcap").write_bytes(b"")
     proc = cli("graph", "publisher-subscriber", "-w", str(ws))
     assert proc.returncode != 0 and "no recorded graph" in proc.stderr
+
+
+def test_feedback_leads_with_the_failure_whose_cause_is_known() -> None:
+    """``fix first:`` names the earliest failed check with a diagnosis, else the earliest judged failure."""
+    import io  # noqa: PLC0415
+
+    from rich.console import Console  # noqa: PLC0415
+
+    from ros2course.grade.results import CheckResult, LessonResult  # noqa: PLC0415
+    from ros2course.report.table import render_result  # noqa: PLC0415
+    from ros2course.run.diagnose import Diagnosis  # noqa: PLC0415
+
+    def check(check_id: str, passed: bool, diagnosis=(), skipped=False) -> CheckResult:
+        return CheckResult(check_id, f"check {check_id}", 1.0 if passed else 0.0, 1.0, passed, "seen", "wanted",
+                           "" if passed else f"hint {check_id}", skipped=skipped, diagnosis=list(diagnosis))
+
+    why = Diagnosis("near_name", "node /talker publishes /chatter2, one character from /chatter", {})
+    result = LessonResult("l", 1.0, 4.0, "failed", [check("a", True), check("b", False), check("c", False, [why]),
+                                                    check("d", False, skipped=True)])
+    assert result.first_fix().id == "c"
+    assert LessonResult("l", 1.0, 3.0, "failed", [check("a", True), check("b", False), check("c", False)]
+                        ).first_fix().id == "b"
+    assert LessonResult("l", 1.0, 2.0, "failed", [check("a", True), check("b", False)]).first_fix() is None
+    out = io.StringIO()
+    render_result(result, Console(file=out, width=200, color_system=None))
+    text = out.getvalue()
+    assert "fix first: check c (node /talker publishes /chatter2, one character from /chatter)" in text
+    assert text.index("fix first:") < text.index("✘ check b")

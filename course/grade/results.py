@@ -231,6 +231,20 @@ class LessonResult:
         """Ids of the checks that did not get full points."""
         return [c.id for c in self.checks if not c.passed]
 
+    def first_fix(self) -> CheckResult | None:
+        """The one failed check to fix first, or None when fewer than two checks failed.
+
+        The earliest judged failure whose diagnosis names a cause (a near name, a type, a
+        QoS pair: :mod:`ros2course.run.diagnose`), else the earliest judged failure; a
+        check "not checked" because another failed is never first. Feedback leads with it
+        and keeps the whole table (exercism's analyzers rank comments essential first;
+        issue 19).
+        """
+        failed = [c for c in self.checks if not c.passed and not c.skipped]
+        if len(failed) < 2:
+            return None
+        return next((c for c in failed if c.diagnosis), failed[0])
+
     # --- gradebooks -----------------------------------------------------------------------
 
     def gradebook_cells(self, columns: list[tuple[str, str]]) -> list[str]:

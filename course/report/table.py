@@ -85,6 +85,10 @@ def render_result(result: LessonResult, console: Console) -> None:
     if result.hint:
         console.print(Text.assemble(("hint: ", "bold cyan"), result.hint))
     skipped = [c for c in result.checks if c.skipped]
+    first = result.first_fix()
+    if first is not None:
+        reason = first.diagnosis[0].message if first.diagnosis else (first.hint or first.observed)
+        console.print(Text.assemble(("fix first: ", "bold magenta"), (first.name, "bold"), f" ({reason})"))
     for check in result.checks:
         if check.passed or check.skipped:
             continue
