@@ -430,13 +430,24 @@ def watch(workspace: WorkspaceOpt = None) -> None:
 def evidence(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", help="Lesson id (default: current).")] = None,
              check_ids: Annotated[Optional[list[str]], typer.Argument(metavar="[CHECK]...",
                                                                       help="Check ids (default: the failed ones).")] = None,
+             plot: Annotated[bool, typer.Option("--plot", help="Also draw each stream's intervals over time in the terminal, with the band the verdict allowed.")] = False,
+             png: Annotated[Optional[Path], typer.Option("--png", metavar="FILE", help="Write the same plots to a PNG file (matplotlib).")] = None,
              workspace: WorkspaceOpt = None) -> None:
     """What a check saw: the recorded messages and rates of the last check of LESSON."""
-    from ros2course.report.evidence import latest_log_dir, render  # noqa: PLC0415 - start time, see the imports
+    from ros2course.report import evidence as ev  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     lesson = _lesson_for(lesson_id, ws)
-    render(latest_log_dir(ws.root, lesson.id), list(check_ids or []), stdout_console())
+    folder = ev.latest_log_dir(ws.root, lesson.id)
+    out = stdout_console()
+    shown = ev.render(folder, list(check_ids or []), out)
+    if plot or png is not None:
+        series = ev.interval_series(folder, shown)
+        if plot:
+            ev.plot_terminal(series, out)
+        if png is not None:
+            ev.plot_png(series, png)
+            out.print(f"wrote {png}")
 
 
 @app.command()

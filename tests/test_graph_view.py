@@ -131,3 +131,25 @@ def test_feedback_leads_with_the_failure_whose_cause_is_known() -> None:
     text = out.getvalue()
     assert "fix first: check c (node /talker publishes /chatter2, one character from /chatter)" in text
     assert text.index("fix first:") < text.index("✘ check b")
+
+
+def test_evidence_plots_draw_the_band_and_refuse_a_bad_file(tmp_path) -> None:
+    """``evidence --plot`` (uniplot) and ``--png`` (matplotlib) on a series; a folder as --png is one clear error."""
+    import io  # noqa: PLC0415
+
+    import pytest  # noqa: PLC0415
+    from rich.console import Console  # noqa: PLC0415
+
+    from ros2course.errors import CourseError  # noqa: PLC0415
+    from ros2course.report.evidence import IntervalSeries, plot_png, plot_terminal  # noqa: PLC0415
+
+    series = [IntervalSeries("rate: /rosout from talker", [0.5, 1.0, 1.3, 1.8], [0.5, 0.5, 0.3, 0.5], (0.425, 0.575))]
+    out = io.StringIO()
+    plot_terminal(series, Console(file=out, width=100, color_system=None))
+    assert "their mean must lie in 0.425-0.575 s" in out.getvalue() and "┌" in out.getvalue()
+    plot_png(series, tmp_path / "r.png")
+    assert (tmp_path / "r.png").read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(CourseError, match="cannot write"):
+        plot_png(series, tmp_path)
+    with pytest.raises(CourseError, match="nothing to plot"):
+        plot_png([], tmp_path / "empty.png")

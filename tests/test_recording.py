@@ -63,6 +63,16 @@ def test_a_failed_check_names_its_recording(solution_workspace, cli):
     shown = cli("evidence", "print-forever-node", cwd=root)  # default: the failed checks
     assert shown.returncode == 0, shown.stderr
     assert "rate: failed" in shown.stdout and rate["observed"].split(" (from ")[0] in " ".join(shown.stdout.split())
+    # the same window drawn (issue 19): the intervals over time, the band the mean had to lie in
+    png = root / "rate.png"
+    plotted = cli("evidence", "print-forever-node", "rate", "--plot", "--png", str(png), cwd=root)
+    assert plotted.returncode == 0, plotted.stderr
+    assert "their mean must lie in 0.425-0.575 s" in plotted.stdout and "┌" in plotted.stdout
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    # and the graph it ran in, beside the lesson's contract
+    graph = cli("graph", "print-forever-node", cwd=root)
+    assert graph.returncode == 0, graph.stderr
+    assert "✔ matched" in graph.stdout and "/print_forever" in graph.stdout
 
 
 def test_evidence_without_a_check_run(workspace, cli):

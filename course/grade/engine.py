@@ -144,6 +144,8 @@ class GradingSession:
         #: what the graph showed in each part that launched learner nodes (:meth:`_observe_graph`):
         #: ``{"part", "nodes", "ends"}``, written to ``graph.json`` by :meth:`close`.
         self.graph_snapshots: list[dict[str, Any]] = []
+        #: ``check id -> (low, high)`` seconds between events a verdict allowed (:meth:`record`'s ``band``).
+        self.bands: dict[str, tuple[float, float]] = {}
 
     def add_plot(self, title: str, times: Sequence[float], series: Mapping[str, Sequence[float]],
                  unit: str = "") -> None:
@@ -177,7 +179,8 @@ class GradingSession:
     # --- recording ---------------------------------------------------------
 
     def record(self, check_id: str, passed: bool, observed: str, expected: str, hint: str | None = None,
-               fraction: float | None = None, window: tuple[float, float] | None = None) -> bool:
+               fraction: float | None = None, window: tuple[float, float] | None = None,
+               band: tuple[float, float] | None = None) -> bool:
         """Record the verdict on ``check_id``; returns ``passed``.
 
         A failed verdict may get the engine's diagnosis of the graph (see :meth:`_diagnosis`);
@@ -191,6 +194,8 @@ class GradingSession:
             window: the wall-clock span the verdict judged (``time.time()`` seconds: first and last
                 send stamp of a rate); default: from the previous verdict of this thread (or the
                 start of its part) to now. Kept with the check's recording (:mod:`ros2course.run.recording`).
+            band: the interval between events the verdict allowed, ``(low, high)`` seconds (a rate's
+                mean period ± its tolerance), kept with the window for ``ros2course evidence --plot``.
 
         Raises:
             KeyError: ``check_id`` is not declared in the grader's ``CHECKS``.
@@ -208,6 +213,8 @@ class GradingSession:
         start = getattr(self._local, "mark", self._started_ns)
         self._local.mark = now
         self.windows[check_id] = (int(window[0] * 1e9), int(window[1] * 1e9)) if window else (start, now)
+        if band is not None:
+            self.bands[check_id] = (float(band[0]), float(band[1]))
         self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
                                              passed, observed, expected,
                                              "" if passed else (hint if hint is not None else check.hint),
@@ -561,7 +568,8 @@ class GradingSession:
         if self.recorder is not None:  # after the graphs: no callback writes any more
             self.recorder.metadata(CHECKS_METADATA, {
                 check_id: json.dumps({"start_ns": start, "end_ns": end, "passed": self.results[check_id].passed,
-                                      "observed": self.results[check_id].observed})
+                                      "observed": self.results[check_id].observed,
+                                      **({"band": list(self.bands[check_id])} if check_id in self.bands else {})})
                 for check_id, (start, end) in self.windows.items() if check_id in self.results})
             self.recorder.close()
         if self.graph_snapshots:

@@ -35,13 +35,15 @@ def rate(s: GradingSession, check_id: str, times: list[float], *, period: float,
     stats = RateStats.from_times(times)
     # the span judged, for the check's recording (``ros2course evidence`` recomputes the rate from it)
     window = (min(times), max(times)) if times else None
+    band = (period * (1 - RATE_TOLERANCE), period * (1 + RATE_TOLERANCE))  # the mean period allowed, seconds
     expected = (f"{1.0 / period:.2f} Hz: mean period {period:.3f} s ± {RATE_TOLERANCE:.0%}, "
                 f"over at least {needed - 1} intervals")
     if stats is None or stats.samples < needed - 1:
         return s.record(check_id, False, f"only {len(times)} {noun}(s) within {waited:.1f} s"
-                        + (f" ({stats.describe()})" if stats else "") + where + few_note, expected, window=window)
+                        + (f" ({stats.describe()})" if stats else "") + where + few_note, expected, window=window, band=band)
     return s.record(check_id, stats.within(1.0 / period, RATE_TOLERANCE),
-                    f"{stats.describe()} (from {source}){where}", expected, window=window)
+                    f"{stats.describe()} (from {source}){where}", expected, window=window,
+                    band=band)
 
 
 def topics_seen(graph: Any) -> str:

@@ -61,6 +61,8 @@ class CheckWindow:
     observed: str
     start_ns: int
     end_ns: int
+    #: the interval between events the verdict allowed, ``(low, high)`` seconds (a rate's band), if any.
+    band: tuple[float, float] | None = None
 
 
 def latest_log_dir(workspace_root: Path, lesson_id: str) -> Path:
@@ -114,8 +116,10 @@ def read(path: Path) -> tuple[list[Observation], list[CheckWindow]]:
                     continue
                 for check_id, value in record.metadata.items():
                     data = json.loads(value)
+                    band = data.get("band")
                     windows.append(CheckWindow(check_id, bool(data["passed"]), str(data.get("observed", "")),
-                                               int(data["start_ns"]), int(data["end_ns"])))
+                                               int(data["start_ns"]), int(data["end_ns"]),
+                                               (float(band[0]), float(band[1])) if band else None))
     except Exception as exc:  # noqa: BLE001 - mcap and its decoder raise their own error classes
         raise CourseError(f"{path}: not a readable recording ({type(exc).__name__}: {exc})",
                           "run the check again; a check stopped by force may leave the file unfinished") from exc
@@ -141,6 +145,110 @@ def stream_rate(items: list[Observation]) -> RateStats | None:
     return RateStats.from_times([item.stamp_ns * 1e-9 for item in items])
 
 
+@dataclasses.dataclass
+class IntervalSeries:
+    """The intervals between a stream's events inside a check's window, for plotting.
+
+    Attributes:
+        label: ``<check>: <topic>`` (and the /rosout source).
+        times: seconds since the recording's first message, at the end of each interval.
+        intervals: seconds between consecutive events (the grader's stamps).
+        band: the interval the verdict allowed, ``(low, high)`` seconds, or None.
+    """
+
+    label: str
+    times: list[float]
+    intervals: list[float]
+    band: tuple[float, float] | None
+
+
+def interval_series(folder: Path, check_ids: list[str]) -> list[IntervalSeries]:
+    """Every stream with at least two intervals in the chosen checks' windows (default: the failed, else all).
+
+    Raises:
+        CourseError: unknown check id, or an unreadable recording.
+    """
+    path = folder / FILE_NAME
+    observations, windows = read(path)
+    chosen = _chosen(path, windows, check_ids)
+    origin = min((o.stamp_ns for o in observations), default=0)
+    out = []
+    for window in chosen:
+        for (topic, source), items in groups(within(observations, window)).items():
+            stamps = [(item.stamp_ns - origin) * 1e-9 for item in items]
+            if len(stamps) < 3:
+                continue
+            label = f"{window.check_id}: {topic}" + (f" from {source}" if source else "")
+            out.append(IntervalSeries(label, stamps[1:], [b - a for a, b in zip(stamps, stamps[1:])], window.band))
+    return out
+
+
+def plot_terminal(series: list[IntervalSeries], console: Console, width: int | None = None, height: int = 12) -> None:
+    """Each series' intervals over time in the terminal (uniplot), its allowed band as two gridlines.
+
+    ``width``: plot columns (default: what the console leaves beside the axis labels, at most 70).
+    """
+    from uniplot import plot_to_string  # noqa: PLC0415 - only for --plot (start time of `evidence`)
+
+    if not series:
+        console.print(Text("nothing to plot: no stream had three events in the chosen windows", style="dim"))
+        return
+    width = width or max(20, min(console.width - 14, 70))
+    for one in series:
+        allowed = f"; their mean must lie in {one.band[0]:.3f}-{one.band[1]:.3f} s (the gridlines)" if one.band else ""
+        options: dict[str, Any] = {"lines": True, "width": width, "height": height, "x_unit": " s", "y_unit": " s",
+                                   "title": f"{one.label}: interval between events{allowed}", "color": False}
+        if one.band is not None:
+            low, high = one.band
+            options.update(y_gridlines=[low, high],
+                           y_min=min(low, *one.intervals) * 0.9, y_max=max(high, *one.intervals) * 1.1)
+        console.out(plot_to_string(one.intervals, one.times, **options), highlight=False)
+
+
+def plot_png(series: list[IntervalSeries], path: Path) -> None:
+    """The same plots as :func:`plot_terminal`, one panel per series, into a PNG file (matplotlib).
+
+    Raises:
+        CourseError: nothing to plot, or the file cannot be written.
+    """
+    if not series:
+        raise CourseError("nothing to plot: no stream had three events in the chosen windows",
+                          "name a check that watched a topic, e.g. ros2course evidence print-forever-node rate --png r.png")
+    import matplotlib  # noqa: PLC0415 - only for --png
+
+    matplotlib.use("Agg")
+    from matplotlib import pyplot  # noqa: PLC0415
+
+    figure, axes = pyplot.subplots(len(series), 1, figsize=(8, 2.6 * len(series)), squeeze=False)
+    for axis, one in zip(axes[:, 0], series):
+        axis.plot(one.times, one.intervals, "o-", markersize=3, label="interval")
+        axis.axhline(sum(one.intervals) / len(one.intervals), color="tab:blue", linestyle="--", linewidth=1,
+                     label="mean interval")
+        if one.band is not None:
+            axis.axhspan(one.band[0], one.band[1], color="tab:green", alpha=0.15, label="mean allowed")
+        axis.set_title(one.label, fontsize=9)
+        axis.set_xlabel("t (s)")
+        axis.set_ylabel("interval (s)")
+        axis.legend(fontsize=8, loc="upper right")
+    figure.tight_layout()
+    try:
+        figure.savefig(path, format="png", dpi=110)
+    except OSError as exc:
+        raise CourseError(f"cannot write {path}: {exc.strerror or exc}", "give a writable file name") from exc
+    finally:
+        pyplot.close(figure)
+
+
+def _chosen(path: Path, windows: list[CheckWindow], check_ids: list[str]) -> list[CheckWindow]:
+    """The windows of ``check_ids`` (default: the failed checks, else all); CourseError for an unknown id."""
+    by_id = {w.check_id: w for w in windows}
+    unknown = [c for c in check_ids if c not in by_id]
+    if unknown:
+        raise CourseError(f"no recorded window for check {unknown[0]!r} in {path}",
+                          f"checks with a window: {', '.join(by_id) or 'none'}")
+    return [by_id[c] for c in check_ids] or [w for w in windows if not w.passed] or windows
+
+
 def render(folder: Path, check_ids: list[str], console: Console) -> list[str]:
     """Print, for each check (default: the failed ones, else all), what the recording holds in its window.
 
@@ -152,12 +260,7 @@ def render(folder: Path, check_ids: list[str], console: Console) -> list[str]:
     """
     path = folder / FILE_NAME
     observations, windows = read(path)
-    by_id = {w.check_id: w for w in windows}
-    unknown = [c for c in check_ids if c not in by_id]
-    if unknown:
-        raise CourseError(f"no recorded window for check {unknown[0]!r} in {path}",
-                          f"checks with a window: {', '.join(by_id) or 'none'}")
-    chosen = [by_id[c] for c in check_ids] or [w for w in windows if not w.passed] or windows
+    chosen = _chosen(path, windows, check_ids)
     origin = min((o.stamp_ns for o in observations), default=0)
     console.print(Text(f"recording: {path} ({len(observations)} messages)", style="bold"))
     for window in chosen:
