@@ -301,8 +301,11 @@ LEARNER = """
 
 @pytest.mark.ros
 @pytest.mark.timeout(90)
-def test_engine_diagnoses_the_first_failed_check_of_a_part(tmp_path):
-    """GradingSession.record attaches the diagnosis once per part, in the graph the part launched into."""
+@pytest.mark.parametrize("diagnose", ["1", "0"])
+def test_engine_diagnoses_the_first_failed_check_of_a_part(tmp_path, monkeypatch, diagnose):
+    """GradingSession.record attaches the diagnosis once per part, in the graph the part launched into;
+    with ROS2COURSE_DIAGNOSE=0 there is none, and every verdict and point is the same."""
+    monkeypatch.setenv("ROS2COURSE_DIAGNOSE", diagnose)
     pytest.importorskip("rclpy")
     from ros2course.grade.engine import Check, GradingSession  # noqa: PLC0415
     from ros2course.ros import env as env_mod  # noqa: PLC0415
@@ -333,6 +336,11 @@ def test_engine_diagnoses_the_first_failed_check_of_a_part(tmp_path):
     finally:
         s.close()
     results = s.results
+    assert [(r.id, r.passed, r.points) for r in results.values()] == [
+        ("before", False, 0.0), ("topic", False, 0.0), ("later", False, 0.0)]  # the verdicts are the grader's
+    if diagnose == "0":
+        assert all(r.diagnosis == [] for r in results.values()) and not s.diagnose_seconds
+        return
     assert results["before"].diagnosis == []  # no graph watched yet
     assert [d.kind for d in results["topic"].diagnosis] == ["no_peer", "near_name"]
     assert "/amazing_quotes (String), one character from /amazing_quote" in results["topic"].diagnosis[1].message

@@ -97,6 +97,8 @@ def check_dependencies(checks: Sequence[Check]) -> None:
 
 #: What the learner's nodes showed in the graph, per part, in a check's log folder (``ros2course graph``).
 GRAPH_FILE = "graph.json"
+#: Set to ``0`` to grade without diagnoses (:meth:`GradingSession._diagnosis`).
+DIAGNOSE_ENV = "ROS2COURSE_DIAGNOSE"
 
 
 class GradingSession:
@@ -255,11 +257,12 @@ class GradingSession:
         lesson declares no graph, the check watched none, or anything fails
         (logged at debug level): a diagnosis never changes a verdict or a score.
         Seconds spent: each in :attr:`diagnose_seconds`, their sum in ``timings["diagnose"]``.
+        ``ROS2COURSE_DIAGNOSE=0`` turns it off (to show verdicts are the same without it).
         """
         try:
             contract = self.lesson.graph
             states = self._part_states
-            if contract is None or not states or states[-1]["diagnosed"]:
+            if contract is None or not states or states[-1]["diagnosed"] or os.environ.get(DIAGNOSE_ENV) == "0":
                 return []
             graph = next((state["graph"] for state in reversed(states) if state["graph"] is not None), None)
             if graph is None:
