@@ -108,3 +108,11 @@ def test_a_case_with_the_references_sources_is_graded_in_the_references_build(tm
     assert validate.grade_in_built(lesson, other, built, reference_src) is None
     assert len(seen) == 1
     assert validate.grade_in_built(lesson, case, built, None) is None, "an unparsable reference never matches"
+
+    def built_by_its_commands(root: Path) -> None:  # workspace-setup's reference commands run colcon themselves
+        script_edited(root)
+        (root / "install").mkdir()
+
+    own = validate.Case(lesson, "own_build", built_by_its_commands, (), lambda r: (True, ""))
+    assert validate.grade_in_built(lesson, own, built, reference_src) is None
+    assert len(seen) == 1

@@ -352,6 +352,8 @@ def grade_in_built(lesson: Lesson, case: Case, built: Path, reference_src: dict[
         case.prepare(scratch)
         if reference_src is None or _src_fingerprints(scratch) != reference_src:
             return None
+        if any((scratch / name).exists() for name in _BUILT):
+            return None  # the case's own commands built it (workspace-setup hands in its build): that build is graded
         for entry in list(built.iterdir()):
             if entry.name not in _BUILT:
                 shutil.rmtree(entry) if entry.is_dir() and not entry.is_symlink() else entry.unlink()
@@ -371,7 +373,11 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
         reference = cases[0]
         begin = time.monotonic()
         reference.prepare(built)
-        reference_src = _src_fingerprints(built)
+        # a lesson whose reference commands build the workspace themselves (workspace-setup) grades that
+        # build: each of its cases keeps its own, so none reuses the reference's
+        hands_in_build = any((built / name).exists() for name in _BUILT)
+        reference_src = None if hands_in_build else _src_fingerprints(built)
+        reference_src = reference_src or None  # no package: no build to spare, every case from scratch
         graded: tuple[LessonResult, float] | None = (
             grade_lesson(lesson, built, underlays=reference.underlays), time.monotonic() - begin)
         for case in cases:
