@@ -26,11 +26,12 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from ros2course import sandbox
 from ros2course.errors import NotGradable
 from ros2course.files import atomic_write_text
 from ros2course.ros.colcon_log import BuildProgress
+from ros2course.ros.compiler_cache import with_compiler_cache
 from ros2course.ros.packages import dependency_closure, find_packages
-from ros2course import sandbox
 
 FINGERPRINTS = ".ros2course-fingerprints.json"
 #: colcon arguments every build uses; ``BUILD_TESTING=OFF`` because ament_lint_auto
@@ -185,7 +186,7 @@ def _read_fingerprints(path: Path) -> dict[str, str]:
         return {}
 
 
-_RELEVANT = re.compile(r"error|Error|ERROR|Traceback|failed|Failed|CMake Error|SyntaxError|not found|No such", re.M)
+_RELEVANT = re.compile(r"error|Error|ERROR|Traceback|failed|Failed|CMake Error|SyntaxError|not found|No such", re.MULTILINE)
 
 
 def build_log_excerpt(text: str, limit: int = 25) -> str:
@@ -268,6 +269,8 @@ def _colcon(workspace_root: Path, packages: list[str], closure: list[str], env: 
             timeout: float, progress: Callable[[str], None] | None, mode: str) -> bool:
     """One ``colcon build --packages-up-to`` into ``log_path`` (``mode`` "wb" or "ab"); True when it succeeded."""
     command = [*colcon_command(env), "build", "--packages-up-to", *packages, *COLCON_ARGS]
+    if sandbox.current() is None:  # never a cache shared between a batch's submissions (see the module)
+        env = with_compiler_cache(env, workspace_root)
     with open(log_path, mode) as log:
         log.write(f"$ {' '.join(command)}\n".encode())
         log.flush()

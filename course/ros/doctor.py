@@ -17,6 +17,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from ros2course.errors import CourseError, MissingRequirement, NotGradable
+from ros2course.ros import compiler_cache
 from ros2course.ros import env as env_mod
 from ros2course.ros import underlay as _underlay
 from ros2course.ros import underlay_build
@@ -142,6 +143,7 @@ def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
     for name in KNOWN_REQUIREMENTS:
         ok, detail = env_mod.probe_requirement(name)
         rows.append(DoctorRow(name, ok, detail, "" if ok else env_mod.INSTALL_HINTS.get(name, "")))
+    rows.append(DoctorRow("ccache (optional)", True, compiler_cache.describe()))
     return rows
 
 

@@ -20,11 +20,11 @@ import signal
 import subprocess
 import sys
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import Callable
 
 from ros2course.ros.colcon_log import BuildProgress
+from ros2course.ros.compiler_cache import with_compiler_cache
 from ros2course.ros.env import activate, detect, repair_cmake_files
 from ros2course.ros.underlay import (
     BUILD_TIMEOUT,
@@ -62,7 +62,7 @@ def _locked(base: Path) -> Iterator[None]:
             fcntl.flock(handle, fcntl.LOCK_UN)
 
 
-_FAILED = re.compile(r"^Failed\s+<<<\s+(\S+)", re.M)
+_FAILED = re.compile(r"^Failed\s+<<<\s+(\S+)", re.MULTILINE)
 
 
 def _run_colcon(args: list[str], env: dict[str, str], cwd: Path, log, timeout: float,
@@ -99,8 +99,11 @@ def _build_env(prefix: Path, component: Component) -> dict[str, str]:
     for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH"):
         env[var] = os.pathsep.join([str(prefix), *[p for p in env.get(var, "").split(os.pathsep) if p]])
     env.pop("COLCON_PREFIX_PATH", None)
+    # ccache, keyed on paths relative to what holds both the build and the wheels' headers (a fresh
+    # clone's venv hits the entries an earlier clone's build left): ros2course.ros.compiler_cache
+    env = with_compiler_cache(env, Path(os.path.commonpath([str(prefix.resolve()), str(Path(sys.prefix).resolve())])))
     if component is SAS_COMPONENT:  # shared/ROS_ENV.md, "Building SmartArmStack (sas) from source"
-        import pybind11  # noqa: PLC0415 - optional extra [sas]
+        import pybind11
 
         env["pybind11_DIR"] = pybind11.get_cmake_dir()
         env["CPATH"] = os.pathsep.join([str(prefix / "include"), str(EIGEN_INCLUDE), env.get("CPATH", "")]).rstrip(":")
