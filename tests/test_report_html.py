@@ -232,7 +232,7 @@ def test_report_without_similarity_or_sources_says_so(graded: tuple[Path, Path],
 
 def test_plots_are_capped_and_say_so(graded: tuple[Path, Path]) -> None:
     text = render_report(graded[0], similarity=False, max_plots=0)
-    assert "<figure>" not in text and "1 rate plot(s) not drawn (a report draws at most 0)" in text
+    assert "<figure>" not in text and "1 plot(s) not drawn (a report draws at most 0 of each kind)" in text
 
 
 def test_similarity_leaves_the_reference_out_unless_asked(tmp_path: Path) -> None:
@@ -324,3 +324,29 @@ def test_headless_browser_renders_and_runs_no_injected_script(graded: tuple[Path
     done = subprocess.run([*base, "--window-size=1200,900", f"--screenshot={shot}", path.as_uri()],
                           check=False, capture_output=True, text=True, timeout=90)
     assert done.returncode == 0 and shot.is_file() and shot.stat().st_size > 10_000, done.stderr[-2000:]
+
+
+def test_a_joint_stream_is_drawn_from_the_recording(tmp_path: Path) -> None:
+    """A robot driver's JointState stream (the sas lesson's) is plotted per joint, from the recording alone."""
+    from sensor_msgs.msg import JointState
+
+    from ros2course.run.recording import Recorder
+
+    out = tmp_path / "out"
+    log_dir = out / "jo_joints" / "logs" / "sas-robot-driver"
+    log_dir.mkdir(parents=True)
+    recorder = Recorder(log_dir / "observed.mcap")
+    stamp = 1_700_000_000_000_000_000
+    for n in range(1000):  # 2 s at 500 Hz: drawn from every 3rd message
+        stamp += 2_000_000
+        recorder.write(0, "/myrobot_1/get/joint_states",
+                       JointState(name=["j1", "j2"], position=[0.001 * n, -0.002 * n]), publish_ns=stamp)
+    recorder.close()
+    row = LessonResult("sas-robot-driver", 1, 2, Status.FAILED,
+                       [_check("built", True, "built"), _check("follows", False, "2 of 3 targets reached")],
+                       student="jo_joints", seconds=20.0, log_dir=str(log_dir))
+    (out / "results.jsonl").write_text(json.dumps(row.to_record()) + "\n")
+    text = render_report(out, similarity=False)
+    section = text[text.index("jo_joints"):]
+    assert "/myrobot_1/get/joint_states: 1000 messages" in section and "2 per message" in section
+    assert section.count("<svg") >= 1 and "[1]" in section

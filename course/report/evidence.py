@@ -44,12 +44,16 @@ class Observation:
         source: the publishing logger for /rosout records, else "".
         stamp_ns: when it happened: a /rosout record's own stamp, else the DDS send stamp (ns since the epoch).
         text: one line summarising it.
+        values: the numbers of a vector message, in order: a ``sensor_msgs/JointState``'s
+            ``position`` (radians or metres, per joint), a ``std_msgs/*MultiArray``'s ``data``;
+            empty for other messages (for the joint-stream plot of ``ros2course report``).
     """
 
     topic: str
     source: str
     stamp_ns: int
     text: str
+    values: tuple[float, ...] = ()
 
 
 @dataclasses.dataclass(frozen=True)
@@ -97,6 +101,39 @@ def _summary(topic: str, msg: Any) -> tuple[str, str, int | None]:
     return "", " ".join(parts), None
 
 
+def vector_of(msg: Any) -> tuple[float, ...]:
+    """The numbers a vector message carries: JointState ``position``, a MultiArray's ``data``; else ``()``."""
+    for field in ("position", "data"):
+        value = getattr(msg, field, None)
+        if value is not None and not isinstance(value, (str, bytes)) and hasattr(value, "__len__"):
+            try:
+                return tuple(float(v) for v in value)
+            except (TypeError, ValueError):
+                return ()
+    return ()
+
+
+#: Message types whose numbers ``ros2course report`` draws as a joint stream (:func:`vector_of`).
+VECTOR_TYPES = ("sensor_msgs/msg/JointState", "std_msgs/msg/Float64MultiArray")
+
+
+def vector_topics(path: Path) -> list[str]:
+    """The recording's topics of a :data:`VECTOR_TYPES` type, from the MCAP summary (no message decoded).
+
+    Never raises: an unreadable or unfinished recording gives ``[]`` (its plots say why when drawn).
+    """
+    try:
+        with path.open("rb") as handle:
+            summary = make_reader(handle).get_summary()
+    except Exception:  # noqa: BLE001 - mcap raises its own error classes; the report goes on without
+        return []
+    if summary is None:
+        return []
+    names = {schema.id: schema.name for schema in summary.schemas.values()}
+    return sorted({channel.topic for channel in summary.channels.values()
+                   if names.get(channel.schema_id) in VECTOR_TYPES})
+
+
 def read(path: Path) -> tuple[list[Observation], list[CheckWindow]]:
     """Every message of the recording (oldest stamp first) and every check's window.
 
@@ -110,7 +147,8 @@ def read(path: Path) -> tuple[list[Observation], list[CheckWindow]]:
             reader = make_reader(handle, decoder_factories=[DecoderFactory()])
             for _, channel, message, decoded in reader.iter_decoded_messages(log_time_order=True):
                 source, text, own = _summary(channel.topic, decoded)
-                observations.append(Observation(channel.topic, source, own or message.publish_time, text))
+                observations.append(Observation(channel.topic, source, own or message.publish_time, text,
+                                                vector_of(decoded)))
             for record in reader.iter_metadata():
                 if record.name != CHECKS_METADATA:
                     continue

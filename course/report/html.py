@@ -267,6 +267,36 @@ def rate_plot_svg(streams: dict[str, list[float]], period: float, tolerance: flo
     return _svg(figure)
 
 
+def joint_plot_svg(topic: str, stamps: list[float], vectors: list[tuple[float, ...]]) -> str:
+    """Each component of a vector stream over time: a robot's joint positions as its driver published them.
+
+    Args:
+        topic: the stream's topic (the legend names its components ``<topic>[i]``).
+        stamps: seconds from the recording's first message, one per vector, oldest first.
+        vectors: the numbers of each message (``JointState.position`` in radians, a MultiArray's ``data``).
+
+    A stream of more than :data:`MAX_POINTS` messages is drawn from every n-th one (a 500 Hz stream of
+    10 s keeps 400 points per joint); at most 8 components are drawn.
+
+    Raises:
+        ImportError: matplotlib is not installed.
+    """
+    figure = _figure(5.2, 2.2)
+    axes = figure.add_subplot()
+    step = max(1, math.ceil(len(stamps) / MAX_POINTS))
+    width = max((len(v) for v in vectors), default=0)
+    for index in range(min(width, 8)):
+        points = [(t, v[index]) for t, v in zip(stamps[::step], vectors[::step]) if len(v) > index]
+        axes.plot([p[0] for p in points], [p[1] for p in points], linewidth=0.9, label=f"[{index}]")
+    axes.set_xlabel(f"time (s) of {topic[:60]}", fontsize=8)
+    axes.set_ylabel("value (rad for joints)", fontsize=8)
+    axes.tick_params(labelsize=7)
+    axes.locator_params(nbins=5)
+    axes.legend(fontsize=6, loc="upper right", ncol=4)
+    figure.subplots_adjust(left=0.13, right=0.98, bottom=0.2, top=0.95)
+    return _svg(figure)
+
+
 def _href(out_dir: Path, path: Path) -> str:
     """A relative, percent-encoded link from the report to ``path``."""
     return urllib.parse.quote(Path(os.path.relpath(path, out_dir)).as_posix())
@@ -295,8 +325,14 @@ def _recording(out_dir: Path, result: LessonResult) -> Path | None:
     return None
 
 
-def _plots(recording: Path, wanted: list[tuple[str, float, float]]) -> tuple[list[dict[str, Any]], list[str]]:
-    """(plots, notes) of the rate checks ``wanted`` ([(check id, period s, tolerance)]) from one recording."""
+def _plots(recording: Path, wanted: list[tuple[str, float, float]], vectors: list[str]
+           ) -> tuple[list[dict[str, Any]], list[str]]:
+    """(plots, notes) from one recording, read once.
+
+    Args:
+        wanted: the rate checks to draw: [(check id, period s, tolerance)].
+        vectors: the vector topics to draw as joint streams (:func:`ros2course.report.evidence.vector_topics`).
+    """
     from ros2course.report.evidence import groups, read, within  # noqa: PLC0415 - mcap is only needed here
 
     try:
@@ -321,6 +357,16 @@ def _plots(recording: Path, wanted: list[tuple[str, float, float]]) -> tuple[lis
         caption = (f"{check_id}: interval between messages ({', '.join(streams)}); green band: the mean period "
                    f"{period:.3f} s ± {tolerance:.0%} the grader accepts; observed {window.observed}")
         plots.append({"svg": rate_plot_svg(streams, period, tolerance), "caption": caption})
+    origin = observations[0].stamp_ns if observations else 0
+    for topic in vectors[:MAX_STREAMS]:
+        items = [o for o in observations if o.topic == topic and o.values]
+        if len(items) < 2:
+            notes.append(f"{topic}: fewer than two messages recorded, no joint plot")
+            continue
+        plots.append({"svg": joint_plot_svg(topic, [(o.stamp_ns - origin) * 1e-9 for o in items],
+                                            [o.values for o in items]),
+                      "caption": f"{topic}: {len(items)} messages as the grader received them, each value "
+                                 f"over time ({len(items[0].values)} per message)"})
     return plots, notes
 
 
@@ -344,21 +390,29 @@ def _students(out_dir: Path, results: list[LessonResult], max_plots: int) -> lis
     for candidate in candidates[:max_plots]:
         chosen[candidate[3]].append(candidate[4:])
     left_out = collections.Counter(c[3] for c in candidates[max_plots:])
+    # joint streams (a robot driver's JointState): failed results first, as many as rate plots at most
+    from ros2course.report.evidence import vector_topics  # noqa: PLC0415 - mcap is only needed here
+
+    streams = sorted((r.status == Status.PASSED, r.student, r.lesson, id(r), topics) for r in ordered
+                     if recordings[id(r)] is not None and (topics := vector_topics(recordings[id(r)])))
+    joints = {c[3]: c[4] for c in streams[:max_plots]}
+    left_out.update(c[3] for c in streams[max_plots:])
     out = []
     for index, r in enumerate(ordered):
         recording = recordings[id(r)]
         logs = _log_folder(out_dir, r)
         plots, notes = [], []
-        if chosen.get(id(r)) and recording.stat().st_size > MAX_RECORDING_BYTES:
+        wanted = bool(chosen.get(id(r)) or joints.get(id(r)))
+        if wanted and recording.stat().st_size > MAX_RECORDING_BYTES:
             notes.append(f"plots not drawn: the recording is over {MAX_RECORDING_BYTES / 1e6:g} MB "
                          "(`ros2course evidence` or Foxglove open it)")
-        elif chosen.get(id(r)):
+        elif wanted:
             try:
-                plots, notes = _plots(recording, chosen[id(r)])
+                plots, notes = _plots(recording, chosen.get(id(r), []), joints.get(id(r), []))
             except Exception as exc:  # noqa: BLE001 - a plot that fails never costs the report
                 notes.append(f"plots not drawn: {type(exc).__name__}: {exc}")
         if left_out.get(id(r)):
-            notes.append(f"{left_out[id(r)]} rate plot(s) not drawn (a report draws at most {max_plots}): "
+            notes.append(f"{left_out[id(r)]} plot(s) not drawn (a report draws at most {max_plots} of each kind): "
                          f"`ros2course evidence` on the recording shows them")
         if recording is None and r.checks:
             notes.append("no recording for this result: nothing measured on a ROS graph was kept")
