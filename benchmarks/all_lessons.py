@@ -6,14 +6,19 @@ print the warm median beside the lesson's observation window (``WINDOW`` in
 its grader module, seconds: the time its contract needs to watch the nodes)
 and the goal of issue 3: window + 1.5 s.
 
-    python benchmarks/all_lessons.py [--runs 3] [--json] [--recording-cost] [LESSON ...]
+    python benchmarks/all_lessons.py [--runs 3] [--json] [--recording-cost] [--diagnosis-cost] [LESSON ...]
 
 ``--recording-cost`` also grades ``--runs`` times with recording off
 (``ROS2COURSE_RECORD=0``), interleaved with the recorded runs, and reports the
 recording's share of the warm check time (issue 13: at most 10 %) and the
 size of the check's ``observed.mcap``.
 
-Every graded run must get full marks; otherwise the script exits 1.
+``--diagnosis-cost`` also grades each wrong solution of the lesson
+(``tests/fixtures/<lesson>``) once and reports the seconds the engine spent on
+each diagnosis of a failed check (``GradingSession.diagnose_seconds``: one per
+part whose check failed), median and max (issue 19: at most 0.2 s).
+
+Every graded run of the reference must get full marks; otherwise the script exits 1.
 """
 
 from __future__ import annotations
@@ -33,7 +38,7 @@ from rich.table import Table
 
 from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.grade.results import Status
-from ros2course.grade.validate import reference_workspace, run_commands
+from ros2course.grade.validate import build_underlay, lesson_cases, reference_workspace, run_commands
 from ros2course.lesson.catalog import load_catalog
 from ros2course.ros import env as env_mod
 from ros2course.run.recording import FILE_NAME as RECORDING_FILE
@@ -91,6 +96,30 @@ def bench_lesson(lesson, runs: int, recording_cost: bool = False) -> dict:
         shutil.rmtree(root, ignore_errors=True)
 
 
+def diagnosis_cost(lesson) -> dict:
+    """Seconds per diagnosis of a failed check over the lesson's wrong solutions, graded once each."""
+    from diagnosis_parity import LIMIT, diagnosis_seconds  # noqa: PLC0415 - the sibling script's collector
+
+    underlay = build_underlay(lesson)
+    costs: list[float] = []
+    try:
+        for case in lesson_cases(lesson, underlay.path if underlay is not None else None)[2:]:  # the fixtures
+            root = Path(tempfile.mkdtemp(prefix=f"ros2course-bench-{lesson.id}-{case.name}-"))
+            try:
+                case.prepare(root)
+                with diagnosis_seconds() as seconds:
+                    grade_lesson(lesson, root, underlays=case.underlays)
+                costs += seconds
+            finally:
+                shutil.rmtree(root, ignore_errors=True)
+    finally:
+        if underlay is not None:
+            underlay.discard()
+    return {"diagnoses": len(costs), "diagnose_median": statistics.median(costs) if costs else None,
+            "diagnose_max": max(costs) if costs else None,
+            "diagnose_within_limit": None if not costs else max(costs) <= LIMIT}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("lessons", nargs="*", help="lesson ids (default: all)")
@@ -98,6 +127,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print JSON instead of a table")
     parser.add_argument("--recording-cost", action="store_true",
                         help="also grade with recording off and report the recording's cost")
+    parser.add_argument("--diagnosis-cost", action="store_true",
+                        help="also grade each wrong solution once and report the seconds per diagnosis")
     args = parser.parse_args(argv)
     env_mod.activate()
     catalog = load_catalog()
@@ -107,6 +138,8 @@ def main(argv: list[str] | None = None) -> int:
     for lesson in lessons:
         err.print(f"benchmarking {lesson.id} ...")
         rows.append(bench_lesson(lesson, args.runs, args.recording_cost))
+        if args.diagnosis_cost:
+            rows[-1].update(diagnosis_cost(lesson))
     if args.json:
         print(json.dumps(rows, indent=2))
     else:
@@ -115,6 +148,8 @@ def main(argv: list[str] | None = None) -> int:
         columns = ["lesson", "cold", "warm median", "warm max", "window", "goal", "ok"]
         if args.recording_cost:
             columns += ["unrecorded", "recording cost", "mcap KiB"]
+        if args.diagnosis_cost:
+            columns += ["diagnoses", "diagnosis median ms", "diagnosis max ms"]
         for column in columns:
             table.add_column(column, justify="left" if column == "lesson" else "right")
         for r in rows:
@@ -126,6 +161,9 @@ def main(argv: list[str] | None = None) -> int:
                 share = r["recording_share"]
                 cells += [fmt(r["unrecorded_median"]), "-" if share is None else f"{share:+.1%}",
                           f"{r['recording_bytes'] / 1024:.1f}"]
+            if args.diagnosis_cost:
+                ms = lambda v: "-" if v is None else f"{v * 1000:.1f}"  # noqa: E731
+                cells += [str(r["diagnoses"]), ms(r["diagnose_median"]), ms(r["diagnose_max"])]
             table.add_row(*cells)
         Console().print(table)
     return 0 if all(r["full_marks"] for r in rows) else 1

@@ -442,7 +442,7 @@ def evidence(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON"
     out = stdout_console()
     shown = ev.render(folder, list(check_ids or []), out)
     if plot or png is not None:
-        series = ev.interval_series(folder, shown)
+        series = ev.interval_series(shown)  # the observations render read: the recording is read once
         if plot:
             ev.plot_terminal(series, out)
         if png is not None:

@@ -66,6 +66,20 @@ def test_lesson_graph_validates_names_and_parts():
     assert [n.name for n in graph.for_part("one").nodes] == ["/a", "/c"]
 
 
+def test_topics_and_services_share_one_endpoint_model():
+    """One endpoint model for both lists; each list's roles and default role, and its kind of type."""
+    graph = LessonGraph.model_validate({"topics": [{"name": "/t", "type": STRING}],
+                                        "services": [{"name": "/s", "type": "std_srvs/srv/Trigger"}]})
+    assert type(graph.topics[0]) is type(graph.services[0])
+    assert (graph.topics[0].role, graph.services[0].role) == ("publish", "serve")
+    assert graph.for_part("any").services[0].role == "serve"
+    for wrong in ({"topics": [{"name": "/t", "type": STRING, "role": "serve"}]},
+                  {"services": [{"name": "/s", "type": "std_srvs/srv/Trigger", "role": "subscribe"}]},
+                  {"topics": [{"name": "/t", "type": "std_srvs/srv/Trigger"}]}):
+        with pytest.raises(ValueError):
+            LessonGraph.model_validate(wrong)
+
+
 def test_declared_lessons_load():
     catalog = load_catalog()
     for lesson_id in ("print-forever-node", "publisher-subscriber", "service-server-client", "parameters",
@@ -155,15 +169,21 @@ def _kinds(findings: list[Diagnosis]) -> list[str]:
     return [d.kind for d in findings]
 
 
+def _diagnose(session, contract: LessonGraph, **kwargs) -> list[Diagnosis]:
+    """The engine's call: the graph observed once, QoS queried through the grader's node."""
+    from ros2course.run.diagnose import diagnose, snapshot  # noqa: PLC0415
+
+    return diagnose(snapshot(session), contract, ros_node=session.node, **kwargs)
+
+
 def _settled(session, contract: LessonGraph, done) -> list[Diagnosis]:
     """Diagnose until ``done(findings)`` (in-process discovery takes a few ms), at most 10 s."""
-    from ros2course.run.diagnose import diagnose  # noqa: PLC0415
     from ros2course.run.probes import wait_until  # noqa: PLC0415
 
     found: list[Diagnosis] = []
 
     def check() -> bool:
-        found[:] = diagnose(session, contract)
+        found[:] = _diagnose(session, contract)
         return done(found)
 
     wait_until(check, 10.0, interval=0.05)
@@ -259,29 +279,28 @@ def test_services(graph):
 @pytest.mark.ros
 @pytest.mark.timeout(60)
 def test_correct_graph_has_no_diagnosis(graph):
-    from ros2course.run.diagnose import diagnose  # noqa: PLC0415
     from ros2course.run.probes import wait_until  # noqa: PLC0415
 
     session, node = graph
     node("talker").create_publisher(_string(), "/amazing_quote", 10)
     session.topic("/amazing_quote", _string(), 10)
     assert wait_until(lambda: "/amazing_quote" in session.topic_types() and "/talker" in session.node_names(), 10.0)
-    assert diagnose(session, CONTRACT) == []
-    assert diagnose(session, LessonGraph()) == []
+    assert _diagnose(session, CONTRACT) == []
+    assert _diagnose(session, LessonGraph()) == []
 
 
 @pytest.mark.ros
 @pytest.mark.timeout(60)
 def test_an_empty_graph_and_a_broken_query_say_nothing(graph):
-    from ros2course.run.diagnose import diagnose  # noqa: PLC0415
+    from ros2course.run.diagnose import diagnose, snapshot  # noqa: PLC0415
 
     session, _ = graph
-    assert diagnose(session, CONTRACT) == []  # no learner node: the grader reports the process
+    assert _diagnose(session, CONTRACT) == []  # no learner node, no process: nothing to say
 
     class Broken:
         node = None
 
-    assert diagnose(Broken(), CONTRACT) == []
+    assert diagnose(snapshot(Broken()), CONTRACT, ros_node=None) == []
 
 
 LEARNER = """
@@ -368,3 +387,228 @@ def test_diagnosis_in_the_html_report_is_escaped(tmp_path):
     html = render_report(tmp_path, similarity=False)
     assert "why: node /x publishes /&lt;script&gt;alert(1)&lt;/script&gt;" in html
     assert "<script>alert(1)" not in html
+
+
+# --- the learner's process and a silent publisher (issue 19, engine-made, real processes) -------------
+
+CRASHER = """
+    import os, signal, sys, time
+    import rclpy
+
+    rclpy.init()
+    node = rclpy.create_node("crasher")
+    time.sleep(0.3)
+    how = sys.argv[1]
+    if how == "raise":
+        raise RuntimeError("the robot is on fire")
+    if how == "error":
+        node.get_logger().error("cannot open /dev/ttyUSB0")
+        node.get_logger().info("giving up")
+        sys.exit(3)
+    os.kill(os.getpid(), signal.SIGSEGV)
+"""
+
+TALKER = """
+    import sys, time
+    import rclpy
+    from rclpy.executors import ExternalShutdownException
+    from std_msgs.msg import String
+
+    try:
+        rclpy.init()
+        node = rclpy.create_node("talker")
+        publisher = node.create_publisher(String, "/amazing_quote", 10)
+        node.create_timer(0.1, lambda: publisher.publish(String(data="Use the force, Pikachu!")))
+        if sys.argv[1] == "spins":
+            rclpy.spin(node)
+        else:
+            while rclpy.ok():  # waits for Ctrl+C but never spins: the timer never fires
+                time.sleep(0.05)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+"""
+
+
+def _session(tmp_path, checks, graph: LessonGraph | None):
+    from ros2course.grade.engine import GradingSession  # noqa: PLC0415
+    from ros2course.ros import env as env_mod  # noqa: PLC0415
+
+    lesson = load_catalog().get("publisher-subscriber").model_copy(update={"graph": graph})
+    (tmp_path / "install").mkdir(exist_ok=True)
+    (tmp_path / "install" / "setup.bash").write_text("", encoding="utf-8")
+    env = dict(os.environ)
+    env_mod.activate(env)
+    return GradingSession(lesson, checks, tmp_path, tmp_path / "log", env)
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("how, words", [
+    ("raise", ["exited with code 1 after", "RuntimeError: the robot is on fire"]),
+    ("error", ["exited with code 3 after", "[ERROR]", "[crasher]: cannot open /dev/ttyUSB0"]),
+    ("segv", ["was killed by SIGSEGV after"]),
+])
+def test_a_learner_process_that_ends_is_diagnosed(tmp_path, how, words):
+    """A node that dies on its own: the engine's ``process`` finding says how (code or signal, seconds
+    after start) and why (last traceback line, else last ERROR record); kit.process_state says the same."""
+    pytest.importorskip("rclpy")
+    from ros2course.grade.engine import Check  # noqa: PLC0415
+    from ros2course.kit import process_state  # noqa: PLC0415
+    from ros2course.run.probes import wait_until  # noqa: PLC0415
+
+    script = tmp_path / "crasher.py"
+    script.write_text(textwrap.dedent(CRASHER), encoding="utf-8")
+    s = _session(tmp_path, [Check("node", "the node runs", 1)], None)  # no graph: process findings still come
+    try:
+        with s.part():
+            proc = s.launch(Path(sys.executable), "crasher", [str(script), how])
+            assert wait_until(lambda: proc.poll() is not None, 30.0)
+            state = process_state(proc)
+            s.record("node", False, f"no node; {state}", "a node that keeps running")
+    finally:
+        s.close()
+    findings = s.results["node"].diagnosis
+    assert [d.kind for d in findings] == ["process"], findings
+    for word in words:
+        assert findings[0].mentions(word), (word, findings[0].message)
+        assert word in state, (word, state)  # one account of the process: observed text and diagnosis agree
+    seconds = float(findings[0].detail["seconds"])
+    assert seconds >= 0.3  # it slept 0.3 s before dying: the time is measured from start, not from the verdict
+    assert findings[0].message.startswith("the learner's process crasher ")
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(120)
+def test_a_node_stopped_by_the_grader_is_not_a_process_finding(tmp_path):
+    """Ctrl+C from the grader ends the process: that exit is not the learner's crash."""
+    pytest.importorskip("rclpy")
+    from ros2course.grade.engine import Check  # noqa: PLC0415
+    from ros2course.run.probes import wait_until  # noqa: PLC0415
+
+    script = tmp_path / "talker.py"
+    script.write_text(textwrap.dedent(TALKER), encoding="utf-8")
+    s = _session(tmp_path, [Check("sigint", "Ctrl+C", 1)], None)
+    try:
+        with s.part():
+            proc = s.launch(Path(sys.executable), "talker", [str(script), "spins"])
+            assert wait_until(lambda: "/talker" in s.ros.node_names(), 30.0)
+            assert proc.interrupt()
+            assert wait_until(lambda: proc.poll() is not None, 10.0)
+            s.record("sigint", False, "exit code 0 but too late (a grader's own verdict)", "-")
+    finally:
+        s.close()
+    assert s.results["sigint"].diagnosis == []
+
+
+SCRIPT = """#!/usr/bin/python3
+# EASY-INSTALL-ENTRY-SCRIPT: '{dist}','console_scripts','{name}'
+import re
+import sys
+
+__requires__ = '{dist}'
+from importlib.metadata import distribution
+
+
+def importlib_load_entry_point(spec, group, name):
+    dist_name, _, _ = spec.partition('==')
+    matches = (
+        entry_point
+        for entry_point in distribution(dist_name).entry_points
+        if entry_point.group == group and entry_point.name == name
+    )
+    return next(matches).load()
+
+
+globals().setdefault('load_entry_point', importlib_load_entry_point)
+
+
+if __name__ == '__main__':
+    sys.argv[0] = re.sub(r'(-script\\.pyw?|\\.exe)?$', '', sys.argv[0])
+    sys.exit(load_entry_point('{dist}', 'console_scripts', '{name}')())
+"""
+
+
+def _installed(root: Path, package: str, version: str, scripts: list[str]) -> Path:
+    """``install/<package>`` as colcon's ament_python build leaves it: a console script written the way
+    setuptools writes it, and ``<package>-<version>-py3.X.egg-info`` listing ``scripts``."""
+    site = root / "install" / package / "lib" / f"python3.{sys.version_info.minor}" / "site-packages"
+    info = site / f"{package}-{version}-py3.{sys.version_info.minor}.egg-info"
+    info.mkdir(parents=True, exist_ok=True)
+    (info / "PKG-INFO").write_text(f"Metadata-Version: 2.1\nName: {package}\nVersion: {version}\n", encoding="utf-8")
+    (info / "entry_points.txt").write_text(
+        "[console_scripts]\n" + "".join(f"{s} = {package}.{s}:main\n" for s in scripts), encoding="utf-8")
+    script = root / "install" / package / "lib" / package / "print_forever_node"
+    script.parent.mkdir(parents=True, exist_ok=True)
+    script.write_text(SCRIPT.format(dist=f"{package}==0.0.1", name="print_forever_node"), encoding="utf-8")
+    script.chmod(0o755)
+    return script
+
+
+def test_an_entry_point_missing_from_the_installed_metadata(tmp_path):
+    """The issue's stale install: the script's entry point is not in the metadata importlib.metadata finds,
+    so the console script dies in next(matches) (StopIteration): said with the metadata's name."""
+    import subprocess  # noqa: PLC0415
+
+    from ros2course.run.diagnose import missing_entry_point, process_findings  # noqa: PLC0415
+    from ros2course.run.process import LearnerProcess  # noqa: PLC0415
+
+    package = "python_package_with_a_node"
+    script = _installed(tmp_path, package, "0.0.1", ["some_other_node"])
+    site = next((tmp_path / "install" / package / "lib").glob("python3*/site-packages"))
+    env = {**os.environ, "PYTHONPATH": str(site)}
+    run = subprocess.run([sys.executable, str(script)], env=env, capture_output=True, text=True, timeout=60,
+                         check=False)
+    assert run.returncode == 1 and "StopIteration" in run.stderr  # what the learner sees
+    found = missing_entry_point(script)
+    assert found is not None and found.kind == "process"
+    assert found.mentions("print_forever_node") and found.mentions(f"{package}-0.0.1-py3.{sys.version_info.minor}.egg-info")
+    assert found.detail["console_scripts"] == "some_other_node"
+    # the same through a learner process that ran it: its exit, then the missing entry point
+    proc = LearnerProcess([sys.executable, str(script)], env, tmp_path / "log", "print_forever_node")
+    proc.program = script  # the console script (run through the interpreter here)
+    proc.start()
+    proc.popen.wait(timeout=60)
+    proc.stop()
+    kinds = [(d.kind, d.detail.get("program", "")) for d in process_findings([proc])]
+    assert kinds == [("process", ""), ("process", "print_forever_node")], kinds
+    # a correct install says nothing
+    fixed = _installed(tmp_path / "ok", package, "0.0.1", ["print_forever_node"])
+    assert missing_entry_point(fixed) is None
+    assert missing_entry_point(Path(sys.executable)) is None  # not a console script
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(120)
+@pytest.mark.parametrize("spins", [False, True])
+def test_a_node_that_never_spins_is_silent(tmp_path, spins):
+    """A node whose publisher the grader's subscription matched, that never published: ``silent``. The same
+    node spinning (its messages arrive) gets no such finding: never a false cause."""
+    pytest.importorskip("rclpy")
+    from std_msgs.msg import String  # noqa: PLC0415
+
+    from ros2course.grade.engine import Check  # noqa: PLC0415
+    from ros2course.run.diagnose import SILENT_AFTER  # noqa: PLC0415
+    from ros2course.run.probes import wait_until  # noqa: PLC0415
+
+    contract = LessonGraph.model_validate({"nodes": [{"name": "/talker"}],
+                                           "topics": [{"name": "/amazing_quote", "type": STRING}]})
+    script = tmp_path / "talker.py"
+    script.write_text(textwrap.dedent(TALKER), encoding="utf-8")
+    s = _session(tmp_path, [Check("node", "the node", 1), Check("messages", "messages", 1)], contract)
+    try:
+        with s.part():
+            probe = s.ros.topic("/amazing_quote", String)
+            s.launch(Path(sys.executable), "talker", [str(script), "spins" if spins else "never"])
+            assert wait_until(lambda: any(not i.node_name.startswith("_") for i in
+                                          s.ros.node.get_publishers_info_by_topic("/amazing_quote")), 30.0)
+            s.record("node", True, "/talker", "/talker")  # the engine sees the match from here on
+            probe.wait_for_count(3, SILENT_AFTER + 1.0)  # the grader's observation window
+            s.record("messages", False, f"{len(probe.messages())} message(s)", "messages on /amazing_quote")
+    finally:
+        s.close()
+    findings = s.results["messages"].diagnosis
+    if spins:
+        assert probe.messages() and "silent" not in [d.kind for d in findings], findings
+        return
+    assert [d.kind for d in findings] == ["silent"], findings
+    assert findings[0].mentions("/talker") and findings[0].mentions("/amazing_quote")

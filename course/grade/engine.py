@@ -31,12 +31,12 @@ from typing import Any
 from ros2course.build import colcon as build_mod
 from ros2course.errors import CourseError, NotGradable
 from ros2course.grade.results import NOT_CHECKED, CheckResult, LessonResult, Plot, Status
-from ros2course.lesson.catalog import Lesson, content_root
+from ros2course.lesson.catalog import Lesson, LessonGraph, content_root
 from ros2course.ros import env as env_mod
 from ros2course.ros import index as ament_index
 from ros2course.ros.interfaces import workspace_type
 from ros2course import sandbox
-from ros2course.run.diagnose import Diagnosis, diagnose, snapshot
+from ros2course.run.diagnose import Diagnosis, GraphSnapshot, diagnose, silent_topics, snapshot
 from ros2course.run.probes import RosSession
 from ros2course.run.process import LearnerProcess, sweep_stale_fastdds_shm
 from ros2course.run.recording import CHECKS_METADATA, Recorder
@@ -217,15 +217,25 @@ class GradingSession:
         self.windows[check_id] = (int(window[0] * 1e9), int(window[1] * 1e9)) if window else (start, now)
         if band is not None:
             self.bands[check_id] = (float(band[0]), float(band[1]))
+        fresh = self._observe_graph()
         self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
                                              passed, observed, expected,
                                              "" if passed else (hint if hint is not None else check.hint),
-                                             diagnosis=[] if passed else self._diagnosis(check))
-        self._observe_graph()
+                                             diagnosis=[] if passed else self._diagnosis(check, fresh))
         return passed
 
-    def _observe_graph(self) -> None:
-        """Keep what the graph shows at the first verdict of a part that launched learner nodes.
+    def _part_graph(self) -> tuple[dict[str, Any], Any] | None:
+        """The calling thread's innermost open part and the graph its learner processes run in (its own
+        :meth:`launch`, else an enclosing part's); None outside a part or before any launch."""
+        states = self._part_states
+        if not states:
+            return None
+        graph = next((state["graph"] for state in reversed(states) if state["graph"] is not None), None)
+        return None if graph is None else (states[-1], graph)
+
+    def _observe_graph(self) -> GraphSnapshot | None:
+        """Keep what the graph shows at the first verdict of a part that launched learner nodes; return it
+        when taken by this call (the snapshot a diagnosis of the same verdict reuses), else None.
 
         The observed side of ``ros2course graph`` (issue 19): one
         :class:`~ros2course.run.diagnose.GraphSnapshot` per part, in :attr:`graph_snapshots`,
@@ -233,47 +243,57 @@ class GradingSession:
         verdict after a launch is when the grader has waited for the learner's nodes, and
         before any Ctrl+C it presses. Never raises; costs a few rcl graph queries per part.
         """
-        states = self._part_states
-        if not states or states[-1]["observed"]:
-            return
-        graph = next((state["graph"] for state in reversed(states) if state["graph"] is not None), None)
-        if graph is None:
-            return
-        states[-1]["observed"] = True
-        found = snapshot(graph)
-        if found is not None:
+        found = self._part_graph()
+        if found is None or found[0]["observed"]:
+            return None
+        state, graph = found
+        state["observed"] = True
+        taken = snapshot(graph)
+        if taken is not None:
             with self._timings_lock:
-                self.graph_snapshots.append({"part": states[-1]["name"], **found.to_dict()})
+                self.graph_snapshots.append({"part": state["name"], **taken.to_dict()})
+        return taken
 
-    def _diagnosis(self, check: Check) -> list[Diagnosis]:
-        """What the graph shows against the lesson's ``graph:`` contract, for a failed ``check`` (issue 19).
+    def _diagnosis(self, check: Check, fresh: GraphSnapshot | None = None) -> list[Diagnosis]:
+        """What the part shows against the lesson's ``graph:`` contract, for a failed ``check`` (issue 19).
 
         Made at most once per part (the innermost open :meth:`part` of this
         thread): for its first failed check recorded while the part, or a part
-        around it, runs a learner process in a graph (:meth:`launch`). That
-        graph is queried right then (:func:`ros2course.run.diagnose.diagnose`),
-        with the contract entries of the check's own part
-        (:meth:`ros2course.lesson.catalog.LessonGraph.for_part`). ``[]`` when the
-        lesson declares no graph, the check watched none, or anything fails
-        (logged at debug level): a diagnosis never changes a verdict or a score.
+        around it, runs a learner process in a graph (:meth:`launch`). The graph
+        is the snapshot :meth:`_observe_graph` took for this same verdict (``fresh``),
+        else one taken now; QoS profiles are queried only for the expected topics
+        that are there; the part's learner processes and its silent topics are
+        judged too (:func:`ros2course.run.diagnose.diagnose`), with the contract
+        entries of the check's own part (:meth:`ros2course.lesson.catalog.LessonGraph.for_part`).
+        A lesson without a ``graph:``, or a part whose processes the grader already stopped
+        (its Ctrl+C check), gets the process findings only. ``[]`` when the check
+        watched no graph, or anything fails (logged at debug level): a diagnosis never changes a verdict or a score.
         Seconds spent: each in :attr:`diagnose_seconds`, their sum in ``timings["diagnose"]``.
         ``ROS2COURSE_DIAGNOSE=0`` turns it off (to show verdicts are the same without it).
         """
         try:
             contract = self.lesson.graph
-            states = self._part_states
-            if contract is None or not states or states[-1]["diagnosed"] or os.environ.get(DIAGNOSE_ENV) == "0":
+            found = self._part_graph()
+            if found is None or found[0]["diagnosed"] or os.environ.get(DIAGNOSE_ENV) == "0":
                 return []
-            graph = next((state["graph"] for state in reversed(states) if state["graph"] is not None), None)
-            if graph is None:
-                return []
-            states[-1]["diagnosed"] = True
+            state, graph = found
+            state["diagnosed"] = True
             begin = time.monotonic()
             with self.phase("diagnose"):
-                found = diagnose(graph, contract.for_part(check.part))
+                processes = [p for part in self._part_states for p in part["processes"]]
+                own = state["processes"] or processes
+                # after the grader's own Ctrl+C the graph is emptying: what is missing then is no cause
+                stopped = bool(own) and all(p.signalled_at is not None for p in own)
+                if contract is None or stopped:  # no graph to compare: the learner's processes only
+                    result = diagnose(None, LessonGraph(), processes=processes)
+                else:
+                    taken = fresh if fresh is not None else snapshot(graph)
+                    silent = silent_topics(graph)
+                    result = diagnose(taken, contract.for_part(check.part), ros_node=graph.node,
+                                      processes=processes, silent=silent)
             with self._timings_lock:
                 self.diagnose_seconds.append(time.monotonic() - begin)
-            return found
+            return result
         except Exception:  # noqa: BLE001 - advice only: never fail the check's recording
             logging.getLogger(__name__).debug("diagnosis of %s failed", check.id, exc_info=True)
             return []
@@ -281,7 +301,9 @@ class GradingSession:
     @property
     def _part_states(self) -> list[dict[str, Any]]:
         """The calling thread's open parts, innermost last: ``{"graph": the RosSession its learner
-        processes run in or None, "diagnosed": whether a failed check of it got its diagnosis}``."""
+        processes run in or None, "diagnosed": whether a failed check of it got its diagnosis, "observed":
+        whether its graph was observed (:meth:`_observe_graph`),
+        "processes": the learner processes it launched}``."""
         if not hasattr(self._local, "parts"):
             self._local.parts = []
         return self._local.parts
@@ -342,7 +364,8 @@ class GradingSession:
         node it started) run, newest first, whatever happened.
         """
         self._closers.append([])
-        self._part_states.append({"graph": None, "diagnosed": False, "observed": False, "name": name})
+        self._part_states.append({"graph": None, "diagnosed": False, "observed": False, "name": name,
+                                  "processes": []})
         self._local.mark = time.time_ns()
         try:
             yield
@@ -533,6 +556,8 @@ class GradingSession:
         proc = LearnerProcess([str(path), *(args or [])], env, self.log_dir, name,
                               cwd=self.workspace_root, ros_sigint=True)
         self._processes.append(proc)
+        if self._part_states:  # judged by the part's process diagnosis
+            self._part_states[-1]["processes"].append(proc)
         proc.start()
         return proc
 

@@ -84,14 +84,15 @@ class ExpectedDiagnosis(BaseModel):
     """A finding a wrong solution's result must carry (:mod:`ros2course.run.diagnose`, issue 19).
 
     Attributes:
-        kind: the finding's kind (``near_name``, ``other_type``, ``qos``, ``no_peer``, ``duplicate_node``).
+        kind: the finding's kind (:data:`ros2course.run.diagnose.KINDS`: ``process``, ``near_name``, ``other_type``,
+            ``qos``, ``no_peer``, ``duplicate_node``, ``silent``).
         mentions: words its message or detail must contain, case-insensitively (e.g. the names involved).
         check: the check id whose diagnosis holds it; "" for any failed check.
     """
 
     model_config = ConfigDict(extra="forbid")
 
-    kind: Literal["near_name", "other_type", "qos", "no_peer", "duplicate_node"]
+    kind: Literal["process", "near_name", "other_type", "qos", "no_peer", "duplicate_node", "silent"]
     mentions: list[str] = Field(default_factory=list)
     check: str = ""
 

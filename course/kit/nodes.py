@@ -9,8 +9,6 @@ that need it "not checked".
 from __future__ import annotations
 
 import dataclasses
-import os
-import signal
 import time
 from collections.abc import Iterable
 from pathlib import Path
@@ -18,7 +16,7 @@ from typing import Any
 
 from ros2course.grade.engine import GradingSession, Unmet
 from ros2course.run.probes import wait_until
-from ros2course.run.process import LearnerProcess, last_traceback, rclpy_shutdown_race
+from ros2course.run.process import LearnerProcess, rclpy_shutdown_race
 
 
 def executable(s: GradingSession, check_id: str, package: str, name: str, hint: str = "") -> Path:
@@ -39,13 +37,12 @@ def executable(s: GradingSession, check_id: str, package: str, name: str, hint: 
 
 
 def process_state(proc: LearnerProcess) -> str:
-    """A sentence on whether ``proc`` is still running, with its last traceback line if it died."""
-    code = proc.poll()
-    if code is None:
+    """A sentence on whether ``proc`` is still running; if it ended, how (:meth:`LearnerProcess.exit_state`:
+    the same account as the engine's ``process`` diagnosis), with its last traceback or ERROR/FATAL line."""
+    ended = proc.exit_state()
+    if ended is None:
         return "the process is still running"
-    trace = last_traceback(proc.stderr()) or last_traceback(proc.stdout())
-    last = trace.strip().splitlines()[-1] if trace else (proc.stderr().strip().splitlines() or [""])[-1]
-    return f"the process exited with code {code}" + (f" ({last})" if last else "")
+    return f"the process {ended.describe()}" + (f" ({ended.last_line})" if ended.last_line else "")
 
 
 @dataclasses.dataclass
@@ -190,9 +187,7 @@ def sigint_exit(s: GradingSession, check_id: str, proc: LearnerProcess, sigint_t
         begin = time.monotonic()
         for wait in (sigint_timeout / 2, sigint_timeout / 2):
             presses += 1
-            try:
-                os.killpg(proc.pid, signal.SIGINT)
-            except (ProcessLookupError, PermissionError):
+            if not proc.interrupt():
                 break
             if wait_until(lambda: proc.poll() is not None, wait, interval=0.01):
                 break

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Annotated, Literal
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator, model_validator
 
 from ros2course.errors import LessonFormatError, UnknownLesson
 from ros2course.lesson import ID_PATTERN as _ID, MANIFEST, content_root  # noqa: F401 - re-exported: callers import it from here
@@ -52,13 +52,20 @@ class GraphNode(BaseModel):
     part: str = ""
 
 
-class GraphTopic(BaseModel):
-    """A topic end the learner's node is expected to have (``ros2 topic info -v``).
+#: The roles an endpoint of the contract can have, per list of :class:`LessonGraph` (``ros2 node info``'s sections).
+_ROLES = {"topics": ("publish", "subscribe"), "services": ("serve", "call")}
+
+
+class GraphEndpoint(BaseModel):
+    """A topic or service end the learner's node is expected to have (``ros2 topic info -v``,
+    ``ros2 service list -t``).
 
     Attributes:
-        name: fully qualified topic name.
-        type: its message type, ``pkg/msg/Name``.
-        role: ``publish`` (the learner's node publishes, the grader listens) or ``subscribe``.
+        name: fully qualified topic or service name.
+        type: its interface type, ``pkg/msg/Name`` (topics) or ``pkg/srv/Name`` (services).
+        role: ``publish`` / ``subscribe`` (topics: the learner's node publishes and the grader listens,
+            or the reverse) or ``serve`` / ``call`` (services: the learner's node is the server or
+            its client); default the first of its list's roles (:class:`LessonGraph` fills it in).
         part: as :attr:`GraphNode.part`.
     """
 
@@ -66,25 +73,7 @@ class GraphTopic(BaseModel):
 
     name: Annotated[str, Field(pattern=_ROS_NAME)]
     type: Annotated[str, Field(pattern=_TYPE_NAME)]
-    role: Literal["publish", "subscribe"] = "publish"
-    part: str = ""
-
-
-class GraphService(BaseModel):
-    """A service end the learner's node is expected to have (``ros2 service list -t``).
-
-    Attributes:
-        name: fully qualified service name.
-        type: its service type, ``pkg/srv/Name``.
-        role: ``serve`` (the learner's node is the server) or ``call`` (its client).
-        part: as :attr:`GraphNode.part`.
-    """
-
-    model_config = ConfigDict(extra="forbid")
-
-    name: Annotated[str, Field(pattern=_ROS_NAME)]
-    type: Annotated[str, Field(pattern=_TYPE_NAME)]
-    role: Literal["serve", "call"] = "serve"
+    role: Literal["publish", "subscribe", "serve", "call", ""] = ""
     part: str = ""
 
 
@@ -99,8 +88,22 @@ class LessonGraph(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     nodes: list[GraphNode] = Field(default_factory=list)
-    topics: list[GraphTopic] = Field(default_factory=list)
-    services: list[GraphService] = Field(default_factory=list)
+    topics: list[GraphEndpoint] = Field(default_factory=list)
+    services: list[GraphEndpoint] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _roles_fit(self) -> LessonGraph:
+        """Each list's default role filled in; a topic's role is a topic role, a service's a service role."""
+        for field, roles in _ROLES.items():
+            kind = "msg" if field == "topics" else "srv"
+            for end in getattr(self, field):
+                if not end.role:
+                    end.role = roles[0]
+                if end.role not in roles:
+                    raise ValueError(f"{field[:-1]} {end.name}: role {end.role!r} is not one of {', '.join(roles)}")
+                if f"/{kind}/" not in end.type:
+                    raise ValueError(f"{field[:-1]} {end.name}: type {end.type} is not a {kind} type")
+        return self
 
     def for_part(self, part: str) -> LessonGraph:
         """The entries that apply to a check of grader part ``part`` (its own and the part-less ones)."""
@@ -116,7 +119,9 @@ class Lesson(BaseModel):
     Attributes:
         id: stable lesson id from shared/LESSONS.md (kebab-case).
         title: one line.
-        chapters: seed tutorial chapter numbers this lesson follows.
+        beyond: for a lesson the seed tutorial has no chapter for (it was written for Humble and
+            teaches no QoS or managed nodes: issue 20), where its subject is documented.
+        chapters: seed tutorial chapter numbers this lesson follows; empty only with ``beyond``.
         requires: what must be installed (see ``ros2course.ros.env.KNOWN_REQUIREMENTS``).
         packages: ROS packages ``check`` builds with colcon (``--packages-up-to``).
         instructions: markdown shown by ``next``.
@@ -147,7 +152,8 @@ class Lesson(BaseModel):
 
     id: Annotated[str, Field(pattern=_ID)]
     title: Annotated[str, Field(min_length=3)]
-    chapters: list[int] = Field(min_length=1)
+    beyond: str = ""
+    chapters: list[int] = Field(default_factory=list)
     requires: list[str] = Field(default_factory=list)
     packages: list[str] = Field(default_factory=list)
     instructions: Annotated[str, Field(min_length=20)]
@@ -166,6 +172,14 @@ class Lesson(BaseModel):
     folder: Path = Field(default=Path("."), exclude=True)
     #: Starter folders of ``starter_includes`` (oldest first); set by :class:`Catalog`.
     included_starters: list[Path] = Field(default_factory=list, exclude=True)
+
+    @field_validator("chapters")
+    @classmethod
+    def _chapters_or_beyond(cls, chapters: list[int], info: ValidationInfo) -> list[int]:
+        if not chapters and not str(info.data.get("beyond") or "").strip():
+            raise ValueError("give at least 1 seed tutorial chapter, or `beyond:` naming where the subject of a "
+                             "lesson the tutorial has no chapter for is documented")
+        return chapters
 
     @field_validator("requires")
     @classmethod

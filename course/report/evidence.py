@@ -200,19 +200,30 @@ class IntervalSeries:
     band: tuple[float, float] | None
 
 
-def interval_series(folder: Path, check_ids: list[str]) -> list[IntervalSeries]:
-    """Every stream with at least two intervals in the chosen checks' windows (default: the failed, else all).
+@dataclasses.dataclass
+class Shown:
+    """What :func:`render` printed, for the plots drawn after it (the recording is read once).
 
-    Raises:
-        CourseError: unknown check id, or an unreadable recording.
+    Attributes:
+        observations: every message of the recording (:func:`read`).
+        windows: the chosen checks' windows, in the order shown.
     """
-    path = folder / FILE_NAME
-    observations, windows = read(path)
-    chosen = _chosen(path, windows, check_ids)
-    origin = min((o.stamp_ns for o in observations), default=0)
+
+    observations: list[Observation]
+    windows: list[CheckWindow]
+
+    @property
+    def check_ids(self) -> list[str]:
+        """The ids shown."""
+        return [w.check_id for w in self.windows]
+
+
+def interval_series(shown: Shown) -> list[IntervalSeries]:
+    """Every stream with at least two intervals in the windows :func:`render` showed."""
+    origin = min((o.stamp_ns for o in shown.observations), default=0)
     out = []
-    for window in chosen:
-        for (topic, source), items in groups(within(observations, window)).items():
+    for window in shown.windows:
+        for (topic, source), items in groups(within(shown.observations, window)).items():
             stamps = [(item.stamp_ns - origin) * 1e-9 for item in items]
             if len(stamps) < 3:
                 continue
@@ -287,11 +298,11 @@ def _chosen(path: Path, windows: list[CheckWindow], check_ids: list[str]) -> lis
     return [by_id[c] for c in check_ids] or [w for w in windows if not w.passed] or windows
 
 
-def render(folder: Path, check_ids: list[str], console: Console) -> list[str]:
+def render(folder: Path, check_ids: list[str], console: Console) -> Shown:
     """Print, for each check (default: the failed ones, else all), what the recording holds in its window.
 
     Returns:
-        The ids shown.
+        what was shown: the observations read and the chosen windows (for :func:`interval_series`).
 
     Raises:
         CourseError: unknown check id, or an unreadable recording.
@@ -327,4 +338,4 @@ def render(folder: Path, check_ids: list[str], console: Console) -> list[str]:
     viewer = shutil.which("foxglove-studio") or shutil.which("foxglove")
     console.print(Text(f"\nThe whole recording opens in Foxglove{f' ({viewer} {path})' if viewer else ''} "
                        "and with `ros2 bag info` where rosbag2's MCAP plugin is installed.", style="dim"))
-    return [w.check_id for w in chosen]
+    return Shown(observations, chosen)

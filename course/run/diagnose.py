@@ -28,11 +28,25 @@ comes from:
   qualified name (``ros2 node list`` warns of it: their parameters and
   services are then ambiguous). A node stopped a moment ago can linger in the
   graph until its participant's lease expires, so a grader that restarts a
-  node in one graph may see it twice for a while.
+  node in one graph may see it twice for a while;
+* ``process``: a learner process of the part ended before the grader stopped
+  it: exit code and seconds after start, or the signal that killed it, with
+  its last traceback line or ERROR/FATAL log line
+  (:meth:`~ros2course.run.process.LearnerProcess.exit_state`, the account
+  ``kit.process_state`` also prints); and, for a console script of an
+  ``ament_python`` package, an entry point missing from the installed
+  metadata that the script loads (setuptools' generated script looks its
+  entry point up with ``importlib.metadata.distribution(name).entry_points``:
+  the first ``*.egg-info``/``*.dist-info`` of that name on its path wins);
+* ``silent``: the learner's node has the expected publisher (the graph shows
+  it with the contract's type) and a grader's probe on that topic has had a
+  matched publisher (rmw's ``matched`` event: same type, compatible QoS) for
+  at least :data:`SILENT_AFTER` seconds, yet nothing arrived since the match
+  (:func:`silent_topics`): a node that never spins, a timer never created.
+  Only then is it said, and only when nothing else explains the failure.
 
-Whether the learner's process is still running is not repeated here: graders
-report it with ``kit.process_state``. A node missing without any near name is
-not reported either (the check's own observed text lists the nodes seen).
+A node missing without any near name is not reported (the check's own
+observed text lists the nodes seen).
 
 Bounds: at most :data:`MAX_FINDINGS` findings, :data:`MAX_NODES` nodes
 inspected, names cut to :data:`NAME_CHARS` characters with control and
@@ -47,11 +61,17 @@ from __future__ import annotations
 import collections
 import dataclasses
 import difflib
+import importlib.metadata
 import logging
+import re
+import time
+from collections.abc import Iterable, Sequence
+from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-if TYPE_CHECKING:  # the lesson model is only a type here
+if TYPE_CHECKING:  # the lesson model and the process are only types here
     from ros2course.lesson.catalog import LessonGraph
+    from ros2course.run.process import LearnerProcess
 
 LOG = logging.getLogger(__name__)
 
@@ -65,7 +85,11 @@ NAME_CHARS = 80
 MAX_NEAR = 2
 #: difflib ratio from which a name counts as near (``difflib.get_close_matches``' default).
 NEAR_CUTOFF = 0.6
-KINDS = ("near_name", "other_type", "qos", "no_peer", "duplicate_node")
+#: Seconds a grader's subscription must have matched the learner's publisher, with nothing received,
+#: before ``silent`` is said: four periods of the course's slowest contract timer (0.5 s), and well past
+#: the few milliseconds endpoint discovery takes once both participants know each other.
+SILENT_AFTER = 2.0
+KINDS = ("process", "near_name", "other_type", "qos", "no_peer", "duplicate_node", "silent")
 
 #: Endpoints every rclpy/rclcpp node has: never the learner's own.
 _STANDARD_TOPICS = frozenset({"/rosout", "/parameter_events"})
@@ -302,27 +326,128 @@ def _qos_findings(ros_node: Any, topic: str) -> list[Diagnosis]:
     return out
 
 
-def diagnose(ros: Any, contract: LessonGraph) -> list[Diagnosis]:
-    """Compare the graph of ``ros`` with the ``contract`` entries; return what explains a failure.
+#: setuptools' console-script wrapper names its distribution: ``__requires__ = 'pkg==0.0.0'`` (or the
+#: ``EASY-INSTALL-ENTRY-SCRIPT: 'pkg==0.0.0','console_scripts','name'`` header of older setuptools).
+_REQUIRES = re.compile(r"""(?:__requires__\s*=\s*|EASY-INSTALL-ENTRY-SCRIPT:\s*)['"]([A-Za-z0-9_.-]+)""")
 
-    Args:
-        ros: a :class:`~ros2course.run.probes.RosSession` (its rclpy ``node`` is queried), entered.
-        contract: the entries that apply to the failed check's part (:meth:`LessonGraph.for_part`).
 
-    Returns:
-        at most :data:`MAX_FINDINGS` findings; ``[]`` when the graph matches the contract, when no
-        learner node is in the graph (a process that died is reported by the grader), or when
-        any graph query failed (logged at debug level). Never raises.
+def missing_entry_point(program: Path) -> Diagnosis | None:
+    """``process``: the console script ``program`` (``install/<pkg>/lib/<pkg>/<name>``) loads an entry point
+    that the installed metadata it finds first does not list.
+
+    The script setuptools writes for ``ament_python`` packages calls
+    ``importlib.metadata.distribution(<name>)`` and takes the ``console_scripts`` entry called
+    ``<name>`` from it (``next(matches)``: a ``StopIteration`` when absent). The same lookup is done
+    here with :mod:`importlib.metadata` on the package's ``lib/python3.*/site-packages``. None when
+    ``program`` is no such script, or its entry point is there. Never raises.
     """
     try:
-        return _diagnose(ros.node, contract)[:MAX_FINDINGS]
+        with program.open("rb") as script:  # a wrapper's head, never a whole binary (an interpreter)
+            head = script.read(4000).decode("utf-8", errors="replace")
+        found = _REQUIRES.search(head)
+        if found is None or program.parent.parent.name != "lib":
+            return None
+        dist_name = found.group(1).split("==")[0]
+        prefix = program.parent.parent.parent
+        sites = sorted(str(p) for p in prefix.glob("lib/python3*/site-packages") if p.is_dir())
+        dist = next(iter(importlib.metadata.distributions(name=dist_name, path=sites)), None)
+        if dist is None:
+            return Diagnosis("process", f"{clean(program.name)} loads package {clean(dist_name)}, but no metadata "
+                             f"of it is installed in {clean(str(prefix))} (rebuild it: colcon build)",
+                             {"program": program.name, "distribution": dist_name})
+        scripts = sorted(e.name for e in dist.entry_points if e.group == "console_scripts")
+        if program.name in scripts:
+            return None
+        where = Path(str(dist._path)) if hasattr(dist, "_path") else Path(dist_name)  # noqa: SLF001 - its folder name
+        listed = ", ".join(clean(n) for n in scripts[:6]) or "none"
+        return Diagnosis("process", f"the entry point {clean(program.name)} is not in the installed metadata "
+                         f"{clean(where.name)} (its console_scripts: {listed}): declare it in setup.py's "
+                         "entry_points and rebuild",
+                         {"program": program.name, "metadata": where.name, "console_scripts": listed})
+    except Exception:  # noqa: BLE001 - advice only
+        LOG.debug("entry point diagnosis of %s failed", program, exc_info=True)
+        return None
+
+
+def process_findings(processes: Iterable[LearnerProcess]) -> list[Diagnosis]:
+    """``process``: each of ``processes`` that ended before the grader stopped it, and why if it can be told."""
+    out = []
+    for proc in processes:
+        if not proc.exited_on_its_own():
+            continue
+        ended = proc.exit_state()
+        if ended is None:
+            continue
+        last = f": {clean(ended.last_line)[:160]}" if ended.last_line else ""
+        out.append(Diagnosis("process", f"the learner's process {clean(proc.name)} {ended.describe()}{last}",
+                             {"process": proc.name, "returncode": str(ended.returncode),
+                              "seconds": "" if ended.seconds is None else f"{ended.seconds:.2f}",
+                              "signal": ended.signal_name or "", "last": ended.last_line}))
+        if ended.returncode != 0 and (entry := missing_entry_point(proc.program)) is not None:
+            out.append(entry)
+    return out
+
+
+def silent_topics(ros: Any) -> set[str]:
+    """The topics on which a grader's probe has had a matched publisher (DDS's ``matched`` event: the same
+    type, compatible QoS) for at least :data:`SILENT_AFTER` seconds, and nothing arrived since the match.
+
+    Args:
+        ros: the :class:`~ros2course.run.probes.RosSession`: its probes keep ``matched`` (since when)
+            and ``heard`` (the last message, :func:`ros2course.run.probes.record`).
+    """
+    now = time.monotonic()
+    return {topic for topic, first in dict(ros.matched).items()
+            if now - first >= SILENT_AFTER and ros.heard.get(topic, float("-inf")) < first}
+
+
+def _silent_findings(contract: LessonGraph, graph: GraphSnapshot, silent: set[str]) -> list[Diagnosis]:
+    out = []
+    for topic in contract.topics:
+        if topic.role != "publish" or topic.name not in silent:
+            continue
+        nodes = [node for node, types in graph.ends["publish"].get(topic.name, {}).items() if topic.type in types]
+        if nodes:
+            out.append(Diagnosis("silent", f"node {clean(nodes[0])} has a publisher on {clean(topic.name)} "
+                                 f"({short_type(topic.type)}) that the grader's subscription matched "
+                                 f"{SILENT_AFTER:.0f}+ s ago, but nothing was published: does it spin "
+                                 "(rclpy.spin) and is its timer created?",
+                                 {"node": nodes[0], "topic": topic.name, "type": topic.type}))
+    return out
+
+
+def diagnose(graph: GraphSnapshot | None, contract: LessonGraph, *, ros_node: Any = None,
+             processes: Sequence[LearnerProcess] = (), silent: set[str] | frozenset[str] = frozenset()
+             ) -> list[Diagnosis]:
+    """Compare what the part showed with the ``contract`` entries; return what explains a failure.
+
+    Args:
+        graph: the graph as observed (:func:`snapshot`), or None when it could not be read.
+        contract: the entries that apply to the failed check's part (:meth:`LessonGraph.for_part`).
+        ros_node: the grader's rclpy ``Node`` in that graph, for the QoS profiles of the expected
+            topics that are there (queried only then); None: no ``qos`` findings.
+        processes: the learner processes the part started (``process`` findings).
+        silent: topics the engine established as matched yet silent (:func:`silent_topics`).
+
+    Returns:
+        at most :data:`MAX_FINDINGS` findings, the learner's processes first; ``[]`` when all
+        matches the contract, or when any query failed (logged at debug level). Never raises.
+    """
+    out: list[Diagnosis] = []
+    try:
+        out += process_findings(processes)
+    except Exception:  # noqa: BLE001 - a diagnosis is advice; it must never fail a check
+        LOG.debug("process diagnosis failed", exc_info=True)
+    try:
+        if graph is not None:  # a process that died leaves its topics silent: that is not a second cause
+            out += _diagnose(graph, contract, ros_node, frozenset() if out else silent)
     except Exception:  # noqa: BLE001 - a diagnosis is advice; it must never fail a check
         LOG.debug("graph diagnosis failed", exc_info=True)
-        return []
+    return out[:MAX_FINDINGS]
 
 
-def _diagnose(ros_node: Any, contract: LessonGraph) -> list[Diagnosis]:
-    graph = _snapshot(ros_node)
+def _diagnose(graph: GraphSnapshot, contract: LessonGraph, ros_node: Any, silent: set[str] | frozenset[str]
+              ) -> list[Diagnosis]:
     if not graph.names:
         return []
     out: list[Diagnosis] = []
@@ -339,11 +464,13 @@ def _diagnose(ros_node: Any, contract: LessonGraph) -> list[Diagnosis]:
                                  f"{how_near(node.name, found)}", {"expected": node.name, "found": found}))
     for topic in contract.topics:
         out += _endpoint_findings("topic", topic.name, topic.type, topic.role, graph)
-        if topic.name in graph.ends[topic.role]:
+        if ros_node is not None and topic.name in graph.ends[topic.role]:
             try:
                 out += _qos_findings(ros_node, topic.name)
             except Exception:  # noqa: BLE001 - QoS introspection failed: the other findings stay
                 LOG.debug("QoS diagnosis of %s failed", topic.name, exc_info=True)
     for service in contract.services:
         out += _endpoint_findings("service", service.name, service.type, service.role, graph)
+    if silent and not out:  # only a graph that otherwise matches the contract can be silent for certain
+        out += _silent_findings(contract, graph, set(silent))
     return out

@@ -162,6 +162,10 @@ class RosSession:
         context: the rclpy ``Context``.
         node: the hidden grader node.
         recorder: where its probes write what they observe (:class:`~ros2course.run.recording.Recorder`), or None.
+        heard: topic -> ``time.monotonic()`` of the last message a probe of this session received on it
+            (kept by :func:`record`, with or without a recorder; the ``silent`` diagnosis reads it).
+        matched: topic -> ``time.monotonic()`` since when a :class:`TopicProbe` on it has had a matched
+            publisher (rmw's ``matched`` event, ``current_count`` > 0); removed when none is left.
 
     Raises:
         RuntimeError: from ``domain_coordinator`` when no domain id is free.
@@ -169,6 +173,8 @@ class RosSession:
 
     def __init__(self, recorder: Any = None) -> None:
         self.recorder = recorder
+        self.heard: dict[str, float] = {}
+        self.matched: dict[str, float] = {}
         self.domain_id = -1
         self._stack = contextlib.ExitStack()
         self.context = None
@@ -297,7 +303,19 @@ class TopicProbe:
         self._session = session
         self._lock = threading.Lock()
         self._samples: list[tuple[float, float, Any]] = []
-        self._sub = session.node.create_subscription(msg_type, topic, self._on_message, qos)
+        from rclpy.event_handler import SubscriptionEventCallbacks  # noqa: PLC0415 - rclpy only when grading
+
+        # DDS's own "matched" event (a publisher of the same type with compatible QoS connected):
+        # when it happened is what the engine's ``silent`` diagnosis needs (ros2course.run.diagnose)
+        self._sub = session.node.create_subscription(msg_type, topic, self._on_message, qos,
+                                                     event_callbacks=SubscriptionEventCallbacks(matched=self._on_matched))
+
+    def _on_matched(self, status: Any) -> None:
+        """Keep :attr:`RosSession.matched`: since when this subscription has had a matched publisher."""
+        if status.current_count > 0:
+            self._session.matched.setdefault(self.topic, time.monotonic())
+        else:
+            self._session.matched.pop(self.topic, None)
 
     def _on_message(self, msg: Any, info: Any) -> None:
         now = time.monotonic()
@@ -412,12 +430,14 @@ class RosoutProbe(TopicProbe):
 
 
 def record(session: RosSession, topic: str, msg: Any, publish_ns: int | None = None) -> None:
-    """Write ``msg`` into the session's recording, if it has one (never raises: a recording cannot fail a check).
+    """Note that ``msg`` arrived (:attr:`RosSession.heard`) and write it into the session's recording, if it
+    has one (never raises: a recording cannot fail a check).
 
     Args:
         topic: the channel name (a topic, or ``<service>/request`` / ``<service>/response``).
         publish_ns: the publisher's send stamp in ns since the epoch (default: now).
     """
+    session.heard[topic] = time.monotonic()
     if session.recorder is None:
         return
     try:

@@ -22,6 +22,7 @@ import contextlib
 import dataclasses
 import fcntl
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -158,6 +159,51 @@ def rclpy_shutdown_race(trace: str) -> bool:
             and ("context is not valid" in last or "context is invalid" in last))
 
 
+#: A ROS log line at ERROR or FATAL severity as rcutils prints it (``[ERROR] [1732000000.1] [node]: text``).
+_ERROR_RECORD = re.compile(r"^\[(ERROR|FATAL)\] \[[0-9.]+\] \[[^\]]*\]: .*$", re.MULTILINE)
+
+
+def last_error_record(text: str) -> str:
+    """The last ERROR or FATAL log line in ``text`` (rcutils' console format, ``RCUTILS_CONSOLE_OUTPUT_FORMAT``
+    default ``[{severity}] [{time}] [{name}]: {message}``), or ""."""
+    found = [m.group(0) for m in _ERROR_RECORD.finditer(text)]
+    return found[-1].strip() if found else ""
+
+
+@dataclasses.dataclass(frozen=True)
+class ProcessExit:
+    """How a learner process ended before the grader stopped it: the one account of a process's end that
+    ``kit.process_state`` (the observed text) and the engine's ``process`` diagnosis both use (issue 19).
+
+    Attributes:
+        returncode: the exit code; negative when a signal killed it (``Popen.returncode``'s convention).
+        seconds: from start to exit, seconds (measured by a thread waiting on the process); None if unknown.
+        last_line: the last traceback line (``ValueError: ...``), else the last ERROR/FATAL log line,
+            else the last line of stderr; "" when it printed nothing.
+    """
+
+    returncode: int
+    seconds: float | None
+    last_line: str
+
+    @property
+    def signal_name(self) -> str | None:
+        """``SIGSEGV`` for a process a signal killed, else None."""
+        if self.returncode >= 0:
+            return None
+        try:
+            return signal.Signals(-self.returncode).name
+        except ValueError:
+            return f"signal {-self.returncode}"
+
+    def describe(self) -> str:
+        """``exited with code 1 after 0.3 s`` or ``was killed by SIGSEGV after 2.1 s`` (no last line)."""
+        after = f" after {self.seconds:.1f} s" if self.seconds is not None else ""
+        if self.signal_name is not None:
+            return f"was killed by {self.signal_name}{after}"
+        return f"exited with code {self.returncode}{after}"
+
+
 class LearnerProcess:
     """One learner executable, started in its own process group.
 
@@ -212,6 +258,12 @@ class LearnerProcess:
         self.deadline = deadline
         self.deadline_hit = False
         self._watchdog: threading.Timer | None = None
+        #: the learner's own program (``argv[0]`` before any wrapper): the executable the grader found.
+        self.program = Path(argv[0]) if argv else Path()
+        #: ``time.monotonic()`` when the process exited (set by a thread waiting on it), else None.
+        self.ended_at: float | None = None
+        #: ``time.monotonic()`` of the first signal the grader sent it (:meth:`interrupt`, :meth:`stop`), else None.
+        self.signalled_at: float | None = None
 
     @property
     def stdout_log(self) -> Path:
@@ -232,11 +284,61 @@ class LearnerProcess:
                         OutputDrain(self.popen.stderr, self.stderr_log, self.output_cap)]
         for drain in self._drains:
             drain.start()
+        # The exit time of a process that dies on its own (``exited after 0.3 s``), noted by a thread
+        # of its own that waits without reaping (see _await_exit).
+        threading.Thread(target=self._await_exit, daemon=True, name=f"ros2course-wait-{self.name}").start()
         if self.deadline is not None:
             self._watchdog = threading.Timer(self.deadline, self._on_deadline)
             self._watchdog.daemon = True
             self._watchdog.start()
         return self
+
+    def _await_exit(self) -> None:
+        """Note when the process exits, without reaping it: ``waitid(P_PID, pid, WEXITED | WNOWAIT)``.
+
+        The zombie keeps its pid, and so the id of its process group, until :meth:`poll` or
+        :meth:`stop` collects it: a pid reaped early could be reused by a new process group
+        (pid_max is 32768 on many hosts) that stop()'s final SIGKILL to the group would hit.
+        """
+        assert self.popen is not None
+        with contextlib.suppress(ChildProcessError, OSError):  # already reaped by poll(): the time is near enough
+            os.waitid(os.P_PID, self.popen.pid, os.WEXITED | os.WNOWAIT)
+        self.ended_at = time.monotonic()
+
+    def exit_state(self) -> ProcessExit | None:
+        """How the process ended, or None while it runs (or before :meth:`start`).
+
+        ``seconds`` is from start to exit; ``last_line`` from its output (:class:`ProcessExit`).
+        """
+        code = self.poll()
+        if code is None:
+            return None
+        ended = self.ended_at
+        if ended is None:  # the waiting thread has not woken yet: reaped by poll() just now
+            ended = time.monotonic()
+        text_err, text_out = self.stderr(), self.stdout()
+        trace = last_traceback(text_err) or last_traceback(text_out)
+        if trace:
+            last = trace.strip().splitlines()[-1].strip()
+        else:
+            last = (last_error_record(text_err) or last_error_record(text_out)
+                    or (text_err.strip().splitlines() or [""])[-1].strip())
+        return ProcessExit(code, ended - self.started_at if self.started_at else None, last)
+
+    def exited_on_its_own(self) -> bool:
+        """True once it exited before any signal of the grader (a crash, a ``main()`` that returned)."""
+        if self.poll() is None or self.deadline_hit:
+            return False
+        return self.signalled_at is None or (self.ended_at is not None and self.ended_at < self.signalled_at)
+
+    def interrupt(self) -> bool:
+        """Send SIGINT (Ctrl+C) to its process group; False when the group is gone."""
+        self.signalled_at = self.signalled_at or time.monotonic()
+        try:
+            os.killpg(self.pid, signal.SIGINT)
+        except (ProcessLookupError, PermissionError):
+            return False
+        return True
 
     def _on_deadline(self) -> None:
         if self.popen is not None and self.popen.poll() is None:
@@ -266,6 +368,7 @@ class LearnerProcess:
         return sum(d.total for d in self._drains)
 
     def _signal_group(self, sig: int) -> None:
+        self.signalled_at = self.signalled_at or time.monotonic()
         with contextlib.suppress(ProcessLookupError, PermissionError):
             os.killpg(self.pid, sig)
 
