@@ -86,13 +86,14 @@ def verdict(result: LessonResult) -> tuple[str, float, tuple[str, ...]]:
     return str(result.status), result.score, tuple(result.failed_checks())
 
 
-def compare_lesson(lesson, skip_starter: bool = False, off_first: bool = False) -> dict:
-    """Grade every case of ``lesson`` with the diagnosis on, then off; the differences and the costs."""
+def compare_lesson(lesson, skip_starter: bool = False, off_first: bool = False, only: list[str] | None = None) -> dict:
+    """Grade every case of ``lesson`` (or the ``only`` named ones) with the diagnosis on, then off;
+    the differences and the costs."""
     underlay = build_underlay(lesson)
     rows = []
     try:
         for case in lesson_cases(lesson, underlay.path if underlay is not None else None):
-            if skip_starter and case.name == "starter":
+            if (skip_starter and case.name == "starter") or (only and case.name not in only):
                 continue
             root = Path(tempfile.mkdtemp(prefix=f"ros2course-parity-{lesson.id}-{case.name}-"))
             try:
@@ -130,10 +131,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", action="store_true", help="print JSON instead of a summary")
     parser.add_argument("--skip-starter", action="store_true", help="grade the reference and the fixtures only")
     parser.add_argument("--off-first", action="store_true", help="grade with the diagnosis off first")
+    parser.add_argument("--case", action="append", default=[], help="grade only this case (repeatable)")
     args = parser.parse_args(argv)
     env_mod.activate()
     catalog = load_catalog()
-    out = [compare_lesson(catalog.get(lesson_id), args.skip_starter, args.off_first) for lesson_id in args.lessons]
+    out = [compare_lesson(catalog.get(lesson_id), args.skip_starter, args.off_first, args.case or None)
+           for lesson_id in args.lessons]
     if args.json:
         print(json.dumps(out, indent=2))
     else:

@@ -41,6 +41,14 @@ def test_all_lessons_benchmark_runs_on_one_lesson() -> None:
 
 @pytest.mark.ros
 @pytest.mark.timeout(600)
+def test_diagnosis_parity_benchmark_runs_on_one_fixture() -> None:
+    rows = json.loads(_bench("diagnosis_parity.py", "print-forever-node", "--case", "crashes-at-start",
+                             "--json").stdout)
+    assert rows[0]["cases"] == 1 and rows[0]["differences"] == 0 and "process" in rows[0]["rows"][0]["diagnoses"]
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(600)
 def test_check_speed_benchmark_runs_once() -> None:
     data = json.loads(_bench("check_speed.py", "--runs", "1", "--json").stdout)
     assert data.get("leftover_processes_killed") == 0
