@@ -66,7 +66,7 @@ def test_lesson_loads_with_enough_hints(lesson_id):
     assert len(set(lesson.hints)) == len(lesson.hints), "no hint repeats another"
     assert all(len(h.strip()) >= 5 for h in lesson.hints)
     assert len(lesson.instructions.strip()) >= 20
-    assert lesson.chapters
+    assert lesson.chapters or lesson.beyond.strip()
 
 
 @pytest.mark.parametrize("lesson_id", LESSON_IDS)
@@ -372,3 +372,12 @@ def test_course_starters_that_build_on_earlier_ones():
     assert params < launch < dump
     assert {p.parts[-2] for p in launch - params} == {"launch"}
     assert {p.parts[-2] for p in dump - launch} == {"config"}
+
+
+def test_a_lesson_beyond_the_tutorial_names_its_source_instead_of_chapters(tmp_path):
+    """``chapters: []`` is accepted only with ``beyond:`` (issue 20's QoS and lifecycle lessons)."""
+    lesson = load_lesson(_mutated_lesson(tmp_path, _with(chapters=[], beyond="ROS 2 docs: About QoS settings")))
+    assert lesson.chapters == [] and lesson.beyond.startswith("ROS 2 docs")
+    with pytest.raises(LessonFormatError) as info:
+        load_lesson(_mutated_lesson(tmp_path, _with(chapters=[], beyond="  "), folder_name="13-blank"))
+    assert "beyond" in str(info.value)

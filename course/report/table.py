@@ -122,9 +122,10 @@ def result_json(result: LessonResult) -> str:
 
 def render_lesson(lesson: Lesson, console: Console) -> None:
     """The lesson's title, chapters and instructions (markdown)."""
-    chapters = ", ".join(str(c) for c in lesson.chapters)
+    source = (f"seed chapter(s): {', '.join(str(c) for c in lesson.chapters)}" if lesson.chapters
+              else f"beyond the seed tutorial: {lesson.beyond}")
     console.print(Panel(Group(Text(lesson.title, style="bold"),
-                              Text(f"lesson id: {lesson.id}   seed chapter(s): {chapters}", style="dim")),
+                              Text(f"lesson id: {lesson.id}   {source}", style="dim")),
                         expand=False))
     # rich.markdown pulls in markdown_it (~50 ms): only the commands that show instructions pay for it
     from rich.markdown import Markdown  # noqa: PLC0415 - start time of list
