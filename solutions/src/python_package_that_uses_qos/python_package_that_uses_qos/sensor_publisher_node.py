@@ -1,0 +1,48 @@
+"""A sensor stream: a Temperature on /temperature every 0.1 s with the sensor-data QoS profile."""
+
+import math
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import qos_profile_sensor_data
+from sensor_msgs.msg import Temperature
+
+
+class SensorPublisherNode(Node):
+    """Publishes a simulated temperature at 10 Hz, BEST_EFFORT, VOLATILE, KEEP_LAST 5."""
+
+    def __init__(self) -> None:
+        super().__init__('sensor_publisher_node')
+        # qos_profile_sensor_data: BEST_EFFORT, VOLATILE, KEEP_LAST with depth 5. A reading that
+        # is lost is not worth resending: the next one is 0.1 s away.
+        self.temperature_publisher = self.create_publisher(
+            msg_type=Temperature,
+            topic='/temperature',
+            qos_profile=qos_profile_sensor_data)
+        self.count = 0
+        self.timer = self.create_timer(0.1, self.timer_callback)
+
+    def timer_callback(self) -> None:
+        """Publish one reading: 21.5 degrees plus a slow wave."""
+        msg = Temperature()
+        msg.header.stamp = self.get_clock().now().to_msg()
+        msg.header.frame_id = 'temperature_sensor'
+        msg.temperature = 21.5 + 0.5 * math.sin(self.count / 10.0)
+        msg.variance = 0.01
+        self.temperature_publisher.publish(msg)
+        self.count += 1
+
+
+def main(args=None) -> None:
+    """Spin the node until Ctrl+C (KeyboardInterrupt or, in Jazzy, ExternalShutdownException)."""
+    try:
+        rclpy.init(args=args)
+        node = SensorPublisherNode()
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+
+
+if __name__ == '__main__':
+    main()
