@@ -22,3 +22,17 @@ def atomic_write_text(path: Path, text: str) -> None:
         with contextlib.suppress(FileNotFoundError):
             os.unlink(tmp)
         raise
+
+
+def cache_dir() -> Path:
+    """The folder for ros2course's caches: ``ROS2COURSE_CACHE_DIR`` or platformdirs' user cache folder.
+
+    Holds the catalog index of ``list`` (:mod:`ros2course.lesson.index`) and the
+    built underlays (:mod:`ros2course.ros.underlay_cache`); ``~/.cache/ros2course`` on Linux.
+    """
+    override = os.environ.get("ROS2COURSE_CACHE_DIR")
+    if override:
+        return Path(override)
+    from platformdirs import user_cache_path
+
+    return user_cache_path("ros2course", appauthor=False)

@@ -212,3 +212,25 @@ def test_build_progress_follows_colcons_start_and_finish_lines(tmp_path):
     assert heard == ["building package_with_interfaces (0 of 2 done)", "building ... (1 of 2 done)",
                      "building python_package_that_uses_the_messages (1 of 2 done)", "building ... (2 of 2 done)"]
     assert not follower.is_alive()
+
+
+@pytest.mark.ros
+def test_tf2_from_the_underlay_looks_transforms_up_and_has_the_cli_executables():
+    """geometry2 and message_filters in the underlay (issue 20's tf2 lessons): the Python buffer and tf2_ros' programs."""
+    ok, detail = env_mod.probe_requirement("tf2")
+    assert ok, f"{detail}: run 'ros2course doctor --fix' first"
+    code = ("import rclpy.duration, rclpy.time, tf2_ros\n"
+            "from geometry_msgs.msg import TransformStamped\n"
+            "buffer = tf2_ros.Buffer()\n"
+            "t = TransformStamped(); t.header.frame_id = 'world'; t.child_frame_id = 'robot'\n"
+            "t.transform.translation.x = 1.5; t.transform.rotation.w = 1.0\n"
+            "buffer.set_transform_static(t, 'test')\n"
+            "print(buffer.lookup_transform('robot', 'world', rclpy.time.Time()).transform.translation.x)\n"
+            "try:\n    buffer.lookup_transform('world', 'camera', rclpy.time.Time())\n"
+            "except tf2_ros.LookupException as exc:\n    print('LookupException')\n"
+            "from ament_index_python.packages import get_package_prefix\n"
+            "import os\nlib = os.path.join(get_package_prefix('tf2_ros'), 'lib', 'tf2_ros')\n"
+            "print(sorted(n for n in os.listdir(lib) if n in ('static_transform_publisher', 'tf2_echo')))\n")
+    proc = subprocess.run([sys.executable, "-c", code], env=_env(), capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.split("\n")[:3] == ["-1.5", "LookupException", "['static_transform_publisher', 'tf2_echo']"]

@@ -8,13 +8,14 @@ passes, stamp, symlink switch) in a few seconds.
 from __future__ import annotations
 
 import io
+import os
+import shutil
 import tarfile
 import textwrap
 from pathlib import Path
 
 import pytest
-
-from ros2course.ros import underlay, underlay_build
+from ros2course.ros import underlay, underlay_build, underlay_cache
 from ros2course.ros.underlay_pins import Pin
 
 #: colcon builds: never beside the determinism tests (conftest.cpu_exclusive)
@@ -72,6 +73,13 @@ def make_archive(mirror: Path, repo: str, packages: dict[str, str]) -> Pin:
 @pytest.fixture
 def mirror(tmp_path: Path) -> Path:
     return tmp_path / "mirror"
+
+
+@pytest.fixture(autouse=True)
+def own_build_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """Each test its own machine-wide cache (ros2course.ros.underlay_cache): no test restores another's build."""
+    monkeypatch.setenv("ROS2COURSE_CACHE_DIR", str(tmp_path / "cache"))
+    return tmp_path / "cache"
 
 
 @pytest.mark.timeout(1200)
@@ -156,3 +164,73 @@ def test_github_urls_of_the_pins():
     assert pin.url == f"https://github.com/ros2/rclcpp/archive/{COMMIT}.tar.gz"
     assert pin.archive_name == f"ros2--rclcpp-{COMMIT}.tar.gz"
     assert pin.top == f"rclcpp-{COMMIT}"
+
+
+@pytest.mark.timeout(1200)
+def test_a_second_install_restores_the_cached_build_relocated_and_rebuild_ignores_it(tmp_path, mirror, own_build_cache):
+    tiny = make_archive(mirror, "tiny", {"tiny_pkg": "ok"})
+    first, built = underlay_build.build(mirror, pins=(tiny,), base=tmp_path / "first")
+    assert built and "restored_from" not in first.stamp
+    entries = list((own_build_cache / "underlay").iterdir())
+    assert [e.name for e in entries] == [f"jazzy-{first.stamp['portable']}"]
+    assert str(first.prefix) in (first.prefix / "local_setup.sh").read_text(encoding="utf-8")
+
+    # another install (another root): restored, and its setup script names its own prefix, not the first one's
+    second, built = underlay_build.build(mirror, pins=(tiny,), base=tmp_path / "second")
+    assert built and second.stamp["restored_from"] == str(entries[0])
+    setup = (second.prefix / "local_setup.sh").read_text(encoding="utf-8")
+    assert str(second.prefix) in setup and str(first.prefix) not in setup
+    assert (second.prefix / "share" / "ament_index" / "resource_index" / "packages" / "tiny_pkg").is_file()
+    assert underlay.up_to_date(tmp_path / "second", (tiny,))
+
+    # --rebuild builds from source; ROS2COURSE_UNDERLAY_CACHE=0 neither reads nor writes the cache
+    again, built = underlay_build.build(mirror, pins=(tiny,), base=tmp_path / "second", force=True)
+    assert built and "restored_from" not in again.stamp and "log" in again.stamp
+    shutil.rmtree(own_build_cache)
+    os.environ["ROS2COURSE_UNDERLAY_CACHE"] = "0"
+    try:
+        third, built = underlay_build.build(mirror, pins=(tiny,), base=tmp_path / "third")
+    finally:
+        del os.environ["ROS2COURSE_UNDERLAY_CACHE"]
+    assert built and "restored_from" not in third.stamp and not own_build_cache.exists()
+
+
+def test_restore_relocates_text_files_symlinks_and_scripts_and_leaves_binaries(tmp_path, own_build_cache):
+    old_venv, new_venv = "/old/clone/.venv", "/new/checkout/.venv"
+    old_prefix, new_prefix = f"{old_venv}/opt/u/builds/aaaa", tmp_path / "new" / "builds" / "bbbb"
+    built = tmp_path / "built"
+    (built / "bin").mkdir(parents=True)
+    (built / "share" / "pkg" / "__pycache__").mkdir(parents=True)
+    script = built / "bin" / "ros2"
+    script.write_text(f"#!{old_venv}/bin/python3\nimport sys\n")
+    script.chmod(0o755)
+    (built / "share" / "pkg" / "parent_prefix_path").write_text(f"{old_prefix}:/below/old:{old_venv}/lib")
+    (built / "share" / "pkg" / "__pycache__" / "x.pyc").write_bytes(f"{old_prefix}".encode())
+    (built / "lib.so").write_bytes(b"\x7fELF\0\0" + old_prefix.encode())
+    (built / "share" / "link").symlink_to(f"{old_prefix}/bin/ros2")
+    paths = {"prefix": old_prefix, "below": "/below/old", "venv": old_venv}
+    entry = underlay_cache.save(built, "jazzy", "0123456789abcdef", paths)
+    assert entry is not None and underlay_cache.lookup("jazzy", "0123456789abcdef") == entry
+
+    rewritten = underlay_cache.restore(entry, new_prefix,
+                                       {"prefix": str(new_prefix), "below": "/below/new", "venv": new_venv})
+    assert rewritten == 3
+    assert (new_prefix / "bin" / "ros2").read_text().startswith(f"#!{new_venv}/bin/python3\n")
+    assert os.access(new_prefix / "bin" / "ros2", os.X_OK)
+    assert (new_prefix / "share" / "pkg" / "parent_prefix_path").read_text() == \
+        f"{new_prefix}:/below/new:{new_venv}/lib"
+    assert os.readlink(new_prefix / "share" / "link") == f"{new_prefix}/bin/ros2"
+    assert (new_prefix / "lib.so").read_bytes() == (built / "lib.so").read_bytes()
+    assert not (new_prefix / "share" / "pkg" / "__pycache__").exists()
+    assert underlay_cache.lookup("jazzy", "fedcba9876543210") is None
+
+
+def test_the_portable_key_follows_the_pins_and_the_wheels_never_the_install_path(monkeypatch):
+    tiny = Pin("test", "tiny", COMMIT, "0.0.1", ("tiny_pkg",))
+    key = underlay_cache.portable_key("jazzy", (tiny,))
+    monkeypatch.setenv("ROS2COURSE_UNDERLAY", "/somewhere/else")
+    assert underlay_cache.portable_key("jazzy", (tiny,)) == key
+    assert underlay_cache.portable_key("jazzy", (Pin("test", "tiny", COMMIT, "0.0.2", ("tiny_pkg",)),)) != key
+    assert underlay_cache.portable_key("sas", (tiny,), below=key) != key
+    monkeypatch.setattr(underlay_cache, "wheel_versions", lambda: [("ros-jazzy-rclcpp-fake", "9.9.9")])
+    assert underlay_cache.portable_key("jazzy", (tiny,)) != key

@@ -31,12 +31,20 @@ from typing import Any
 from ros2course.build import colcon as build_mod
 from ros2course.errors import CourseError, NotGradable
 from ros2course.grade.results import NOT_CHECKED, CheckResult, LessonResult, Plot, Status
-from ros2course.lesson.catalog import Lesson, LessonGraph, content_root
+from ros2course.lesson.catalog import Lesson, content_root
 from ros2course.ros import env as env_mod
 from ros2course.ros import index as ament_index
 from ros2course.ros.interfaces import workspace_type
 from ros2course import sandbox
-from ros2course.run.diagnose import Diagnosis, GraphSnapshot, diagnose, silent_topics, snapshot
+from ros2course.run.diagnose import (
+    MAX_FINDINGS,
+    Diagnosis,
+    GraphSnapshot,
+    diagnose,
+    process_findings,
+    silent_topics,
+    snapshot,
+)
 from ros2course.run.probes import RosSession
 from ros2course.run.process import LearnerProcess, sweep_stale_fastdds_shm
 from ros2course.run.recording import CHECKS_METADATA, Recorder
@@ -99,6 +107,26 @@ def check_dependencies(checks: Sequence[Check]) -> None:
 GRAPH_FILE = "graph.json"
 #: Set to ``0`` to grade without diagnoses (:meth:`GradingSession._diagnosis`).
 DIAGNOSE_ENV = "ROS2COURSE_DIAGNOSE"
+
+
+@dataclasses.dataclass
+class _PartState:
+    """What the engine keeps of one open :meth:`GradingSession.part` (one thread's stack of them).
+
+    Attributes:
+        name: the part's name (the ``part`` of the graph snapshots in ``graph.json``).
+        graph: the :class:`~ros2course.run.probes.RosSession` its learner processes run in, or None
+            before it launched any.
+        diagnosed: a failed check of it got its diagnosis (one per part: issue 19).
+        observed: its graph was observed (:meth:`GradingSession._observe_graph`).
+        processes: the learner processes it launched (their exits feed the ``process`` diagnosis).
+    """
+
+    name: str
+    graph: Any = None
+    diagnosed: bool = False
+    observed: bool = False
+    processes: list[LearnerProcess] = dataclasses.field(default_factory=list)
 
 
 class GradingSession:
@@ -224,13 +252,13 @@ class GradingSession:
                                              diagnosis=[] if passed else self._diagnosis(check, fresh))
         return passed
 
-    def _part_graph(self) -> tuple[dict[str, Any], Any] | None:
+    def _part_graph(self) -> tuple[_PartState, Any] | None:
         """The calling thread's innermost open part and the graph its learner processes run in (its own
         :meth:`launch`, else an enclosing part's); None outside a part or before any launch."""
         states = self._part_states
         if not states:
             return None
-        graph = next((state["graph"] for state in reversed(states) if state["graph"] is not None), None)
+        graph = next((state.graph for state in reversed(states) if state.graph is not None), None)
         return None if graph is None else (states[-1], graph)
 
     def _observe_graph(self) -> GraphSnapshot | None:
@@ -244,14 +272,14 @@ class GradingSession:
         before any Ctrl+C it presses. Never raises; costs a few rcl graph queries per part.
         """
         found = self._part_graph()
-        if found is None or found[0]["observed"]:
+        if found is None or found[0].observed:
             return None
         state, graph = found
-        state["observed"] = True
+        state.observed = True
         taken = snapshot(graph)
         if taken is not None:
             with self._timings_lock:
-                self.graph_snapshots.append({"part": state["name"], **taken.to_dict()})
+                self.graph_snapshots.append({"part": state.name, **taken.to_dict()})
         return taken
 
     def _diagnosis(self, check: Check, fresh: GraphSnapshot | None = None) -> list[Diagnosis]:
@@ -274,18 +302,18 @@ class GradingSession:
         try:
             contract = self.lesson.graph
             found = self._part_graph()
-            if found is None or found[0]["diagnosed"] or os.environ.get(DIAGNOSE_ENV) == "0":
+            if found is None or found[0].diagnosed or os.environ.get(DIAGNOSE_ENV) == "0":
                 return []
             state, graph = found
-            state["diagnosed"] = True
+            state.diagnosed = True
             begin = time.monotonic()
             with self.phase("diagnose"):
-                processes = [p for part in self._part_states for p in part["processes"]]
-                own = state["processes"] or processes
+                processes = [p for part in self._part_states for p in part.processes]
+                own = state.processes or processes
                 # after the grader's own Ctrl+C the graph is emptying: what is missing then is no cause
                 stopped = bool(own) and all(p.signalled_at is not None for p in own)
                 if contract is None or stopped:  # no graph to compare: the learner's processes only
-                    result = diagnose(None, LessonGraph(), processes=processes)
+                    result = process_findings(processes)[:MAX_FINDINGS]
                 else:
                     taken = fresh if fresh is not None else snapshot(graph)
                     silent = silent_topics(graph)
@@ -299,11 +327,8 @@ class GradingSession:
             return []
 
     @property
-    def _part_states(self) -> list[dict[str, Any]]:
-        """The calling thread's open parts, innermost last: ``{"graph": the RosSession its learner
-        processes run in or None, "diagnosed": whether a failed check of it got its diagnosis, "observed":
-        whether its graph was observed (:meth:`_observe_graph`),
-        "processes": the learner processes it launched}``."""
+    def _part_states(self) -> list[_PartState]:
+        """The calling thread's open parts, innermost last."""
         if not hasattr(self._local, "parts"):
             self._local.parts = []
         return self._local.parts
@@ -364,8 +389,7 @@ class GradingSession:
         node it started) run, newest first, whatever happened.
         """
         self._closers.append([])
-        self._part_states.append({"graph": None, "diagnosed": False, "observed": False, "name": name,
-                                  "processes": []})
+        self._part_states.append(_PartState(name))
         self._local.mark = time.time_ns()
         try:
             yield
@@ -552,12 +576,12 @@ class GradingSession:
         graph = graph or self.ros
         env = graph.learner_env(self.overlay())
         if self._part_states:  # the graph a failed check of this part is diagnosed in (see _diagnosis)
-            self._part_states[-1]["graph"] = graph
+            self._part_states[-1].graph = graph
         proc = LearnerProcess([str(path), *(args or [])], env, self.log_dir, name,
                               cwd=self.workspace_root, ros_sigint=True)
         self._processes.append(proc)
         if self._part_states:  # judged by the part's process diagnosis
-            self._part_states[-1]["processes"].append(proc)
+            self._part_states[-1].processes.append(proc)
         proc.start()
         return proc
 

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import NamedTuple
 
-from ros2course.files import atomic_write_text
+from ros2course.files import atomic_write_text, cache_dir
 from ros2course.lesson.status import PROGRESS_VERSION, lesson_status
 from ros2course.lesson.workspace import Workspace
 
@@ -49,16 +49,6 @@ class LessonEntry(NamedTuple):
     title: str
     chapters: list[int]
     workspace_paths: list[str]
-
-
-def cache_dir() -> Path:
-    """The folder for ros2course's caches: ``ROS2COURSE_CACHE_DIR`` or platformdirs' user cache folder."""
-    override = os.environ.get("ROS2COURSE_CACHE_DIR")
-    if override:
-        return Path(override)
-    from platformdirs import user_cache_path  # noqa: PLC0415 - only when the index is read or written
-
-    return user_cache_path("ros2course", appauthor=False)
 
 
 def _loader_stamp() -> list[int]:
@@ -117,7 +107,7 @@ def catalog_entries(chapters_dir: Path) -> list[LessonEntry]:
             index = json.loads(path.read_text(encoding="utf-8"))
             if index["format"] == INDEX_FORMAT and index["folders"] == current and index["loader"] == _loader_stamp():
                 return [LessonEntry(*row) for row in index["lessons"]]
-    from ros2course.lesson.catalog import Catalog  # noqa: PLC0415 - pydantic and yaml: index misses only
+    from ros2course.lesson.catalog import Catalog
 
     lessons = [LessonEntry(lesson.id, lesson.title, list(lesson.chapters), lesson.workspace_paths)
                for lesson in Catalog(chapters_dir).lessons]

@@ -42,6 +42,7 @@ INSTALL_HINTS = {
               "(or source a system ROS 2 Jazzy)",
     "ros2": "the ros2 command is not on PyPI: 'ros2course doctor --fix' builds it from source "
             "(or source a system ROS 2 Jazzy)",
+    "tf2": "tf2 is not on PyPI: 'ros2course doctor --fix' builds it from source (or source a system ROS 2 Jazzy)",
     "eigen3": "apt-get install libeigen3-dev",
     "qt5core": "apt-get install qtbase5-dev",
 }
@@ -309,6 +310,12 @@ def probe_requirement(name: str) -> tuple[bool, str]:
 
             ok = hasattr(launch, "LaunchDescription")
         return ok, ("launch and launch_ros importable" if ok else "launch/launch_ros not importable")
+    if name == "tf2":  # the Python API and the C++ package whose tf2_echo/static_transform_publisher learners run
+        if importlib.util.find_spec("tf2_ros") is None:
+            return False, "tf2_ros (Python) not importable"
+        if not ament_has("tf2_ros"):
+            return False, "tf2_ros not in the ament index"
+        return True, "tf2_ros importable and in the ament index"
     if name == "ros2":
         path = shutil.which("ros2", path=os.environ.get("PATH"))
         return (path is not None, path or "the ros2 command is not on PATH")

@@ -23,6 +23,7 @@ import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
+from ros2course.ros import underlay_cache
 from ros2course.ros.colcon_log import BuildProgress
 from ros2course.ros.compiler_cache import with_compiler_cache
 from ros2course.ros.env import activate, detect, repair_cmake_files
@@ -142,6 +143,7 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
     say = progress or (lambda line: None)
 
     below = ""
+    under = None
     if component is not JAZZY_COMPONENT:
         under = built(JAZZY_COMPONENT)
         if under is None:
@@ -149,6 +151,9 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
                                       "(ros2course env --build)")
         below = under.stamp["key"]
     key = cache_key(pins, below)
+    # the machine-wide cache (ros2course.ros.underlay_cache): None where what it is built on was not keyed
+    portable = (underlay_cache.portable_key(component.name, pins, under.stamp.get("portable", "") if under else "")
+                if under is None or under.stamp.get("portable") else None)
     with _locked(base):
         install = detect()
         if install.kind == "wheels" and install.prefix is not None:
@@ -176,6 +181,21 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
             if stale.name != keep:
                 shutil.rmtree(stale, ignore_errors=True)
         begin = time.monotonic()
+        paths = {"prefix": str(prefix), "below": str(under.prefix) if under else "", "venv": sys.prefix}
+        entry = underlay_cache.lookup(component.name, portable) if portable and not force and underlay_cache.enabled() \
+            else None
+        if entry is not None:
+            try:
+                rewritten = underlay_cache.restore(entry, prefix, paths)
+            except (OSError, ValueError, KeyError) as exc:  # a damaged entry: build from source instead
+                shutil.rmtree(prefix, ignore_errors=True)
+                say(f"the cached build {entry} could not be restored ({exc}): building from source")
+            else:
+                say(f"restored {component.what} from the build cache {entry} ({rewritten} files relocated)")
+                _write_stamp(prefix, {"key": key, "portable": portable, "component": component.name, "pins": pins,
+                                      "below": below, "seconds": round(time.monotonic() - begin, 1),
+                                      "restored_from": str(entry)})
+                return _switch(base, key, keep), True
         step = "preparing the sources"
         with open(log_path, "wb") as log:
             try:
@@ -200,19 +220,9 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
                                  "--build-base", str(work / "build"), "--install-base", str(prefix),
                                  "--event-handlers", "console_direct-", "summary+", "console_start_end+",
                                  *cmake_args], env, work, log, BUILD_TIMEOUT, packages)
-                stamp = {
-                    "key": key,
-                    "component": component.name,
-                    "pins": [dataclasses.asdict(pin) for pin in pins],
-                    "repairs": REPAIRS_VERSION,
-                    "python": sys.executable,
-                    "below": below,
-                    "built": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds"),
-                    "seconds": round(time.monotonic() - begin, 1),
-                    "sources": str(mirror) if mirror else "github",
-                    "log": str(log_path),
-                }
-                (prefix / STAMP).write_text(json.dumps(stamp, indent=1), encoding="utf-8")
+                _write_stamp(prefix, {"key": key, "portable": portable, "component": component.name, "pins": pins,
+                                      "below": below, "seconds": round(time.monotonic() - begin, 1),
+                                      "sources": str(mirror) if mirror else "github", "log": str(log_path)})
             except subprocess.CalledProcessError:
                 failed = _FAILED.findall(log_path.read_text(encoding="utf-8", errors="replace"))
                 where = f" (package {failed[0]})" if failed else ""
@@ -231,15 +241,30 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
             except BaseException:
                 shutil.rmtree(prefix, ignore_errors=True)
                 raise
-        link = base / "current"
-        tmp_link = base / f".current-{os.getpid()}"
-        with contextlib.suppress(FileNotFoundError):
-            tmp_link.unlink()
-        tmp_link.symlink_to(Path("builds") / key)
-        os.replace(tmp_link, link)
         shutil.rmtree(work, ignore_errors=True)
-        if keep is not None and keep != key:
-            shutil.rmtree(builds / keep, ignore_errors=True)
-        made = current(base)
-        assert made is not None
-        return made, True
+        if portable:
+            underlay_cache.save(prefix, component.name, portable, paths)
+        return _switch(base, key, keep), True
+
+
+def _write_stamp(prefix: Path, fields: dict) -> None:
+    """Write the build's stamp (``ros2course-underlay.json``): only a prefix with one is ever trusted."""
+    stamp = {**fields, "pins": [dataclasses.asdict(pin) for pin in fields["pins"]], "repairs": REPAIRS_VERSION,
+             "python": sys.executable,
+             "built": datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")}
+    (prefix / STAMP).write_text(json.dumps(stamp, indent=1), encoding="utf-8")
+
+
+def _switch(base: Path, key: str, keep: str | None) -> Underlay:
+    """Point ``<base>/current`` at ``builds/<key>`` with one atomic rename; remove the build it replaced."""
+    link = base / "current"
+    tmp_link = base / f".current-{os.getpid()}"
+    with contextlib.suppress(FileNotFoundError):
+        tmp_link.unlink()
+    tmp_link.symlink_to(Path("builds") / key)
+    os.replace(tmp_link, link)
+    if keep is not None and keep != key:
+        shutil.rmtree(base / "builds" / keep, ignore_errors=True)
+    made = current(base)
+    assert made is not None
+    return made

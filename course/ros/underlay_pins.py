@@ -123,6 +123,12 @@ JAZZY = (
          "ros2param", "ros2pkg", "ros2run", "ros2service", "ros2topic"),
         patches=("ros2pkg-empy4.patch",)),
     Pin("ros2", "rosidl_runtime_py", "df2361f64ecb85f65f4bf22e804424e0f1ac4197", "0.13.1"),
+    # tf2 (issue 20's tf2 lessons; not on PyPI): the Python and C++ APIs, tf2_ros' `static_transform_publisher`
+    # and `tf2_echo`, tf2_tools' `view_frames`. Left out: tf2_geometry_msgs, tf2_kdl, tf2_eigen (orocos_kdl_vendor
+    # would download KDL) and tf2_bullet (shared/ROS_ENV.md, "tf2 from source")
+    Pin("ros2", "geometry2", "646342c6164e837d69460e3d28e7a025396544f6", "0.36.4",
+        ("tf2", "tf2_msgs", "tf2_py", "tf2_ros_py", "tf2_ros", "tf2_tools")),
+    Pin("ros2", "message_filters", "d3eecd6e1103ac44bf4bb9216e89353998b4c152", "4.11.2"),
 )
 
 #: SmartArmStack and DQ Robotics (tutorial ch. 29-31), optional, built on top of
