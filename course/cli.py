@@ -583,7 +583,9 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
                         progress=lambda line: err.print(line, markup=False),
                         packages=(lambda line, st=status, what=component.what: st.update(f"{what}: {line}"))
                         if status is not None else None)
-                state = f"built in {made.stamp.get('seconds', 0):.0f} s" if built else "up to date"
+                state = ("up to date" if not built else
+                         f"restored from the build cache in {made.stamp.get('seconds', 0):.0f} s"
+                         if made.stamp.get("restored_from") else f"built in {made.stamp.get('seconds', 0):.0f} s")
                 err.print(f"{component.what}: {state}: {made.prefix}", markup=False)
     if path:
         sys.stdout.write(f"{_env().write_setup_script()}\n")

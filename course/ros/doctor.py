@@ -62,8 +62,10 @@ def _underlay_rows(fix: bool, sources: Path | None) -> list[DoctorRow]:
     wanted = _underlay.cache_key()
     if built is not None:
         rows.append(DoctorRow("ROS 2 underlay", built.stamp.get("key") == wanted,
-                              f"{built.prefix}, built {built.stamp.get('built', '?')} in "
-                              f"{built.stamp.get('seconds', '?')} s from {built.stamp.get('sources', '?')}",
+                              f"{built.prefix}, " + (f"restored {built.stamp.get('built', '?')} from the build cache "
+                              f"{built.stamp['restored_from']}" if built.stamp.get("restored_from") else
+                              f"built {built.stamp.get('built', '?')} in {built.stamp.get('seconds', '?')} s from "
+                              f"{built.stamp.get('sources', '?')}"),
                               "" if built.stamp.get("key") == wanted else
                               "built for other pins, interpreter or repairs: ros2course doctor --fix"))
     for pin in JAZZY:
