@@ -11,6 +11,7 @@ they first draw.
 Concurrency is judged on the order of events (a task draws while another one
 is still retrying), never on wall-clock times: the tutorial's point (ch. 2.5)
 is that ``await asyncio.sleep()`` lets other tasks run, ``time.sleep()`` does not.
+Times judge only the pause itself (:meth:`Trace.pauses`), within wide bounds.
 """
 
 from __future__ import annotations
@@ -54,6 +55,11 @@ class Trace:
         """Seconds from the first draw to the last (0 without draws)."""
         stamps = [e[3] for e in self.events if e[0] == "draw"]
         return max(stamps) - min(stamps) if stamps else 0.0
+
+    def pauses(self, index: int) -> list[float]:
+        """Seconds between consecutive draws of task ``index`` (empty with fewer than 2 draws)."""
+        stamps = [e[3] for e in self.events if e[0] == "draw" and e[1] == index]
+        return [later - earlier for earlier, later in zip(stamps, stamps[1:])]
 
     def last_draw(self, index: int) -> int:
         """Position of task ``index``'s last draw in the events (-1 if it never drew)."""

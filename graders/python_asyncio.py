@@ -34,6 +34,10 @@ EXAMPLE_PLANS = [[0.52, 0.81, 0.67, 0.93, 0.58, 0.74, 0.85, 0.0312], [0.61, 0.77
 EXAMPLE_RESULTS = [plan[-1] for plan in EXAMPLE_PLANS]
 #: How close a printed number must be to a result to count as printing it (allows rounding to 2 decimals).
 RESULT_TOLERANCE = 0.005
+#: Median seconds between two draws of one call that count as the contract's `asyncio.sleep(0.1)`: a loaded
+#: machine only lengthens a pause, and a sleep of 0 (or a negative one, which asyncio treats as 0) or of a
+#: second is outside (issue 24's mutants `sleep(-1.1)` and `sleep(1.1)` passed before).
+PAUSE_RANGE = (0.05, 0.6)
 #: Seconds each run may take before it is stopped (the reference needs about 1 s).
 RUN_TIMEOUT = 20.0
 #: The wrapper's probe scenarios with one result: (scenario, check, rolls as told, return value, draws, expected).
@@ -137,11 +141,17 @@ def _probe(s: GradingSession) -> None:
                  f"calling it failed: {outcome[2] if outcome else trace.error(run)}", expected)
     outcome, part = trace.scenario("gather")
     ok = outcome is not None and outcome[0] == "result"
-    s.record("yields_between_draws", ok and part.interleaved(),
-             f"asyncio.gather of two calls drew in the order {part.describe_order()}" if ok else
+    pauses = sorted(part.pauses(0))
+    pause = pauses[len(pauses) // 2] if pauses else None
+    paced = pause is not None and PAUSE_RANGE[0] <= pause <= PAUSE_RANGE[1]
+    paced_text = "" if pause is None else f"; the first call's draws were {pause:.2f} s apart (median)" + (
+        "" if paced else ": the sleep between two draws is not the 0.1 s of the contract")
+    s.record("yields_between_draws", ok and part.interleaved() and paced,
+             f"asyncio.gather of two calls drew in the order {part.describe_order()}{paced_text}" if ok else
              f"asyncio.gather of two calls failed: {outcome[2] if outcome else trace.error(run)}",
              "the second call draws while the first is still retrying (e.g. 1 2 1 2 1 1 1), "
-             "because each call awaits between draws")
+             f"because each call awaits asyncio.sleep(0.1) between draws (pauses of {PAUSE_RANGE[0]}-"
+             f"{PAUSE_RANGE[1]} s count)")
 
 
 def _example(s: GradingSession, name: str, runs_check: str, concurrent_check: str) -> Trace:
