@@ -103,6 +103,10 @@ def test_dev_mutate_smoke(cli, tmp_path: Path) -> None:
     diff = (out / "survivors" / LESSON / f"{survivor['key']}.diff").read_text(encoding="utf-8")
     assert f"--- a/{NODE_FILE}" in diff and "+if __name__ < '__main__':" in diff
     assert json.loads((out / "mutation.json").read_text())["lessons"][LESSON]["score"] == pytest.approx(0.75)
+    # the score lives with the lesson, for dev validate and the course's readers
+    record = json.loads((course / "chapters" / "13-print-forever-node" / mut.SCORE_FILE).read_text())
+    assert (record["score"], record["killed"], record["triaged"]) == (pytest.approx(0.75), 3, 1), record
+    assert record["survivors"] == [f"{survivor['file']}:{survivor['line']} ({survivor['key']})"]
 
     again = cli(*args, env=env, timeout=120)  # the table, every outcome from the cache
     assert again.returncode == 0, again.stderr[-3000:]
@@ -123,3 +127,21 @@ def test_a_bad_mutation_yaml_is_a_one_line_error(cli, tmp_path: Path, triage: st
     error = [line for line in proc.stderr.splitlines() if line.startswith("error:")]
     assert len(error) == 1 and "mutation.yaml" in error[0] and words in error[0], proc.stderr
     assert "hint:" in proc.stderr and "Traceback" not in proc.stderr
+
+
+def test_dev_validate_shows_the_lessons_last_mutation_score(tmp_path: Path) -> None:
+    from types import SimpleNamespace
+
+    lesson = SimpleNamespace(id="demo-lesson", folder=tmp_path)
+    assert mut.describe_score(lesson) == \
+        "demo-lesson: grader strength not measured (ros2course dev mutate demo-lesson --sample 20)"
+    record = {"generated": 57, "graded": 20, "sampled": True, "killed": 11, "killed_by_build": 4, "survived": 5,
+              "triaged": 4, "timed_out": 0, "grader_error": 0, "score": 11 / 12, "seconds": 80.0,
+              "date": "2026-11-23", "course_version": mut.course_version(), "survivors": ["a.py:3 (abc)"]}
+    (tmp_path / mut.SCORE_FILE).write_text(json.dumps(record))
+    line = mut.describe_score(lesson)
+    assert line.startswith("demo-lesson: grader strength 92 % (11 of 12 counted mutants killed; 20 of 57 mutants")
+    assert "1 survivor(s) not triaged" in line and "measured on course" not in line
+    record["course_version"] = "0.9"
+    (tmp_path / mut.SCORE_FILE).write_text(json.dumps(record))
+    assert "measured on course 0.9, now " in mut.describe_score(lesson)

@@ -27,7 +27,6 @@ from typing import Any
 
 from rich.console import Console
 from rich.table import Table
-
 from ros2course.batch.parity import case_workspace
 from ros2course.batch.runner import run_batch
 from ros2course.errors import CourseError
@@ -153,6 +152,7 @@ def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, 
     try:
         for lesson in lessons:
             found.append(mutate_lesson(lesson, out, sample, seed, jobs, timeout, console))
+            mut.write_score(lesson, found[-1])
     finally:
         previous = _read_cache(out / RESULT_FILE).get("lessons", {})
         merged = {**(previous if isinstance(previous, dict) else {}), **{f.lesson: f.to_dict() for f in found}}

@@ -37,10 +37,12 @@ Score = killed / (generated - killed by build - triaged), over the graded mutant
 from __future__ import annotations
 
 import dataclasses
+import datetime as dt
 import difflib
 import fnmatch
 import hashlib
 import importlib.util
+import json
 import random
 import shutil
 import subprocess
@@ -51,8 +53,8 @@ from typing import Any
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
-
 from ros2course.errors import CourseError, LessonFormatError, MissingRequirement
+from ros2course.files import atomic_write_text
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import (
     Lesson,
@@ -61,9 +63,12 @@ from ros2course.lesson.catalog import (
     load_catalog,
     yaml_error_text,
 )
+from ros2course.lesson.courses import MANIFEST, load_manifest
 
 #: Name of the triage file beside ``lesson.yaml``.
 TRIAGE_FILE = "mutation.yaml"
+#: The lesson's last mutation score, beside ``lesson.yaml``: written by ``dev mutate``, shown by ``dev validate``.
+SCORE_FILE = "mutation-score.json"
 #: The outcomes of a mutant, in the order the table shows them.
 KILLED, KILLED_BY_BUILD, SURVIVED, TIMED_OUT, GRADER_ERROR = (
     "killed", "killed by build", "survived", "timed out", "grader error")
@@ -492,3 +497,50 @@ class LessonMutation:
                 "grader_error": self.count(GRADER_ERROR), "score": self.score, "seconds": round(self.seconds, 1),
                 "stale": [e.model_dump(exclude_none=True) for e in self.stale],
                 "mutants": [g.to_dict() for g in self.graded]}
+
+
+def course_version() -> str:
+    """The current course's version (``course.yaml``), "" for a course without a manifest."""
+    root = content_root()
+    return load_manifest(root).version if (root / MANIFEST).is_file() else ""
+
+
+def write_score(lesson: Lesson, found: LessonMutation) -> Path | None:
+    """Record ``found``'s counts and score in ``chapters/<lesson>/mutation-score.json``; its path, or None.
+
+    The file lives with the lesson, like its ``mutation.yaml``, so that ``dev validate``
+    (:func:`describe_score`) and whoever reads the course see the grader's last
+    measured strength; commit it with the lesson. None when the lesson folder is
+    read-only (an installed course): the run's ``mutation.json`` still has it all.
+    """
+    data = {key: value for key, value in found.to_dict().items() if key not in ("mutants", "stale", "lesson")}
+    data.update(date=dt.date.today().isoformat(), course_version=course_version(),
+                survivors=sorted(f"{g.mutant.file}:{g.mutant.line} ({g.mutant.key})" for g in found.graded
+                                 if g.outcome == SURVIVED and not g.triaged))
+    path = lesson.folder / SCORE_FILE
+    try:
+        atomic_write_text(path, json.dumps(data, indent=1) + "\n")
+    except OSError:
+        return None
+    return path
+
+
+def describe_score(lesson: Lesson) -> str:
+    """One line on the lesson's last mutation score (:func:`write_score`), or how to measure it."""
+    how = f"ros2course dev mutate {lesson.id} --sample 20"
+    try:
+        data = json.loads((lesson.folder / SCORE_FILE).read_text(encoding="utf-8"))
+        score = data["score"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return f"{lesson.id}: grader strength not measured ({how})"
+    counted = data["graded"] - data["killed_by_build"] - data["triaged"]
+    share = "n/a" if score is None else f"{100 * score:.0f} %"
+    graded = (f"{data['graded']} of {data['generated']} mutants (a sample)" if data.get("sampled")
+              else f"all {data['generated']} mutants")
+    version = data.get("course_version", "")
+    stale = f"; measured on course {version}, now {course_version()}: {how}" \
+        if version and version != course_version() else ""
+    left = f"; {len(data.get('survivors', []))} survivor(s) not triaged" if data.get("survivors") else ""
+    return (f"{lesson.id}: grader strength {share} ({data['killed']} of {counted} counted mutants killed; "
+            f"{graded}, {data['triaged']} triaged, {data['killed_by_build']} killed by the build; "
+            f"dev mutate {data.get('date', '?')}{left}{stale})")

@@ -27,14 +27,14 @@ import shutil
 import subprocess
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any, Callable, Literal
+from typing import Any, Literal
 
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 from rich.console import Console
 from rich.table import Table
-
 from ros2course.build.colcon import fingerprint
 from ros2course.build.reference import (
     ReferenceBuild,
@@ -44,14 +44,15 @@ from ros2course.build.reference import (
 )
 from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
 from ros2course.grade.engine import grade_lesson
+from ros2course.grade.mutate import describe_score
 from ros2course.grade.results import LessonResult, Status
-from ros2course.lesson.courses import course_fixtures
 from ros2course.lesson.catalog import (
     Lesson,
     content_root,
     format_validation_error,
     load_catalog,
 )
+from ros2course.lesson.courses import course_fixtures
 from ros2course.lesson.starter import copy_starter
 from ros2course.ros import env as env_mod
 from ros2course.ros.packages import find_packages
@@ -476,4 +477,10 @@ def render_outcomes(outcomes: list[Outcome], console: Console) -> None:
     console.print(table)
     bad = sum(not o.ok for o in outcomes)
     console.print(f"{len(outcomes) - bad} passed, {bad} failed")
+    from ros2course.grade.mutate import describe_score
+
+    catalog = load_catalog()
+    for lesson_id in dict.fromkeys(o.lesson for o in outcomes):
+        if lesson_id in catalog.ids():
+            console.print(describe_score(catalog.get(lesson_id)), markup=False)
 
