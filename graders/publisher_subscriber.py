@@ -101,15 +101,14 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
              noun="message", source="the messages' send stamps", where=where)
 
 
-def _grade_subscriber(s: GradingSession, msg_type: type, graph) -> None:
+def _grade_subscriber(s: GradingSession, msg_type: type) -> None:
     path = kit.executable(s, "sub_executable", PACKAGE, SUB_EXE)
-    rosout = graph.rosout()
-    node = kit.start_node(s, "sub_node_name", path, SUB_NODE, sigint_check="sub_sigint_exit", need_node=False,
-                          graph=graph)
-    target, where = ts.own_endpoint(s, "sub_topic", node, "subscriptions", TOPIC, MSG_TYPE, graph=graph,
+    rosout = s.graph.rosout()
+    node = kit.start_node(s, "sub_node_name", path, SUB_NODE, sigint_check="sub_sigint_exit", need_node=False)
+    target, where = ts.own_endpoint(s, "sub_topic", node, "subscriptions", TOPIC, MSG_TYPE,
                                     none=f"no {MSG_TYPE} subscription to publish to", where="published on")
     quotes.subscriber_logs(s, "sub_logs_quotes", "sub_logs_details", node, rosout, target, msg_type,
-                           count=GRADER_QUOTES, where=where, graph=graph)
+                           count=GRADER_QUOTES, where=where)
 
 
 def grade(s: GradingSession) -> None:
@@ -120,5 +119,5 @@ def grade(s: GradingSession) -> None:
         _grade_publisher(s, msg_type)
     # A fresh graph: a process joining a graph whose participants already know each other is
     # discovered up to ~3 s later than one joining a fresh graph (Fast DDS, localhost discovery).
-    with s.part("subscriber"):
-        _grade_subscriber(s, msg_type, s.new_graph())
+    with s.part("subscriber", own_graph=True):
+        _grade_subscriber(s, msg_type)

@@ -127,14 +127,14 @@ def _types() -> tuple[type, type]:
 
 def _grade_sensor(s: GradingSession, temperature: type) -> None:
     path = kit.executable(s, "sensor_executable", PACKAGE, SENSOR_EXE)
-    graph = s.new_graph()
+    graph = s.graph  # the part's own
     # both probes exist before the node starts: no reading is missed, and the RELIABLE one would match at once
     best_effort = graph.topic(SENSOR_TOPIC, temperature, _qos.sensor_qos())
     reliable = _qos.Probe(graph, SENSOR_TOPIC, temperature, _qos.profile(reliable=True, transient_local=False,
                                                                          depth=10))
     node = kit.start_node(s, "sensor_node_name", path, SENSOR_NODE, sigint_check="sensor_sigint_exit",
-                          need_node=False, graph=graph)
-    target, where = ts.own_endpoint(s, "sensor_topic", node, "publishers", SENSOR_TOPIC, SENSOR_TYPE, graph=graph,
+                          need_node=False)
+    target, where = ts.own_endpoint(s, "sensor_topic", node, "publishers", SENSOR_TOPIC, SENSOR_TYPE,
                                     none=f"no {SENSOR_TYPE} topic published to listen to", where="on")
     if target != SENSOR_TOPIC:  # grade what flows where it is published
         best_effort = graph.topic(target, temperature, _qos.sensor_qos())
@@ -240,13 +240,13 @@ def _matching(readings: list[float], text: str) -> list[float]:
 
 def _grade_monitor(s: GradingSession, temperature: type, string: type) -> None:
     path = kit.executable(s, "monitor_executable", PACKAGE, MONITOR_EXE)
-    graph = s.new_graph()
+    graph = s.graph  # the part's own
     # the configuration is published before the monitor exists: it is a late joiner
     feed = _qos.Feed(s, graph, temperature, string, sensor_topic=SENSOR_TOPIC, config_topic=CONFIG_TOPIC,
                      period=PERIOD)
     rosout = graph.rosout()
     node = kit.start_node(s, "monitor_node_name", path, MONITOR_NODE, sigint_check="monitor_sigint_exit",
-                          need_node=False, graph=graph)
+                          need_node=False)
     found: dict[str, list[str]] = {}
 
     def both() -> bool:
@@ -305,9 +305,9 @@ def _grade_monitor(s: GradingSession, temperature: type, string: type) -> None:
 
 def _grade_cli(s: GradingSession, temperature: type, string: type) -> None:
     path = scripts.script(s, "cli_script", SCRIPT)
-    graph = s.new_graph()
+    graph = s.graph  # the part's own
     oracle = _qos.Oracle(s, graph, temperature, string, sensor_topic=SENSOR_TOPIC, config_topic=CONFIG_TOPIC)
-    run = scripts.run_script(s, path, timeout=SCRIPT_TIMEOUT, graph=graph,
+    run = scripts.run_script(s, path, timeout=SCRIPT_TIMEOUT,
                              daemon_sees=[SENSOR_TOPIC, CONFIG_TOPIC, f"/{oracle.sensor_node}",
                                           f"/{oracle.config_node}"])
     scripts.ended(s, "cli_ends", run, "it ends by itself with exit code 0")
@@ -323,9 +323,9 @@ def grade(s: GradingSession) -> None:
     temperature, string = _types()
     with s.part("config"):  # first, in s.ros: the parameter client of the kit asks there
         _grade_config(s, string)
-    with s.part("sensor"):
+    with s.part("sensor", own_graph=True):
         _grade_sensor(s, temperature)
-    with s.part("monitor"):
+    with s.part("monitor", own_graph=True):
         _grade_monitor(s, temperature, string)
-    with s.part("cli"):
+    with s.part("cli", own_graph=True):
         _grade_cli(s, temperature, string)

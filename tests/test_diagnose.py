@@ -612,3 +612,29 @@ def test_a_node_that_never_spins_is_silent(tmp_path, spins):
         return
     assert [d.kind for d in findings] == ["silent"], findings
     assert findings[0].mentions("/talker") and findings[0].mentions("/amazing_quote")
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(90)
+def test_a_part_opened_with_its_own_graph_gives_it_to_every_step_inside(tmp_path):
+    """``s.part(name, own_graph=True)``: ``s.graph`` and ``s.launch`` use the part's private graph (issue 23:
+    no ``graph=`` threaded through the steps); outside it, and in a part without one, ``s.graph`` is ``s.ros``."""
+    from ros2course.grade.engine import Check  # noqa: PLC0415
+    from ros2course.run.probes import wait_until  # noqa: PLC0415
+
+    script = tmp_path / "learner.py"
+    script.write_text(textwrap.dedent(LEARNER), encoding="utf-8")
+    s = _session(tmp_path, [Check("topic", "the topic", 1, part="own")], None)
+    try:
+        assert s.graph is s.ros
+        with s.part("own", own_graph=True):
+            own = s.graph
+            assert own is not s.ros and own.domain_id != s.ros.domain_id
+            with s.part("inner"):  # a nested part without a graph of its own observes the enclosing one's
+                assert s.graph is own
+            s.launch(Path(sys.executable), "learner", [str(script)])
+            assert wait_until(lambda: "/amazing_quote_publisher_node" in own.node_names(), 20.0)
+            assert "/amazing_quote_publisher_node" not in s.ros.node_names()
+        assert s.graph is s.ros
+    finally:
+        s.close()

@@ -120,10 +120,13 @@ class _PartState:
         diagnosed: a failed check of it got its diagnosis (one per part: issue 19).
         observed: its graph was observed (:meth:`GradingSession._observe_graph`).
         processes: the learner processes it launched (their exits feed the ``process`` diagnosis).
+        own_graph: the private graph the part was opened with (``part(..., own_graph=True)``), or None:
+            what :attr:`GradingSession.graph` gives the steps inside it.
     """
 
     name: str
     graph: Any = None
+    own_graph: Any = None
     diagnosed: bool = False
     observed: bool = False
     processes: list[LearnerProcess] = dataclasses.field(default_factory=list)
@@ -381,15 +384,21 @@ class GradingSession:
                 raise Unmet(self.unmet_need(check_id) or f"'{self.checks[check_id].name}' did not pass")
 
     @contextlib.contextmanager
-    def part(self, name: str = "") -> Iterator[None]:
+    def part(self, name: str = "", *, own_graph: bool = False) -> Iterator[None]:
         """Grade one independent part of a lesson (e.g. one of two executables).
 
         :class:`Unmet` raised inside ends only this part. On the way out the
         part's closing actions (:meth:`on_close`, e.g. judging Ctrl+C of a
         node it started) run, newest first, whatever happened.
+
+        Args:
+            name: the part's name (feedback, ``graph.json``).
+            own_graph: the part gets a private graph of its own (:meth:`new_graph`);
+                :attr:`graph`, and so every kit step and :meth:`launch` inside it,
+                use that graph without a ``graph=`` argument.
         """
         self._closers.append([])
-        self._part_states.append(_PartState(name))
+        self._part_states.append(_PartState(name, own_graph=self.new_graph() if own_graph else None))
         self._local.mark = time.time_ns()
         try:
             yield
@@ -552,6 +561,13 @@ class GradingSession:
         """``install/<package>/share/<package>`` as ``ros2 launch`` finds it (ament index), or None."""
         return ament_index.package_share(package, self.overlay())
 
+    @property
+    def graph(self) -> Any:
+        """The graph the calling thread's steps observe: the innermost open part's own graph
+        (``part(..., own_graph=True)``), else :attr:`ros` (a :class:`~ros2course.run.probes.RosSession`)."""
+        return next((state.own_graph for state in reversed(self._part_states) if state.own_graph is not None),
+                    self.ros)
+
     def new_graph(self):
         """Another private ROS graph (its own domain id) for this check, closed with it.
 
@@ -560,7 +576,8 @@ class GradingSession:
         with ``-p`` overrides), or a lesson's second executable: a process joining
         a graph whose participants already know each other is discovered up to
         ~3 s later than one joining a fresh graph (Fast DDS, localhost discovery).
-        Pass it as ``graph=`` to the kit steps and :meth:`launch`.
+        Pass it as ``graph=`` to the kit steps and :meth:`launch`, or open the part
+        with ``part(name, own_graph=True)``, which makes one and uses it by default.
         """
         return self._stack.enter_context(RosSession(recorder=self._recording()))
 
@@ -571,9 +588,9 @@ class GradingSession:
             path: the executable (from :meth:`find_executable`).
             name: label for its log files (``<name>.stdout.log``).
             args: extra arguments (e.g. ``["--ros-args", "-r", "__node:=x"]``).
-            graph: the :class:`~ros2course.run.probes.RosSession` to run in (default :attr:`ros`).
+            graph: the :class:`~ros2course.run.probes.RosSession` to run in (default :attr:`graph`).
         """
-        graph = graph or self.ros
+        graph = graph or self.graph
         env = graph.learner_env(self.overlay())
         if self._part_states:  # the graph a failed check of this part is diagnosed in (see _diagnosis)
             self._part_states[-1].graph = graph

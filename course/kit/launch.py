@@ -492,12 +492,12 @@ def launched_node(s: Any, started_id: str, node_id: str, run: LaunchRun, package
     def give_up() -> bool:
         if not run.any_running():
             return True
-        if not first_other and [n for n in s.ros.node_names() if not n.startswith("/launch_ros_")]:
+        if not first_other and [n for n in s.graph.node_names() if not n.startswith("/launch_ros_")]:
             first_other.append(time.monotonic())
         return bool(first_other) and time.monotonic() - first_other[0] > 3.0
 
     with s.phase("start"):
-        found = s.ros.wait_for_node(node, timeout, abort=give_up)
+        found = s.graph.wait_for_node(node, timeout, abort=give_up)
     proc = run.processes[0]
     output = proc.stdout() + "\n" + proc.stderr()
     expected = f"the launch file starts {package}/{executable}"
@@ -509,7 +509,7 @@ def launched_node(s: Any, started_id: str, node_id: str, run: LaunchRun, package
         s.record(started_id, False, f"{run.mode}: launch did not report starting {executable}; "
                  f"{process_state(proc)}" + (f"; last output: {tail}" if tail else "")
                  + (f"; {contents}" if contents else ""), expected)
-    seen = ", ".join(s.ros.node_names()) or "none"
+    seen = ", ".join(s.graph.node_names()) or "none"
     states = "; ".join(f"{p.name}: {process_state(p)}" for p in run.processes)
     s.record(node_id, found, f"node /{node} is running ({run.mode})" if found else
              f"no node named {node} after {time.monotonic() - began:.1f} s; nodes seen: {seen}; {states}",

@@ -69,7 +69,7 @@ def require_quote_fields(msg_type: type) -> None:
 
 
 class MysteryNode:
-    """A visible rclpy node of the grader's in ``s.ros`` (the check's domain), spinning until the part ends.
+    """A visible rclpy node of the grader's in ``s.graph`` (the check's domain), spinning until the part ends.
 
     Args:
         s: the grading session; the node is destroyed by :meth:`GradingSession.on_close`.
@@ -83,7 +83,7 @@ class MysteryNode:
         import rclpy  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
         from rclpy.executors import SingleThreadedExecutor  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
-        context = s.ros.context
+        context = s.graph.context
         self.node = rclpy.create_node(name, context=context, enable_rosout=False,
                                       start_parameter_services=parameter_services)
         for key, value in (parameters or {}).items():
@@ -151,7 +151,7 @@ def quote_inbox(s: GradingSession, msg_type: type) -> TopicProbe:
     for one matching subscription (Jazzy's default for ``--once``) and this is it.
     Returns the :class:`~ros2course.run.probes.TopicProbe` recording what arrives.
     """
-    return s.ros.topic(INBOX_TOPIC, msg_type, 10)
+    return s.graph.topic(INBOX_TOPIC, msg_type, 10)
 
 
 class ConfigurableQuotePublisher(MysteryNode):
@@ -185,7 +185,7 @@ class ConfigurableQuotePublisher(MysteryNode):
         self._msg_type = msg_type
         self._count = 0
         self.node.add_post_set_parameters_callback(self._changed)
-        self.probe = s.ros.topic(f"/{CONFIGURABLE_TOPIC}", msg_type, 10)
+        self.probe = s.graph.topic(f"/{CONFIGURABLE_TOPIC}", msg_type, 10)
         self._pub = self.node.create_publisher(msg_type, CONFIGURABLE_TOPIC, 10)
         self.node.create_timer(CONFIGURABLE_PERIOD, self._publish)
 

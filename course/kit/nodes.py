@@ -83,7 +83,7 @@ def start_node(s: GradingSession, check_id: str, path: Path, node: str, *, sigin
             even when a later step raised :class:`Unmet`.
         args: extra arguments (e.g. ``["--ros-args", "-p", "period:=0.25"]``).
         label: name of its log files (default: the executable's name).
-        graph: the :class:`~ros2course.run.probes.RosSession` to run in (default ``s.ros``).
+        graph: the :class:`~ros2course.run.probes.RosSession` to run in (default ``s.graph``: the part's own graph, else ``s.ros``).
         timeout: seconds to wait for the node (a later process of a check can
             take ~3 s to be discovered: Fast DDS's announcement period).
         grace: stop waiting this many seconds after other nodes appeared without it.
@@ -92,7 +92,7 @@ def start_node(s: GradingSession, check_id: str, path: Path, node: str, *, sigin
     Raises:
         Unmet: the process died, or (``need_node``) no node to inspect appeared.
     """
-    graph = graph or s.ros
+    graph = graph or s.graph
     before = set(graph.node_names())
     proc = s.launch(path, label or path.name, list(args), graph=graph)
     if sigint_check is not None:
@@ -127,7 +127,7 @@ def wait_for_node(s: GradingSession, check_id: str, proc: LearnerProcess, node: 
     are ignored: a node stopped a moment ago can linger in the graph until
     its DDS participant's lease expires. Observed lists the (new) nodes seen.
     """
-    graph = graph or s.ros
+    graph = graph or s.graph
     ignored = set(before)
     first_other: list[float] = []
 

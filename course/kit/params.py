@@ -150,7 +150,7 @@ class NodeParameters:
 
 def connect(s: GradingSession, node: str | None, *, proc: Any = None, why: str = "",
             timeout: float = 5.0) -> NodeParameters:
-    """The parameter services of ``node`` (a node name without the leading ``/``) in ``s.ros``.
+    """The parameter services of ``node`` (a node name without the leading ``/``) in ``s.graph``.
 
     Args:
         node: the node to ask (e.g. :attr:`ros2course.kit.StartedNode.name`); None: there is none.
@@ -166,7 +166,7 @@ def connect(s: GradingSession, node: str | None, *, proc: Any = None, why: str =
     from rclpy.parameter_client import AsyncParameterClient  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
     # AsyncParameterClient has no destroy(); its clients go with the session's node.
-    client = AsyncParameterClient(s.ros.node, node)
+    client = AsyncParameterClient(s.graph.node, node)
     if not wait_until(client.services_are_ready, timeout, interval=0.05):
         state = f"; {process_state(proc)}" if proc is not None else ""
         raise Unmet(f"the parameter services of /{node} did not appear within {timeout:.1f} s{state}")

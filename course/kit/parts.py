@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 import concurrent.futures
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 
 from ros2course.grade.engine import GradingSession
 
 
 def at_once(s: GradingSession, background: str, grade_background: Callable[[], None], foreground: str,
-            grade_foreground: Callable[[], None]) -> None:
+            grade_foreground: Callable[[], None], *, own_graphs: Collection[str] = ()) -> None:
     """Grade part ``background`` on a worker thread while part ``foreground`` is graded on this thread.
 
     For halves that run in private graphs of their own (``s.new_graph()``), so
@@ -19,16 +19,18 @@ def at_once(s: GradingSession, background: str, grade_background: Callable[[], N
     whose programs run longest. ``s.part`` keeps each thread's closing actions
     (Ctrl+C checks) apart; an :class:`~ros2course.grade.engine.Unmet` ends only its
     own part. A grader fault (any other exception) of the background half is
-    raised here once both are done.
+    raised here once both are done. ``own_graphs``: the names of the halves
+    opened with ``s.part(name, own_graph=True)`` (each then observes its own
+    private graph through ``s.graph``).
     """
     def run_background() -> None:
-        with s.part(background):
+        with s.part(background, own_graph=background in own_graphs):
             grade_background()
 
     with concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix=f"ros2course-{background}") as pool:
         done = pool.submit(run_background)
         try:
-            with s.part(foreground):
+            with s.part(foreground, own_graph=foreground in own_graphs):
                 grade_foreground()
         finally:
             done.result()

@@ -202,13 +202,13 @@ def start_as_launched(s: GradingSession, check_id: str, probe: Any) -> Any:
         s.record(check_id, False, reason, expected)
         raise Unmet("the node could not be started")
     with s.phase("start"):
-        found = s.ros.wait_for_node(LAUNCH_NODE, 10.0, abort=lambda: proc.poll() is not None)
+        found = s.graph.wait_for_node(LAUNCH_NODE, 10.0, abort=lambda: proc.poll() is not None)
         if found:
             probe.wait_for_count(1, timeout=3.0 + LATE_DELIVERY, abort=lambda: proc.poll() is not None)
     samples = probe.samples()
     if not found or not samples:
-        seen = ", ".join(s.ros.node_names()) or "none"
-        s.record(check_id, False, (f"no message on /{LAUNCH_TOPIC}; topics seen: {topics_seen(s.ros)}"
+        seen = ", ".join(s.graph.node_names()) or "none"
+        s.record(check_id, False, (f"no message on /{LAUNCH_TOPIC}; topics seen: {topics_seen(s.graph)}"
                                    if found else f"no node {LAUNCH_NODE}; nodes seen: {seen}")
                  + f"; {process_state(proc)}", expected)
         raise Unmet("the node is not running as the launch file would run it")

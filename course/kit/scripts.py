@@ -71,7 +71,7 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
     Args:
         path: from :func:`script`.
         timeout: seconds the script may run before it is stopped (``timed_out``: a command in it never ended).
-        graph: the :class:`~ros2course.run.probes.RosSession` whose domain it joins (default ``s.ros``).
+        graph: the :class:`~ros2course.run.probes.RosSession` whose domain it joins (default ``s.graph``: the part's own graph, else ``s.ros``).
         interrupt_after_s: for scripts that run until stopped (``ros2 run``, ``ros2 launch``): press
             Ctrl+C (SIGINT to its process group) after this many seconds, then wait ``exit_timeout``.
         args: extra arguments after the script path.
@@ -86,7 +86,7 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
     after this returns (processes with the run's marker are killed, ``ros2``
     daemons included).
     """
-    env = (graph or s.ros).learner_env(s.overlay())
+    env = (graph or s.graph).learner_env(s.overlay())
     argv = ["bash", str(path), *args]
     label = path.stem
     if "ROS_HOME" not in env:  # the ros2 CLI's daemon and logs write there, as the submission

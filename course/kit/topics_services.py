@@ -158,7 +158,7 @@ def endpoints(graph: Any, node: str | None, kind: str) -> dict[str, list[str]]:
 
 def wait_for_endpoint(s: GradingSession, node: str | None, kind: str, name: str, timeout: float,
                       abort: Callable[[], bool] | None = None, graph: Any = None) -> dict[str, list[str]]:
-    """Poll :func:`endpoints` of ``node`` in ``graph`` (default ``s.ros``) until ``name`` is among them.
+    """Poll :func:`endpoints` of ``node`` in ``graph`` (default ``s.graph``) until ``name`` is among them.
 
     Returns the last listing.
 
@@ -174,7 +174,7 @@ def wait_for_endpoint(s: GradingSession, node: str | None, kind: str, name: str,
 
     def done() -> bool:
         seen.clear()
-        seen.update(endpoints(graph or s.ros, node, kind))
+        seen.update(endpoints(graph or s.graph, node, kind))
         if name in seen:
             return True
         if seen and not first_other:
@@ -212,7 +212,7 @@ def own_endpoint(s: GradingSession, check_id: str, node: Any, kind: str, name: s
 
     ``kind`` is ``publishers``, ``subscriptions`` or ``services`` (what ``ros2
     node info`` lists); waits up to 3 s (:func:`wait_for_endpoint`) in
-    ``graph`` (default ``s.ros``). A misnamed endpoint of the right type is
+    ``graph`` (default ``s.graph``). A misnamed endpoint of the right type is
     still graded where it is (:func:`pick_endpoint`).
 
     Args:
@@ -226,7 +226,7 @@ def own_endpoint(s: GradingSession, check_id: str, node: Any, kind: str, name: s
     Raises:
         Unmet: (``none``) no endpoint of ``type_name``.
     """
-    graph = graph or s.ros
+    graph = graph or s.graph
     found = wait_for_endpoint(s, node.name, kind, name, 3.0, abort=node.ended, graph=graph)
     ok = type_name in found.get(name, [])
     others = "" if ok or kind == "services" else f"; topics in the graph: {learner_topics(graph)}"
@@ -267,23 +267,23 @@ def reliable_qos(depth: int = 10) -> Any:
 
 
 def listen(s: GradingSession, topic: str, msg_type: type, graph: Any = None) -> Any:
-    """A :class:`~ros2course.run.probes.TopicProbe` on ``topic`` in ``graph`` (default ``s.ros``), :func:`reliable_qos`.
+    """A :class:`~ros2course.run.probes.TopicProbe` on ``topic`` in ``graph`` (default ``s.graph``), :func:`reliable_qos`.
 
     Create it before the learner's publisher starts: no message is missed.
     """
-    return (graph or s.ros).topic(topic, msg_type, reliable_qos())
+    return (graph or s.graph).topic(topic, msg_type, reliable_qos())
 
 
 @contextlib.contextmanager
 def publisher(s: GradingSession, topic: str, msg_type: type, graph: Any = None) -> Iterator[Any]:
-    """The grader's own publisher on ``topic`` in ``graph`` (default ``s.ros``; like ``ros2 topic pub``).
+    """The grader's own publisher on ``topic`` in ``graph`` (default ``s.graph``; like ``ros2 topic pub``).
 
     Removed on exit.
 
     Yields the rclpy publisher (``publish(msg)``, ``get_subscription_count()``),
     :func:`reliable_qos`.
     """
-    node = (graph or s.ros).node
+    node = (graph or s.graph).node
     pub = node.create_publisher(msg_type, topic, reliable_qos())
     try:
         yield pub
@@ -433,13 +433,13 @@ class DeferredServer:
 
 def stand_in_server(s: GradingSession, srv_type: type, name: str,
                     handler: Callable[[int, Any, Any], Any], graph: Any = None) -> DeferredServer:
-    """A :class:`DeferredServer` for ``name`` in ``graph`` (default ``s.ros``), not offered yet, closed with the part.
+    """A :class:`DeferredServer` for ``name`` in ``graph`` (default ``s.graph``), not offered yet, closed with the part.
 
     Create it before starting the learner's client (``kit.start_node``): the
     closing actions run newest first, so the client's Ctrl+C check runs while
     the service still exists (what a learner would do), then the server goes.
     Call :meth:`DeferredServer.offer` when the service is to appear.
     """
-    server = DeferredServer(graph or s.ros, srv_type, name, handler)
+    server = DeferredServer(graph or s.graph, srv_type, name, handler)
     s.on_close(server.close)
     return server
