@@ -53,6 +53,9 @@ CHECKS = [
     Check("returns_roll", "unlikely_to_return retries until a roll is below 0.1, and returns that roll", 2,
           "loop: draw random.uniform(0.0, 1.0); if it is below likelihood, return it; otherwise sleep and draw again",
           needs=("module",)),
+    Check("prints_progress", "unlikely_to_return prints a retry line for each miss and '<tag> Done.' on success", 1,
+          "print(f\"{tag} retry needed (roll = {roll} >= {likelihood}).\") before each sleep, "
+          "print(f\"{tag} Done.\") before returning", needs=("module",)),
     Check("likelihood_param", "unlikely_to_return compares with its likelihood argument", 1,
           "compare the roll with the likelihood parameter, not with a fixed 0.1", needs=("module",)),
     Check("yields_between_draws", "Between draws it awaits asyncio.sleep, so two calls run concurrently", 2,
@@ -139,6 +142,7 @@ def _probe(s: GradingSession) -> None:
         s.record(check_id, ok and outcome[2] == value and len(part.draw_order()) == draws,
                  f"{rolls} it drew {len(part.draw_order())} time(s) and returned {outcome[2]!r}" if ok else
                  f"calling it failed: {outcome[2] if outcome else trace.error(run)}", expected)
+    _progress_lines(s, trace.scenario("default")[1])
     outcome, part = trace.scenario("gather")
     ok = outcome is not None and outcome[0] == "result"
     pauses = sorted(part.pauses(0))
@@ -152,6 +156,18 @@ def _probe(s: GradingSession) -> None:
              "the second call draws while the first is still retrying (e.g. 1 2 1 2 1 1 1), "
              f"because each call awaits asyncio.sleep(0.1) between draws (pauses of {PAUSE_RANGE[0]}-"
              f"{PAUSE_RANGE[1]} s count)")
+
+
+def _progress_lines(s: GradingSession, part: Trace) -> None:
+    """prints_progress, on the default scenario (tag "probe", 3 misses then a hit): the lines the contract names."""
+    printed = [e[2].strip() for e in part.events if e[0] == "out"]
+    retries = [line for line in printed if "probe" in line and "retry" in line.lower()]
+    done = [line for line in printed if "probe Done." in line]
+    shown = "; ".join(printed[:5]) + (" ..." if len(printed) > 5 else "") if printed else "nothing"
+    s.record("prints_progress", len(retries) == 3 and len(done) == 1,
+             f"with 3 misses then a hit it printed {len(retries)} retry line(s) and {len(done)} 'probe Done.' "
+             f"line(s): {shown}",
+             "3 lines saying a retry is needed (with the tag), then 'probe Done.' (the tag was 'probe')")
 
 
 def _example(s: GradingSession, name: str, runs_check: str, concurrent_check: str) -> Trace:
