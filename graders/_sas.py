@@ -39,9 +39,8 @@ from ._joint_stream import (
     JointSample,
     JointStreamProbe,
     arrival_rate,
-    source_rate,
 )
-from ros2course.kit.judge import RATE_TOLERANCE, topics_seen
+from ros2course.kit.judge import rate, topics_seen
 from ros2course.kit.launch import (
     NodeAction,
     describe_launch_folder,
@@ -330,26 +329,13 @@ def limits(s: GradingSession, published_id: str, radians_id: str, run: DriverRun
 
 def span_rate(s: GradingSession, check_id: str, samples: list[JointSample], *, period: float, span: float,
               noun: str, extra: str = "", few_note: str = "") -> bool:
-    """Record ``check_id`` on the rate of ``samples`` over their DDS source timestamps (seconds).
-
-    Computed like ``ros2 topic hz`` (1 / mean delta, ros2topic/verb/hz.py) but
-    on the publication times, not disturbed by the grader's own scheduling;
-    the mean period must be ``period`` ± :data:`~ros2course.kit.judge.RATE_TOLERANCE`
-    (shared/LESSONS.md) over at least 90 % of ``span`` seconds of messages.
-    ``extra`` is appended to ``expected``; ``few_note`` to ``observed`` when too few came.
-    """
-    stats = source_rate(samples)
-    expected = (f"{1 / period:.0f} Hz: mean period {period * 1000:.{1 if period < 0.01 else 0}f} ms ± "
-                f"{RATE_TOLERANCE:.0%} over at least {span:.1f} s{extra}")
-    covered = samples[-1].source - samples[0].source if len(samples) > 1 else 0.0
-    if stats is None or covered < span * 0.9:
-        return s.record(check_id, False, f"only {len(samples)} {noun}(s) over {covered:.2f} s"
-                        + (f": {stats.describe()}" if stats else "") + few_note, expected)
+    """Record ``check_id`` on the rate of ``samples`` over their DDS source timestamps: the kit's rate
+    judgement (:func:`ros2course.kit.judge.rate`) over at least 90 % of ``span`` seconds, with what
+    ``ros2 topic hz`` (arrival times) would show beside it. ``extra`` is appended to ``expected``."""
     hz = arrival_rate(samples)
-    observed = (f"{stats.rate_hz:.1f} Hz (mean period {stats.mean_period * 1000:.2f} ms, min "
-                f"{stats.min_period * 1000:.2f}, max {stats.max_period * 1000:.2f}, {stats.samples} intervals)"
-                + (f"; ros2 topic hz (arrival times) would show {hz.rate_hz:.1f} Hz" if hz else ""))
-    return s.record(check_id, stats.within(1.0 / period, RATE_TOLERANCE), observed, expected)
+    return rate(s, check_id, [x.source for x in samples], period=period, span=span, noun=noun,
+                source="the DDS source timestamps", few_note=few_note, expected_note=extra,
+                where=f"; ros2 topic hz (arrival times) would show {hz.rate_hz:.1f} Hz" if hz else "")
 
 
 def stream(s: GradingSession, rate_id: str, shape_id: str, zeros_id: str, run: DriverRun, span: float = 1.0) -> None:

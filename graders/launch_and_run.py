@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from ros2course.kit import Check, GradingSession, scripts
 from ._node_watch import NodeWatch, node_appeared
-from ros2course.kit.programs import sigint_exit
+from ros2course.kit.nodes import sigint_exit
 from ros2course.kit.quotes import LAUNCH_FILE, LAUNCH_NODE
 from ros2course.kit.quotes import PACKAGE as LAUNCH_PACKAGE
 

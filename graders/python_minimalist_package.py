@@ -20,7 +20,8 @@ import yaml
 from ros2course import kit
 from ros2course.kit import Check, GradingSession, Unmet
 from ros2course.kit import python_programs as py
-from ros2course.kit.programs import interrupt_after, printed_lines, sigint_exit
+from ros2course.kit.nodes import sigint_exit
+from ros2course.kit.programs import interrupt_after, printed_lines
 
 PROJECT = Path("python") / "minimalist_package"
 SCRIPT = Path("minimalist_package") / "minimalist_script.py"

@@ -130,8 +130,8 @@ class _Recorder:
     def __init__(self) -> None:
         self.results: dict[str, tuple] = {}
 
-    def record(self, check_id, passed, observed, expected, hint=None, fraction=None):
-        self.results[check_id] = (passed, observed, expected)
+    def record(self, check_id, passed, observed, expected, hint=None, fraction=None, window=None, band=None):
+        self.results[check_id] = (passed, observed, expected, window, band)
         return passed
 
 
@@ -148,6 +148,9 @@ def test_span_rate_judges_the_source_stamps_over_the_span():
     s = _Recorder()
     assert span_rate(s, "rate", _samples(0.002, 501), period=0.002, span=1.0, noun="message")
     assert "500.0 Hz" in s.results["rate"][1] and "2.0 ms" in s.results["rate"][2]
+    # the kit's one rate judgement: the span judged and the band allowed go into the check's recording
+    assert s.results["rate"][2].startswith("500.00 Hz: mean period 2.0 ms ± 15%, over at least 1.0 s of messages")
+    assert s.results["rate"][4] == pytest.approx((0.0017, 0.0023))
     assert not span_rate(s, "slow", _samples(0.02, 51), period=0.002, span=1.0, noun="message")
     assert not span_rate(s, "short", _samples(0.002, 100), period=0.002, span=1.0, noun="message")
     assert s.results["short"][1].startswith("only 100 message(s) over 0.20 s")

@@ -13,15 +13,16 @@ RATE_TOLERANCE = 0.15
 STANDARD_TOPICS = frozenset({"/rosout", "/parameter_events"})
 
 
-def rate(s: GradingSession, check_id: str, times: list[float], *, period: float, needed: int,
-         waited: float, noun: str, source: str, where: str = "", few_note: str = "") -> bool:
+def rate(s: GradingSession, check_id: str, times: list[float], *, period: float, needed: int = 0,
+         waited: float = 0.0, noun: str, source: str, where: str = "", few_note: str = "",
+         span: float | None = None, expected_note: str = "") -> bool:
     """Record ``check_id`` on the mean period of ``times`` (seconds, oldest first).
 
-    The formula is ``ros2 topic hz``'s (1 / mean delta, ros2topic/verb/hz.py),
-    over stamps taken where the event happened (a message's DDS send stamp,
-    a /rosout record's stamp, a request's send stamp), never over arrival
-    times: a loaded machine handing the grader two messages at once must not
-    change the verdict.
+    The one rate judgement of the kit. The formula is ``ros2 topic hz``'s
+    (1 / mean delta, ros2topic/verb/hz.py), over stamps taken where the event
+    happened (a message's DDS send stamp, a /rosout record's stamp, a request's
+    send stamp), never over arrival times: a loaded machine handing the grader
+    two messages at once must not change the verdict.
 
     Args:
         period: expected seconds between events; ±:data:`RATE_TOLERANCE` on the mean.
@@ -29,17 +30,25 @@ def rate(s: GradingSession, check_id: str, times: list[float], *, period: float,
         waited: seconds the grader waited, shown when too few events came.
         noun: what an event is, for the learner ("message", "record", "call").
         source: what ``times`` are, e.g. "the messages' send stamps".
-        where: appended to the observed text (e.g. the topic the node really uses).
+        where: appended to the observed text (e.g. the topic the node really uses, or what
+            ``ros2 topic hz`` over arrival times would show).
         few_note: appended only when too few events came (e.g. the process state).
+        span: instead of ``needed``: the events must cover at least 90 % of ``span``
+            seconds (fast streams, e.g. sas's 500 Hz joint states, where a count says
+            less than the time covered).
+        expected_note: appended to the expected text.
     """
     stats = RateStats.from_times(times)
     # the span judged, for the check's recording (``ros2course evidence`` recomputes the rate from it)
     window = (min(times), max(times)) if times else None
     band = (period * (1 - RATE_TOLERANCE), period * (1 + RATE_TOLERANCE))  # the mean period allowed, seconds
-    expected = (f"{1.0 / period:.2f} Hz: mean period {period:.3f} s ± {RATE_TOLERANCE:.0%}, "
-                f"over at least {needed - 1} intervals")
-    if stats is None or stats.samples < needed - 1:
-        return s.record(check_id, False, f"only {len(times)} {noun}(s) within {waited:.1f} s"
+    shown = f"{period * 1000:.{1 if period < 0.01 else 0}f} ms" if period < 0.1 else f"{period:.3f} s"
+    over = f"over at least {span:.1f} s of {noun}s" if span else f"over at least {needed - 1} intervals"
+    expected = f"{1.0 / period:.2f} Hz: mean period {shown} ± {RATE_TOLERANCE:.0%}, {over}{expected_note}"
+    covered = window[1] - window[0] if window else 0.0
+    if stats is None or (covered < span * 0.9 if span else stats.samples < needed - 1):
+        within = f"over {covered:.2f} s" if span else f"within {waited:.1f} s"
+        return s.record(check_id, False, f"only {len(times)} {noun}(s) {within}"
                         + (f" ({stats.describe()})" if stats else "") + where + few_note, expected, window=window, band=band)
     return s.record(check_id, stats.within(1.0 / period, RATE_TOLERANCE),
                     f"{stats.describe()} (from {source}){where}", expected, window=window,

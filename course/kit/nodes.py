@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.grade.engine import GradingSession, Unmet
+from ros2course.kit.programs import ProgramRun, judge_interrupted_run
 from ros2course.run.probes import wait_until
 from ros2course.run.process import LearnerProcess, rclpy_shutdown_race
 
@@ -156,8 +157,16 @@ def wait_for_node(s: GradingSession, check_id: str, proc: LearnerProcess, node: 
                     f"{process_state(proc)}", f"a node named {node} (the name passed to super().__init__)")
 
 
-def sigint_exit(s: GradingSession, check_id: str, proc: LearnerProcess, sigint_timeout: float = 3.0) -> bool:
+def sigint_exit(s: GradingSession, check_id: str, proc: LearnerProcess | ProgramRun,
+                sigint_timeout: float = 3.0) -> bool:
     """Press Ctrl+C (SIGINT) and record ``check_id``: exit code 0, no traceback, within ``sigint_timeout`` s.
+
+    The kit's one Ctrl+C step (declared with :func:`ros2course.kit.checks.ctrl_c`).
+    ``proc``: a running learner process (a node: Ctrl+C is pressed now), or a
+    :class:`~ros2course.kit.programs.ProgramRun` that ``interrupt_after`` /
+    ``scripts.run_script(..., interrupt_after_s=...)`` already ended with Ctrl+C
+    (a script: judged as it ended, :func:`~ros2course.kit.programs.judge_interrupted_run`,
+    which also fails a run whose started processes were still stopping).
 
     The rule is the tutorial's (ch. 13: a node ends cleanly on Ctrl+C; in
     Jazzy ``rclpy.spin()`` may raise ``ExternalShutdownException``). Observed
@@ -177,6 +186,8 @@ def sigint_exit(s: GradingSession, check_id: str, proc: LearnerProcess, sigint_t
 
     A node that ignores Ctrl+C still fails (it ignores the second one too).
     """
+    if isinstance(proc, ProgramRun):
+        return judge_interrupted_run(s, check_id, proc, sigint_timeout)
     expected = f"exit code 0 within {sigint_timeout:.0f} s of SIGINT (Ctrl+C), no traceback"
     if proc.poll() is not None:
         report = proc.stop()

@@ -191,12 +191,15 @@ def _children(left: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(p for p in left if _DAEMON not in p)
 
 
-def sigint_exit(s: GradingSession, check_id: str, run: ProgramRun, exit_timeout: float = 3.0) -> bool:
-    """Record ``check_id`` on a run of :func:`interrupt_after`: Ctrl+C ended it with exit code 0 and no traceback.
+def judge_interrupted_run(s: GradingSession, check_id: str, run: ProgramRun, exit_timeout: float = 3.0) -> bool:
+    """Record ``check_id`` on a run that :func:`interrupt_after` (or ``scripts.run_script``) ended with Ctrl+C:
+    exit code 0, no traceback, nothing it started still running.
 
-    The rule of the tutorial's scripts (ch. 2.4: ``except KeyboardInterrupt``) and
-    nodes (ch. 12): Ctrl+C is the normal way to stop them, not an error. A program
-    that ended by itself before Ctrl+C fails: it was never stopped.
+    Graders call it as :func:`ros2course.kit.nodes.sigint_exit` (the kit's one
+    Ctrl+C step), which hands a :class:`ProgramRun` here. The rule of the
+    tutorial's scripts (ch. 2.4: ``except KeyboardInterrupt``) and nodes (ch. 12):
+    Ctrl+C is the normal way to stop them, not an error. A program that ended by
+    itself before Ctrl+C fails: it was never stopped.
     """
     if not run.interrupted:
         observed = f"it had already ended by itself ({run.describe()}) before Ctrl+C"
@@ -212,7 +215,7 @@ def sigint_exit(s: GradingSession, check_id: str, run: ProgramRun, exit_timeout:
         observed = f"{run.ending()}, no traceback"
     return s.record(check_id, run.interrupted and not run.timed_out and run.returncode == 0 and not run.traceback
                     and not run.left_running,
-                    observed, f"exit code 0 within {exit_timeout:.0f} s of Ctrl+C, no traceback, "
+                    observed, f"exit code 0 within {exit_timeout:.0f} s of SIGINT (Ctrl+C), no traceback, "
                     "after everything it started has stopped")
 
 

@@ -66,7 +66,11 @@ class RateStats:
         return abs(self.mean_period - expected_period) <= tolerance * expected_period
 
     def describe(self) -> str:
-        """Human summary, e.g. ``2.00 Hz (mean period 0.500 s, min 0.498, max 0.502, 6 intervals)``."""
+        """Human summary, e.g. ``2.00 Hz (mean period 0.500 s, min 0.498, max 0.502, 6 intervals)``;
+        periods under 0.1 s in milliseconds (``500.0 Hz (mean period 2.00 ms, min 1.95, max 2.10, ...)``)."""
+        if self.mean_period < 0.1:
+            return (f"{self.rate_hz:.1f} Hz (mean period {self.mean_period * 1000:.2f} ms, min "
+                    f"{self.min_period * 1000:.2f}, max {self.max_period * 1000:.2f}, {self.samples} intervals)")
         return (f"{self.rate_hz:.2f} Hz (mean period {self.mean_period:.3f} s, min {self.min_period:.3f}, "
                 f"max {self.max_period:.3f}, {self.samples} intervals)")
 
