@@ -507,6 +507,20 @@ class GradingSession:
                               "a fault of the grading run: grade through ros2course grade, which builds them")
         return workspace_type(self.overlay(), package, kind, name)
 
+    def installed_type(self, package: str, kind: str, name: str) -> Any:
+        """A msg/srv class of the ROS install itself (the wheels, the underlay, a system ROS), never the
+        workspace's: e.g. ``("tf2_msgs", "msg", "TFMessage")``, which only the source-built underlay has.
+
+        Loaded as :meth:`interface_type` loads a workspace's (:mod:`ros2course.ros.interfaces`): the grading
+        process started before the install's ``lib/`` could be on its library path, so the package's
+        typesupport libraries are loaded from its prefix. Nothing of a submission is involved, so batch
+        grading uses it as is.
+
+        Raises:
+            NotGradable: the package is not in the ROS install, or its types do not load.
+        """
+        return workspace_type(self.base_env, package, kind, name)
+
     def submission_folder(self, name: str, fill: Callable[[Path], None] | None = None) -> Path:
         """A fresh folder ``log_dir/<name>`` that the programs the grader runs as the submission may write.
 
