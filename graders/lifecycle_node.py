@@ -16,6 +16,8 @@ window ends early on the first message sent in it.
 
 from __future__ import annotations
 
+import itertools
+import re
 import time
 from typing import Any
 
@@ -41,6 +43,9 @@ ANSWER_TIMEOUT = 3.0
 #: Seconds for the node's publisher to leave the graph after cleanup (DDS announces a
 #: destroyed endpoint at once; a loaded machine may take a few hundred ms to tell us).
 GONE_TIMEOUT = 2.0
+#: What each message says (the lesson: 'Heartbeat 0', 'Heartbeat 1', ...); the first number seen is not judged:
+#: the timer runs (and counts) while the node is inactive, its messages dropped by the lifecycle publisher.
+HEARTBEAT = re.compile(r"Heartbeat (-?\d+)")
 #: lifecycle_msgs/msg/State primary state ids (lifecycle_msgs/msg/State.msg).
 UNCONFIGURED, INACTIVE, ACTIVE, FINALIZED = 1, 2, 3, 4
 STATE_LABELS = {0: "unknown", UNCONFIGURED: "unconfigured", INACTIVE: "inactive", ACTIVE: "active",
@@ -73,7 +78,7 @@ CHECKS = [
           needs=("configure",)),
     Check("activate", "activate succeeds: inactive -> active", 1,
           "on_activate returns super().on_activate(state) (TransitionCallbackReturn.SUCCESS)", needs=("configure",)),
-    Check("active_messages", f"While active it publishes {TOPIC_TYPE} on {TOPIC}", 2,
+    Check("active_messages", f"While active it publishes {TOPIC_TYPE} 'Heartbeat N' on {TOPIC}, N counting up", 2,
           "return super().on_activate(state) from on_activate: the base class is what enables the lifecycle "
           "publisher", needs=("activate",)),
     Check("active_rate", f"While active it publishes every {PERIOD} s ({1 / PERIOD:.0f} Hz)", 2,
@@ -241,8 +246,14 @@ def _active(s: GradingSession, probe: Any, node: kit.StartedNode, since: float) 
         s.record("active_messages", False, f"nothing sent on {TOPIC} in {waited:.1f} s of the active state; "
                  f"{topics}; {kit.process_state(node.proc)}", expected)
         return
-    s.record("active_messages", True, f"{len(stamps)} message(s), e.g. '{_sent_in(probe, since)[0][1].data[:60]}'",
-             expected)
+    texts = [m.data for _, m in _sent_in(probe, since)][:SAMPLES]
+    numbers = [int(found.group(1)) if (found := HEARTBEAT.fullmatch(text)) else None for text in texts]
+    counting = None not in numbers and all(b - a == 1 for a, b in itertools.pairwise(numbers))
+    s.record("active_messages", counting,
+             f"{len(stamps)} message(s): " + ", ".join(repr(text[:40]) for text in texts[:4])
+             + (" ..." if len(texts) > 4 else "") + ("" if counting else
+             ": not 'Heartbeat N' with N one more each time"),
+             f"{expected}, 'Heartbeat N' with N counting up by one")
     kit.rate(s, "active_rate", stamps, period=PERIOD, needed=SAMPLES, waited=waited, noun="message",
              source="the messages' send stamps")
 
