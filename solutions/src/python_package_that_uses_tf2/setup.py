@@ -19,6 +19,7 @@ setup(
     entry_points={
         'console_scripts': [
             'circle_broadcaster = python_package_that_uses_tf2.circle_broadcaster:main',
+            'frame_listener = python_package_that_uses_tf2.frame_listener:main',
         ],
     },
 )

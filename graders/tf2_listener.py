@@ -1,0 +1,159 @@
+"""Grader for ``tf2-listener`` (issue 20; contract in chapters/47-tf2-listener/CONTRACT.md).
+
+Black-box, on the node's ``/rosout`` records while the grader itself is the tf2 tree:
+
+1. the node starts with no transform anywhere: it must keep running and say (WARN)
+   that ``world -> target`` is not available yet, never crash;
+2. the grader broadcasts ``world -> target`` on ``/tf`` at 20 Hz with a random
+   translation: the node must log it (three decimals);
+3. the grader moves ``target`` to another random place: the node must log the new
+   position (a listener that looked up once and kept the value fails).
+
+The grader publishes ``tf2_msgs/msg/TFMessage`` itself, as ``tf2_ros.TransformBroadcaster``
+does, without importing tf2_ros (its C extension needs the underlay's libtf2 on the
+grading process's library path).
+"""
+
+from __future__ import annotations
+
+import random
+import threading
+
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, checks, wait_until
+from ros2course.kit import topics_services as ts
+
+PACKAGE = "python_package_that_uses_tf2"
+EXE = NODE = "frame_listener"
+PARENT, CHILD = "world", "target"
+PERIOD = 0.5  # seconds between the node's lookups (2 Hz)
+BROADCAST_PERIOD = 0.05  # seconds between the grader's transforms (20 Hz, like a moving robot)
+UNAVAILABLE_WINDOW = 1.5  # seconds with no transform: about three lookups
+#: Seconds for a logged position: the node's next lookups plus discovery of the grader's publisher.
+LOG_TIMEOUT = 4.0
+TOLERANCE = 0.002  # metres: logged with three decimals
+WARN = 30  # rcl_interfaces/msg/Log WARN level
+
+WINDOW = UNAVAILABLE_WINDOW + 2 * 2 * PERIOD
+
+LISTENER = {"part": "listener", "needs": ("listener_executable",)}
+
+CHECKS = [
+    Check("build", "The package builds with colcon", 1),
+    *checks.started("listener", PACKAGE, EXE, NODE, part="listener"),
+    Check("waits_for_transform", f"With no {PARENT} -> {CHILD} yet, it keeps running and warns", 2,
+          "catch tf2_ros.TransformException around lookup_transform and log a warning: a frame nobody broadcasts "
+          "yet is normal at start-up", **LISTENER),
+    Check("logs_transform", f"It logs where {CHILD} is in {PARENT} once the transform exists", 3,
+          f"t = self.buffer.lookup_transform('{PARENT}', '{CHILD}', rclpy.time.Time()); log "
+          "t.transform.translation's x, y, z with three decimals", needs=("waits_for_transform",), part="listener"),
+    Check("follows_changes", f"When {CHILD} moves, it logs the new position", 2,
+          "look the transform up again at every tick: never keep the first answer", needs=("logs_transform",),
+          part="listener"),
+    checks.ctrl_c("listener_sigint_exit", "the listener", **LISTENER),
+]
+
+
+class _Broadcast:
+    """The grader's own ``world -> target`` on /tf, sent every :data:`BROADCAST_PERIOD` s from a thread."""
+
+    def __init__(self, s: GradingSession, tf_message: type, transform_type: type) -> None:
+        self.s, self.tf_message, self.transform_type = s, tf_message, transform_type
+        self.publisher = s.graph.node.create_publisher(tf_message, "/tf", ts.reliable_qos(100))
+        self.position: tuple[float, float, float] | None = None
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="ros2course-tf-broadcast", daemon=True)
+        self.thread.start()
+        s.on_close(self.close)
+
+    def _run(self) -> None:
+        while not self.stop.wait(BROADCAST_PERIOD):
+            if self.position is None:
+                continue
+            t = self.transform_type()
+            t.header.stamp = self.s.graph.node.get_clock().now().to_msg()
+            t.header.frame_id, t.child_frame_id = PARENT, CHILD
+            t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = self.position
+            t.transform.rotation.w = 1.0
+            self.publisher.publish(self.tf_message(transforms=[t]))
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(timeout=2.0)
+
+
+def _random_position(far_from: tuple[float, float, float] | None = None) -> tuple[float, float, float]:
+    """Three decimals each in [-3, 3] m, every coordinate at least 0.5 m from ``far_from``'s."""
+    while True:
+        found = tuple(round(random.uniform(-3.0, 3.0), 3) for _ in range(3))
+        if min(abs(v) for v in found) > 0.2 and (far_from is None or
+                                                  all(abs(a - b) > 0.5 for a, b in zip(found, far_from))):
+            return found
+
+
+def _logged(rosout, node: str, position: tuple[float, float, float]) -> list[str]:
+    """The node's records that show ``position`` (three numbers within :data:`TOLERANCE`, in order)."""
+    out = []
+    for record in rosout.records(node=node):
+        numbers = ts.numbers_in(record.msg)
+        if any(all(abs(a - b) <= TOLERANCE for a, b in zip(numbers[i:i + 3], position))
+               for i in range(len(numbers) - 2)):
+            out.append(record.msg)
+    return out
+
+
+def _grade_listener(s: GradingSession) -> None:
+    from geometry_msgs.msg import TransformStamped
+
+    tf_message = s.installed_type("tf2_msgs", "msg", "TFMessage")  # tf2 is not on PyPI: from the underlay
+    path = kit.executable(s, "listener_executable", PACKAGE, EXE)
+    rosout = s.graph.rosout()
+    node = kit.start_node(s, "listener_node_name", path, NODE, sigint_check="listener_sigint_exit",
+                          need_node=False)
+    name = node.name or NODE
+    # 1. nothing broadcast yet
+    with s.phase("observe"):
+        wait_until(lambda: bool(rosout.records(node=name, level=WARN)), UNAVAILABLE_WINDOW + 2 * PERIOD,
+                   abort=node.ended)
+        wait_until(node.ended, UNAVAILABLE_WINDOW)  # it must survive its first failed lookups
+    warnings = rosout.records(node=name, level=WARN)
+    alive = not node.ended()
+    s.record("waits_for_transform", alive and bool(warnings),
+             (f"still running after {UNAVAILABLE_WINDOW:.1f} s without the transform; " if alive
+              else f"it ended: {kit.process_state(node.proc)}; ")
+             + (f"it warned: {warnings[0].msg[:120]!r}" if warnings else "no WARN record from it"),
+             f"it keeps running and logs a WARN record while {PARENT} -> {CHILD} does not exist")
+    if not alive:
+        return
+    # 2. the grader becomes the tf2 tree
+    broadcast = _Broadcast(s, tf_message, TransformStamped)
+    first = _random_position()
+    broadcast.position = first
+    with s.phase("observe"):
+        wait_until(lambda: bool(_logged(rosout, name, first)), LOG_TIMEOUT, abort=node.ended)
+    shown = _logged(rosout, name, first)
+    latest = [r.msg for r in rosout.records(node=name)][-2:]
+    if not s.record("logs_transform", bool(shown),
+                    f"it logged {shown[0][:120]!r}" if shown else
+                    f"no record shows ({', '.join(f'{v:.3f}' for v in first)}) within {LOG_TIMEOUT:.0f} s; its last "
+                    f"records: {latest or 'none'}; {kit.process_state(node.proc)}",
+                    f"a record with x, y, z of {PARENT} -> {CHILD}: ({', '.join(f'{v:.3f}' for v in first)}) "
+                    f"(± {TOLERANCE} m, the grader's broadcast)"):
+        return
+    # 3. target moves
+    second = _random_position(far_from=first)
+    broadcast.position = second
+    with s.phase("observe"):
+        wait_until(lambda: bool(_logged(rosout, name, second)), LOG_TIMEOUT, abort=node.ended)
+    moved = _logged(rosout, name, second)
+    latest = [r.msg for r in rosout.records(node=name)][-1:]
+    s.record("follows_changes", bool(moved),
+             f"after the move it logged {moved[0][:120]!r}" if moved else
+             f"no record shows the new position within {LOG_TIMEOUT:.0f} s; its last record: {latest or 'none'}",
+             f"a record with the new position ({', '.join(f'{v:.3f}' for v in second)})")
+
+
+def grade(s: GradingSession) -> None:
+    """One part: the listener against the grader's own transforms (see the module docstring)."""
+    with s.part("listener"):
+        _grade_listener(s)
