@@ -167,3 +167,12 @@ def test_the_batch_sample_is_the_wrong_solutions_check_graded_fastest() -> None:
     assert sample_fixtures(lesson, 2, checked) == ["grep_keeps_the_inbox", "wrong_topic_name"]
     assert sample_fixtures(lesson, 1) == ["echo_without_once"]
     assert len(sample_fixtures(lesson, 9, checked)) == 5
+    # one whose program died on its own (a `process` diagnosis) comes last: what was seen of it is a race
+    from ros2course.grade.results import CheckResult
+    from ros2course.run.diagnose import Diagnosis
+
+    died = CheckResult("echo", "echo", 0, 1, False, "", "", "",
+                       diagnosis=[Diagnosis("process", "the learner's process x exited with code 1", {})])
+    checked[2] = Outcome(lesson.id, "grep_keeps_the_inbox", True, "", "", 7.9,
+                         LessonResult(lesson.id, 1.0, 11.0, "failed", [died]))
+    assert sample_fixtures(lesson, 1, checked) == ["wrong_topic_name"]

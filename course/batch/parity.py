@@ -54,12 +54,21 @@ def sample_fixtures(lesson: Lesson, count: int, checked: list[Outcome] | None = 
         return names
     if count <= 0:
         return []
+    # a wrong solution whose program died on its own (a `process` diagnosis) last: what was observed of
+    # it depends on how far it got before it died (its node name is seen or not), a race, not parity
     graded = sorted((o for o in checked or [] if o.lesson == lesson.id and o.case in names
-                     and o.result is not None and o.result.status.graded), key=lambda o: o.seconds)
+                     and o.result is not None and o.result.status.graded),
+                    key=lambda o: (_died_on_its_own(o), o.seconds))
     if len(graded) >= count:
         return [o.case for o in graded[:count]]
     step = len(names) / count
     return [names[int(i * step)] for i in range(count)]
+
+
+def _died_on_its_own(outcome: Outcome) -> bool:
+    """True when a check of ``outcome`` was diagnosed ``process``: a learner process ended before the grader
+    stopped it (:func:`ros2course.run.diagnose.process_findings`)."""
+    return any(d.kind == "process" for c in outcome.result.checks for d in c.diagnosis)
 
 
 def case_workspace(lesson: Lesson, case: str, dest: Path) -> Path:
