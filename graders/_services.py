@@ -21,8 +21,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ros2course.kit import GradingSession
-from ros2course.kit import LATE_DELIVERY, call_service, wait_until
+from ros2course.kit import LATE_DELIVERY, GradingSession, call_service, wait_until
 from ros2course.kit.judge import RATE_TOLERANCE, rate
 from ros2course.kit.nodes import StartedNode, process_state
 from ros2course.kit.topics_services import DeferredServer, has_point
@@ -54,11 +53,12 @@ def point_answers(rng: random.Random | None = None) -> Callable[[int, Any, Any],
 
 
 def says_it_waits(s: GradingSession, check_id: str, rosout: Any, node: StartedNode, service: str,
-                  timeout: float = 3.0) -> bool:
+                  timeout: float = 3.0, what: str = "service") -> bool:
     """Record ``check_id``: within ``timeout`` s, with ``service`` missing, the client logs that it waits.
 
     Args:
         rosout: the client's graph's :class:`~ros2course.run.probes.RosoutProbe` (made before it started).
+        what: what is missing, for the feedback: ``"service"``, ``"action server"``.
     """
     def said() -> list:
         return rosout.records(match=lambda text: WAITING.search(text) is not None)
@@ -68,10 +68,10 @@ def says_it_waits(s: GradingSession, check_id: str, rosout: Any, node: StartedNo
     found = said()
     if found:
         return s.record(check_id, True, f"logged '{found[0].msg.strip()}' while {service} did not exist",
-                        "a log record saying it waits for the service")
+                        f"a log record saying it waits for the {what}")
     shown = " | ".join(r.msg.strip()[:80] for r in rosout.records()[:3]) or "no log records"
-    return s.record(check_id, False, f"in {timeout:.0f} s without the service: {shown}; {process_state(node.proc)}",
-                    f"a log record (e.g. 'service {service} not available, waiting...') while the service is missing")
+    return s.record(check_id, False, f"in {timeout:.0f} s without the {what}: {shown}; {process_state(node.proc)}",
+                    f"a log record (e.g. '{what} {service} not available, waiting...') while the {what} is missing")
 
 
 def calls(s: GradingSession, calls_id: str, rate_id: str, server: DeferredServer, node: StartedNode, *,

@@ -29,8 +29,8 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 
 from ros2course.grade.engine import GradingSession, Unmet
-from ros2course.run.probes import wait_until
 from ros2course.kit.programs import ProgramRun, interrupt_after, run_program
+from ros2course.run.probes import wait_until
 
 #: Characters of a script's output quoted back in feedback.
 EXCERPT = 400
@@ -115,7 +115,7 @@ DAEMON_TIMEOUT = 15.0
 class _QuickTransport(xmlrpc.client.Transport):
     """XML-RPC over HTTP with a 2 s socket timeout (a daemon that hangs must not hang the check)."""
 
-    def make_connection(self, host):  # noqa: ANN001, ANN201 - xmlrpc.client's signature
+    def make_connection(self, host):
         connection = super().make_connection(host)
         connection.timeout = 2.0
         return connection
@@ -208,7 +208,7 @@ def printed(s: GradingSession, check_id: str, run: ProgramRun, needles: Iterable
     missing = [needle for needle in needles if (needle not in lines if whole_lines else needle not in run.stdout)]
     expected = f"your script prints {what} (`{command}` prints it)"
     if missing:
-        s.record(check_id, False, f"your script printed no {what}: missing {', '.join(map(repr, missing))}; "
+        s.record(check_id, False, f"your script did not print {what}: missing {', '.join(map(repr, missing))}; "
                  f"it printed: {excerpt(run.stdout)}", expected, hint=f"`{command}` prints it")
         return False
     s.record(check_id, True, f"it printed {what}", expected)

@@ -76,7 +76,7 @@ def workspace_type(overlay: dict[str, str], package: str, kind: str, name: str) 
 
     Args:
         overlay: the sourced workspace environment (``GradingSession.overlay()``).
-        kind: ``"msg"`` or ``"srv"``.
+        kind: ``"msg"``, ``"srv"`` or ``"action"``.
 
     Raises:
         NotGradable: the package is not installed in the workspace, or its types do not load.

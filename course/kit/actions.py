@@ -1,0 +1,325 @@
+"""Kit steps for ROS 2 actions (``rclpy.action``): the grader as a learner server's client, or as a learner client's server.
+
+An action is three services and two topics under ``<name>/_action/`` (design.ros2.org/articles/actions.html):
+``send_goal``, ``cancel_goal`` and ``get_result``, ``feedback`` and ``status``. The grader speaks it
+with rclpy's own :class:`rclpy.action.ActionClient` and :class:`rclpy.action.ActionServer`, as
+``ros2 action send_goal`` does:
+
+* :class:`GoalClient` sends goals to a learner's server, cancels them and waits for results.
+  Feedback is judged from a probe on the ``feedback`` topic, whose messages carry the goal id and
+  the server's send stamps (rates and speeds on send stamps, never on arrival times).
+* :class:`StandInActionServer` answers a learner's client with goals scripted by the grader
+  (accept or reject, the feedback to send, how the goal ends). It spins a node and executor of
+  its own, so an executing goal never blocks the grader's /rosout subscription; nothing of it
+  exists in the graph before :meth:`StandInActionServer.offer`.
+
+:func:`action_endpoints` lists a node's action servers or clients, as ``ros2 node info`` does.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+from ros2course.grade.engine import GradingSession
+from ros2course.kit.topics_services import reliable_qos
+from ros2course.run.probes import record, stop_spinning, wait_until
+
+#: action_msgs/msg/GoalStatus status values, by name (GoalStatus.msg).
+STATUS_NAMES = {0: "UNKNOWN", 1: "ACCEPTED", 2: "EXECUTING", 3: "CANCELING", 4: "SUCCEEDED", 5: "CANCELED",
+                6: "ABORTED"}
+SUCCEEDED, CANCELED, ABORTED = 4, 5, 6
+
+
+def status_name(status: int | None) -> str:
+    """``SUCCEEDED`` for 4 (action_msgs/msg/GoalStatus), ``no result`` for None."""
+    return "no result" if status is None else STATUS_NAMES.get(status, f"status {status}")
+
+
+def action_endpoints(graph: Any, node: str | None, kind: str) -> dict[str, list[str]]:
+    """The actions ``node`` serves (``kind="servers"``) or is a client of (``"clients"``): name -> type names.
+
+    What ``ros2 node info`` lists under "Action Servers" / "Action Clients"
+    (``rclpy.action.get_action_server_names_and_types_by_node``). Empty when
+    ``node`` (``/name``) is None or not in ``graph`` (a :class:`~ros2course.run.probes.RosSession`).
+    """
+    from rclpy.action import (
+        get_action_client_names_and_types_by_node,
+        get_action_server_names_and_types_by_node,
+    )
+    from rclpy.node import NodeNameNonExistentError
+
+    if node is None:
+        return {}
+    query = {"servers": get_action_server_names_and_types_by_node,
+             "clients": get_action_client_names_and_types_by_node}[kind]
+    namespace, _, name = node.rpartition("/")
+    try:
+        found = query(graph.node, name, namespace or "/")
+    except (NodeNameNonExistentError, RuntimeError):
+        return {}
+    return {action: list(types) for action, types in found}
+
+
+def wait_for_action(s: GradingSession, node: str | None, kind: str, name: str, timeout: float,
+                    abort: Callable[[], bool] | None = None, graph: Any = None) -> dict[str, list[str]]:
+    """Poll :func:`action_endpoints` until ``name`` is among them (at most ``timeout`` s, phase ``start``).
+
+    Returns the last listing. Another action of the node ends the wait 1 s
+    after it appears (a misnamed action will not rename itself).
+    """
+    seen: dict[str, list[str]] = {}
+    first_other: list[float] = []
+
+    def done() -> bool:
+        seen.clear()
+        seen.update(action_endpoints(graph or s.graph, node, kind))
+        if name in seen:
+            return True
+        if seen and not first_other:
+            first_other.append(time.monotonic())
+        return bool(first_other) and time.monotonic() - first_other[0] > 1.0
+
+    if node is not None:
+        with s.phase("start"):
+            wait_until(done, timeout, interval=0.05, abort=abort)
+    return dict(seen)
+
+
+@dataclass
+class Goal:
+    """One goal the grader sent with :class:`GoalClient`, and what became of it.
+
+    Attributes:
+        request: the ``Action.Goal`` sent.
+        sent: ``time.time()`` seconds when it was sent.
+        accepted: the server's answer; None while (or when) there was none.
+        status: the terminal status (:data:`STATUS_NAMES`), None before the result.
+        result: the ``Action.Result``, None before it.
+        ended: ``time.time()`` seconds when the result arrived.
+    """
+
+    request: Any
+    sent: float
+    accepted: bool | None = None
+    handle: Any = None
+    status: int | None = None
+    result: Any = None
+    ended: float | None = None
+    why: str = ""
+    result_future: Any = None
+
+    @property
+    def uuid(self) -> bytes | None:
+        """The goal id the server gave it (None when it was not answered)."""
+        return None if self.handle is None else bytes(self.handle.goal_id.uuid)
+
+
+class GoalClient:
+    """The grader's ``ros2 action send_goal`` for action ``name`` in ``graph``.
+
+    Args:
+        action_type: the generated action class (e.g. ``MoveStraightIn2D``).
+        name: the action's name, ``/move_straight_in_2d``.
+        graph: a :class:`~ros2course.run.probes.RosSession` (default ``s.graph``).
+
+    Create it before the learner's server starts: its feedback probe then
+    misses nothing. Closed with the part (:meth:`GradingSession.on_close`).
+    """
+
+    def __init__(self, s: GradingSession, action_type: type, name: str, graph: Any = None) -> None:
+        from rclpy.action import ActionClient
+
+        self.graph = graph or s.graph
+        self.action_type, self.name = action_type, name
+        self.client = ActionClient(self.graph.node, action_type, name)
+        self.feedback_probe = self.graph.topic(f"{name}/_action/feedback", action_type.Impl.FeedbackMessage,
+                                               reliable_qos(100))
+        s.on_close(self.close)
+
+    def wait_for_server(self, timeout: float, abort: Callable[[], bool] | None = None) -> bool:
+        """True once the server's three services and two topics match ours (``server_is_ready``)."""
+        return wait_until(self.client.server_is_ready, timeout, interval=0.05, abort=abort)
+
+    def send(self, request: Any, timeout: float = 3.0) -> Goal:
+        """Send ``request`` (an ``Action.Goal``) and wait ``timeout`` s for accepted or rejected."""
+        goal = Goal(request=request, sent=time.time())
+        record(self.graph, f"{self.name}/_action/send_goal/request", request)
+        future = self.client.send_goal_async(request)
+        if not wait_until(future.done, timeout, interval=0.005):
+            future.cancel()
+            goal.why = f"no answer to the goal within {timeout:.1f} s"
+            return goal
+        goal.handle = future.result()
+        goal.accepted = bool(goal.handle.accepted) if goal.handle is not None else None
+        return goal
+
+    def wait_result(self, goal: Goal, timeout: float, abort: Callable[[], bool] | None = None) -> Goal:
+        """Wait up to ``timeout`` s for ``goal``'s result; sets ``status``, ``result``, ``ended`` (else ``why``)."""
+        if not goal.accepted:
+            return goal
+        if goal.result_future is None:
+            goal.result_future = goal.handle.get_result_async()
+        future = goal.result_future
+        wait_until(future.done, timeout, interval=0.005, abort=abort)
+        if future.done() and future.result() is not None:
+            response = future.result()
+            goal.status, goal.result, goal.ended = response.status, response.result, time.time()
+            record(self.graph, f"{self.name}/_action/get_result/response", response)
+        else:
+            goal.why = f"no result within {timeout:.1f} s"
+        return goal
+
+    def cancel(self, goal: Goal, timeout: float = 3.0) -> tuple[bool | None, str]:
+        """Ask to cancel ``goal``: ``(True, "")`` when the server accepted, ``(False, why)``, ``(None, why)`` without an answer.
+
+        A cancel is accepted when the server's answer lists the goal among
+        ``goals_canceling`` (action_msgs/srv/CancelGoal), as ``ros2 action``
+        and rclpy's ``ClientGoalHandle.cancel_goal_async`` read it.
+        """
+        future = goal.handle.cancel_goal_async()
+        if not wait_until(future.done, timeout, interval=0.005):
+            future.cancel()
+            return None, f"no answer to the cancel request within {timeout:.1f} s"
+        response = future.result()
+        canceling = [bytes(info.goal_id.uuid) for info in response.goals_canceling]
+        if goal.uuid in canceling:
+            return True, ""
+        if response.return_code == 0:  # rcl accepted it; the server's cancel_callback said REJECT (rclpy's default)
+            return False, "the server refused it: the goal is not among goals_canceling (its cancel_callback rejected it)"
+        codes = {1: "ERROR_REJECTED", 2: "ERROR_UNKNOWN_GOAL_ID", 3: "ERROR_GOAL_TERMINATED: it had already ended"}
+        return False, f"the server refused it ({codes.get(response.return_code, response.return_code)})"
+
+    def feedback(self, goal: Goal) -> list[tuple[float, Any]]:
+        """``(send stamp seconds, Action.Feedback)`` of ``goal``, oldest first (from the feedback topic)."""
+        uuid = goal.uuid
+        if uuid is None:
+            return []
+        return [(stamp, message.feedback) for stamp, message in zip(self.feedback_probe.send_stamps(),
+                                                                    self.feedback_probe.messages(), strict=False)
+                if bytes(message.goal_id.uuid) == uuid]
+
+    def close(self) -> None:
+        """Remove the client from the graph."""
+        self.client.destroy()
+
+
+@dataclass
+class Script:
+    """How :class:`StandInActionServer` answers one goal.
+
+    Attributes:
+        accept: False rejects the goal.
+        feedback: ``Action.Feedback`` messages to publish, one every ``period`` s.
+        result: the ``Action.Result`` to return.
+        status: how the goal ends: :data:`SUCCEEDED` or :data:`ABORTED`.
+        period: seconds between two feedback messages.
+    """
+
+    accept: bool = True
+    feedback: list[Any] = field(default_factory=list)
+    result: Any = None
+    status: int = SUCCEEDED
+    period: float = 0.1
+
+
+class StandInActionServer:
+    """The grader's action server ``name``, answering each goal as ``script(index, goal)`` says.
+
+    It lives on a node and a two-thread executor of its own (``_ros2course_stand_in_action_server``),
+    so a goal executing (publishing feedback every ``period``) never blocks the grader's other
+    callbacks. Nothing exists in the graph before :meth:`offer`.
+
+    Args:
+        graph: the :class:`~ros2course.run.probes.RosSession` to serve in.
+        script: ``script(index, goal) -> Script``; ``index`` counts goals from 0.
+
+    Attributes:
+        goals: ``(time.monotonic() seconds, Action.Goal)`` per goal received.
+        ended: per goal executed, ``(time.monotonic() seconds, status)`` when it ended.
+    """
+
+    def __init__(self, graph: Any, action_type: type, name: str, script: Callable[[int, Any], Script]) -> None:
+        self.graph, self.action_type, self.name, self.script = graph, action_type, name, script
+        self.goals: list[tuple[float, Any]] = []
+        self.ended: list[tuple[float, int]] = []
+        self._accepted: list[Script] = []  # scripts of accepted goals not executed yet, oldest first
+        self._lock = threading.Lock()
+        self._node = self._executor = self._thread = self._server = None
+
+    def offer(self) -> None:
+        """Create the server (it appears in the graph) and start answering."""
+        import rclpy
+        from rclpy.action import ActionServer
+        from rclpy.callback_groups import ReentrantCallbackGroup
+        from rclpy.executors import MultiThreadedExecutor
+        from rclpy.parameter import Parameter
+
+        self._node = rclpy.create_node(
+            "_ros2course_stand_in_action_server", context=self.graph.context, enable_rosout=False,
+            start_parameter_services=False,
+            parameter_overrides=[Parameter("start_type_description_service", value=False)])
+        self._server = ActionServer(self._node, self.action_type, self.name, self._execute,
+                                    goal_callback=self._on_goal, callback_group=ReentrantCallbackGroup())
+        self._executor = MultiThreadedExecutor(num_threads=2, context=self.graph.context)
+        self._executor.add_node(self._node)
+        self._thread = threading.Thread(target=self._spin, daemon=True, name="ros2course-stand-in-action-server")
+        self._thread.start()
+
+    def _spin(self) -> None:
+        from rclpy.executors import ExternalShutdownException
+
+        try:
+            self._executor.spin()
+        except (ExternalShutdownException, RuntimeError):
+            return
+
+    def _on_goal(self, goal: Any) -> Any:
+        from rclpy.action import GoalResponse
+
+        with self._lock:
+            index = len(self.goals)
+            self.goals.append((time.monotonic(), goal))
+        record(self.graph, f"{self.name}/_action/send_goal/request", goal)
+        script = self.script(index, goal)
+        if script.accept:
+            with self._lock:
+                self._accepted.append(script)
+        return GoalResponse.ACCEPT if script.accept else GoalResponse.REJECT
+
+    def _execute(self, goal_handle: Any) -> Any:
+        with self._lock:
+            script = self._accepted.pop(0)
+        for feedback in script.feedback:
+            time.sleep(script.period)
+            goal_handle.publish_feedback(feedback)
+        time.sleep(script.period)
+        (goal_handle.abort if script.status == ABORTED else goal_handle.succeed)()
+        with self._lock:
+            self.ended.append((time.monotonic(), script.status))
+        return script.result if script.result is not None else self.action_type.Result()
+
+    def close(self) -> None:
+        """Stop answering and remove the server from the graph (nothing to do before :meth:`offer`)."""
+        if self._executor is not None:
+            stop_spinning(self._executor, self._thread)
+        if self._server is not None:
+            self._server.destroy()
+        if self._node is not None:
+            self._node.destroy_node()
+        self._node = self._executor = self._thread = self._server = None
+
+
+def stand_in_action_server(s: GradingSession, action_type: type, name: str, script: Callable[[int, Any], Script],
+                           graph: Any = None) -> StandInActionServer:
+    """A :class:`StandInActionServer` in ``graph`` (default ``s.graph``), not offered yet, closed with the part.
+
+    Create it before starting the learner's client (closers run newest first:
+    the client's Ctrl+C is judged while the server still exists).
+    """
+    server = StandInActionServer(graph or s.graph, action_type, name, script)
+    s.on_close(server.close)
+    return server

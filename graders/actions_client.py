@@ -1,0 +1,259 @@
+"""Grader for ``actions-client`` (contract in chapters/29-actions-client/CONTRACT.md).
+
+The grader plays the action server (:class:`ros2course.kit.actions.StandInActionServer`)
+and judges the learner's client from its /rosout records and how its process ends.
+Three runs, each in a graph of its own, each with a goal of random coordinates
+given as the parameters ``x`` and ``y``:
+
+* **goal**: no server at first (the client must say it waits); then the grader's
+  server appears, accepts the goal, sends five feedback messages with random
+  distances and ends the goal SUCCEEDED with a final position of its own. The log
+  must show every distance, the final position and the status; the process must
+  then end by itself with exit code 0.
+* **aborted**: the server accepts, sends two feedback messages and ABORTS: the log
+  must name that status (a client that always says "succeeded" fails).
+* **rejected**: the server rejects the goal: the client must say so and end cleanly
+  (a rejected goal has no result: asking for it gets an empty answer with status UNKNOWN).
+* **interrupted**: no server at all; Ctrl+C while the client waits must end it with
+  exit code 0 and no traceback.
+"""
+
+from __future__ import annotations
+
+import random
+import re
+import time
+from collections.abc import Callable
+from typing import Any
+
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, Unmet, checks
+from ros2course.kit import actions as act
+from ros2course.kit.topics_services import numbers_in
+
+from . import _services
+
+PACKAGE = "python_package_that_uses_the_actions"
+EXECUTABLE = "move_straight_in_2d_action_client_node"
+NODE = "move_straight_in_2d_action_client"
+ACTION = "/move_straight_in_2d"
+#: Seconds the client runs without a server before the grader's appears.
+WAIT_WINDOW = 3.0
+#: Seconds a client may take to end by itself once its goal has ended.
+END_TIMEOUT = 3.0
+#: Seconds for the log records the grader looks for (one goal lasts under a second).
+LOG_TIMEOUT = 5.0
+#: Metres: a logged number matches a value the grader sent when it is this close (3 decimals printed).
+NUMBER_TOLERANCE = 0.0006
+PERIOD = 0.1  # seconds between the grader's feedback messages
+
+RUN = ("executable",)
+CHECKS = [
+    Check("build", "The packages build with colcon", 1),
+    Check("executable", f"ros2 run finds {EXECUTABLE}", 1,
+          f"add '{EXECUTABLE} = {PACKAGE}.{EXECUTABLE}:main' to console_scripts in setup.py, then colcon build"),
+    Check("node_name", f"A node named {NODE} starts", 1, f"pass '{NODE}' to super().__init__()", needs=RUN,
+          part="goal"),
+    Check("waits", f"While no server offers {ACTION}, it says in its log that it waits", 1,
+          "in a timer: if not self.action_client.server_is_ready(): log 'action server not available, waiting...' "
+          "(throttle_duration_sec=1.0) and return", needs=RUN, part="goal"),
+    Check("goal_sent", "Once the server is there, it sends one goal: the parameters x and y", 2,
+          "declare the parameters x and y (self.declare_parameter('x', 1.0).value), put them in "
+          "goal.desired_position and call self.action_client.send_goal_async(goal, feedback_callback=...)",
+          needs=RUN, part="goal"),
+    Check("logs_feedback", "It logs the distance_to_goal of every feedback message", 2,
+          "pass feedback_callback=self.feedback_callback to send_goal_async; log "
+          "feedback_message.feedback.distance_to_goal with get_logger().info()", needs=RUN, part="goal"),
+    Check("logs_result", "It logs the result: the final position and the status SUCCEEDED", 2,
+          "in goal_response_callback: goal_handle.get_result_async().add_done_callback(self.result_callback); "
+          "there, response = future.result(): log response.result.final_position and the name of "
+          "response.status (GoalStatus.STATUS_SUCCEEDED is 4)", needs=RUN, part="goal"),
+    Check("ends", "Once the goal has ended, the client ends by itself: exit code 0, no traceback", 1,
+          "after logging the result, stop spinning: set a flag and loop `while rclpy.ok() and not node.done: "
+          "rclpy.spin_once(node, timeout_sec=0.1)` in main", needs=RUN, part="goal"),
+    Check("logs_aborted", "A goal the server aborts is logged as ABORTED", 1,
+          "log the status the result response carries (response.status: GoalStatus.STATUS_ABORTED is 6), "
+          "never a fixed 'succeeded'", needs=RUN, part="aborted"),
+    checks.ctrl_c("sigint_exit", "the client while it waits for the server", 1, needs=RUN, part="interrupted"),
+    Check("handles_rejection", "A rejected goal is logged as rejected, and the client ends cleanly", 2,
+          "in goal_response_callback: if not goal_handle.accepted: log that the goal was rejected, set the flag "
+          "that ends main() and return (a rejected goal has no result: asking for it gets status UNKNOWN)",
+          needs=RUN, part="rejected"),
+]
+
+
+def _goal_xy() -> tuple[float, float]:
+    return round(random.uniform(0.3, 0.9), 3), round(random.uniform(-0.9, -0.3), 3)
+
+
+def _params(xy: tuple[float, float]) -> list[str]:
+    return ["--ros-args", "-p", f"x:={xy[0]}", "-p", f"y:={xy[1]}"]
+
+
+def _gone(proc: kit.LearnerProcess) -> Callable[[], bool]:
+    """True once ``proc`` has been dead for :data:`kit.LATE_DELIVERY` s: the records it logged just before
+    exiting are still on their way to the grader until then."""
+    def gone() -> bool:
+        return proc.poll() is not None and time.monotonic() - (proc.ended_at or 0.0) > kit.LATE_DELIVERY
+
+    return gone
+
+
+def _has(text: str, value: float) -> bool:
+    return any(abs(number - value) <= NUMBER_TOLERANCE for number in numbers_in(text))
+
+
+def _records(rosout: Any) -> list[str]:
+    """The client's log records (its node's logger), oldest first, on one line each."""
+    return [" ".join(r.msg.split()) for r in rosout.records(node=NODE)]
+
+
+def _last(rosout: Any, count: int = 3) -> str:
+    return " | ".join(text[:80] for text in _records(rosout)[-count:]) or "no log records"
+
+
+def _result_script(action: Any, final: tuple[float, float], distances: list[float], status: int) -> act.Script:
+    feedback = []
+    for distance in distances:
+        message = action.Feedback()
+        message.distance_to_goal = distance
+        feedback.append(message)
+    result = action.Result()
+    result.final_position.x, result.final_position.y = final
+    return act.Script(accept=True, feedback=feedback, result=result, status=status, period=PERIOD)
+
+
+def grade(s: GradingSession) -> None:
+    """Three runs of the client against the grader's own server (see the module docstring)."""
+    action = s.interface_type("package_with_interfaces", "action", "MoveStraightIn2D")
+    path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)
+    with s.part("goal", own_graph=True):
+        _goal_run(s, action, path)
+    with s.part("aborted", own_graph=True):
+        _aborted_run(s, action, path)
+    with s.part("rejected", own_graph=True):
+        _rejected_run(s, action, path)
+    with s.part("interrupted", own_graph=True):
+        _interrupted_run(s, path)
+
+
+def _interrupted_run(s: GradingSession, path: Any) -> None:
+    """sigint_exit: Ctrl+C while the client waits for a server that never comes (judged as the part ends)."""
+    rosout = s.graph.rosout()
+    proc = _started(s, path, _goal_xy(), f"{EXECUTABLE}.interrupted")
+    s.on_close(lambda: kit.sigint_exit(s, "sigint_exit", proc))
+    with s.phase("observe"):  # Ctrl+C once it says it waits (what a learner sees before pressing it)
+        kit.wait_until(lambda: bool(_records(rosout)), 2 * WAIT_WINDOW, abort=lambda: proc.poll() is not None)
+
+
+def _goal_run(s: GradingSession, action: Any, path: Any) -> None:
+    """waits, goal_sent, logs_feedback, logs_result, ends."""
+    xy = _goal_xy()
+    distances = sorted((round(random.uniform(0.05, 0.95), 3) for _ in range(4)), reverse=True) + [0.0]
+    final = (round(xy[0] + random.uniform(-0.004, 0.004), 3), round(xy[1] + random.uniform(-0.004, 0.004), 3))
+    server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
+        action, final, distances, act.SUCCEEDED))
+    rosout = s.graph.rosout()
+    node = kit.start_node(s, "node_name", path, NODE, args=_params(xy), label=EXECUTABLE)
+    _services.says_it_waits(s, "waits", rosout, node, ACTION, timeout=WAIT_WINDOW, what="action server")
+    server.offer()
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(server.goals), LOG_TIMEOUT, abort=node.ended)
+    expected = f"one goal, desired_position ({xy[0]}, {xy[1]}) (the parameters x and y)"
+    if not server.goals:
+        s.record("goal_sent", False, f"no goal in {LOG_TIMEOUT:.0f} s after the server appeared; "
+                 f"last log records: {_last(rosout)}; {kit.process_state(node.proc)}", expected)
+        s.require("goal_sent")
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(server.ended), len(distances) * PERIOD + 2.0, abort=node.ended)
+        kit.wait_until(lambda: any(_has(text, final[0]) and _has(text, final[1]) for text in _records(rosout)),
+                       LOG_TIMEOUT, abort=_gone(node.proc))
+    # counted once the goal has ended: a client that sends again at every tick has sent several by now
+    sent = [(g.desired_position.x, g.desired_position.y) for _, g in server.goals]
+    shown = ", ".join(f"({x:g}, {y:g})" for x, y in sent[:3]) + (", ..." if len(sent) > 3 else "")
+    s.record("goal_sent", len(sent) == 1 and abs(sent[0][0] - xy[0]) < 1e-9 and abs(sent[0][1] - xy[1]) < 1e-9,
+             f"{len(sent)} goal(s) by the time the first had ended: {shown}", expected)
+    records = _records(rosout)
+    found = [d for d in distances if any(_has(text, d) for text in records)]
+    s.record("logs_feedback", len(found) == len(distances),
+             f"{len(found)} of the {len(distances)} distances sent ({', '.join(f'{d:.3f}' for d in distances)}) "
+             f"found in the log" + ("" if found else f"; last log records: {_last(rosout)}"),
+             "each distance_to_goal in a log record (the logger, not print())",
+             fraction=len(found) / len(distances))
+    shown = [text for text in records if _has(text, final[0]) and _has(text, final[1])]
+    said = [text for text in shown if re.search(r"succe", text, re.IGNORECASE)]
+    expected = f"a log record with the final position ({final[0]}, {final[1]}) and SUCCEEDED"
+    if said:
+        s.record("logs_result", True, f"'{said[0][:120]}'", expected)
+    elif shown:
+        s.record("logs_result", False, f"'{shown[0][:120]}': the position, but not the status", expected)
+    else:
+        s.record("logs_result", False, f"no record with ({final[0]}, {final[1]}); last log records: {_last(rosout)}",
+                 expected)
+    _ends(s, "ends", node.proc, "once its goal had SUCCEEDED")
+
+
+def _ends(s: GradingSession, check_id: str, proc: kit.LearnerProcess, when: str) -> bool:
+    """Record ``check_id``: ``proc`` ends by itself within :data:`END_TIMEOUT` s, exit code 0, no traceback."""
+    with s.phase("observe"):
+        kit.wait_until(lambda: proc.poll() is not None, END_TIMEOUT)
+    expected = f"the process ends by itself within {END_TIMEOUT:.0f} s, exit code 0, no traceback"
+    ended = proc.exit_state()
+    if ended is None:
+        return s.record(check_id, False, f"still running {END_TIMEOUT:.0f} s {when}", expected)
+    traceback = "Traceback (most recent call last)" in proc.stderr() + proc.stdout()
+    ok = ended.returncode == 0 and not traceback
+    return s.record(check_id, ok, f"{when}, the process {ended.describe()}"
+                    + (f" ({ended.last_line})" if ended.last_line and not ok else ""), expected)
+
+
+def _started(s: GradingSession, path: Any, xy: tuple[float, float], label: str) -> kit.LearnerProcess:
+    """Start the client with goal ``xy`` (the server is already there); it may end before the graph shows it."""
+    return s.launch(path, label, _params(xy))
+
+
+def _aborted_run(s: GradingSession, action: Any, path: Any) -> None:
+    """logs_aborted: the grader's server aborts the goal after two feedback messages."""
+    xy = _goal_xy()
+    final = (round(xy[0] / 2, 3), round(xy[1] / 2, 3))
+    server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
+        action, final, [0.6, 0.5], act.ABORTED))
+    rosout = s.graph.rosout()
+    server.offer()
+    proc = _started(s, path, xy, f"{EXECUTABLE}.aborted")
+    with s.phase("observe"):
+        kit.wait_until(lambda: any(re.search(r"abort", text, re.IGNORECASE) for text in _records(rosout)),
+                       2 * LOG_TIMEOUT, abort=_gone(proc))
+    said = [text for text in _records(rosout) if re.search(r"abort", text, re.IGNORECASE)]
+    expected = "a log record naming the status ABORTED"
+    if not server.goals:
+        raise Unmet(f"no goal reached the server; last log records: {_last(rosout)}; {kit.process_state(proc)}")
+    s.record("logs_aborted", bool(said), f"'{said[0][:120]}'" if said else
+             f"the goal was aborted; its log: {_last(rosout)}", expected)
+
+
+def _rejected_run(s: GradingSession, action: Any, path: Any) -> None:
+    """handles_rejection: the grader's server rejects the goal."""
+    xy = _goal_xy()
+    server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: act.Script(accept=False))
+    rosout = s.graph.rosout()
+    server.offer()
+    proc = _started(s, path, xy, f"{EXECUTABLE}.rejected")
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(server.goals), 2 * LOG_TIMEOUT, abort=lambda: proc.poll() is not None)
+        if not server.goals:
+            raise Unmet(f"no goal reached the server; last log records: {_last(rosout)}; {kit.process_state(proc)}")
+        kit.wait_until(lambda: any(re.search(r"reject", text, re.IGNORECASE) for text in _records(rosout))
+                       and proc.poll() is not None, END_TIMEOUT, abort=_gone(proc))
+    said = [text for text in _records(rosout) if re.search(r"reject", text, re.IGNORECASE)]
+    ended = proc.exit_state()
+    traceback = "Traceback (most recent call last)" in proc.stderr() + proc.stdout()
+    problems = []
+    if not said:
+        problems.append(f"no log record says the goal was rejected (last records: {_last(rosout)})")
+    if ended is None:
+        problems.append(f"still running {END_TIMEOUT:.0f} s after the rejection")
+    elif ended.returncode != 0 or traceback:
+        problems.append(f"the process {ended.describe()}" + (f" ({ended.last_line})" if ended.last_line else ""))
+    s.record("handles_rejection", not problems, "; ".join(problems) or f"'{said[0][:120]}', then the process "
+             f"{ended.describe()}", "a log record saying the goal was rejected, then exit code 0, no traceback")

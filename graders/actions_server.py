@@ -1,0 +1,391 @@
+"""Grader for ``actions-server`` (contract in chapters/29-actions-server/CONTRACT.md).
+
+Black-box, as ``ros2 action send_goal`` would: the grader's own action client
+(:class:`ros2course.kit.actions.GoalClient`) sends the learner's server four goals
+in a row, the point it simulates carrying over from one to the next:
+
+1. a goal 1 m away: accepted, feedback every 0.1 s with the distance falling at
+   1 m/s (a least-squares fit over the feedback messages' send stamps), the result
+   the goal itself and the status SUCCEEDED;
+2. a goal 3 m away and a goal with a NaN coordinate: both rejected;
+3. a goal 0.8 m from where goal 1 ended, canceled after three feedback messages:
+   its first feedback shows where the point started (the position is kept), the
+   cancel is accepted, the goal ends CANCELED short of the goal and nothing moves
+   after it;
+4. a goal 1 m away, then after three feedback messages a second goal: the first
+   ends ABORTED (one goal at a time), the second SUCCEEDED.
+
+Then the learner's ``cli/action_move_straight.sh X Y`` runs against the same server
+(``ros2 action list``, ``info``, ``send_goal --feedback``), with a goal only the
+grader knows.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import random
+import time
+from typing import Any
+
+from ros2course import kit
+from ros2course.kit import Check, GradingSession, Unmet, checks, scripts
+from ros2course.kit import actions as act
+
+PACKAGE = "python_package_that_uses_the_actions"
+EXECUTABLE = "move_straight_in_2d_action_server_node"
+NODE = "move_straight_in_2d_action_server"
+ACTION = "/move_straight_in_2d"
+ACTION_TYPE = "package_with_interfaces/action/MoveStraightIn2D"
+SPEED = 1.0  # metres per second (CONTRACT.md)
+PERIOD = 0.1  # seconds between two feedback messages (CONTRACT.md)
+MAX_DISTANCE = 2.0  # metres: goals farther than this from the point are rejected (CONTRACT.md)
+#: Metres: positions judged (the result, where a canceled goal stopped).
+POSITION_TOLERANCE = 0.01
+#: Metres: where the point is after a cancel or a first step, judged to one step and a half (one
+#: more step may be taken while the request travels).
+STEP_TOLERANCE = 1.5 * SPEED * PERIOD
+#: Seconds a goal of distance d may take: d / SPEED plus this (start-up and a loaded machine).
+GOAL_SLACK = 3.0
+SCRIPT = "cli/action_move_straight.sh"
+SCRIPT_TIMEOUT = 20.0  # seconds: three ros2 commands, about 1 s each to start, and a 0.5 m goal
+
+RUN = ("executable",)
+SERVED = ("action_served",)
+CHECKS = [
+    Check("build", "The packages build with colcon", 1),
+    Check("executable", f"ros2 run finds {EXECUTABLE}", 1,
+          f"add '{EXECUTABLE} = {PACKAGE}.{EXECUTABLE}:main' to console_scripts in setup.py, then colcon build"),
+    Check("node_name", f"A node named {NODE} starts", 1, f"pass '{NODE}' to super().__init__()", needs=RUN),
+    Check("action_served", f"It serves the action {ACTION} [{ACTION_TYPE}]", 2,
+          f"ActionServer(self, MoveStraightIn2D, '{ACTION}', execute_callback=...) in __init__; the action "
+          "must be in package_with_interfaces (action/MoveStraightIn2D.action, listed in rosidl_generate_interfaces)",
+          needs=RUN),
+    Check("goal_accepted", "A goal 1 m away is accepted", 1,
+          "goal_callback returns GoalResponse.ACCEPT for a goal with finite coordinates within 2 m", needs=SERVED),
+    Check("feedback", "While it moves, it publishes feedback: distance_to_goal falls at every step, to 0", 2,
+          "after each step: feedback.distance_to_goal = the distance still to go; "
+          "goal_handle.publish_feedback(feedback)", needs=("goal_accepted",)),
+    Check("feedback_rate", f"One feedback message every {PERIOD} s ({1 / PERIOD:.0f} Hz)", 1,
+          f"sleep {PERIOD} s between two steps (time.sleep({PERIOD}) in execute_callback)", needs=("feedback",)),
+    Check("speed", f"The point moves at {SPEED} m/s (the distance falls {SPEED * PERIOD} m per step)", 2,
+          f"move {SPEED * PERIOD} m towards the goal at each step: position += direction * SPEED * PERIOD",
+          needs=("feedback",)),
+    Check("result", "The goal ends SUCCEEDED, its result the goal itself", 2,
+          "when the last step lands on the goal: goal_handle.succeed(), and return a Result whose final_position "
+          "is where the point is", needs=("goal_accepted",)),
+    Check("rejects", f"Goals more than {MAX_DISTANCE} m away, or not finite, are rejected", 2,
+          "in goal_callback: return GoalResponse.REJECT when math.isfinite() fails for x or y, or when the goal "
+          f"is more than {MAX_DISTANCE} m from the point", needs=SERVED),
+    Check("position_kept", "The next goal starts where the last one ended", 1,
+          "keep the point's position in the node (self.position), not in execute_callback: it must survive "
+          "from one goal to the next", needs=("goal_accepted",)),
+    Check("cancel_accepted", "A cancel request for the executing goal is accepted", 1,
+          "pass cancel_callback= to ActionServer, returning CancelResponse.ACCEPT (the default rejects every "
+          "cancel); spin with a MultiThreadedExecutor and a ReentrantCallbackGroup, or the cancel request "
+          "waits until execute_callback returns", needs=("goal_accepted",)),
+    Check("canceled", "The canceled goal ends CANCELED where the point stopped, and the point stops", 2,
+          "in the loop of execute_callback: if goal_handle.is_cancel_requested: goal_handle.canceled() and return "
+          "a Result with the position reached", needs=("cancel_accepted",)),
+    Check("preempted", "A new goal aborts the one executing (ABORTED), then succeeds itself", 2,
+          "in handle_accepted_callback: if the previous goal handle is_active, call its abort(), then "
+          "goal_handle.execute(); in the loop, stop when not goal_handle.is_active", needs=("goal_accepted",)),
+    Check("cli_script", f"{SCRIPT} exists and is valid bash", 1, part="cli", needs=SERVED),
+    Check("cli_list", f"It lists the actions: {ACTION}", 1, "ros2 action list", part="cli", needs=("cli_script",)),
+    Check("cli_info", f"It shows who serves {ACTION}", 1, f"ros2 action info {ACTION}", part="cli",
+          needs=("cli_script",)),
+    Check("cli_send_goal", "It sends the goal given as its arguments, prints the feedback and the result", 2,
+          f"ros2 action send_goal --feedback {ACTION} {ACTION_TYPE} \"{{desired_position: {{x: $1, y: $2}}}}\"",
+          part="cli", needs=("cli_script",)),
+    checks.ctrl_c("sigint_exit", "the server", 1, needs=RUN),
+]
+
+
+def _point(x: float, y: float) -> Any:
+    from geometry_msgs.msg import (
+        Point,  # a wheel of the venv; graders load for CHECKS without ROS
+    )
+
+    return Point(x=x, y=y, z=0.0)
+
+
+def _goal(action: Any, x: float, y: float) -> Any:
+    goal = action.Goal()
+    goal.desired_position = _point(x, y)
+    return goal
+
+
+def _xy(point: Any) -> tuple[float, float]:
+    return point.x, point.y
+
+
+def _show(xy: tuple[float, float]) -> str:
+    return f"({xy[0]:.3f}, {xy[1]:.3f})"
+
+
+def _distances(client: act.GoalClient, goal: act.Goal) -> list[tuple[float, float]]:
+    """``(send stamp, distance_to_goal)`` of ``goal``'s feedback so far."""
+    return [(stamp, feedback.distance_to_goal) for stamp, feedback in client.feedback(goal)]
+
+
+def _wait_feedback(s: GradingSession, client: act.GoalClient, goal: act.Goal, count: int, node: kit.StartedNode,
+                   timeout: float) -> list[tuple[float, float]]:
+    with s.phase("observe"):
+        kit.wait_until(lambda: len(_distances(client, goal)) >= count or goal.result_future is not None
+                       and goal.result_future.done(), timeout, abort=node.ended)
+    return _distances(client, goal)
+
+
+def grade(s: GradingSession) -> None:
+    """Start the server, send it four goals, then run the learner's script against it."""
+    action = s.interface_type("package_with_interfaces", "action", "MoveStraightIn2D")
+    path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)
+    client = act.GoalClient(s, action, ACTION)  # before the node starts: no feedback is missed
+    node = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit", need_node=False)
+    stuck: list[str] = []
+    stop = (0.0, 0.0)  # where the point is when a step before the cancel raised Unmet
+    with s.part("server"):
+        _served(s, client, node)
+        start, heading = _first_goal(s, action, client, node)
+        _rejects(s, action, client, start)
+        stop = _cancel(s, action, client, node, start, heading)
+        stuck = _preempt(s, action, client, node, stop)
+    with s.part("cli"):
+        unmet = s.unmet_need("cli_script")
+        if unmet is not None:
+            raise Unmet(unmet)
+        if stuck:
+            raise Unmet(f"the server still executes the goal(s) {', '.join(stuck)} and answers no cancel: "
+                        "every thread of its executor is busy")
+        _cli(s, node, stop)
+
+
+def _served(s: GradingSession, client: act.GoalClient, node: kit.StartedNode) -> None:
+    """Record ``action_served``: the node lists the action and the grader's client reaches it."""
+    found = act.wait_for_action(s, node.name, "servers", ACTION, 5.0, abort=node.ended)
+    ready = ACTION_TYPE in found.get(ACTION, []) and client.wait_for_server(3.0, abort=node.ended)
+    shown = ", ".join(f"{name} [{', '.join(types)}]" for name, types in sorted(found.items())) or "none"
+    observed = f"{node.name or 'no node'} serves the action(s): {shown}"
+    if ACTION in found and not ready:
+        observed += "; the grader's client of that type could not reach it (the action's fields differ?)"
+    s.record("action_served", ready, f"{observed}; {kit.process_state(node.proc)}" if not ready else observed,
+             f"{ACTION} [{ACTION_TYPE}] (ros2 node info: Action Servers)")
+    s.require("action_served")
+
+
+def _first_goal(s: GradingSession, action: Any, client: act.GoalClient,
+                node: kit.StartedNode) -> tuple[tuple[float, float], float]:
+    """Goal 1 (1 m from the origin): goal_accepted, feedback, feedback_rate, speed, result.
+
+    Returns where the point is believed to be afterwards, and the goal's direction (radians).
+    """
+    angle = random.uniform(0.0, 2.0 * math.pi)
+    target = (round(math.cos(angle), 3), round(math.sin(angle), 3))
+    distance = math.hypot(*target)
+    goal = client.send(_goal(action, *target))
+    s.record("goal_accepted", bool(goal.accepted),
+             f"the goal {_show(target)} ({distance:.3f} m from the start (0, 0)) was "
+             + ("accepted" if goal.accepted else "rejected" if goal.accepted is False else f"not answered: {goal.why}"),
+             f"the goal {_show(target)} accepted")
+    s.require("goal_accepted")
+    began = time.monotonic()
+    client.wait_result(goal, distance / SPEED + GOAL_SLACK, abort=node.ended)
+    _judge_feedback(s, client, goal, distance, time.monotonic() - began)
+    expected = f"status SUCCEEDED, final_position {_show(target)} ± {POSITION_TOLERANCE} m"
+    if goal.status is None:
+        s.record("result", False, f"{goal.why}; {kit.process_state(node.proc)}", expected)
+        return target, angle
+    final = _xy(goal.result.final_position)
+    ok = goal.status == act.SUCCEEDED and math.dist(final, target) <= POSITION_TOLERANCE
+    s.record("result", ok, f"status {act.status_name(goal.status)}, final_position {_show(final)}", expected)
+    return target, angle  # where a correct server put the point (the result itself is judged above)
+
+
+def _judge_feedback(s: GradingSession, client: act.GoalClient, goal: act.Goal, distance: float, waited: float) -> None:
+    """Record ``feedback``, ``feedback_rate`` and ``speed`` from goal 1's feedback messages."""
+    with s.phase("observe"):  # the last feedback may arrive just after the result
+        kit.wait_until(lambda: any(d <= POSITION_TOLERANCE for _, d in _distances(client, goal)), kit.LATE_DELIVERY)
+    samples = _distances(client, goal)
+    steps = int(distance / (SPEED * PERIOD))
+    expected = (f"about {steps} feedback messages, distance_to_goal falling at every one, from at most "
+                f"{distance:.2f} m to 0 (± {POSITION_TOLERANCE})")
+    if not samples:
+        s.record("feedback", False, f"no feedback in {waited:.1f} s (status {act.status_name(goal.status)})",
+                 expected)
+        return
+    values = [d for _, d in samples]
+    shown = ", ".join(f"{d:.3f}" for d in values[:4]) + (f", ..., {values[-1]:.3f}" if len(values) > 4 else "")
+    falling = all(b < a for a, b in itertools.pairwise(values))
+    ok = (falling and len(values) >= steps // 2 and values[0] <= distance + POSITION_TOLERANCE
+          and values[-1] <= POSITION_TOLERANCE)
+    why = "" if ok else (": it does not fall at every step" if not falling else
+                         f": only {len(values)} message(s)" if len(values) < steps // 2 else
+                         ": it does not end at 0" if values[-1] > POSITION_TOLERANCE else
+                         f": it starts above the {distance:.3f} m to go")
+    s.record("feedback", ok, f"{len(values)} feedback message(s), distance_to_goal {shown}{why}", expected)
+    stamps = [t for t, _ in samples]
+    kit.rate(s, "feedback_rate", stamps[:-1] if len(stamps) > steps else stamps, period=PERIOD,
+             needed=min(steps, 6), waited=waited, noun="feedback message", source="the feedback messages' send stamps")
+    moving = [(t, d) for t, d in samples if d > POSITION_TOLERANCE]
+    expected = f"distance_to_goal falling at {SPEED} m/s ± {kit.RATE_TOLERANCE:.0%} (least squares over the send stamps)"
+    if len(moving) < 3:
+        s.record("speed", False, f"only {len(moving)} feedback message(s) while moving", expected)
+        return
+    slope = _slope(moving)
+    s.record("speed", abs(-slope - SPEED) <= kit.RATE_TOLERANCE * SPEED,
+             f"the distance falls at {-slope:.3f} m/s over {len(moving)} feedback messages", expected,
+             window=(moving[0][0], moving[-1][0]))
+
+
+def _slope(points: list[tuple[float, float]]) -> float:
+    """Least-squares slope of ``(t, value)`` points (value units per second)."""
+    n = len(points)
+    mean_t = sum(t for t, _ in points) / n
+    mean_v = sum(v for _, v in points) / n
+    spread = sum((t - mean_t) ** 2 for t, _ in points)
+    return sum((t - mean_t) * (v - mean_v) for t, v in points) / spread if spread else 0.0
+
+
+def _rejects(s: GradingSession, action: Any, client: act.GoalClient, start: tuple[float, float]) -> None:
+    """Record ``rejects``: a goal 3 m from the point and one with a NaN coordinate are both rejected."""
+    angle = random.uniform(0.0, 2.0 * math.pi)
+    far = (round(start[0] + 3.0 * math.cos(angle), 3), round(start[1] + 3.0 * math.sin(angle), 3))
+    cases = [(f"{_show(far)}, 3 m away", far), ("(nan, 0.5)", (math.nan, 0.5))]
+    seen, wrong = [], 0
+    for label, xy in cases:
+        goal = client.send(_goal(action, *xy))
+        if goal.accepted:
+            wrong += 1
+            client.cancel(goal)  # a server that accepted it must not drive off: end it
+            client.wait_result(goal, 3.0 + 3.0 / SPEED)
+        verdict = {True: "accepted", False: "rejected", None: f"not answered ({goal.why})"}[goal.accepted]
+        seen.append(f"{label}: {verdict}")
+        if goal.accepted is None:
+            wrong += 1
+    s.record("rejects", wrong == 0, "; ".join(seen), "both rejected (GoalResponse.REJECT)",
+             fraction=(len(cases) - wrong) / len(cases))
+
+
+def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.StartedNode,
+            start: tuple[float, float], heading: float) -> tuple[float, float]:
+    """Goal 2, canceled after three feedback messages: position_kept, cancel_accepted, canceled.
+
+    ``heading``: the direction of goal 1 from the origin (radians). Returns where the point is
+    believed to be afterwards.
+    """
+    # 0.8 m from where goal 1 ended, at right angles to goal 1's way: from the origin it is 1.28 m away
+    target = (round(start[0] - 0.8 * math.sin(heading), 3), round(start[1] + 0.8 * math.cos(heading), 3))
+    goal = client.send(_goal(action, *target))
+    if not goal.accepted:
+        reason = f"the goal {_show(target)}, 0.8 m from {_show(start)}, was not accepted ({goal.why or 'rejected'})"
+        for check_id in ("position_kept", "cancel_accepted"):
+            s.record(check_id, False, reason, "accepted")
+        return start
+    first = _wait_feedback(s, client, goal, 3, node, 3.0)
+    expected = (f"the first feedback of a goal 0.8 m from where the last ended: distance_to_goal within "
+                f"{STEP_TOLERANCE:.2f} m below 0.8")
+    if first:
+        d0 = first[0][1]
+        s.record("position_kept", 0.8 - STEP_TOLERANCE <= d0 <= 0.8 + POSITION_TOLERANCE,
+                 f"goal {_show(target)} from {_show(start)}: first distance_to_goal {d0:.3f} m"
+                 + ("" if d0 <= 0.8 + POSITION_TOLERANCE else
+                    f" (from the origin it would be {math.hypot(*target) - SPEED * PERIOD:.3f})"), expected)
+    else:
+        s.record("position_kept", False, f"no feedback for the goal {_show(target)}", expected)
+    accepted, why = client.cancel(goal)
+    asked = time.time()
+    s.record("cancel_accepted", bool(accepted),
+             "the cancel request was accepted" if accepted else f"cancel: {why}; the goal then ended "
+             + act.status_name(client.wait_result(goal, 0.8 / SPEED + GOAL_SLACK, abort=node.ended).status),
+             "the goal listed among goals_canceling in the answer")
+    if not accepted:
+        client.wait_result(goal, 0.8 / SPEED + GOAL_SLACK, abort=node.ended)
+        return _xy(goal.result.final_position) if goal.result is not None else target
+    client.wait_result(goal, 2.0, abort=node.ended)
+    time.sleep(2 * PERIOD)  # a server that keeps moving sends feedback now
+    late = [d for t, d in _distances(client, goal) if t > asked + 1.5 * PERIOD]
+    samples = _distances(client, goal)
+    expected = (f"status CANCELED, final_position where the point stopped (short of the goal by the last "
+                f"distance_to_goal ± {STEP_TOLERANCE:.2f} m), no feedback after the cancel")
+    if goal.status is None:
+        s.record("canceled", False, f"{goal.why} after the cancel; {kit.process_state(node.proc)}", expected)
+        return target
+    final = _xy(goal.result.final_position)
+    short = math.dist(final, target)
+    last = samples[-1][1] if samples else 0.8
+    # where the point stopped by the server's own last feedback: the next goal starts there
+    stopped = (target[0] - (target[0] - start[0]) / 0.8 * last, target[1] - (target[1] - start[1]) / 0.8 * last)
+    problems = []
+    if goal.status != act.CANCELED:
+        problems.append(f"status {act.status_name(goal.status)}")
+    if abs(short - last) > STEP_TOLERANCE or short < POSITION_TOLERANCE:
+        problems.append(f"final_position {_show(final)} is {short:.3f} m from the goal, the last feedback said "
+                        f"{last:.3f}")
+    if late:
+        problems.append(f"{len(late)} feedback message(s) sent after the cancel (down to {late[-1]:.3f} m)")
+    s.record("canceled", not problems, "; ".join(problems) if problems else
+             f"CANCELED at {_show(final)}, {short:.3f} m short of the goal, nothing sent after it", expected)
+    return stopped if math.isfinite(last) else final
+
+
+def _preempt(s: GradingSession, action: Any, client: act.GoalClient, node: kit.StartedNode,
+             start: tuple[float, float]) -> list[str]:
+    """Record ``preempted``: goal 3 (1 m away) is aborted by goal 4 (back to the start), which succeeds.
+
+    Returns the goals the server still executes after the grader asked to cancel them (its
+    executor busy with them: it can take no other request).
+    """
+    angle = random.uniform(0.0, 2.0 * math.pi)
+    far = (round(start[0] + math.cos(angle), 3), round(start[1] + math.sin(angle), 3))
+    back = (round(start[0], 3), round(start[1], 3))
+    expected = ("the first goal ABORTED once the second is accepted; the second SUCCEEDED, final_position "
+                f"{_show(back)} ± {POSITION_TOLERANCE} m")
+    first = client.send(_goal(action, *far))
+    if not first.accepted:
+        s.record("preempted", False, f"the goal {_show(far)} (1 m away) was not accepted", expected)
+        return []
+    _wait_feedback(s, client, first, 3, node, 3.0)
+    second = client.send(_goal(action, *back))
+    client.wait_result(first, 1.0 / SPEED + GOAL_SLACK, abort=node.ended)
+    client.wait_result(second, 1.0 / SPEED + GOAL_SLACK, abort=node.ended)
+    observed = [f"first goal {_show(far)}: {act.status_name(first.status)}"]
+    if second.accepted:
+        final = _xy(second.result.final_position) if second.result is not None else None
+        observed.append(f"second goal {_show(back)}: {act.status_name(second.status)}"
+                        + (f" at {_show(final)}" if final else ""))
+        ok = (first.status == act.ABORTED and second.status == act.SUCCEEDED and final is not None
+              and math.dist(final, back) <= POSITION_TOLERANCE)
+        # a first goal that succeeded before the second was accepted did not run alongside it
+        if first.status == act.SUCCEEDED and first.ended is not None and first.ended <= second.sent + PERIOD:
+            observed.append("the first goal ended before the second was accepted (was the server able to take "
+                            "a goal while executing one?)")
+    else:
+        ok = False
+        observed.append(f"second goal {_show(back)}: {'rejected' if second.accepted is False else second.why}")
+    s.record("preempted", ok, "; ".join(observed), expected)
+    stuck = []
+    for goal in (first, second):  # goals still running (two loops fighting over the point) end here
+        if goal.accepted and goal.status is None:
+            client.cancel(goal)
+            if client.wait_result(goal, 1.0, abort=node.ended).status is None:
+                stuck.append(_show(_xy(goal.request.desired_position)))
+    return stuck
+
+
+def _cli(s: GradingSession, node: kit.StartedNode, start: tuple[float, float]) -> None:
+    """Run the learner's script with a goal 0.5 m from the point; judge what it printed."""
+    path = scripts.script(s, "cli_script", SCRIPT)
+    if node.ended():
+        raise Unmet(f"the server is no longer running: {kit.process_state(node.proc)}")
+    angle = random.uniform(0.0, 2.0 * math.pi)
+    target = (round(start[0] + 0.5 * math.cos(angle), 3), round(start[1] + 0.5 * math.sin(angle), 3))
+    run = scripts.run_script(s, path, timeout=SCRIPT_TIMEOUT, args=[f"{target[0]}", f"{target[1]}"],
+                             daemon_sees=[f"/{NODE}", f"{ACTION}/_action/send_goal"])
+    scripts.printed(s, "cli_list", run, [ACTION], f"the action {ACTION}", "ros2 action list", whole_lines=True)
+    scripts.printed(s, "cli_info", run, [f"Action: {ACTION}", "Action servers: 1", f"    /{NODE}"],
+                    f"that /{NODE} serves {ACTION}", f"ros2 action info {ACTION}")
+    needles = ["Feedback:", "distance_to_goal:", "Goal finished with status: SUCCEEDED",
+               f"x: {target[0]}", f"y: {target[1]}"]
+    scripts.printed(s, "cli_send_goal", run, needles, f"the goal ({target[0]}, {target[1]}) sent, its feedback "
+                    "and its result", f"ros2 action send_goal --feedback {ACTION} {ACTION_TYPE} "
+                    "\"{desired_position: {x: $1, y: $2}}\"")
