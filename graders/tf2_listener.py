@@ -32,6 +32,9 @@ UNAVAILABLE_WINDOW = 1.5  # seconds with no transform: about three lookups
 #: Seconds for a logged position: the node's next lookups plus discovery of the grader's publisher.
 LOG_TIMEOUT = 4.0
 TOLERANCE = 0.002  # metres: logged with three decimals
+#: Records judged for the lookup rate (5 intervals: shared/LESSONS.md's minimum), from the first warning on:
+#: the waiting phase and the two positions give 7 or more.
+RATE_RECORDS = 6
 WARN = 30  # rcl_interfaces/msg/Log WARN level
 
 WINDOW = UNAVAILABLE_WINDOW + 2 * 2 * PERIOD
@@ -50,6 +53,9 @@ CHECKS = [
     Check("follows_changes", f"When {CHILD} moves, it logs the new position", 2,
           "look the transform up again at every tick: never keep the first answer", needs=("logs_transform",),
           part="listener"),
+    Check("lookup_rate", f"It looks the transform up every {PERIOD} s: one record per lookup", 1,
+          f"create the timer with self.create_timer({PERIOD}, self.on_timer) and log once per tick (a warning "
+          "or the position)", needs=("waits_for_transform",), part="listener"),
     checks.ctrl_c("listener_sigint_exit", "the listener", **LISTENER),
 ]
 
@@ -103,8 +109,6 @@ def _logged(rosout, node: str, position: tuple[float, float, float]) -> list[str
 
 
 def _grade_listener(s: GradingSession) -> None:
-    from geometry_msgs.msg import TransformStamped
-
     tf_message = s.installed_type("tf2_msgs", "msg", "TFMessage")  # tf2 is not on PyPI: from the underlay
     path = kit.executable(s, "listener_executable", PACKAGE, EXE)
     rosout = s.graph.rosout()
@@ -125,6 +129,25 @@ def _grade_listener(s: GradingSession) -> None:
              f"it keeps running and logs a WARN record while {PARENT} -> {CHILD} does not exist")
     if not alive:
         return
+    try:
+        _follow(s, rosout, name, node, tf_message)
+    finally:
+        _lookup_rate(s, rosout, name, node)
+
+
+def _lookup_rate(s: GradingSession, rosout, name: str, node: kit.StartedNode) -> None:
+    """Record ``lookup_rate`` on the stamps of the node's records from its first warning on (one per lookup)."""
+    records = rosout.records(node=name)
+    first = next((i for i, r in enumerate(records) if r.level == WARN), None)
+    stamps = [kit.stamp_seconds(r.stamp) for r in records[first:]] if first is not None else []
+    kit.rate(s, "lookup_rate", stamps[:RATE_RECORDS], period=PERIOD, needed=RATE_RECORDS,
+             waited=(stamps[-1] - stamps[0]) if stamps else 0.0, noun="record",
+             source="the stamps of its log records, one per lookup", few_note=f"; {kit.process_state(node.proc)}")
+
+
+def _follow(s: GradingSession, rosout, name: str, node: kit.StartedNode, tf_message: type) -> None:
+    """Steps 2 and 3: logs_transform and follows_changes, the grader broadcasting ``world -> target``."""
+    from geometry_msgs.msg import TransformStamped
     # 2. the grader becomes the tf2 tree
     broadcast = _Broadcast(s, tf_message, TransformStamped)
     first = _random_position()
