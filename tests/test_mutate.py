@@ -59,6 +59,23 @@ def test_classify() -> None:
     assert mut.classify(_result([], Status.GRADER_ERROR, "boom"))[0] == mut.GRADER_ERROR
 
 
+def test_grader_errors_and_timeouts_are_graded_again(tmp_path: Path) -> None:
+    """A resumed mutation batch regrades the mutants whose last outcome was a grader error or a timeout."""
+    from ros2course.batch import mutate as batch_mutate
+    from ros2course.report.gradebook import append_record, read_results
+
+    results = tmp_path / "results.jsonl"
+    rows = {"killed": _result(["rate"]), "error": _result([], Status.GRADER_ERROR, "boom"),
+            "slow": _result([], Status.NOT_GRADABLE, "timed out after 300 s"), "survived": _result([], Status.PASSED)}
+    for student, result in rows.items():
+        result.student = student
+        append_record(results, result)
+    assert batch_mutate._forget_unfinished(results) == 2
+    assert [r.student for r in read_results(results)] == ["killed", "survived"]
+    assert batch_mutate._forget_unfinished(results) == 0 and len(read_results(results)) == 2
+    assert batch_mutate._forget_unfinished(tmp_path / "none.jsonl") == 0
+
+
 def test_sample_is_seeded_and_keys_ignore_line_numbers() -> None:
     mutants = [mut.Mutant("f.py", i, f"x = {i}", f"x = {i + 1}", f"x = {i + 1}\n") for i in range(20)]
     assert mut.sample_mutants(mutants, 5, 1) == mut.sample_mutants(mutants, 5, 1)

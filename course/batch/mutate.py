@@ -33,9 +33,27 @@ from ros2course.errors import CourseError
 from ros2course.files import atomic_write_text
 from ros2course.grade import mutate as mut
 from ros2course.lesson.catalog import Lesson, load_catalog
+from ros2course.report.gradebook import read_results
 
 CACHE_FILE = "mutation-cache.json"
 RESULT_FILE = "mutation.json"
+#: Outcomes that say nothing lasting about a mutant: never cached, and their batch rows are graded again.
+UNFINISHED = (mut.GRADER_ERROR, mut.TIMED_OUT)
+
+
+def _forget_unfinished(results_path: Path) -> int:
+    """Drop the rows of ``results_path`` (a mutation batch's ``results.jsonl``) whose outcome is in
+    :data:`UNFINISHED`, so that resuming the batch grades those mutants again; returns how many.
+
+    Without it a resumed batch would keep a grader error or a timeout of an earlier run forever.
+    """
+    records = read_results(results_path)
+    kept = [r for r in records if mut.classify(r)[0] not in UNFINISHED]
+    if len(kept) == len(records):
+        return 0
+    atomic_write_text(results_path, "".join(json.dumps(r.to_record(), separators=(",", ":"), ensure_ascii=False)
+                                            + "\n" for r in kept))
+    return len(records) - len(kept)
 
 
 def _read_cache(path: Path) -> dict[str, Any]:
@@ -81,6 +99,7 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         cache_path = out / CACHE_FILE
         cache = _read_cache(cache_path)
         todo = [m for m in picked if mut.cache_key(grader, course, m) not in cache]
+        this_run: dict[str, dict[str, Any]] = {}  # outcomes of this run that are never cached (UNFINISHED)
         if console is not None:
             console.print(f"{lesson.id}: {len(every)} mutants generated, {len(picked)} picked"
                           f"{f' (--sample {sample} --seed {seed})' if len(picked) < len(every) else ''}, "
@@ -93,6 +112,7 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
                 shutil.copytree(reference, dest, symlinks=True)
                 (dest / mutant.file).write_text(mutant.content, encoding="utf-8")
             batch_out = out / "batch" / f"{lesson.id}-{course[:8]}{grader[:8]}"
+            _forget_unfinished(batch_out / "results.jsonl")
             report = run_batch(submissions, [lesson.id], batch_out, jobs=jobs, timeout=timeout,
                                resume=batch_out.exists(), console=console)
             results = {r.student: r for r in report.records if r.lesson == lesson.id}
@@ -101,15 +121,18 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
                 if result is None:
                     continue  # interrupted before this one: graded next time
                 outcome, lost = mut.classify(result)
-                cache[mut.cache_key(grader, course, mutant)] = {
-                    "outcome": outcome, "lost": lost, "score": result.score, "max_score": result.max_score,
-                    "message": (result.message or "").splitlines()[0][:300] if result.message else ""}
+                row = {"outcome": outcome, "lost": lost, "score": result.score, "max_score": result.max_score,
+                       "message": (result.message or "").splitlines()[0][:300] if result.message else ""}
+                # a grader error or a timeout says something about this run (a loaded machine, a grader
+                # bug since fixed), not about the mutant: reported now, graded again next time
+                (this_run if outcome in UNFINISHED else cache)[mut.cache_key(grader, course, mutant)] = row
             out.mkdir(parents=True, exist_ok=True)
             atomic_write_text(cache_path, json.dumps(cache, indent=1, sort_keys=True) + "\n")
         graded = []
         fresh = {m.key for m in todo}
         for mutant in picked:
-            known = cache.get(mut.cache_key(grader, course, mutant))
+            key = mut.cache_key(grader, course, mutant)
+            known = cache.get(key) or this_run.get(key)
             if known is None:
                 continue
             graded.append(mut.Graded(mutant, known["outcome"], list(known["lost"]), known.get("score", 0.0),
