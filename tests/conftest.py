@@ -10,7 +10,6 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from ros2course.lesson.catalog import content_root, load_catalog
 from ros2course.lesson.workspace import Workspace
 from ros2course.ros import env as env_mod
@@ -30,6 +29,16 @@ LONG_MODULES = ("test_validate.py", "test_batch_ros.py", "test_benchmarks.py", "
 #: and steals from the end of a queue, so they run one after the other on that worker instead
 #: of leaving the other worker waiting for the lock (8 worker-minutes idle in a CI run).
 CPU_LOCK_MODULES = ("test_determinism.py", "test_batch_ros.py", "test_hostile_class.py")
+
+
+@pytest.fixture(autouse=True)
+def bundled_course_after_each_test():
+    """Every test ends on the bundled course: a test that chose another (``use_course``, an
+    in-process CLI call with ``--course``) must not hand it to the next test in this worker."""
+    yield
+    from ros2course.lesson import use_course
+
+    use_course(None)
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -56,7 +65,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 def pytest_configure(config: pytest.Config) -> None:
     """The controller makes the run's CPU lock file (see :func:`cpu_lock`); xdist workers inherit its path."""
     if not hasattr(config, "workerinput") and "ROS2COURSE_TESTS_CPU_LOCK" not in os.environ:
-        import tempfile  # noqa: PLC0415
+        import tempfile
 
         folder = tempfile.mkdtemp(prefix="ros2course-tests-")
         os.environ["ROS2COURSE_TESTS_CPU_LOCK"] = os.path.join(folder, "cpu.lock")
@@ -74,7 +83,7 @@ def pytest_unconfigure(config: pytest.Config) -> None:
 @contextlib.contextmanager
 def cpu_lock():
     """Hold one lock shared by every xdist worker of this run (see :func:`cpu_exclusive`)."""
-    import fcntl  # noqa: PLC0415
+    import fcntl
 
     with open(os.environ["ROS2COURSE_TESTS_CPU_LOCK"], "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)
@@ -129,7 +138,36 @@ def run_cli(*args: str, cwd: Path | None = None, timeout: float = 300, env: dict
                           stdin=subprocess.DEVNULL, check=False)
 
 
+def run_cli_in_process(*args: str, cwd: Path | None = None, timeout: float = 300, env: dict | None = None
+                       ) -> subprocess.CompletedProcess:
+    """Run ``ros2course ARGS`` in this process with typer's ``CliRunner`` (issue 23), shaped as :func:`run_cli`'s result.
+
+    For tests of messages, exit codes and files, where no process boundary is under test
+    (signals, exit statuses of a real process and start-up time keep :func:`run_cli`).
+    ``timeout`` is not enforced: such commands never start ROS nodes. ``env`` is set for
+    the call only (CliRunner restores the environment), and the working directory is
+    changed for the call only.
+    """
+    from ros2course.cli import app
+    from ros2course.lesson import use_course
+    from typer.testing import CliRunner
+
+    use_course(None)  # the one per-process choice a new process starts without (the CLI makes it per command)
+    before = Path.cwd()
+    if cwd is not None:
+        os.chdir(cwd)
+    try:
+        result = CliRunner().invoke(app, [str(a) for a in args], env={**(env or {}), "COLUMNS": "320"})
+    finally:
+        os.chdir(before)
+        use_course(None)  # a --course or a workspace's record must not outlive the call into later tests
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return subprocess.CompletedProcess(list(args), result.exit_code, result.stdout, result.stderr)
+
+
 @pytest.fixture
 def cli():
     """The :func:`run_cli` helper."""
     return run_cli
+

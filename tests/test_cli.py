@@ -13,7 +13,6 @@ from pathlib import Path
 
 import pytest
 import yaml
-
 from ros2course.lesson.catalog import content_root, load_catalog
 from ros2course.lesson.starter import starter_files, starter_sources
 
@@ -104,6 +103,16 @@ def copy_course(dest: Path) -> Path:
     for part in ("chapters", "graders", "solutions", "tests/fixtures"):
         shutil.copytree(ROOT / part, dest / part, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
     return dest
+
+
+@pytest.fixture
+def cli(request):
+    """The CLI in this process (typer's CliRunner: messages, exit codes and files, issue 23), except for
+    the tests that grade real ROS nodes (marked ``ros``), which run ``python -m ros2course`` as a learner
+    would (a process of its own: its ROS contexts, learner processes and exit)."""
+    from conftest import run_cli, run_cli_in_process
+
+    return run_cli if request.node.get_closest_marker("ros") else run_cli_in_process
 
 
 @pytest.fixture

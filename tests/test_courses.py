@@ -14,7 +14,6 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from ros2course.errors import CourseError, LessonFormatError
 from ros2course.grade.engine import load_grader
 from ros2course.lesson import bundled_course
@@ -27,10 +26,11 @@ LAB_COURSE = ROOT / "tests" / "data" / "lab_course"
 
 
 def ros2course(*args: str, cwd: Path, env: dict | None = None) -> subprocess.CompletedProcess:
-    """``ros2course ARGS`` as a user types it (no ROS2COURSE_CONTENT from the test run leaks in)."""
-    environ = {k: v for k, v in os.environ.items() if k != "ROS2COURSE_CONTENT"}
-    return subprocess.run([sys.executable, "-m", "ros2course", *args], cwd=cwd, capture_output=True, text=True,
-                          env={**environ, **(env or {}), "COLUMNS": "320"}, timeout=120, check=False)
+    """``ros2course ARGS`` as a user types it, in this process (typer's CliRunner: no process boundary is
+    under test here, issue 23); no ROS2COURSE_CONTENT from the test run leaks in."""
+    from conftest import run_cli_in_process
+
+    return run_cli_in_process(*args, cwd=cwd, env={"ROS2COURSE_CONTENT": None, **(env or {})})
 
 
 def test_the_tutorial_course_is_bundled_and_registered() -> None:
@@ -165,7 +165,7 @@ def test_a_lesson_dropped_by_a_newer_course_version_is_reported_and_kept(tmp_pat
 def test_graders_use_only_the_public_kit(course: Path) -> None:
     """The narrow door (issues 18 and 23): a course's graders import ``ros2course.kit`` and its modules,
     their own siblings (``from . import _helper``), and nothing else of the engine."""
-    import ast  # noqa: PLC0415
+    import ast
 
     wide = []
     for path in sorted((course / "graders").glob("*.py")):
@@ -183,10 +183,10 @@ def test_graders_use_only_the_public_kit(course: Path) -> None:
 
 def test_the_public_kit_is_documented_and_its_reference_builds(tmp_path: Path) -> None:
     """Every public step of ``ros2course.kit`` has a docstring, and scripts/api_docs.sh builds the reference."""
-    import importlib  # noqa: PLC0415
-    import inspect  # noqa: PLC0415
+    import importlib
+    import inspect
 
-    import ros2course.kit as kit  # noqa: PLC0415
+    from ros2course import kit
 
     missing = []
     for module_path in sorted((ROOT / "course" / "kit").glob("*.py")):

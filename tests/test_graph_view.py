@@ -10,9 +10,19 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+import pytest
+
 from ros2course.lesson.catalog import LessonGraph, load_catalog
 from ros2course.report.graph import compare, load_observed, mermaid
 from ros2course.run.diagnose import GraphSnapshot
+
+
+@pytest.fixture
+def cli():
+    """The CLI in this process (typer's CliRunner): no process boundary is under test here (issue 23)."""
+    from conftest import run_cli_in_process
+
+    return run_cli_in_process
 
 QUOTE = "package_with_interfaces/msg/AmazingQuote"
 CONTRACT = LessonGraph.model_validate({

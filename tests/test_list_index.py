@@ -23,6 +23,14 @@ from ros2course.lesson.progress import Progress
 from ros2course.lesson.workspace import Workspace
 from tests.test_cli import assert_clean_error, copy_course
 
+
+@pytest.fixture
+def cli():
+    """The CLI in this process (typer's CliRunner): no process boundary is under test here (issue 23)."""
+    from conftest import run_cli_in_process
+
+    return run_cli_in_process
+
 CHAPTERS = content_root() / "chapters"
 
 
