@@ -31,7 +31,8 @@ def test_an_interface_package_the_lesson_teaches_is_still_built_for_the_batch() 
     assert trusted_interface_packages([lesson]) == ["package_with_interfaces"]
     assert trusted_interface_packages([catalog.get("print-forever-node")]) == []
     every = trusted_interface_packages(catalog.lessons)
-    assert every == ["package_with_interfaces"]
+    # and the references testing-your-nodes runs the learner's tests against
+    assert every == ["package_with_interfaces", "python_package_with_a_library", "python_package_with_a_node"]
 
 
 def test_a_lesson_whose_interface_the_course_cannot_build_is_refused_up_front() -> None:
@@ -48,6 +49,21 @@ def test_the_grader_may_import_only_declared_interfaces(tmp_path: Path) -> None:
     with pytest.raises(CourseError) as info:
         session.interface_type("package_with_interfaces", "msg", "AmazingQuote")
     assert "does not declare" in info.value.message and "interfaces: [package_with_interfaces]" in info.value.hint
+
+
+def test_the_grader_may_read_only_declared_reference_packages(tmp_path: Path) -> None:
+    """A grader reads the course's reference sources only of the packages lesson.yaml declares in ``references:``
+    (batch grading copies just those into the sandbox); a declared one is found in solutions/ under check."""
+    catalog = load_catalog()
+    session = GradingSession(catalog.get("print-forever-node"), [Check("a", "a", 1)], tmp_path, tmp_path / "log",
+                             dict(os.environ))
+    with pytest.raises(CourseError) as info:
+        session.reference_package("python_package_with_a_node")
+    assert "references: [python_package_with_a_node]" in info.value.hint
+    testing = GradingSession(catalog.get("testing-your-nodes"), [Check("a", "a", 1)], tmp_path, tmp_path / "log",
+                             dict(os.environ))
+    folder = testing.reference_package("python_package_with_a_node")
+    assert (folder / "python_package_with_a_node" / "print_forever_node.py").is_file()
 
 
 needs_root = pytest.mark.skipif(os.geteuid() != 0 or not sandbox.capabilities().uid_drop,
@@ -86,6 +102,22 @@ def test_submission_programs_write_only_into_submission_folders() -> None:
         sandbox.configure(None)
         session.close()
         shutil.rmtree(root, ignore_errors=True)
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(600)
+def test_a_forgotten_depend_on_an_earlier_lessons_package_loses_the_same_points_in_grade(tmp_path: Path) -> None:
+    """A fresh hand-in whose package.xml forgets the library (use-python-library's missing-library-depend) builds the
+    library all the same, as a learner's workspace has it from lesson 14: `grade` loses only depends_library, as
+    `check` does, although the worker cannot read solutions/ to learn what the lesson depends on."""
+    from ros2course.batch.parity import case_workspace  # noqa: PLC0415
+    from ros2course.batch.runner import run_batch  # noqa: PLC0415
+
+    lesson = load_catalog().get("use-python-library")
+    case_workspace(lesson, "missing-library-depend", tmp_path / "class" / "forgetful")
+    report = run_batch(tmp_path / "class", [lesson.id], tmp_path / "out", jobs=1, timeout=300)
+    [record] = report.records
+    assert [c.id for c in record.checks if not c.passed] == ["depends_library"], record.message
 
 
 @pytest.mark.ros

@@ -25,6 +25,7 @@ from ros2course.batch.archive import ARCHIVE_SUFFIXES
 from ros2course.batch.runner import (
     Job,
     build_trusted_interfaces,
+    needs_reference_sources,
     default_hidden,
     lesson_checks,
     refuse_without_isolation,
@@ -102,7 +103,7 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
     hide = default_hidden(Path(tempfile.gettempdir()) / "ros2course-none", results.parent,
                           Path(tempfile.gettempdir()) / "ros2course-none")
     trusted = (build_trusted_interfaces([catalog.get(lesson_id) for lesson_id in lessons])
-               if sandbox.capabilities().uid_drop else None)
+               if sandbox.capabilities().uid_drop or needs_reference_sources(lessons) else None)
     job = Job(uuid.uuid4().hex, "submission", str(entry.absolute()), "", lessons, str(results.parent), timeout, hide=hide,
               pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""), require_isolation=require_isolation)
     try:

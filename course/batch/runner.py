@@ -30,6 +30,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import contextlib
 import dataclasses
+import functools
 import json
 import os
 import shutil
@@ -59,6 +60,7 @@ from rich.table import Table
 from ros2course.batch.archive import Submission, discover, prepare
 from ros2course.build.reference import (
     ReferenceBuild,
+    lesson_dependencies,
     shared_reference_build,
     trusted_interface_packages,
 )
@@ -173,7 +175,7 @@ def build_trusted_interfaces(lessons: list[Any]) -> ReferenceBuild | None:
     submission's build of them is code the submission controls, so under
     isolation the grader imports these reference builds instead (same
     definitions as the contract in shared/LESSONS.md, so the same wire types).
-    Which packages: each lesson's ``interfaces`` (lesson.yaml) and their
+    Which packages: each lesson's ``interfaces`` and ``references`` (lesson.yaml) and their
     dependencies (:func:`ros2course.build.reference.trusted_interface_packages`).
     Built once and shared while their files and the ROS install stay the same
     (:func:`ros2course.build.reference.shared_reference_build`); call ``discard()`` when done.
@@ -189,6 +191,13 @@ def build_trusted_interfaces(lessons: list[Any]) -> ReferenceBuild | None:
     if not packages:
         return None
     return shared_reference_build(lessons[0], packages, "build.log")
+
+
+def needs_reference_sources(lesson_ids: list[str]) -> bool:
+    """True when a lesson's grader reads reference sources (``references:`` in lesson.yaml), which only the
+    trusted build brings into the sandbox (``solutions/`` is hidden from submissions and the worker)."""
+    catalog = load_catalog()
+    return any(catalog.get(lesson_id).references for lesson_id in lesson_ids)
 
 
 # --- one job ------------------------------------------------------------------------------------
@@ -342,10 +351,21 @@ def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Is
     if via:
         missing.pop(sandbox.PIDS_LIMIT, None)
         protections[sandbox.PIDS_LIMIT] = f"{job.pids_limit} tasks at once ({' + '.join(via)})"
-    if job.trusted_interfaces and uid is not None:
+    if job.trusted_interfaces:
         worker_args += ["--trusted-interfaces", job.trusted_interfaces]
     isolation = sandbox.Isolation(protections, missing, uid, job.pids_limit if via else None, " + ".join(via))
     return prefix, worker_args, isolation, cgroup
+
+
+@functools.lru_cache(maxsize=64)
+def _dependencies_of(course: Path, lesson_id: str) -> tuple[str, ...]:
+    return tuple(lesson_dependencies(load_catalog().get(lesson_id)))
+
+
+def _reference_dependencies(lesson_id: str) -> tuple[str, ...]:
+    """The reference packages ``lesson_id``'s packages depend on (:func:`~ros2course.build.reference.lesson_dependencies`),
+    which the worker builds too when the submission holds them (``grade_lesson(build_also=...)``)."""
+    return _dependencies_of(content_root(), lesson_id)
 
 
 def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], dict[str, Any], int, bool]:
@@ -365,7 +385,8 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], 
            "--logs", str(logs), "--memory-limit", str(job.memory_limit), "--file-limit", str(job.file_limit),
            *worker_args]
     for lesson in job.lessons:
-        cmd += ["--lesson", lesson]
+        # the course's reference dependencies, read here: solutions/ is hidden from the worker
+        cmd += ["--lesson", lesson, "--build-also", f"{lesson}={','.join(_reference_dependencies(lesson))}"]
     isolation = {**walls.to_json(),
                  "memory": f"RLIMIT_AS {job.memory_limit / 2**20:.0f} MiB per process" if job.memory_limit else "none"}
     # parent-death signal: the worker dies with the thread that started it (a pool thread lives as long as
@@ -585,7 +606,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     scratch_root.chmod(0o711)
     hide = default_hidden(submissions, out_dir, scratch_root)
     trusted = None
-    if isolate and sandbox.capabilities().uid_drop and entries:
+    if entries and (isolate and sandbox.capabilities().uid_drop or needs_reference_sources(lessons)):
         try:
             trusted = build_trusted_interfaces([catalog.get(lesson) for lesson in lessons])
         except BaseException:

@@ -57,7 +57,12 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--pids-cgroup", default="", help="cgroup.procs file of the job's pids cgroup")
     parser.add_argument("--trusted-interfaces", type=Path, default=None,
                         help="built workspace of the course's interface packages, imported instead of the submission's")
+    parser.add_argument("--build-also", action="append", default=[], metavar="LESSON=PKG,PKG",
+                        help="reference packages the lesson's packages depend on, built too when the workspace has "
+                             "them (read by the batch: solutions/ is hidden here)")
     args = parser.parse_args(argv)
+    build_also = {lesson: [p for p in packages.split(",") if p]
+                  for lesson, _, packages in (item.partition("=") for item in args.build_also)}
 
     _limit(resource.RLIMIT_AS, args.memory_limit)
     _limit(resource.RLIMIT_FSIZE, args.file_limit)
@@ -77,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             lesson = catalog.get(lesson_id)
             result = grade_lesson(lesson, args.workspace, log_dir=log_dir,
-                                  trusted_interfaces=args.trusted_interfaces)
+                                  trusted_interfaces=args.trusted_interfaces, build_also=build_also.get(lesson_id))
         except Exception as exc:  # noqa: BLE001 - any failure is this lesson's "grader error" row
             (log_dir / "grader-error.txt").write_text(traceback.format_exc(), encoding="utf-8")
             result = LessonResult.unfinished(lesson_id, Status.GRADER_ERROR,

@@ -209,9 +209,11 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
         workspace_root: the colcon workspace (holding ``src/``).
         packages: ROS package names the lesson needs.
         also: packages built too when ``src/`` holds them, missing ones skipped: the lesson's
-            ``interfaces``, so a package.xml that forgets ``<depend>package_with_interfaces</depend>``
-            still runs (as it does in a learner's workspace built earlier) and loses only the
-            grader's check on its dependencies, in ``check`` and ``grade`` alike.
+            ``interfaces`` and the packages its reference depends on (earlier lessons'), so a
+            package.xml that forgets ``<depend>package_with_interfaces</depend>`` or
+            ``<depend>python_package_with_a_library</depend>`` still runs (as it does in a learner's
+            workspace built lesson by lesson) and loses only the grader's check on its
+            dependencies, in ``check`` and ``grade`` (a fresh hand-in) alike.
         env: environment for colcon (ROS install activated).
         log_path: file receiving colcon's output.
         timeout: seconds before the build is stopped and reported as failed.

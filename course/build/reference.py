@@ -62,25 +62,26 @@ def lesson_dependencies(lesson: Lesson) -> list[str]:
 
 def trusted_interface_packages(lessons: list[Lesson]) -> list[str]:
     """The reference packages batch grading must build for ``lessons``' graders: their declared
-    ``interfaces`` (lesson.yaml) and what those depend on in ``solutions/src``, sorted.
+    ``interfaces`` and ``references`` (lesson.yaml) and what those depend on in ``solutions/src``, sorted.
 
     Derived from what each grader imports, never from the lesson's own packages: a lesson that
     teaches ``package_with_interfaces`` and grades with its types still gets the course's copy.
 
     Raises:
-        CourseError: a lesson declares an interface package ``solutions/src`` does not have
+        CourseError: a lesson declares an interface or reference package ``solutions/src`` does not have
             (the course is broken; no class can be graded on it).
     """
     found = solution_packages()
     for lesson in lessons:
-        unknown = [name for name in lesson.interfaces if name not in found]
+        unknown = [name for name in [*lesson.interfaces, *lesson.references] if name not in found]
         if unknown:
-            raise CourseError(f"lesson {lesson.id} cannot be graded in batch: its grader imports "
-                              f"{', '.join(unknown)} types, and the course has no reference package of that name "
+            raise CourseError(f"lesson {lesson.id} cannot be graded in batch: its grader reads the reference "
+                              f"package {', '.join(unknown)}, and the course has no package of that name "
                               f"in {content_root() / 'solutions' / 'src'}",
                               "a fault of the course: add the package to solutions/src or fix 'interfaces:' "
-                              "in lesson.yaml")
-    return dependency_closure(list(dict.fromkeys(p for lesson in lessons for p in lesson.interfaces)), found)
+                              "or 'references:' in lesson.yaml")
+    return dependency_closure(list(dict.fromkeys(p for lesson in lessons for p in [*lesson.interfaces,
+                                                                                 *lesson.references])), found)
 
 
 def build_reference(lesson: Lesson, dest: Path, packages: list[str], log_name: str) -> Path:

@@ -29,12 +29,14 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.build import colcon as build_mod
+from ros2course.build.reference import lesson_dependencies
 from ros2course.errors import CourseError, NotGradable
 from ros2course.grade.results import NOT_CHECKED, CheckResult, LessonResult, Plot, Status
 from ros2course.lesson.catalog import Lesson, content_root
 from ros2course.ros import env as env_mod
 from ros2course.ros import index as ament_index
 from ros2course.ros.interfaces import workspace_type
+from ros2course.ros.packages import find_packages
 from ros2course import sandbox
 from ros2course.run.diagnose import (
     MAX_FINDINGS,
@@ -521,6 +523,29 @@ class GradingSession:
         """
         return workspace_type(self.base_env, package, kind, name)
 
+    def reference_package(self, package: str) -> Path:
+        """The folder of the course's own reference source of ``package`` (``solutions/src/...``), read-only.
+
+        For a grader that runs something of the learner's against the course's code (a testing
+        lesson: the learner's tests against the reference and its mutants). In batch grading the
+        copy in the trusted build is used: ``solutions/`` is hidden from the sandbox.
+
+        Raises:
+            CourseError: the lesson does not declare ``package`` in ``references:`` (lesson.yaml), or the
+                course has no such reference package (both faults of the course, never the learner's).
+        """
+        if package not in self.lesson.references:
+            raise CourseError(f"the grader of {self.lesson.id} reads the reference of {package} but its lesson.yaml "
+                              "does not declare it", f"a fault of the course: add 'references: [{package}]' to lesson.yaml")
+        src = (self.trusted_interfaces / "src" if self.trusted_interfaces is not None
+               else content_root() / "solutions" / "src")
+        found = find_packages(src)
+        if package not in found:
+            raise CourseError(f"the course has no reference package {package} in {src}",
+                              "a fault of the course or of the grading run: grade through ros2course grade, which "
+                              "copies the lesson's references")
+        return found[package][0]
+
     def submission_folder(self, name: str, fill: Callable[[Path], None] | None = None) -> Path:
         """A fresh folder ``log_dir/<name>`` that the programs the grader runs as the submission may write.
 
@@ -739,7 +764,7 @@ def new_log_dir(workspace_root: Path, lesson_id: str) -> Path:
 
 def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = None,
                  underlays: tuple[Path, ...] | list[Path] = (), trusted_interfaces: Path | None = None,
-                 progress: Any = None) -> LessonResult:
+                 progress: Any = None, build_also: Sequence[str] | None = None) -> LessonResult:
     """Build the lesson's packages in ``workspace_root``, run its grader, return the result.
 
     ``underlays`` are built workspaces sourced before building and running the
@@ -751,6 +776,11 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
 
     ``progress(line)``, when given, hears what colcon is building (see
     :class:`~ros2course.ros.colcon_log.BuildProgress`).
+
+    ``build_also`` names packages built too when the workspace holds them: by default the
+    course's reference dependencies of the lesson's packages
+    (:func:`~ros2course.build.reference.lesson_dependencies`, read from ``solutions/``); batch
+    grading passes them in, since its worker cannot see ``solutions/``.
 
     Never raises for problems of the submission (they become the result);
     raises :class:`~ros2course.errors.MissingRequirement` when the machine lacks
@@ -775,8 +805,13 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
 
     if lesson.packages:
         try:
+            # the lesson's interfaces and the earlier lessons' packages its reference depends on are built
+            # too when src/ holds them: a package.xml that forgets a <depend> then loses only the check on
+            # its dependencies, in a fresh hand-in (grade) as in a learner's workspace built lesson by lesson
             built = build_mod.build_packages(workspace_root, lesson.packages, base_env, log_dir / "build.log",
-                                             progress=progress, also=lesson.interfaces)
+                                             progress=progress,
+                                             also=[*lesson.interfaces, *(lesson_dependencies(lesson)
+                                                                         if build_also is None else build_also)])
         except NotGradable as exc:
             return not_gradable(exc.message, exc.hint)
         timings["build"] = built.seconds

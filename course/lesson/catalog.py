@@ -141,6 +141,10 @@ class Lesson(BaseModel):
             (:meth:`ros2course.grade.engine.GradingSession.interface_type` refuses any other). Batch
             grading builds them once from ``solutions/`` and imports that trusted build, never
             the submission's, even when the lesson teaches the package itself.
+        references: reference packages of ``solutions/src`` whose sources the grader itself reads
+            (:meth:`ros2course.grade.engine.GradingSession.reference_package` refuses any other): the
+            code a testing lesson runs the learner's tests against. Batch grading copies them with
+            its trusted build, since ``solutions/`` is hidden from the sandbox.
         folders: workspace folders holding the lesson's files outside any ROS package
             (the preamble's ``python/minimalist_package``); ``dev validate`` copies them
             from ``solutions/`` for the reference and its wrong solutions.
@@ -163,6 +167,7 @@ class Lesson(BaseModel):
     starter_includes: list[Annotated[str, Field(pattern=_ID)]] = Field(default_factory=list)
     reference: ReferenceSolution = Field(default_factory=ReferenceSolution)
     interfaces: list[Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]*$")]] = Field(default_factory=list)
+    references: list[Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]*$")]] = Field(default_factory=list)
     folders: list[Annotated[str, Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_./-]*$")]] = Field(default_factory=list)
     starter_solutions: list[Annotated[str, Field(pattern=r"^src/[A-Za-z0-9_]+(/[A-Za-z0-9_][A-Za-z0-9_.-]*)*$")]] = (
         Field(default_factory=list))
