@@ -119,6 +119,12 @@ def _xy(point: Any) -> tuple[float, float]:
     return point.x, point.y
 
 
+def _finite_or(xy: tuple[float, float], fallback: tuple[float, float]) -> tuple[float, float]:
+    """``xy`` when both are numbers, else ``fallback``: a server that accepted a NaN goal reports a NaN
+    point for ever, and the next goals are placed from where a correct server would be instead."""
+    return xy if all(math.isfinite(v) for v in xy) else fallback
+
+
 def _show(xy: tuple[float, float]) -> str:
     return f"({xy[0]:.3f}, {xy[1]:.3f})"
 
@@ -289,7 +295,10 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
         s.record("position_kept", 0.8 - STEP_TOLERANCE <= d0 <= 0.8 + POSITION_TOLERANCE,
                  f"goal {_show(target)} from {_show(start)}: first distance_to_goal {d0:.3f} m"
                  + ("" if d0 <= 0.8 + POSITION_TOLERANCE else
-                    f" (from the origin it would be {math.hypot(*target) - SPEED * PERIOD:.3f})"), expected)
+                    f" (from the origin it would be {math.hypot(*target) - SPEED * PERIOD:.3f})"
+                    if math.isfinite(d0) else
+                    ": the point is no longer a number (an accepted goal with a NaN x or y moved it there)"),
+                 expected)
     else:
         s.record("position_kept", False, f"no feedback for the goal {_show(target)}", expected)
     accepted, why = client.cancel(goal)
@@ -300,7 +309,7 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
              "the goal listed among goals_canceling in the answer")
     if not accepted:
         client.wait_result(goal, 0.8 / SPEED + GOAL_SLACK, abort=node.ended)
-        return _xy(goal.result.final_position) if goal.result is not None else target
+        return _finite_or(_xy(goal.result.final_position), target) if goal.result is not None else target
     client.wait_result(goal, 2.0, abort=node.ended)
     time.sleep(2 * PERIOD)  # a server that keeps moving sends feedback now
     late = [d for t, d in _distances(client, goal) if t > asked + 1.5 * PERIOD]
@@ -325,7 +334,7 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
         problems.append(f"{len(late)} feedback message(s) sent after the cancel (down to {late[-1]:.3f} m)")
     s.record("canceled", not problems, "; ".join(problems) if problems else
              f"CANCELED at {_show(final)}, {short:.3f} m short of the goal, nothing sent after it", expected)
-    return stopped if math.isfinite(last) else final
+    return stopped if math.isfinite(last) else _finite_or(final, target)
 
 
 def _preempt(s: GradingSession, action: Any, client: act.GoalClient, node: kit.StartedNode,

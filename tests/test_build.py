@@ -234,3 +234,35 @@ def test_tf2_from_the_underlay_looks_transforms_up_and_has_the_cli_executables()
     proc = subprocess.run([sys.executable, "-c", code], env=_env(), capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split("\n")[:3] == ["-1.5", "LookupException", "['static_transform_publisher', 'tf2_echo']"]
+
+
+#: The reference launch_testing test of the testing-your-nodes lesson (its own grading runs it too).
+LAUNCH_TEST = (Path(__file__).resolve().parent.parent / "solutions" / "src" / "python_package_with_a_node" / "test"
+               / "test_print_forever_launch.py")
+
+
+@pytest.mark.ros
+def test_colcon_test_runs_a_launch_testing_test_of_a_learners_node(tmp_path):
+    """`colcon test` with pytest, launch_testing's plugin loaded from the underlay (pytest < 9: see pyproject)."""
+    from ros2course.run.probes import RosSession
+
+    root = tmp_path / "ws"
+    package = root / "src" / "python_package_with_a_node"
+    shutil.copytree(Path(__file__).resolve().parent.parent / "solutions" / "src" / package.name, package,
+                    ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    # colcon runs pytest (not unittest) when setup.py asks for it
+    assert "tests_require=['pytest']" in (package / "setup.py").read_text()
+    assert (package / "test" / LAUNCH_TEST.name).is_file()  # copied with the package
+    result = build_packages(root, [package.name], _env(), tmp_path / "b.log")
+    assert result.ok, result.excerpt
+    with RosSession() as graph:  # a private domain id for the node the test launches
+        env = graph.learner_env(overlay_env(root, _env()))
+        test = subprocess.run(["colcon", "test", "--packages-select", package.name], cwd=root, env=env,
+                              capture_output=True, text=True, timeout=180)
+        summary = subprocess.run(["colcon", "test-result", "--all", "--verbose"], cwd=root, env=env,
+                                 capture_output=True, text=True, timeout=60)
+    log = (root / "log" / "latest_test" / package.name / "stdout_stderr.log")
+    shown = log.read_text(errors="replace")[-3000:] if log.is_file() else test.stdout[-3000:]
+    assert test.returncode == 0, shown
+    # launch_testing reports its test description as one pytest item
+    assert "Summary: 1 test, 0 errors, 0 failures" in summary.stdout, summary.stdout + shown

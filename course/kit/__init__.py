@@ -23,9 +23,11 @@ The kit's modules, by what they observe (graders import the ones they use,
 
 * nodes, judge, checks, parts: executables, nodes, rates, Ctrl+C, shared check declarations;
 * topics_services, quotes, params, launch: the Python track's topics, services, parameters, launch;
+* actions: the grader as an action client of a learner's server, or as a learner client's server;
 * scripts, mystery: the ``ros2`` command-line lessons and the grader's own "mystery" nodes;
 * packages, packaging, cmake: package.xml, setup.py, CMake installs and consumers;
-* programs, python_programs: learner programs that are not nodes.
+* programs, python_programs: learner programs that are not nodes;
+* testing: a learner's own tests, run on the course's reference and on hidden mutants of it.
 
 Placement rule (issue 23): a step two lessons use, or another course's author
 would, lives here; a helper of one lesson lives with that lesson's grader, as

@@ -14,6 +14,7 @@ setup(
     ],
     install_requires=['setuptools'],
     zip_safe=True,
+    tests_require=['pytest'],
     maintainer='ros2course learner',
     maintainer_email='learner@example.com',
     description='A Python library other ROS 2 packages import: a function and a class.',

@@ -12,6 +12,7 @@ setup(
     ],
     install_requires=['setuptools'],
     zip_safe=True,
+    tests_require=['pytest'],
     maintainer='ros2course learner',
     maintainer_email='learner@example.com',
     description='Python nodes of the ros2course tutorial.',
