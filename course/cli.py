@@ -600,6 +600,7 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
              repeat: Annotated[int, typer.Option("--repeat", metavar="N", help="Grade each case N times and report every check whose verdict changed (a flaky grader).")] = 0,
              load: Annotated[int, typer.Option("--load", metavar="K", help="With --repeat: K gradings at once, each on its own copy (two learners on one machine).")] = 1,
              case: Annotated[Optional[list[str]], typer.Option("--case", metavar="CASE", help="With --repeat: only this case (reference, starter or a fixture's name; repeatable).")] = None,
+             jobs: Annotated[int, typer.Option("--jobs", "-j", metavar="K", help="Wrong solutions graded K at once (each in a process of its own); references and full-marks cases are always graded alone.")] = 1,
              course: CourseOpt = None,
              ) -> None:
     """Grade every lesson's reference (full marks), starter (not full) and wrong solutions (named checks fail)."""
@@ -609,6 +610,8 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
 
     if sample < 0:
         raise CourseError(f"--sample must be 0 or more (got {sample})", "e.g. --sample 2")
+    if jobs < 1:
+        raise CourseError(f"--jobs must be 1 or more (got {jobs})", "e.g. --jobs 2: two wrong solutions at once")
     if repeat:
         if batch:
             raise CourseError("--repeat and --batch do not go together", "run them one after the other")
@@ -627,9 +630,9 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
     if batch:
         from ros2course.batch.parity import validate_with_batch  # noqa: PLC0415 - start time, see the imports
 
-        outcomes = validate_with_batch(lesson_ids or None, sample=sample, progress=stderr_console())
+        outcomes = validate_with_batch(lesson_ids or None, sample=sample, jobs=jobs, progress=stderr_console())
     else:
-        outcomes = validate_course(lesson_ids or None, progress=stderr_console())
+        outcomes = validate_course(lesson_ids or None, progress=stderr_console(), jobs=jobs)
     if as_json:
         import json  # noqa: PLC0415 - start time, see the imports
 

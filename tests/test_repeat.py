@@ -45,8 +45,9 @@ def test_a_grader_error_in_one_run_is_a_change_of_status() -> None:
 
 @pytest.mark.parametrize("args,words", [(["--repeat", "1"], "at least 2 runs"),
                                         (["--repeat", "2", "--load", "0"], "--load must be 1 or more"),
-                                        (["--repeat", "2", "--batch"], "do not go together")])
-def test_bad_repeat_options_are_one_line_errors(cli, args, words) -> None:
+                                        (["--repeat", "2", "--batch"], "do not go together"),
+                                        (["--jobs", "0"], "--jobs must be 1 or more")])
+def test_bad_repeat_and_jobs_options_are_one_line_errors(cli, args, words) -> None:
     proc = cli("dev", "validate", "print-forever-node", *args)
     assert proc.returncode != 0 and words in proc.stderr and "Traceback" not in proc.stderr
 

@@ -16,7 +16,8 @@ from ros2course.lesson.catalog import load_catalog
 @pytest.mark.timeout(1500)
 @pytest.mark.parametrize("lesson_id", load_catalog().ids())
 def test_dev_validate(lesson_id, cli):
-    proc = cli("dev", "validate", lesson_id, "--json", "--batch", "--sample", "1", timeout=1200)
+    # --jobs 2: wrong solutions two at once (a hanging one waits for its deadline on no CPU), references alone
+    proc = cli("dev", "validate", lesson_id, "--json", "--batch", "--sample", "1", "--jobs", "2", timeout=1200)
     assert "Traceback" not in proc.stderr, proc.stderr
     # an error before the JSON (a one-line CourseError, a signal) must say itself in the failure
     assert proc.stdout.strip(), f"no JSON; exit status {proc.returncode}; stderr:\n{proc.stderr[-4000:]}"

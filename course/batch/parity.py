@@ -158,16 +158,18 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
 def validate_with_batch(lesson_ids: list[str] | None, sample: int = 2, jobs: int = 1, progress=None) -> list[Outcome]:
     """``dev validate --batch``: every case through ``check`` (:func:`ros2course.grade.validate.validate_course`),
     then the reference and ``sample`` fixtures of each lesson through ``grade`` in one batch
-    (:func:`batch_parity`); the outcomes of both, the batch's last.
+    (:func:`batch_parity`); the outcomes of both, the batch's last. ``jobs``: wrong solutions
+    graded at once by ``check`` (:func:`~ros2course.grade.validate.validate_lesson`); the batch
+    grades one submission at a time (a reference's full marks are judged with nothing beside it).
 
     Raises:
         UnknownLesson: a lesson id is not in the catalog.  CourseError: the batch refuses a lesson.
     """
     catalog = load_catalog()
     lessons = [catalog.get(i) for i in lesson_ids] if lesson_ids else catalog.lessons
-    outcomes = validate_course([lesson.id for lesson in lessons], progress=progress)
+    outcomes = validate_course([lesson.id for lesson in lessons], progress=progress, jobs=jobs)
     picks = {lesson.id: {"reference", *sample_fixtures(lesson, sample, outcomes)} for lesson in lessons}
     checked = [o for o in outcomes if o.case in picks.get(o.lesson, ())]
     if progress is not None:
         progress.print(f"grading {len(checked)} case(s) of {len(lessons)} lesson(s) again with ros2course grade ...")
-    return outcomes + batch_parity(lessons, checked, jobs=jobs, progress=progress)
+    return outcomes + batch_parity(lessons, checked, progress=progress)

@@ -8,7 +8,7 @@ learners on one lab machine, or ``watch`` in one terminal and ``check`` in
 another), and reports every check whose verdict changed between runs, with
 the observed text of a run that passed it and of one that failed it.
 
-Each grading runs in its own process (``python -m ros2course.grade.repeat``), as
+Each grading runs in its own process (:func:`ros2course.grade.child.grade_in_child`), as
 ``ros2course check`` does: its own ROS domain, rclpy context and ``ros2``
 daemon, so the runs share nothing but the machine. A steady grader is one
 whose verdicts do not depend on what else runs; the fix for a flaky check is
@@ -20,22 +20,16 @@ from __future__ import annotations
 import collections
 import concurrent.futures
 import dataclasses
-import json
-import os
 import shutil
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
 
 from ros2course.errors import CourseError
+from ros2course.grade.child import grade_in_child
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import load_catalog
-
-#: Seconds one grading may take before the run is counted as hung (a grader's own deadlines are far shorter).
-RUN_TIMEOUT = 600.0
 
 
 @dataclasses.dataclass
@@ -127,23 +121,6 @@ class Steadiness:
                 "flakes": [dataclasses.asdict(f) for f in self.flakes]}
 
 
-def _grade_in_process(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_dir: Path) -> LessonResult:
-    """Grade ``root`` in a fresh ``python -m ros2course.grade.repeat`` process (as ``check`` would)."""
-    argv = [sys.executable, "-m", "ros2course.grade.repeat", lesson_id, str(root), str(log_dir)]
-    for underlay in underlays:
-        argv += ["--underlay", str(underlay)]
-    try:
-        proc = subprocess.run(argv, capture_output=True, text=True, timeout=RUN_TIMEOUT,  # noqa: S603
-                              stdin=subprocess.DEVNULL, check=False)
-    except subprocess.TimeoutExpired:
-        return LessonResult.unfinished(lesson_id, Status.GRADER_ERROR, f"the grading ran past {RUN_TIMEOUT:.0f} s")
-    lines = [line for line in proc.stdout.splitlines() if line.startswith("{")]
-    if proc.returncode != 0 or not lines:
-        tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-        return LessonResult.unfinished(lesson_id, Status.GRADER_ERROR, f"the grading process failed: {tail}")
-    return LessonResult.from_record(json.loads(lines[-1]))
-
-
 def repeat_case(case, repeat: int, load: int, progress=None) -> Steadiness:
     """Grade one :class:`~ros2course.grade.validate.Case` ``repeat`` times, ``load`` at once.
 
@@ -168,7 +145,7 @@ def repeat_case(case, repeat: int, load: int, progress=None) -> Steadiness:
         with concurrent.futures.ThreadPoolExecutor(max_workers=len(copies)) as pool:
             for first in range(0, repeat, len(copies)):
                 batch = range(first, min(repeat, first + len(copies)))
-                futures = [pool.submit(_grade_in_process, case.lesson.id, copies[i - first], case.underlays,
+                futures = [pool.submit(grade_in_child, case.lesson.id, copies[i - first], case.underlays,
                                        root / "logs" / f"run{i:03d}") for i in batch]
                 for future in futures:
                     result = future.result()
@@ -238,30 +215,3 @@ def render_steadiness(rows: list[Steadiness], console) -> None:
     console.print(table)
     bad = [r for r in rows if not r.ok]
     console.print(f"{len(rows) - len(bad)} steady, {len(bad)} not")
-
-
-def _main(argv: list[str]) -> int:
-    """One grading for :func:`repeat_case`: ``LESSON ROOT LOG_DIR [--underlay PATH]...``; prints its JSON record."""
-    import argparse  # noqa: PLC0415
-
-    from ros2course.grade.engine import grade_lesson  # noqa: PLC0415
-    from ros2course.ros import env as env_mod  # noqa: PLC0415
-
-    parser = argparse.ArgumentParser(prog="python -m ros2course.grade.repeat")
-    parser.add_argument("lesson")
-    parser.add_argument("root", type=Path)
-    parser.add_argument("log_dir", type=Path)
-    parser.add_argument("--underlay", type=Path, action="append", default=[])
-    args = parser.parse_args(argv)
-    env_mod.activate()
-    lesson = load_catalog().get(args.lesson)
-    args.log_dir.mkdir(parents=True, exist_ok=True)
-    result = grade_lesson(lesson, args.root, log_dir=args.log_dir, underlays=tuple(args.underlay))
-    sys.stdout.write(json.dumps(result.to_record()) + "\n")
-    sys.stdout.flush()
-    return 0
-
-
-if __name__ == "__main__":
-    os.environ.setdefault("PYTHONDONTWRITEBYTECODE", "1")
-    raise SystemExit(_main(sys.argv[1:]))

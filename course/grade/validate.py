@@ -21,8 +21,10 @@ shows exactly the bug and nothing else::
 
 from __future__ import annotations
 
+import concurrent.futures
 import dataclasses
 import os
+import queue
 import shutil
 import subprocess
 import tempfile
@@ -43,6 +45,7 @@ from ros2course.build.reference import (
     shared_reference_build,
 )
 from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
+from ros2course.grade.child import grade_in_child
 from ros2course.grade.engine import grade_lesson
 from ros2course.grade.mutate import describe_score
 from ros2course.grade.results import LessonResult, Status
@@ -231,25 +234,38 @@ def _describe(result: LessonResult) -> str:
     return text
 
 
+#: ``grade(lesson, root, underlays)``: how a validation case is graded (in this process, or in a child).
+Grade = Callable[[Lesson, Path, tuple[Path, ...]], LessonResult]
+
+
+def grade_here(lesson: Lesson, root: Path, underlays: tuple[Path, ...]) -> LessonResult:
+    """Grade ``root`` in this process (:func:`~ros2course.grade.engine.grade_lesson`)."""
+    return grade_lesson(lesson, root, underlays=underlays)
+
+
 def grade_case(lesson: Lesson, case: str, prepare, keep: bool = False,
-               underlays: tuple[Path, ...] = ()) -> tuple[LessonResult, float]:
+               underlays: tuple[Path, ...] = (), grade: Grade = grade_here) -> tuple[LessonResult, float]:
     """Grade a throw-away workspace that ``prepare(root)`` fills; returns the result and seconds."""
     root = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-{case}-"))
     begin = time.monotonic()
     try:
         prepare(root)
-        result = grade_lesson(lesson, root, underlays=underlays)
+        result = grade(lesson, root, underlays)
         return result, time.monotonic() - begin
     finally:
         if not keep:
             shutil.rmtree(root, ignore_errors=True)
 
 
-def validate_lesson(lesson: Lesson) -> list[Outcome]:
-    """Validate one lesson: reference, starter, fixtures (see module docstring)."""
+def validate_lesson(lesson: Lesson, jobs: int = 1) -> list[Outcome]:
+    """Validate one lesson: reference, starter, fixtures (see module docstring).
+
+    Args:
+        jobs: wrong solutions graded at once (see :func:`_validate_lesson`).
+    """
     underlay = build_underlay(lesson)
     try:
-        return _validate_lesson(lesson, underlay.path if underlay is not None else None)
+        return _validate_lesson(lesson, underlay.path if underlay is not None else None, jobs)
     finally:
         if underlay is not None:
             underlay.discard()
@@ -265,6 +281,9 @@ class Case:
         prepare: ``prepare(root)`` fills an empty folder with the case's workspace (and runs its commands).
         underlays: built workspaces sourced before building it (the lesson's dependencies).
         judge: ``judge(result)`` -> ``(ok, expected text)``.
+        alone: the case expects full marks (the reference, a fixture with ``expect: full_marks``):
+            with ``--jobs``, it is graded with nothing of the validation beside it, since a timing
+            check must hold under a normal load, not beside gradings of its own making.
     """
 
     lesson: Lesson
@@ -272,6 +291,7 @@ class Case:
     prepare: Callable[[Path], None]
     underlays: tuple[Path, ...]
     judge: Callable[[LessonResult], tuple[bool, str]]
+    alone: bool = False
 
 
 def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
@@ -301,7 +321,7 @@ def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
     def not_full(result: LessonResult) -> tuple[bool, str]:
         return result.status != Status.PASSED and result.score < result.max_score, "not full marks"
 
-    cases = [Case(lesson, "reference", reference, underlays, full_marks),
+    cases = [Case(lesson, "reference", reference, underlays, full_marks, alone=True),
              Case(lesson, "starter", starter, underlays, not_full)]
     for fixture in load_fixtures(lesson.id):
         # a fixture that edits a dependency builds everything itself, without the underlay
@@ -318,7 +338,8 @@ def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
                 return full_marks(result)
             return judge_fixture(fixture.fails, result, fixture.says, fixture.diagnosis)
 
-        cases.append(Case(lesson, fixture.name, wrong, underlays if uses_underlay else (), judged))
+        cases.append(Case(lesson, fixture.name, wrong, underlays if uses_underlay else (), judged,
+                          alone=fixture.expect == "full_marks"))
     return cases
 
 
@@ -336,8 +357,8 @@ def _src_fingerprints(root: Path) -> dict[str, str] | None:
     return {str(path.relative_to(root)): fingerprint(path) for path, _ in found.values()}
 
 
-def grade_in_built(lesson: Lesson, case: Case, built: Path, reference_src: dict[str, str] | None
-                   ) -> tuple[LessonResult, float] | None:
+def grade_in_built(lesson: Lesson, case: Case, built: Path, reference_src: dict[str, str] | None,
+                   grade: Grade = grade_here) -> tuple[LessonResult, float] | None:
     """Grade ``case`` in the workspace ``built`` (the reference, built), when its ``src/`` is the reference's.
 
     Most wrong solutions of the ``ros2`` CLI and script lessons change a script,
@@ -346,7 +367,8 @@ def grade_in_built(lesson: Lesson, case: Case, built: Path, reference_src: dict[
     everything but ``build/`` and ``install/`` (nothing the reference's grading
     wrote survives), so the engine's build cache (fingerprints of path, size
     and mtime; copies keep mtimes) finds the packages built. A case whose
-    ``src/`` differs in any file returns None, to be graded from scratch.
+    ``src/`` differs in any file returns None, to be graded from scratch. ``built`` may
+    also be an empty folder: the case is then built there, for the next case to reuse.
     """
     begin = time.monotonic()
     scratch = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-{case.name}-"))
@@ -361,16 +383,27 @@ def grade_in_built(lesson: Lesson, case: Case, built: Path, reference_src: dict[
                 shutil.rmtree(entry) if entry.is_dir() and not entry.is_symlink() else entry.unlink()
         for entry in scratch.iterdir():
             shutil.move(str(entry), built / entry.name)
-        return grade_lesson(lesson, built, underlays=case.underlays), time.monotonic() - begin
+        return grade(lesson, built, case.underlays), time.monotonic() - begin
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
 
 
-def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
-    """Grade every case; the reference's built workspace is reused by cases with the reference's ``src/``."""
-    outcomes = []
+def _validate_lesson(lesson: Lesson, underlay: Path | None, jobs: int = 1) -> list[Outcome]:
+    """Grade every case; the reference's built workspace is reused by cases with the reference's ``src/``.
+
+    With ``jobs`` > 1 the cases that expect full marks (:attr:`Case.alone`) are graded first,
+    one at a time, in this process; then the others (the starter, the wrong solutions) ``jobs``
+    at once, each in a child process (:func:`~ros2course.grade.child.grade_in_child`, as two
+    learners' checks on one machine). A wrong solution hanging until its deadline is most of a
+    lesson's validation time and needs no CPU: the others are graded meanwhile. Each of the
+    ``jobs`` slots keeps a built copy of the reference (the first case it grades builds it).
+    Outcomes keep the cases' order.
+    """
     cases = lesson_cases(lesson, underlay)
-    built = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-built-"))
+    scratch = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-"))
+    built = scratch / "built"
+    built.mkdir()
+    graded: dict[str, tuple[LessonResult, float]] = {}
     try:
         reference = cases[0]
         begin = time.monotonic()
@@ -380,20 +413,49 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None) -> list[Outcome]:
         hands_in_build = any((built / name).exists() for name in _BUILT)
         reference_src = None if hands_in_build else _src_fingerprints(built)
         reference_src = reference_src or None  # no package: no build to spare, every case from scratch
-        graded: tuple[LessonResult, float] | None = (
-            grade_lesson(lesson, built, underlays=reference.underlays), time.monotonic() - begin)
-        for case in cases:
-            if case is not reference:
-                graded = None
-                if case.underlays == reference.underlays:
-                    graded = grade_in_built(lesson, case, built, reference_src)
-                if graded is None:
-                    graded = grade_case(lesson, case.name, case.prepare, underlays=case.underlays)
-            result, seconds = graded
-            ok, expected = case.judge(result)
-            outcomes.append(Outcome(lesson.id, case.name, ok, expected, _describe(result), seconds, result))
+        graded[reference.name] = (grade_lesson(lesson, built, underlays=reference.underlays),
+                                  time.monotonic() - begin)
+
+        def grade_one(case: Case, slot: Path, grade: Grade) -> tuple[LessonResult, float]:
+            found = None
+            if case.underlays == reference.underlays:
+                found = grade_in_built(lesson, case, slot, reference_src, grade)
+            return found or grade_case(lesson, case.name, case.prepare, underlays=case.underlays, grade=grade)
+
+        rest = [case for case in cases if case is not reference]
+        parallel = [case for case in rest if not case.alone] if jobs > 1 else []
+        for case in rest:
+            if case not in parallel:
+                graded[case.name] = grade_one(case, built, grade_here)
+        if parallel:
+            logs = scratch / "logs"
+            slots: queue.SimpleQueue[Path] = queue.SimpleQueue()
+            for index in range(min(jobs, len(parallel))):
+                slot = built if index == 0 else scratch / f"built{index}"
+                slot.mkdir(exist_ok=True)
+                slots.put(slot)
+
+            def in_child(case_lesson: Lesson, root: Path, underlays: tuple[Path, ...]) -> LessonResult:
+                return grade_in_child(case_lesson.id, root, underlays, Path(tempfile.mkdtemp(dir=logs)))
+
+            def in_a_slot(case: Case) -> tuple[LessonResult, float]:
+                slot = slots.get()
+                try:
+                    return grade_one(case, slot, in_child)
+                finally:
+                    slots.put(slot)
+
+            logs.mkdir()
+            with concurrent.futures.ThreadPoolExecutor(max_workers=jobs) as pool:
+                for case, found in zip(parallel, pool.map(in_a_slot, parallel), strict=True):
+                    graded[case.name] = found
     finally:
-        shutil.rmtree(built, ignore_errors=True)
+        shutil.rmtree(scratch, ignore_errors=True)
+    outcomes = []
+    for case in cases:
+        result, seconds = graded[case.name]
+        ok, expected = case.judge(result)
+        outcomes.append(Outcome(lesson.id, case.name, ok, expected, _describe(result), seconds, result))
     return outcomes
 
 
@@ -451,15 +513,25 @@ def _folders(packages: list[str]) -> set[str]:
     return {found[name][0].name for name in packages if name in found}
 
 
-def validate_course(lesson_ids: list[str] | None = None, progress: Console | None = None) -> list[Outcome]:
-    """Validate the given lessons (default: all), printing one line per case on ``progress``."""
+def validate_course(lesson_ids: list[str] | None = None, progress: Console | None = None,
+                    jobs: int = 1) -> list[Outcome]:
+    """Validate the given lessons (default: all), printing one line per case on ``progress``.
+
+    Args:
+        jobs: wrong solutions of a lesson graded at once (:func:`validate_lesson`); 1: one at a time.
+
+    Raises:
+        CourseError: ``jobs`` < 1.  UnknownLesson: a lesson id is not in the catalog.
+    """
+    if jobs < 1:
+        raise CourseError(f"--jobs must be 1 or more (got {jobs})", "e.g. --jobs 2: two wrong solutions at once")
     catalog = load_catalog()
     lessons = [catalog.get(i) for i in lesson_ids] if lesson_ids else catalog.lessons
     outcomes = []
     for lesson in lessons:
         if progress is not None:
             progress.print(f"validating {lesson.id} ...")
-        for outcome in validate_lesson(lesson):
+        for outcome in validate_lesson(lesson, jobs):
             outcomes.append(outcome)
             if progress is not None:
                 mark = "[green]ok[/]" if outcome.ok else "[red]WRONG[/]"
@@ -477,7 +549,6 @@ def render_outcomes(outcomes: list[Outcome], console: Console) -> None:
     console.print(table)
     bad = sum(not o.ok for o in outcomes)
     console.print(f"{len(outcomes) - bad} passed, {bad} failed")
-    from ros2course.grade.mutate import describe_score
 
     catalog = load_catalog()
     for lesson_id in dict.fromkeys(o.lesson for o in outcomes):

@@ -1,0 +1,83 @@
+"""Grade one workspace in a child process of its own, as ``ros2course check`` would.
+
+``dev validate --repeat --load K`` (:mod:`ros2course.grade.repeat`) and ``dev validate
+--jobs K`` (:mod:`ros2course.grade.validate`) grade several workspaces at once. Each
+grading runs in its own ``python -m ros2course.grade.child`` process: its own ROS domain,
+rclpy context and ``ros2`` daemon, so the gradings share nothing but the machine (and
+nothing of the author's process, such as an rclpy context, leaks into the next one).
+The child grades the lesson of the course this process has chosen (``--course``): it is
+told through ``ROS2COURSE_CONTENT`` (:func:`ros2course.lesson.content_root`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+from ros2course.grade.results import LessonResult, Status
+from ros2course.lesson.catalog import content_root, load_catalog
+
+#: Seconds one grading may take before the run is counted as hung (a grader's own deadlines are far shorter).
+RUN_TIMEOUT = 600.0
+
+
+def grade_in_child(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_dir: Path,
+                   timeout: float = RUN_TIMEOUT) -> LessonResult:
+    """Grade the workspace ``root`` for ``lesson_id`` in a fresh child process.
+
+    Args:
+        lesson_id: a lesson of the active course.
+        root: the workspace folder (``src/`` and the lesson's folders); its build is
+            reused when up to date, as a learner's second ``check`` does.
+        underlays: built workspaces sourced before building and running it.
+        log_dir: where the grading writes its logs (made when missing).
+        timeout: seconds before the child is killed and the grading counted as hung.
+
+    Returns:
+        The child's result; a ``grader error`` result (never an exception) when the child
+        ran past ``timeout``, failed, or printed no result.
+    """
+    argv = [sys.executable, "-m", "ros2course.grade.child", lesson_id, str(root), str(log_dir)]
+    for underlay in underlays:
+        argv += ["--underlay", str(underlay)]
+    env = {**os.environ, "ROS2COURSE_CONTENT": str(content_root())}
+    try:
+        proc = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, env=env,  # noqa: S603
+                              stdin=subprocess.DEVNULL, check=False)
+    except subprocess.TimeoutExpired:
+        return LessonResult.unfinished(lesson_id, Status.GRADER_ERROR, f"the grading ran past {timeout:.0f} s")
+    lines = [line for line in proc.stdout.splitlines() if line.startswith("{")]
+    if proc.returncode != 0 or not lines:
+        tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+        return LessonResult.unfinished(lesson_id, Status.GRADER_ERROR, f"the grading process failed: {tail}")
+    return LessonResult.from_record(json.loads(lines[-1]))
+
+
+def _main(argv: list[str]) -> int:
+    """The child: ``LESSON ROOT LOG_DIR [--underlay PATH]...``; prints its result's JSON record."""
+    import argparse  # noqa: PLC0415
+
+    from ros2course.grade.engine import grade_lesson  # noqa: PLC0415
+    from ros2course.ros import env as env_mod  # noqa: PLC0415
+
+    parser = argparse.ArgumentParser(prog="python -m ros2course.grade.child")
+    parser.add_argument("lesson")
+    parser.add_argument("root", type=Path)
+    parser.add_argument("log_dir", type=Path)
+    parser.add_argument("--underlay", type=Path, action="append", default=[])
+    args = parser.parse_args(argv)
+    env_mod.activate()
+    lesson = load_catalog().get(args.lesson)
+    args.log_dir.mkdir(parents=True, exist_ok=True)
+    result = grade_lesson(lesson, args.root, log_dir=args.log_dir, underlays=tuple(args.underlay))
+    sys.stdout.write(json.dumps(result.to_record()) + "\n")
+    sys.stdout.flush()
+    return 0
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("PYTHONDONTWRITEBYTECODE", "1")
+    raise SystemExit(_main(sys.argv[1:]))
