@@ -282,27 +282,32 @@ CLIENT = """
 @pytest.mark.ros
 @pytest.mark.timeout(60)
 def test_stand_in_server_records_learner_calls(ros_env, learners):
+    """The kit's one stand-in service server (DeferredServer) answers a learner's client and records its calls."""
     from rcl_interfaces.srv import ListParameters  # noqa: PLC0415
 
-    from ros2course.run.probes import RosSession, StandInServer  # noqa: PLC0415
+    from ros2course.kit.topics_services import DeferredServer  # noqa: PLC0415
+    from ros2course.run.probes import RosSession  # noqa: PLC0415
 
-    def handler(request, response):
-        response.result.names = ["grader:" + p for p in request.prefixes]
+    def handler(index, request, response):
+        response.result.names = [f"grader{index}:" + p for p in request.prefixes]
         return response
 
     with RosSession() as session:
-        server = StandInServer(session, ListParameters, "/grader_service", handler)
-        proc = learners(session, "client", CLIENT, ros_env)
-        assert wait_until(lambda: proc.poll() is not None, 30.0), describe(proc)
-        assert proc.poll() == 0, describe(proc) + proc.stdout()
-        assert [list(r.prefixes) for _, r in server.calls] == [["call0"], ["call1"], ["call2"]]
-        assert [r.depth for _, r in server.calls] == [0, 1, 2]
-        times = [t for t, _ in server.calls]
-        assert times == sorted(times)
-        assert server.rate() is not None and server.rate().samples == 2
-        lines = [line for line in proc.stdout().splitlines() if line.startswith("answer")]
-        assert lines == ["answer ['grader:call0']", "answer ['grader:call1']", "answer ['grader:call2']"]
-        server.close()
+        server = DeferredServer(session, ListParameters, "/grader_service", handler)
+        server.offer()
+        try:
+            proc = learners(session, "client", CLIENT, ros_env)
+            assert wait_until(lambda: proc.poll() is not None, 30.0), describe(proc)
+            assert proc.poll() == 0, describe(proc) + proc.stdout()
+            assert [list(r.prefixes) for _, r in server.calls] == [["call0"], ["call1"], ["call2"]]
+            assert [r.depth for _, r in server.calls] == [0, 1, 2]
+            times = [t for t, _ in server.calls]
+            assert times == sorted(times)
+            assert server.rate() is not None and server.rate().samples == 2
+            lines = [line for line in proc.stdout().splitlines() if line.startswith("answer")]
+            assert lines == ["answer ['grader0:call0']", "answer ['grader1:call1']", "answer ['grader2:call2']"]
+        finally:
+            server.close()
         assert wait_until(lambda: "/grader_service" not in dict(session.node.get_service_names_and_types()), 5.0)
 
 

@@ -482,10 +482,6 @@ class GradingSession:
             self._overlay = build_mod.overlay_env(self.workspace_root, self.base_env)
         return dict(self._overlay)
 
-    def node_env(self) -> dict[str, str]:
-        """Environment for learner executables: overlay + private domain + localhost discovery."""
-        return self.ros.learner_env(self.overlay())
-
     def interface_type(self, package: str, kind: str, name: str) -> Any:
         """A generated msg/srv class from the workspace (see :mod:`ros2course.ros.interfaces`).
 

@@ -2,7 +2,7 @@
 
 The grader starts its own "mystery" nodes in the check's private graph, then
 runs the learner's script there: ``bash <script>`` with the sourced workspace,
-the check's ``ROS_DOMAIN_ID`` and localhost discovery (:meth:`GradingSession.node_env`),
+the check's ``ROS_DOMAIN_ID`` and localhost discovery (``learner_env`` of the part's graph),
 in its own process group with a deadline and capped output
 (:meth:`GradingSession.start_program`). When the script's process is stopped,
 every process carrying its run marker is killed too, so a ``ros2`` daemon that

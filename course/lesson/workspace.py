@@ -52,11 +52,6 @@ class Workspace:
         """True when ``ros2course init`` ran here (a progress file exists)."""
         return self.progress_path.is_file()
 
-    @property
-    def log_dir(self) -> Path:
-        """Where build and node logs of checks go (inside colcon's ``log/``)."""
-        return self.root / "log" / "ros2course"
-
     def load_progress(self) -> Progress:
         """Read and validate the progress file (an empty :class:`~ros2course.lesson.progress.Progress` if none).
 
