@@ -5,7 +5,8 @@ analysis of :mod:`ros2course.batch.mutate` on a seeded sample of the lesson's
 mutants (universalmutator), graded through the batch engine, and writes one
 table row per lesson: mutants generated, graded (sampled or all), killed by the
 build, killed, survived, triaged (``chapters/<lesson>/mutation.yaml``), score
-and wall time. Lessons not run this time are listed as such. Results are cached
+and wall time. A lesson not run this time keeps the row of its last run (its
+``mutation-score.json``, with that run's date and course version). Results are cached
 in ``--out`` (a second run grades only new mutants)::
 
     python benchmarks/grader_strength.py [LESSON ...] [--sample 30] [--seed 1] [--jobs 2] [--out DIR]
@@ -19,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import datetime as dt
+import json
 import shutil
 import sys
 import tempfile
@@ -31,6 +33,7 @@ sys.path.insert(0, str(ROOT))
 from rich.console import Console  # noqa: E402
 
 from ros2course.batch.mutate import mutate_lessons, render  # noqa: E402
+from ros2course.grade.mutate import SCORE_FILE  # noqa: E402
 from ros2course.lesson.catalog import load_catalog  # noqa: E402
 from ros2course.ros import env as env_mod  # noqa: E402
 
@@ -43,9 +46,36 @@ def _row(f, sample: int) -> str:
             f"{f.seconds:.0f} |")
 
 
+def _recorded_row(lesson_id: str, data: dict) -> str:
+    """A table row for a lesson not run this time, from its ``mutation-score.json`` (its last run)."""
+    score = "n/a" if data.get("score") is None else f"{100 * data['score']:.0f} %"
+    graded = (f"{data['graded']} of {data['generated']} (seeded sample)" if data.get("sampled")
+              else f"{data['graded']} (all)")
+    when = f"{data.get('date', '?')}, course {data.get('course_version') or '?'}"
+    return (f"| {lesson_id} | {data['generated']} | {graded} | {data['killed_by_build']} | {data['killed']} | "
+            f"{data['survived']} | {data['triaged']} | {data.get('timed_out', 0) + data.get('grader_error', 0)} | "
+            f"{score} | last run {when} |")
+
+
+def recorded_scores(lesson_ids: list[str]) -> dict[str, dict]:
+    """``{lesson id: its mutation-score.json}`` for the lessons that have one (:func:`ros2course.grade.mutate.write_score`)."""
+    catalog = load_catalog()
+    found = {}
+    for lesson_id in lesson_ids:
+        path = catalog.get(lesson_id).folder / SCORE_FILE
+        try:
+            found[lesson_id] = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            continue
+    return found
+
+
 def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: int, jobs: int,
               speedup: str = "") -> None:
-    """Write the Markdown report (rows of what ran, then the lessons not run)."""
+    """Write the Markdown report: rows of what ran; rows of the lessons not run this time, from the
+    score each lesson's last run recorded (so a run on a few lessons keeps the others'); then the
+    lessons never measured."""
+    recorded = recorded_scores(not_run)
     lines = [
         "# Grader strength: mutation analysis per lesson",
         "",
@@ -66,23 +96,29 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "`survivors/` folder.",
         "",
         "| lesson | mutants generated | graded | killed by build | killed | survived | triaged | "
-        "timed out / grader error | score | wall time of this run, s (cached mutants cost nothing) |",
+        "timed out / grader error | score | wall time of this run, s (cached mutants cost nothing), or when it last ran |",
         "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|",
         *[_row(f, sample) for f in found],
+        *[_recorded_row(lesson_id, data) for lesson_id, data in recorded.items()],
         "",
     ]
-    survivors = [(f.lesson, g) for f in found for g in f.graded if g.outcome == "survived" and not g.triaged]
+    survivors = [f"- {f.lesson} `{g.mutant.key}`: {g.mutant.file}:{g.mutant.line}: "
+                 f"`{g.mutant.original.strip()}` -> `{g.mutant.mutated.strip()}`"
+                 for f in found for g in f.graded if g.outcome == "survived" and not g.triaged]
+    survivors += [f"- {lesson_id} (last run): {where}" for lesson_id, data in recorded.items()
+                  for where in data.get("survivors", [])]
     if survivors:
         lines += ["## Survivors not triaged", "",
                   "Each is a change the grader did not notice: a gap to close in the grader, or a mutant to triage "
                   "in the lesson's mutation.yaml with a reason.", ""]
-        lines += [f"- {lesson} `{g.mutant.key}`: {g.mutant.file}:{g.mutant.line}: "
-                  f"`{g.mutant.original.strip()}` -> `{g.mutant.mutated.strip()}`" for lesson, g in survivors]
+        lines += survivors
         lines.append("")
     if speedup:
         lines += [speedup, ""]
-    if not_run:
-        lines += ["Not run this time (the table has no row for them): " + ", ".join(not_run) + ".", ""]
+    never = [lesson_id for lesson_id in not_run if lesson_id not in recorded]
+    if never:
+        lines += ["Never measured (no `mutation-score.json`; the table has no row for them): "
+                  + ", ".join(never) + ".", ""]
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_text("\n".join(lines), encoding="utf-8")
 
