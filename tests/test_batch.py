@@ -327,7 +327,7 @@ def test_require_isolation_refuses_with_the_missing_protections(tmp_path: Path, 
     job = batch.Job("b", "alice", str(tmp_path / "subs" / "alice"), "", ["workspace-setup"], str(tmp_path / "out2"),
                     require_isolation=True)
     outcome = batch.run_job(job)
-    record = outcome["records"][0]
+    record = outcome.records[0]
     assert record.status == "grader error" and "not root: test" in record.message
     assert record.isolation["missing"] == {sandbox.UID: "not root: test"}
 
@@ -345,3 +345,27 @@ def test_summary_lists_each_protection(tmp_path: Path) -> None:
     text = console.file.getvalue()
     assert "network namespace" in text and "loopback only" in text
     assert "unprivileged uid" in text and "MISSING" in text and "not root" in text
+
+
+def test_relocate_paths_names_the_workers_folders_as_the_instructor_sees_them(tmp_path: Path) -> None:
+    """Field by field, on path boundaries: ``scratch/ws2`` is not ``scratch/ws``; quotes and backslashes
+    in a text survive (the old rewrite replaced inside serialised JSON)."""
+    from ros2course.batch.runner import relocate_paths
+    from ros2course.grade.results import CheckResult, LessonResult, Status
+
+    scratch = tmp_path / "ros2course-grade-alice"
+    result = LessonResult("l", 1.0, 2.0, Status.FAILED, [
+        CheckResult("build", "b", 1, 1, True, f'built "{scratch}/ws/src" (a \\ b)', "", ""),
+        CheckResult("run", "r", 0, 1, False, f"see {scratch}/logs/node.log; kept {scratch}/ws2/x",
+                    "", f"full log: {scratch}/logs")],
+        f"colcon failed in {scratch}/ws", log_dir=str(scratch / "logs" / "l"),
+        build={"log": str(scratch / "logs" / "build.log"), "ok": True})
+    out = relocate_paths([result], [(scratch / "logs", "/out/alice/logs"), (scratch / "ws", "<submission>"),
+                                    (scratch, "<scratch>")])[0]
+    assert out.log_dir == "/out/alice/logs/l"
+    assert out.checks[0].observed == 'built "<submission>/src" (a \\ b)'
+    assert out.checks[1].observed == "see /out/alice/logs/node.log; kept <scratch>/ws2/x"
+    assert out.checks[1].hint == "full log: /out/alice/logs"
+    assert out.message == "colcon failed in <submission>"
+    assert out.build == {"log": "/out/alice/logs/build.log", "ok": True}
+    assert (out.score, out.status, out.checks[1].passed) == (1.0, Status.FAILED, False)

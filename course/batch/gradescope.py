@@ -111,6 +111,6 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
     finally:
         if trusted is not None:
             trusted.discard()
-    data = gradebook.gradescope_json(outcome["records"])
+    data = gradebook.gradescope_json(outcome.records)
     atomic_write_text(results, json.dumps(data, indent=2) + "\n")
     return float(data["score"])

@@ -33,6 +33,7 @@ import dataclasses
 import functools
 import json
 import os
+import re
 import shutil
 import signal
 import statistics
@@ -43,6 +44,7 @@ import threading
 import time
 import uuid
 from collections import Counter
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -240,24 +242,69 @@ def _kill_job(popen: subprocess.Popen, marker: str) -> list[int]:
     return kill_marked(marker, var=BATCH_MARKER_VAR)
 
 
-def _rewrite_paths(results: list[LessonResult], replacements: list[tuple[str, str]]) -> list[LessonResult]:
-    """The results with the worker's paths (scratch folder) replaced by what the instructor sees."""
-    text = json.dumps([r.to_record() for r in results])
-    for old, new in replacements:
-        if old:
-            text = text.replace(json.dumps(old)[1:-1], json.dumps(new)[1:-1])
-    return [LessonResult.from_record(r) for r in json.loads(text)]
+def _path_pattern(folder: Path) -> re.Pattern[str]:
+    """``folder`` as it appears in a text, ending on a path boundary (``/tmp/a/ws`` never matches ``/tmp/a/ws2``)."""
+    return re.compile(re.escape(str(folder)) + r"(?![\w.-])")
 
 
-def run_job(job: Job) -> dict[str, Any]:
+def relocate_paths(results: list[LessonResult], moves: Sequence[tuple[Path, str]]) -> list[LessonResult]:
+    """The results with the worker's folders named as the instructor sees them.
+
+    A result names the worker's scratch folders in its ``log_dir`` and in its texts
+    (observed, hints, messages, build log excerpts). Each string field of each result
+    (:meth:`LessonResult.to_record`, walked field by field, never as serialised JSON)
+    has every ``(folder, replacement)`` of ``moves`` replaced, in order (list a folder
+    before the folders that contain it), matched on path boundaries.
+
+    Args:
+        results: the worker's results.
+        moves: ``(folder in the worker's scratch, what to show instead)``: e.g. the job's
+            ``logs/`` -> ``OUTDIR/<student>/logs``, its ``ws/`` -> ``<submission>``.
+    """
+    patterns = [(_path_pattern(folder), replacement) for folder, replacement in moves]
+
+    def moved(value: Any) -> Any:
+        if isinstance(value, str):
+            for pattern, replacement in patterns:
+                value = pattern.sub(lambda _: replacement, value)
+            return value
+        if isinstance(value, dict):
+            return {key: moved(item) for key, item in value.items()}
+        if isinstance(value, list):
+            return [moved(item) for item in value]
+        return value
+
+    return [LessonResult.from_record(moved(result.to_record())) for result in results]
+
+
+@dataclasses.dataclass
+class JobResult:
+    """What :func:`run_job` gives back for one submission.
+
+    Attributes:
+        student: the submission's student id.
+        records: one result per lesson graded (none when the job was cancelled: a resumed batch grades it again).
+        isolation: the ``isolation`` field of its results (:meth:`ros2course.sandbox.Isolation.to_json`
+            plus the memory limit, the pids cgroup's counters and ``killed_after``).
+        peak_rss: bytes, the worker and its children at their largest (sampled every 0.5 s).
+        seconds: wall time of the job.
+        cancelled: the batch was interrupted while it ran.
+    """
+
+    student: str
+    records: list[LessonResult]
+    isolation: dict[str, Any]
+    peak_rss: int = 0
+    seconds: float = 0.0
+    cancelled: bool = False
+
+
+def run_job(job: Job) -> JobResult:
     """Prepare, grade and clean up one submission; never raises for the submission's faults.
 
     Returns:
-        ``{"student", "records": [LessonResult per lesson], "isolation": {...},
-        "peak_rss": bytes (worker and its children, sampled every 0.5 s),
-        "seconds": wall time, "cancelled": bool}``. Each result carries the student, the isolation,
+        the job's :class:`JobResult`. Each result carries the student, the isolation,
         ``timings["total"]`` and the peak memory.
-        A cancelled job returns no records (a resumed batch grades it again).
     """
     begin = time.monotonic()
     student_logs = Path(job.out_dir) / job.student / "logs"
@@ -281,8 +328,8 @@ def run_job(job: Job) -> dict[str, Any]:
         if (scratch / "logs").is_dir():
             # never as links: the submission's uid could write links into logs/ros
             sandbox.copy_logs(scratch / "logs", student_logs)
-        records = _rewrite_paths(records, [(str(scratch / "logs"), str(student_logs)),
-                                           (str(scratch / "ws"), "<submission>"), (str(scratch), "<scratch>")])
+        records = relocate_paths(records, [(scratch / "logs", str(student_logs)), (scratch / "ws", "<submission>"),
+                                           (scratch, "<scratch>")])
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
         if not isolation.get("mountns"):
@@ -293,8 +340,7 @@ def run_job(job: Job) -> dict[str, Any]:
         record.isolation = isolation
         record.timings["total"] = round(seconds, 3)
         record.peak_rss = peak
-    return {"student": job.student, "records": [] if cancelled else records, "isolation": isolation,
-            "peak_rss": peak, "seconds": seconds, "cancelled": cancelled}
+    return JobResult(job.student, [] if cancelled else records, isolation, peak, seconds, cancelled)
 
 
 def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Isolation, sandbox.PidsCgroup | None]:
@@ -647,14 +693,14 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
                               for lesson in job.lessons]
                     for result in failed:
                         result.student = job.student
-                    outcome = {"records": failed, "isolation": {}, "peak_rss": 0}
-                for record in outcome["records"]:
+                    outcome = JobResult(job.student, failed, {})
+                for record in outcome.records:
                     gradebook.append_record(results_path, record)
                     records.append(record)
-                if outcome["records"]:
+                if outcome.records:
                     write_outputs(out_dir, records, lessons, [job.student])
-                    isolation = outcome.get("isolation") or isolation
-                    peaks.append(int(outcome.get("peak_rss", 0)))
+                    isolation = outcome.isolation or isolation
+                    peaks.append(outcome.peak_rss)
                 if progress:
                     progress.update(task, advance=1, last=job.student)
     except BaseException:
