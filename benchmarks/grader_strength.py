@@ -11,6 +11,7 @@ in ``--out`` (a second run grades only new mutants)::
 
     python benchmarks/grader_strength.py [LESSON ...] [--sample 30] [--seed 1] [--jobs 2] [--out DIR]
     python benchmarks/grader_strength.py print-forever-node --speedup   # also times --jobs 1 vs --jobs N
+    python benchmarks/grader_strength.py --readme   # only README.md's lesson table, from the recorded scores
 
 ``--speedup`` grades the lesson's sample twice more without the cache (``--jobs 1`` then
 ``--jobs N``) and reports the parallel speed-up.
@@ -34,6 +35,7 @@ from rich.console import Console  # noqa: E402
 
 from ros2course.batch.mutate import mutate_lessons, render  # noqa: E402
 from ros2course.grade.mutate import SCORE_FILE  # noqa: E402
+from ros2course.grade.validate import with_lessons_table  # noqa: E402
 from ros2course.lesson.catalog import load_catalog  # noqa: E402
 from ros2course.ros import env as env_mod  # noqa: E402
 
@@ -123,6 +125,11 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
     path.write_text("\n".join(lines), encoding="utf-8")
 
 
+def update_readme(readme: Path = ROOT / "README.md") -> None:
+    """Rewrite the README's lesson table (:func:`ros2course.grade.validate.with_lessons_table`)."""
+    readme.write_text(with_lessons_table(readme.read_text(encoding="utf-8")), encoding="utf-8")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("lessons", nargs="*", help="lesson ids (default: every lesson)")
@@ -132,7 +139,12 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=ROOT / ".mutation-out")
     parser.add_argument("--doc", type=Path, default=ROOT / "docs" / "grader-strength.md")
     parser.add_argument("--speedup", action="store_true", help="also time --jobs 1 against --jobs N, uncached")
+    parser.add_argument("--readme", action="store_true",
+                        help="only rewrite README.md's lesson table from the scores the lessons recorded (no mutants graded)")
     args = parser.parse_args()
+    if args.readme:
+        update_readme()
+        return 0
     env_mod.activate()
     every = load_catalog().ids()
     chosen = args.lessons or every
@@ -157,7 +169,8 @@ def main() -> int:
         console.print(speedup)
         speedup_file.write_text(speedup + "\n", encoding="utf-8")
     write_doc(args.doc, found, [i for i in every if i not in chosen], args.sample, args.seed, args.jobs, speedup)
-    console.print(f"wrote {args.doc} ({time.monotonic() - begin:.0f} s)")
+    update_readme()
+    console.print(f"wrote {args.doc} and README.md's lesson table ({time.monotonic() - begin:.0f} s)")
     return 0
 
 

@@ -381,3 +381,20 @@ def test_a_lesson_beyond_the_tutorial_names_its_source_instead_of_chapters(tmp_p
     with pytest.raises(LessonFormatError) as info:
         load_lesson(_mutated_lesson(tmp_path, _with(chapters=[], beyond="  "), folder_name="13-blank"))
     assert "beyond" in str(info.value)
+
+
+def test_the_readme_lesson_table_is_current() -> None:
+    """README.md's lesson table (checks, wrong solutions, grader strength) matches the course (issue 24)."""
+    from ros2course.grade.validate import with_lessons_table
+
+    readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
+    assert with_lessons_table(readme) == readme, (
+        "README.md's lesson table is stale: run python benchmarks/grader_strength.py --readme")
+
+
+def test_a_readme_without_the_table_markers_is_a_one_line_error() -> None:
+    from ros2course.errors import CourseError
+    from ros2course.grade.validate import with_lessons_table
+
+    with pytest.raises(CourseError, match="no generated lesson table"):
+        with_lessons_table("# a course\n")

@@ -525,6 +525,19 @@ def write_score(lesson: Lesson, found: LessonMutation) -> Path | None:
     return path
 
 
+def score_text(lesson: Lesson) -> str:
+    """The lesson's last mutation score in a few words (a table cell): ``"93 % (20 of 368 mutants)"``,
+    ``"n/a (every counted mutant triaged)"`` or ``"not measured"`` (no :func:`write_score` file)."""
+    try:
+        data = json.loads((lesson.folder / SCORE_FILE).read_text(encoding="utf-8"))
+        score = data["score"]
+        graded, generated = data["graded"], data["generated"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return "not measured"
+    share = "n/a" if score is None else f"{100 * score:.0f} %"
+    return f"{share} ({graded} of {generated} mutants)" if data.get("sampled") else f"{share} (all {generated} mutants)"
+
+
 def describe_score(lesson: Lesson) -> str:
     """One line on the lesson's last mutation score (:func:`write_score`), or how to measure it."""
     how = f"ros2course dev mutate {lesson.id} --sample 20"

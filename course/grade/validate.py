@@ -46,8 +46,8 @@ from ros2course.build.reference import (
 )
 from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
 from ros2course.grade.child import grade_in_child
-from ros2course.grade.engine import grade_lesson
-from ros2course.grade.mutate import describe_score
+from ros2course.grade.engine import grade_lesson, load_grader
+from ros2course.grade.mutate import describe_score, score_text
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import (
     Lesson,
@@ -537,6 +537,42 @@ def validate_course(lesson_ids: list[str] | None = None, progress: Console | Non
                 mark = "[green]ok[/]" if outcome.ok else "[red]WRONG[/]"
                 progress.print(f"  {mark} {outcome.case}: {outcome.got} ({outcome.seconds:.1f} s)")
     return outcomes
+
+
+#: Markers around the generated lesson table in a course's README (:func:`lessons_markdown`).
+TABLE_BEGIN, TABLE_END = "<!-- lessons: begin (generated: python benchmarks/grader_strength.py --readme) -->", \
+    "<!-- lessons: end -->"
+
+
+def lessons_markdown() -> str:
+    """A Markdown table of the course's lessons, in order: id, title, checks and points of its grader,
+    wrong solutions (fixtures) and grader strength (its last ``dev mutate``, :func:`~ros2course.grade.mutate.score_text`).
+
+    Raises:
+        CourseError: a grader cannot be imported.  LessonFormatError: a fixture is malformed.
+    """
+    rows = ["| lesson | title | checks (points) | wrong solutions | grader strength |", "|---|---|---:|---:|---|"]
+    for lesson in load_catalog().lessons:
+        checks = load_grader(lesson.grader).CHECKS
+        title = lesson.title.replace("|", "\\|")
+        rows.append(f"| `{lesson.id}` | {title} | {len(checks)} ({sum(c.points for c in checks):g}) | "
+                    f"{len(load_fixtures(lesson.id))} | {score_text(lesson)} |")
+    return "\n".join(rows)
+
+
+def with_lessons_table(readme: str) -> str:
+    """``readme`` with the text between :data:`TABLE_BEGIN` and :data:`TABLE_END` replaced by :func:`lessons_markdown`.
+
+    Raises:
+        CourseError: the README has no such markers.
+    """
+    try:
+        head, rest = readme.split(TABLE_BEGIN, 1)
+        _, tail = rest.split(TABLE_END, 1)
+    except ValueError as exc:
+        raise CourseError("the README has no generated lesson table",
+                          f"put the two lines {TABLE_BEGIN!r} and {TABLE_END!r} where it goes") from exc
+    return f"{head}{TABLE_BEGIN}\n{lessons_markdown()}\n{TABLE_END}{tail}"
 
 
 def render_outcomes(outcomes: list[Outcome], console: Console) -> None:
