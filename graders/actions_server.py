@@ -8,12 +8,17 @@ in a row, the point it simulates carrying over from one to the next:
    1 m/s (a least-squares fit over the feedback messages' send stamps), the result
    the goal itself and the status SUCCEEDED;
 2. a goal 3 m away and a goal with a NaN coordinate: both rejected;
-3. a goal 0.8 m from where goal 1 ended, canceled after three feedback messages:
+3. a goal 1.6 m from where goal 1 ended, canceled after three feedback messages:
    its first feedback shows where the point started (the position is kept), the
    cancel is accepted, the goal ends CANCELED short of the goal and nothing moves
    after it;
-4. a goal 1 m away, then after three feedback messages a second goal: the first
+4. a goal 1.8 m away, then after three feedback messages a second goal: the first
    ends ABORTED (one goal at a time), the second SUCCEEDED.
+
+Goals 3 and 4 are long (1.6 s and 1.8 s at the contract's speed) although the grader
+acts after their first 0.3 s: on a loaded machine the grader may see the third
+feedback message late, and a goal that had already ended by then could not be
+canceled or preempted (CI saw a 0.8 m goal end before its cancel arrived).
 
 Then the learner's ``cli/action_move_straight.sh X Y`` runs against the same server
 (``ros2 action list``, ``info``, ``send_goal --feedback``), with a goal only the
@@ -47,6 +52,9 @@ POSITION_TOLERANCE = 0.01
 STEP_TOLERANCE = 1.5 * SPEED * PERIOD
 #: Seconds a goal of distance d may take: d / SPEED plus this (start-up and a loaded machine).
 GOAL_SLACK = 3.0
+#: Metres: goal 3 (canceled) and goal 4 (preempted) from where the point is (see the module docstring).
+CANCEL_DISTANCE = 1.6
+PREEMPT_DISTANCE = 1.8
 #: Seconds the contract needs the server watched (benchmarks/all_lessons.py): goal 1 (1 m at SPEED),
 #: three feedback messages then two periods of silence after the cancel, three messages of goal 3 and
 #: goal 4's way back (0.3 m), the script's 0.5 m goal.
@@ -80,7 +88,8 @@ CHECKS = [
           "is where the point is", needs=("goal_accepted",)),
     Check("rejects", f"Goals more than {MAX_DISTANCE} m away, or not finite, are rejected", 2,
           "in goal_callback: return GoalResponse.REJECT when math.isfinite() fails for x or y, or when the goal "
-          f"is more than {MAX_DISTANCE} m from the point", needs=SERVED),
+          f"is more than {MAX_DISTANCE} m from the point (measure from where the point is now, not from the origin)",
+          needs=SERVED),
     Check("position_kept", "The next goal starts where the last one ended", 1,
           "keep the point's position in the node (self.position), not in execute_callback: it must survive "
           "from one goal to the next", needs=("goal_accepted",)),
@@ -257,10 +266,16 @@ def _slope(points: list[tuple[float, float]]) -> float:
 
 
 def _rejects(s: GradingSession, action: Any, client: act.GoalClient, start: tuple[float, float]) -> None:
-    """Record ``rejects``: a goal 3 m from the point and one with a NaN coordinate are both rejected."""
+    """Record ``rejects``: a goal 3 m from the point, one 2.6 m from it across the origin (only 1.6 m from
+    the origin: a server measuring from (0, 0) instead of from the point accepts it) and one with a NaN
+    coordinate are all rejected. ``start`` is the point after goal 1, 1 m from the origin."""
     angle = random.uniform(0.0, 2.0 * math.pi)
     far = (round(start[0] + 3.0 * math.cos(angle), 3), round(start[1] + 3.0 * math.sin(angle), 3))
-    cases = [(f"{_show(far)}, 3 m away", far), ("(nan, 0.5)", (math.nan, 0.5))]
+    across = (round(-1.6 * start[0], 3), round(-1.6 * start[1], 3))
+    cases = [(f"{_show(far)}, 3 m away", far),
+             (f"{_show(across)}, {math.dist(across, start):.1f} m away (but {math.hypot(*across):.1f} m from the "
+              "origin)", across),
+             ("(nan, 0.5)", (math.nan, 0.5))]
     seen, wrong = [], 0
     for label, xy in cases:
         goal = client.send(_goal(action, *xy))
@@ -272,7 +287,7 @@ def _rejects(s: GradingSession, action: Any, client: act.GoalClient, start: tupl
         seen.append(f"{label}: {verdict}")
         if goal.accepted is None:
             wrong += 1
-    s.record("rejects", wrong == 0, "; ".join(seen), "both rejected (GoalResponse.REJECT)",
+    s.record("rejects", wrong == 0, "; ".join(seen), "all rejected (GoalResponse.REJECT)",
              fraction=(len(cases) - wrong) / len(cases))
 
 
@@ -283,22 +298,24 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
     ``heading``: the direction of goal 1 from the origin (radians). Returns where the point is
     believed to be afterwards.
     """
-    # 0.8 m from where goal 1 ended, at right angles to goal 1's way: from the origin it is 1.28 m away
-    target = (round(start[0] - 0.8 * math.sin(heading), 3), round(start[1] + 0.8 * math.cos(heading), 3))
+    # CANCEL_DISTANCE from where goal 1 ended, at right angles to goal 1's way: from the origin it is
+    # hypot(1, 1.6) = 1.89 m away, so a server that reset the point shows it in its first feedback
+    d = CANCEL_DISTANCE
+    target = (round(start[0] - d * math.sin(heading), 3), round(start[1] + d * math.cos(heading), 3))
     goal = client.send(_goal(action, *target))
     if not goal.accepted:
-        reason = f"the goal {_show(target)}, 0.8 m from {_show(start)}, was not accepted ({goal.why or 'rejected'})"
+        reason = f"the goal {_show(target)}, {d} m from {_show(start)}, was not accepted ({goal.why or 'rejected'})"
         for check_id in ("position_kept", "cancel_accepted"):
             s.record(check_id, False, reason, "accepted")
         return start
     first = _wait_feedback(s, client, goal, 3, node, 3.0)
-    expected = (f"the first feedback of a goal 0.8 m from where the last ended: distance_to_goal within "
-                f"{STEP_TOLERANCE:.2f} m below 0.8")
+    expected = (f"the first feedback of a goal {d} m from where the last ended: distance_to_goal within "
+                f"{STEP_TOLERANCE:.2f} m below {d}")
     if first:
         d0 = first[0][1]
-        s.record("position_kept", 0.8 - STEP_TOLERANCE <= d0 <= 0.8 + POSITION_TOLERANCE,
+        s.record("position_kept", d - STEP_TOLERANCE <= d0 <= d + POSITION_TOLERANCE,
                  f"goal {_show(target)} from {_show(start)}: first distance_to_goal {d0:.3f} m"
-                 + ("" if d0 <= 0.8 + POSITION_TOLERANCE else
+                 + ("" if d0 <= d + POSITION_TOLERANCE else
                     f" (from the origin it would be {math.hypot(*target) - SPEED * PERIOD:.3f})"
                     if math.isfinite(d0) else
                     ": the point is no longer a number (an accepted goal with a NaN x or y moved it there)"),
@@ -309,10 +326,10 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
     asked = time.time()
     s.record("cancel_accepted", bool(accepted),
              "the cancel request was accepted" if accepted else f"cancel: {why}; the goal then ended "
-             + act.status_name(client.wait_result(goal, 0.8 / SPEED + GOAL_SLACK, abort=node.ended).status),
+             + act.status_name(client.wait_result(goal, d / SPEED + GOAL_SLACK, abort=node.ended).status),
              "the goal listed among goals_canceling in the answer")
     if not accepted:
-        client.wait_result(goal, 0.8 / SPEED + GOAL_SLACK, abort=node.ended)
+        client.wait_result(goal, d / SPEED + GOAL_SLACK, abort=node.ended)
         return _finite_or(_xy(goal.result.final_position), target) if goal.result is not None else target
     client.wait_result(goal, 2.0, abort=node.ended)
     time.sleep(2 * PERIOD)  # a server that keeps moving sends feedback now
@@ -325,9 +342,9 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
         return target
     final = _xy(goal.result.final_position)
     short = math.dist(final, target)
-    last = samples[-1][1] if samples else 0.8
+    last = samples[-1][1] if samples else d
     # where the point stopped by the server's own last feedback: the next goal starts there
-    stopped = (target[0] - (target[0] - start[0]) / 0.8 * last, target[1] - (target[1] - start[1]) / 0.8 * last)
+    stopped = (target[0] - (target[0] - start[0]) / d * last, target[1] - (target[1] - start[1]) / d * last)
     problems = []
     if goal.status != act.CANCELED:
         problems.append(f"status {act.status_name(goal.status)}")
@@ -343,24 +360,25 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
 
 def _preempt(s: GradingSession, action: Any, client: act.GoalClient, node: kit.StartedNode,
              start: tuple[float, float]) -> list[str]:
-    """Record ``preempted``: goal 3 (1 m away) is aborted by goal 4 (back to the start), which succeeds.
+    """Record ``preempted``: a goal PREEMPT_DISTANCE away is aborted by a goal back to the start, which succeeds.
 
     Returns the goals the server still executes after the grader asked to cancel them (its
     executor busy with them: it can take no other request).
     """
     angle = random.uniform(0.0, 2.0 * math.pi)
-    far = (round(start[0] + math.cos(angle), 3), round(start[1] + math.sin(angle), 3))
+    far = (round(start[0] + PREEMPT_DISTANCE * math.cos(angle), 3),
+           round(start[1] + PREEMPT_DISTANCE * math.sin(angle), 3))
     back = (round(start[0], 3), round(start[1], 3))
     expected = ("the first goal ABORTED once the second is accepted; the second SUCCEEDED, final_position "
                 f"{_show(back)} ± {POSITION_TOLERANCE} m")
     first = client.send(_goal(action, *far))
     if not first.accepted:
-        s.record("preempted", False, f"the goal {_show(far)} (1 m away) was not accepted", expected)
+        s.record("preempted", False, f"the goal {_show(far)} ({PREEMPT_DISTANCE} m away) was not accepted", expected)
         return []
     _wait_feedback(s, client, first, 3, node, 3.0)
     second = client.send(_goal(action, *back))
-    client.wait_result(first, 1.0 / SPEED + GOAL_SLACK, abort=node.ended)
-    client.wait_result(second, 1.0 / SPEED + GOAL_SLACK, abort=node.ended)
+    client.wait_result(first, PREEMPT_DISTANCE / SPEED + GOAL_SLACK, abort=node.ended)
+    client.wait_result(second, PREEMPT_DISTANCE / SPEED + GOAL_SLACK, abort=node.ended)
     observed = [f"first goal {_show(far)}: {act.status_name(first.status)}"]
     if second.accepted:
         final = _xy(second.result.final_position) if second.result is not None else None
