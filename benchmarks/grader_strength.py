@@ -53,10 +53,10 @@ def _recorded_row(lesson_id: str, data: dict) -> str:
     score = "n/a" if data.get("score") is None else f"{100 * data['score']:.0f} %"
     graded = (f"{data['graded']} of {data['generated']} (seeded sample)" if data.get("sampled")
               else f"{data['graded']} (all)")
-    when = f"{data.get('date', '?')}, course {data.get('course_version') or '?'}"
+    when = f"{data.get('seconds', 0):.0f} s on {data.get('date', '?')}, course {data.get('course_version') or '?'}"
     return (f"| {lesson_id} | {data['generated']} | {graded} | {data['killed_by_build']} | {data['killed']} | "
             f"{data['survived']} | {data['triaged']} | {data.get('timed_out', 0) + data.get('grader_error', 0)} | "
-            f"{score} | last run {when} |")
+            f"{score} | last run: {when} |")
 
 
 def recorded_scores(lesson_ids: list[str]) -> dict[str, dict]:
@@ -78,6 +78,7 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
     score each lesson's last run recorded (so a run on a few lessons keeps the others'); then the
     lessons never measured."""
     recorded = recorded_scores(not_run)
+    order = {lesson_id: index for index, lesson_id in enumerate(load_catalog().ids())}  # rows in `list` order
     lines = [
         "# Grader strength: mutation analysis per lesson",
         "",
@@ -100,8 +101,9 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "| lesson | mutants generated | graded | killed by build | killed | survived | triaged | "
         "timed out / grader error | score | wall time of this run, s (cached mutants cost nothing), or when it last ran |",
         "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|",
-        *[_row(f, sample) for f in found],
-        *[_recorded_row(lesson_id, data) for lesson_id, data in recorded.items()],
+        *[row for _, row in sorted([(order.get(f.lesson, 0), _row(f, sample)) for f in found]
+                                   + [(order.get(lesson_id, 0), _recorded_row(lesson_id, data))
+                                      for lesson_id, data in recorded.items()])],
         "",
     ]
     survivors = [f"- {f.lesson} `{g.mutant.key}`: {g.mutant.file}:{g.mutant.line}: "
