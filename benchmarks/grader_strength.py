@@ -35,6 +35,8 @@ from rich.console import Console  # noqa: E402
 
 from ros2course.batch.mutate import mutate_lessons, render  # noqa: E402
 from ros2course.grade.mutate import SCORE_FILE  # noqa: E402
+from ros2course.grade.repeat import render_steadiness, repeat_lessons  # noqa: E402
+from ros2course.grade.strength import steadiness_text, write_steadiness  # noqa: E402
 from ros2course.grade.validate import with_lessons_table  # noqa: E402
 from ros2course.lesson.catalog import load_catalog  # noqa: E402
 from ros2course.ros import env as env_mod  # noqa: E402
@@ -45,7 +47,7 @@ def _row(f, sample: int) -> str:
     graded = f"{len(f.graded)} of {f.generated} (seeded sample)" if f.sampled else f"{len(f.graded)} (all)"
     return (f"| {f.lesson} | {f.generated} | {graded} | {f.count('killed by build')} | {f.count('killed')} | "
             f"{f.count('survived')} | {f.triaged} | {f.count('timed out') + f.count('grader error')} | {score} | "
-            f"{f.seconds:.0f} |")
+            f"{f.seconds:.0f} | {steadiness_text(load_catalog().get(f.lesson))} |")
 
 
 def _recorded_row(lesson_id: str, data: dict) -> str:
@@ -56,7 +58,7 @@ def _recorded_row(lesson_id: str, data: dict) -> str:
     when = f"{data.get('seconds', 0):.0f} s on {data.get('date', '?')}, course {data.get('course_version') or '?'}"
     return (f"| {lesson_id} | {data['generated']} | {graded} | {data['killed_by_build']} | {data['killed']} | "
             f"{data['survived']} | {data['triaged']} | {data.get('timed_out', 0) + data.get('grader_error', 0)} | "
-            f"{score} | last run: {when} |")
+            f"{score} | last run: {when} | {steadiness_text(load_catalog().get(lesson_id))} |")
 
 
 def recorded_scores(lesson_ids: list[str]) -> dict[str, dict]:
@@ -98,9 +100,14 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "the lesson's own starter gives with TODOs or does not give). Survivors' diffs are in the run's "
         "`survivors/` folder.",
         "",
+        "Reference steadiness: the lesson's reference graded N times, K at once (two learners' checks on one "
+        "machine), by `python benchmarks/grader_strength.py LESSON... --repeat N --load K` (recorded in "
+        "`chapters/<lesson>/steadiness.json`): steady when no check changed its verdict.",
+        "",
         "| lesson | mutants generated | graded | killed by build | killed | survived | triaged | "
-        "timed out / grader error | score | wall time of this run, s (cached mutants cost nothing), or when it last ran |",
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|",
+        "timed out / grader error | score | wall time of this run, s (cached mutants cost nothing), or when it last ran | "
+        "reference steadiness (`dev validate --repeat`) |",
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|",
         *[row for _, row in sorted([(order.get(f.lesson, 0), _row(f, sample)) for f in found]
                                    + [(order.get(lesson_id, 0), _recorded_row(lesson_id, data))
                                       for lesson_id, data in recorded.items()])],
@@ -132,6 +139,20 @@ def update_readme(readme: Path = ROOT / "README.md") -> None:
     readme.write_text(with_lessons_table(readme.read_text(encoding="utf-8")), encoding="utf-8")
 
 
+def record_steadiness(lesson_ids: list[str], repeat: int, load: int, doc: Path) -> int:
+    """Grade each lesson's reference ``repeat`` times, ``load`` at once (``dev validate --repeat``), record
+    each in its ``steadiness.json``, then rewrite the doc and the README's table from the records."""
+    catalog = load_catalog()
+    console = Console(stderr=True)
+    rows = repeat_lessons(lesson_ids, repeat, load, ["reference"], progress=console)
+    for row in rows:
+        write_steadiness(catalog.get(row.lesson), row)
+    render_steadiness(rows, console)
+    write_doc(doc, [], catalog.ids(), 20, 1, 2)
+    update_readme()
+    return 0 if all(r.ok for r in rows) else 1
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("lessons", nargs="*", help="lesson ids (default: every lesson)")
@@ -141,6 +162,10 @@ def main() -> int:
     parser.add_argument("--out", type=Path, default=ROOT / ".mutation-out")
     parser.add_argument("--doc", type=Path, default=ROOT / "docs" / "grader-strength.md")
     parser.add_argument("--speedup", action="store_true", help="also time --jobs 1 against --jobs N, uncached")
+    parser.add_argument("--repeat", type=int, default=0, metavar="N",
+                        help="instead of mutants: grade each lesson's reference N times (--load at once) and record "
+                             "its steadiness (chapters/<lesson>/steadiness.json)")
+    parser.add_argument("--load", type=int, default=2, metavar="K", help="with --repeat: gradings at once")
     parser.add_argument("--readme", action="store_true",
                         help="only rewrite README.md's lesson table from the scores the lessons recorded (no mutants graded)")
     args = parser.parse_args()
@@ -148,6 +173,8 @@ def main() -> int:
         update_readme()
         return 0
     env_mod.activate()
+    if args.repeat:
+        return record_steadiness(args.lessons or load_catalog().ids(), args.repeat, args.load, args.doc)
     every = load_catalog().ids()
     chosen = args.lessons or every
     console = Console(stderr=True)

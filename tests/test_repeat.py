@@ -62,3 +62,22 @@ def test_inspect_services_lists_the_graph_steadily_under_load(cli) -> None:
     assert [r["case"] for r in rows] == ["reference"]
     assert rows[0]["runs"] == 3 and rows[0]["load"] == 2
     assert rows[0]["ok"], rows[0]["flakes"] or rows[0]
+
+
+def test_a_reference_s_repeat_run_is_recorded_and_shown(tmp_path) -> None:
+    """benchmarks/grader_strength.py --repeat records each reference's steadiness with its lesson; the
+    doc and the README's table show it (issue 24)."""
+    import types
+
+    from ros2course.grade.repeat import Flake
+    from ros2course.grade.strength import STEADINESS_FILE, steadiness_text, write_steadiness
+
+    lesson = types.SimpleNamespace(folder=tmp_path)
+    assert steadiness_text(lesson) == "not measured"
+    write_steadiness(lesson, Steadiness("inspect-services", "reference", 20, 2, [], 20, 300.0))
+    recorded = json.loads((tmp_path / STEADINESS_FILE).read_text())
+    assert recorded["runs"] == 20 and recorded["load"] == 2 and recorded["ok"] and recorded["date"]
+    assert steadiness_text(lesson) == "steady, 20 runs (2 at once)"
+    flake = Flake("listed", 13, 7, "/what_is_the_point", "no list of services")
+    write_steadiness(lesson, Steadiness("inspect-services", "reference", 20, 2, [flake], 13, 300.0))
+    assert steadiness_text(lesson) == "UNSTEADY in 20 runs (2 at once): listed (passed 13, failed 7)"

@@ -49,6 +49,7 @@ from ros2course.grade.child import grade_in_child
 from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.grade.mutate import describe_score, score_text
 from ros2course.grade.results import LessonResult, Status
+from ros2course.grade.strength import steadiness_text
 from ros2course.lesson.catalog import (
     Lesson,
     content_root,
@@ -546,17 +547,19 @@ TABLE_BEGIN, TABLE_END = "<!-- lessons: begin (generated: python benchmarks/grad
 
 def lessons_markdown() -> str:
     """A Markdown table of the course's lessons, in order: id, title, checks and points of its grader,
-    wrong solutions (fixtures) and grader strength (its last ``dev mutate``, :func:`~ros2course.grade.mutate.score_text`).
+    wrong solutions (fixtures), grader strength (its last ``dev mutate``, :func:`~ros2course.grade.mutate.score_text`)
+    and the reference's steadiness (its last repeat run, :func:`~ros2course.grade.strength.steadiness_text`).
 
     Raises:
         CourseError: a grader cannot be imported.  LessonFormatError: a fixture is malformed.
     """
-    rows = ["| lesson | title | checks (points) | wrong solutions | grader strength |", "|---|---|---:|---:|---|"]
+    rows = ["| lesson | title | checks (points) | wrong solutions | grader strength | reference steadiness |",
+            "|---|---|---:|---:|---|---|"]
     for lesson in load_catalog().lessons:
         checks = load_grader(lesson.grader).CHECKS
         title = lesson.title.replace("|", "\\|")
         rows.append(f"| `{lesson.id}` | {title} | {len(checks)} ({sum(c.points for c in checks):g}) | "
-                    f"{len(load_fixtures(lesson.id))} | {score_text(lesson)} |")
+                    f"{len(load_fixtures(lesson.id))} | {score_text(lesson)} | {steadiness_text(lesson)} |")
     return "\n".join(rows)
 
 

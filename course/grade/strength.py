@@ -1,0 +1,53 @@
+"""A lesson's recorded steadiness: the last ``dev validate --repeat`` of its reference (issue 24).
+
+Kept with the lesson, beside its mutation score (``mutation-score.json``,
+:func:`ros2course.grade.mutate.write_score`): docs/grader-strength.md and the README's
+lesson table show both (:func:`ros2course.grade.validate.lessons_markdown`).
+"""
+
+from __future__ import annotations
+
+import datetime as dt
+import json
+from pathlib import Path
+from typing import Any
+
+from ros2course.files import atomic_write_text
+from ros2course.grade.mutate import course_version
+from ros2course.lesson.catalog import Lesson
+
+#: The lesson's last repeat run of its reference, beside its ``mutation-score.json`` (:func:`write_steadiness`).
+STEADINESS_FILE = "steadiness.json"
+
+
+def write_steadiness(lesson: Lesson, row: Any) -> Path | None:
+    """Record the reference's repeat run (a :class:`~ros2course.grade.repeat.Steadiness`) in
+    ``chapters/<lesson>/steadiness.json``; its path, or None.
+
+    What docs/grader-strength.md and the README's lesson table show as the reference's
+    steadiness (issue 24). None when the lesson folder is read-only (an installed course).
+    """
+    data = {**row.to_dict(), "date": dt.date.today().isoformat(), "course_version": course_version()}
+    data.pop("lesson", None)
+    path = lesson.folder / STEADINESS_FILE
+    try:
+        atomic_write_text(path, json.dumps(data, indent=1) + "\n")
+    except OSError:
+        return None
+    return path
+
+
+def steadiness_text(lesson: Lesson) -> str:
+    """The reference's last repeat run in a few words (a table cell): ``"steady, 20 runs (2 at once)"``,
+    ``"UNSTEADY: listed (passed 13, failed 7)"`` or ``"not measured"``."""
+    try:
+        data = json.loads((lesson.folder / STEADINESS_FILE).read_text(encoding="utf-8"))
+        runs, load, flakes = data["runs"], data["load"], data["flakes"]
+    except (OSError, ValueError, KeyError, TypeError):
+        return "not measured"
+    if data.get("ok"):
+        return f"steady, {runs} runs ({load} at once)"
+    if flakes:
+        changed = ", ".join(f"{f['check']} (passed {f['passed']}, failed {f['failed']})" for f in flakes)
+        return f"UNSTEADY in {runs} runs ({load} at once): {changed}"
+    return f"not full marks in {runs - data.get('judged_ok', 0)} of {runs} runs ({load} at once)"
