@@ -313,6 +313,7 @@ def test_copy_logs_never_copies_links_or_fifos(tmp_path: Path) -> None:
 
 
 def test_require_isolation_refuses_with_the_missing_protections(tmp_path: Path, monkeypatch) -> None:
+    from ros2course.batch import job as one_job
     from ros2course.batch import runner as batch
     from ros2course import sandbox
 
@@ -324,9 +325,9 @@ def test_require_isolation_refuses_with_the_missing_protections(tmp_path: Path, 
     with pytest.raises(CourseError, match=r"unprivileged uid \(not root: test\)"):
         batch.run_batch(tmp_path / "subs", ["workspace-setup"], tmp_path / "out", require_isolation=True)
     # the job itself refuses too (a Dask worker may be another machine): a grader error row, nothing run
-    job = batch.Job("b", "alice", str(tmp_path / "subs" / "alice"), "", ["workspace-setup"], str(tmp_path / "out2"),
+    job = one_job.Job("b", "alice", str(tmp_path / "subs" / "alice"), "", ["workspace-setup"], str(tmp_path / "out2"),
                     require_isolation=True)
-    outcome = batch.run_job(job)
+    outcome = one_job.run_job(job)
     record = outcome.records[0]
     assert record.status == "grader error" and "not root: test" in record.message
     assert record.isolation["missing"] == {sandbox.UID: "not root: test"}
@@ -350,7 +351,7 @@ def test_summary_lists_each_protection(tmp_path: Path) -> None:
 def test_relocate_paths_names_the_workers_folders_as_the_instructor_sees_them(tmp_path: Path) -> None:
     """Field by field, on path boundaries: ``scratch/ws2`` is not ``scratch/ws``; quotes and backslashes
     in a text survive (the old rewrite replaced inside serialised JSON)."""
-    from ros2course.batch.runner import relocate_paths
+    from ros2course.batch.job import relocate_paths
     from ros2course.grade.results import CheckResult, LessonResult, Status
 
     scratch = tmp_path / "ros2course-grade-alice"

@@ -18,7 +18,8 @@ from pathlib import Path
 import psutil
 import pytest
 
-from ros2course.batch.runner import BATCH_MARKER_VAR, run_batch
+from ros2course.batch.job import BATCH_MARKER_VAR
+from ros2course.batch.runner import run_batch
 from ros2course.grade.engine import grade_lesson
 from ros2course.grade.validate import (
     apply_edits,

@@ -3,7 +3,7 @@
 Gradescope copies the student's upload to ``/autograder/submission`` and
 reads ``/autograder/results/results.json`` (its autograder specification:
 ``score``, ``output``, ``tests[name, score, max_score, output, visibility]``).
-The grading is the same :func:`ros2course.batch.runner.run_job` as ``ros2course grade``
+The grading is the same :func:`ros2course.batch.job.run_job` as ``ros2course grade``
 (scratch copy, worker subprocess, namespaces where the container allows them,
 timeout), so a submission gets the same verdict on Gradescope as in a batch.
 
@@ -22,14 +22,12 @@ import uuid
 from pathlib import Path
 
 from ros2course.batch.archive import ARCHIVE_SUFFIXES
+from ros2course.batch.job import Job, lesson_checks, run_job
 from ros2course.batch.runner import (
-    Job,
     build_trusted_interfaces,
-    needs_reference_sources,
     default_hidden,
-    lesson_checks,
+    needs_reference_sources,
     refuse_without_isolation,
-    run_job,
 )
 from ros2course.errors import CourseError
 from ros2course.files import atomic_write_text
