@@ -210,6 +210,34 @@ def write_outputs(out_dir: Path, records: list[LessonResult], lessons: list[str]
                                    json.dumps(gradebook.gradescope_json(mine), indent=2) + "\n")
 
 
+def _refuse_bad_input(submissions: Path, out_dir: Path, lessons: list[str], jobs: int | None, timeout: float,
+                      pids_limit: int) -> None:
+    """Refuse a batch before anything is graded (see :func:`run_batch`'s arguments).
+
+    Raises:
+        CourseError: no such folder, OUTDIR inside SUBMISSIONS, no lesson, bad numbers, a lesson
+            whose grader does not load or whose interfaces the batch cannot build.
+        MissingRequirement: a lesson needs what is not installed.
+    """
+    if not submissions.is_dir():
+        raise CourseError(f"{submissions} is not a folder", "give the folder that holds one entry per student")
+    if out_dir.resolve().is_relative_to(submissions.resolve()):
+        raise CourseError(f"OUTDIR {out_dir} is inside the submissions folder", "choose an --out folder elsewhere")
+    if not lessons:
+        raise CourseError("no lesson given", "add --lesson LESSON (ros2course list shows them)")
+    if jobs is not None and jobs < 1:
+        raise CourseError(f"--jobs must be at least 1 (got {jobs})", "e.g. --jobs 2")
+    if timeout <= 0:
+        raise CourseError(f"--timeout must be positive (got {timeout:g})", "e.g. --timeout 300")
+    if pids_limit < 16:
+        raise CourseError(f"--pids-limit must be at least 16 (got {pids_limit})", "e.g. --pids-limit 256")
+    catalog = load_catalog()
+    for lesson_id in lessons:
+        env_mod.require(catalog.get(lesson_id).requires, f"lesson {lesson_id}")
+        lesson_checks(lesson_id)
+    trusted_interface_packages([catalog.get(lesson_id) for lesson_id in lessons])  # refuses a lesson batch cannot grade
+
+
 def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | None = None,
               timeout: float = DEFAULT_TIMEOUT, scheduler: str | None = None, resume: bool = False,
               console: Any = None, memory_limit: int = DEFAULT_MEMORY_LIMIT, isolate: bool = True,
@@ -245,25 +273,10 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     begin = time.monotonic()
     submissions = submissions.absolute()
     out_dir = out_dir.absolute()
-    if not submissions.is_dir():
-        raise CourseError(f"{submissions} is not a folder", "give the folder that holds one entry per student")
-    if out_dir.resolve().is_relative_to(submissions.resolve()):
-        raise CourseError(f"OUTDIR {out_dir} is inside the submissions folder", "choose an --out folder elsewhere")
-    if not lessons:
-        raise CourseError("no lesson given", "add --lesson LESSON (ros2course list shows them)")
-    if jobs is not None and jobs < 1:
-        raise CourseError(f"--jobs must be at least 1 (got {jobs})", "e.g. --jobs 2")
-    if timeout <= 0:
-        raise CourseError(f"--timeout must be positive (got {timeout:g})", "e.g. --timeout 300")
-    if pids_limit < 16:
-        raise CourseError(f"--pids-limit must be at least 16 (got {pids_limit})", "e.g. --pids-limit 256")
+    _refuse_bad_input(submissions, out_dir, lessons, jobs, timeout, pids_limit)
     if require_isolation:
         refuse_without_isolation(isolate)
     catalog = load_catalog()
-    for lesson_id in lessons:
-        env_mod.require(catalog.get(lesson_id).requires, f"lesson {lesson_id}")
-        lesson_checks(lesson_id)
-    trusted_interface_packages([catalog.get(lesson_id) for lesson_id in lessons])  # refuses a lesson batch cannot grade
     results_path = out_dir / "results.jsonl"
     existing = gradebook.read_results(results_path)
     if existing and not resume:
