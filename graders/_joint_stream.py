@@ -48,6 +48,8 @@ class JointSample:
         stamp: ``header.stamp``, seconds.
         positions: ``position`` (radians, as the driver sent it).
         frame_id: ``header.frame_id``.
+        sequence: the publisher's sequence number of the message (rclpy's
+            ``publication_sequence_number``; None when the middleware gives none).
     """
 
     arrival: float
@@ -55,6 +57,7 @@ class JointSample:
     stamp: float
     positions: tuple[float, ...]
     frame_id: str
+    sequence: int | None = None
 
 
 def best_effort_qos(depth: int = READER_DEPTH) -> Any:
@@ -114,7 +117,7 @@ class JointStreamProbe:
         now = time.monotonic()
         stamp = msg.header.stamp
         sample = JointSample(now, info["source_timestamp"] * 1e-9, stamp.sec + stamp.nanosec * 1e-9,
-                             tuple(msg.position), msg.header.frame_id)
+                             tuple(msg.position), msg.header.frame_id, info.get("publication_sequence_number"))
         with self._lock:
             self._samples.append(sample)
         if self._graph is not None:
@@ -123,7 +126,8 @@ class JointStreamProbe:
     def _on_array(self, msg: Any, info: Any) -> None:
         """For ``std_msgs/Float64MultiArray`` (e.g. sas targets): ``data`` as positions, no stamp."""
         now = time.monotonic()
-        sample = JointSample(now, info["source_timestamp"] * 1e-9, 0.0, tuple(msg.data), "")
+        sample = JointSample(now, info["source_timestamp"] * 1e-9, 0.0, tuple(msg.data), "",
+                             info.get("publication_sequence_number"))
         with self._lock:
             self._samples.append(sample)
         if self._graph is not None:

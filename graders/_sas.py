@@ -330,10 +330,12 @@ def limits(s: GradingSession, published_id: str, radians_id: str, run: DriverRun
 def span_rate(s: GradingSession, check_id: str, samples: list[JointSample], *, period: float, span: float,
               noun: str, extra: str = "", few_note: str = "") -> bool:
     """Record ``check_id`` on the rate of ``samples`` over their DDS source timestamps: the kit's rate
-    judgement (:func:`ros2course.kit.judge.rate`) over at least 90 % of ``span`` seconds, with what
+    judgement (:func:`ros2course.kit.judge.rate`) over at least 90 % of ``span`` seconds, messages the
+    probe missed counted by the driver's sequence numbers (not the driver's fault), with what
     ``ros2 topic hz`` (arrival times) would show beside it. ``extra`` is appended to ``expected``."""
     hz = arrival_rate(samples)
     return rate(s, check_id, [x.source for x in samples], period=period, span=span, noun=noun,
+                sequence=[x.sequence for x in samples],
                 source="the DDS source timestamps", few_note=few_note, expected_note=extra,
                 where=f"; ros2 topic hz (arrival times) would show {hz.rate_hz:.1f} Hz" if hz else "")
 

@@ -162,7 +162,7 @@ def grade(s: GradingSession) -> None:
     client = act.GoalClient(s, action, ACTION)  # before the node starts: no feedback is missed
     node = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit", need_node=False)
     stuck: list[str] = []
-    stop = (0.0, 0.0)  # where the point is when a step before the cancel raised Unmet
+    stop = [(0.0, 0.0)]  # where the point may be when a step before the cancel raised Unmet
     with s.part("server"):
         _served(s, client, node)
         start, heading = _first_goal(s, action, client, node)
@@ -176,7 +176,7 @@ def grade(s: GradingSession) -> None:
         if stuck:
             raise Unmet(f"the server still executes the goal(s) {', '.join(stuck)} and answers no cancel: "
                         "every thread of its executor is busy")
-        _cli(s, node, stop)
+        _cli(s, node, stop[0])  # goal 4's second goal took a correct server back to stop[0]
 
 
 def _served(s: GradingSession, client: act.GoalClient, node: kit.StartedNode) -> None:
@@ -292,11 +292,12 @@ def _rejects(s: GradingSession, action: Any, client: act.GoalClient, start: tupl
 
 
 def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.StartedNode,
-            start: tuple[float, float], heading: float) -> tuple[float, float]:
+            start: tuple[float, float], heading: float) -> list[tuple[float, float]]:
     """Goal 2, canceled after three feedback messages: position_kept, cancel_accepted, canceled.
 
     ``heading``: the direction of goal 1 from the origin (radians). Returns where the point is
-    believed to be afterwards.
+    believed to be afterwards: one position, or two when the server's last feedback and its result
+    disagree (a wrong server; :func:`_preempt` places its goal so that either is right).
     """
     # CANCEL_DISTANCE from where goal 1 ended, at right angles to goal 1's way: from the origin it is
     # hypot(1, 1.6) = 1.89 m away, so a server that reset the point shows it in its first feedback
@@ -307,7 +308,7 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
         reason = f"the goal {_show(target)}, {d} m from {_show(start)}, was not accepted ({goal.why or 'rejected'})"
         for check_id in ("position_kept", "cancel_accepted"):
             s.record(check_id, False, reason, "accepted")
-        return start
+        return [start]
     first = _wait_feedback(s, client, goal, 3, node, 3.0)
     expected = (f"the first feedback of a goal {d} m from where the last ended: distance_to_goal within "
                 f"{STEP_TOLERANCE:.2f} m below {d}")
@@ -330,7 +331,7 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
              "the goal listed among goals_canceling in the answer")
     if not accepted:
         client.wait_result(goal, d / SPEED + GOAL_SLACK, abort=node.ended)
-        return _finite_or(_xy(goal.result.final_position), target) if goal.result is not None else target
+        return [_finite_or(_xy(goal.result.final_position), target) if goal.result is not None else target]
     client.wait_result(goal, 2.0, abort=node.ended)
     time.sleep(2 * PERIOD)  # a server that keeps moving sends feedback now
     late = [d for t, d in _distances(client, goal) if t > asked + 1.5 * PERIOD]
@@ -339,7 +340,7 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
                 f"distance_to_goal ± {STEP_TOLERANCE:.2f} m), no feedback after the cancel")
     if goal.status is None:
         s.record("canceled", False, f"{goal.why} after the cancel; {kit.process_state(node.proc)}", expected)
-        return target
+        return [target]
     final = _xy(goal.result.final_position)
     short = math.dist(final, target)
     last = samples[-1][1] if samples else d
@@ -355,20 +356,39 @@ def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
         problems.append(f"{len(late)} feedback message(s) sent after the cancel (down to {late[-1]:.3f} m)")
     s.record("canceled", not problems, "; ".join(problems) if problems else
              f"CANCELED at {_show(final)}, {short:.3f} m short of the goal, nothing sent after it", expected)
-    return stopped if math.isfinite(last) else _finite_or(final, target)
+    if not math.isfinite(last):
+        return [_finite_or(final, target)]
+    # a server whose feedback or result is wrong (those checks failed above) leaves the point's place
+    # uncertain: goal 4 must then be valid from both, or its verdict would depend on a random angle
+    return [stopped, final] if all(map(math.isfinite, final)) and math.dist(stopped, final) > STEP_TOLERANCE \
+        else [stopped]
+
+
+def _away_from(places: list[tuple[float, float]], distance: float) -> tuple[float, float]:
+    """A goal ``distance`` metres from the first of ``places``, and from the second too when the two are
+    between 5 cm and ``2 * distance`` apart (where the two circles meet, on a random side); otherwise in a
+    random direction from the first."""
+    a = places[0]
+    if len(places) > 1 and 0.05 < (gap := math.dist(a, places[1])) < 2 * distance:
+        b = places[1]
+        mid = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
+        h = random.choice((-1.0, 1.0)) * math.sqrt(distance ** 2 - (gap / 2) ** 2)
+        ux, uy = (b[0] - a[0]) / gap, (b[1] - a[1]) / gap
+        return round(mid[0] - h * uy, 3), round(mid[1] + h * ux, 3)
+    angle = random.uniform(0.0, 2.0 * math.pi)
+    return round(a[0] + distance * math.cos(angle), 3), round(a[1] + distance * math.sin(angle), 3)
 
 
 def _preempt(s: GradingSession, action: Any, client: act.GoalClient, node: kit.StartedNode,
-             start: tuple[float, float]) -> list[str]:
+             places: list[tuple[float, float]]) -> list[str]:
     """Record ``preempted``: a goal PREEMPT_DISTANCE away is aborted by a goal back to the start, which succeeds.
 
-    Returns the goals the server still executes after the grader asked to cancel them (its
-    executor busy with them: it can take no other request).
+    ``places``: where the point may be (:func:`_cancel`); the goal is PREEMPT_DISTANCE from each, the
+    start is the first. Returns the goals the server still executes after the grader asked to cancel
+    them (its executor busy with them: it can take no other request).
     """
-    angle = random.uniform(0.0, 2.0 * math.pi)
-    far = (round(start[0] + PREEMPT_DISTANCE * math.cos(angle), 3),
-           round(start[1] + PREEMPT_DISTANCE * math.sin(angle), 3))
-    back = (round(start[0], 3), round(start[1], 3))
+    far = _away_from(places, PREEMPT_DISTANCE)
+    back = (round(places[0][0], 3), round(places[0][1], 3))
     expected = ("the first goal ABORTED once the second is accepted; the second SUCCEEDED, final_position "
                 f"{_show(back)} ± {POSITION_TOLERANCE} m")
     first = client.send(_goal(action, *far))

@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import concurrent.futures
 import os
 import shutil
 import subprocess
 import sys
+import threading
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -154,6 +157,19 @@ def test_grader_process_uses_the_workspace_interfaces(tmp_path):
             assert response.point.x == 42.0
         finally:
             proc.stop(sigint_timeout=3)
+    # Two parts graded at once ask for a type together: each gets the class, never a module another thread is
+    # still importing (regression: "package_with_interfaces.msg has no type AmazingQuote", a fixture not gradable).
+    for module in [m for m in sys.modules if m.startswith("package_with_interfaces")]:
+        del sys.modules[module]
+    together = threading.Barrier(4)
+
+    def look_up(kind: str, name: str) -> Any:
+        together.wait()
+        return workspace_type(overlay, "package_with_interfaces", kind, name)
+
+    with concurrent.futures.ThreadPoolExecutor(4) as pool:
+        found = list(pool.map(look_up, ["msg", "msg", "srv", "srv"], ["AmazingQuote"] * 2 + ["WhatIsThePoint"] * 2))
+    assert found[0] is found[1] and found[2] is found[3] and found[0].__name__ == "AmazingQuote"
 
 
 def test_ament_index_lookups_match_ament_index_python_without_touching_os_environ() -> None:

@@ -32,6 +32,23 @@ def test_rate_stats_known_times():
     assert stats.std_dev == pytest.approx(math.sqrt(2.0 / 3.0))
 
 
+def test_rate_stats_counts_messages_the_reader_missed_by_sequence_number():
+    # a 500 Hz publisher; the reader lost messages 3, 4 and 8 (a loaded machine): by the times alone
+    # the rate looks 30 % low, by the publisher's sequence numbers it is what was published
+    sequence = [1, 2, 5, 6, 7, 9, 10]
+    times = [(n - 1) * 0.002 for n in sequence]
+    assert RateStats.from_times(times).rate_hz == pytest.approx(500 * 6 / 9)
+    stats = RateStats.from_times(times, sequence)
+    assert stats.rate_hz == pytest.approx(500.0)
+    assert (stats.samples, stats.missed) == (9, 3)
+    assert stats.std_dev == pytest.approx(0.0, abs=1e-12)
+    assert "3 message(s) the grader's reader missed" in stats.describe()
+    # numbers that do not increase (two writers, or none given) fall back to the times alone
+    for unusable in ([1, 2, 5, 6, 7, 9, 9], [1, 2, 5, None, 7, 9, 10], [1, 2]):
+        fallback = RateStats.from_times(times, unusable)
+        assert (fallback.samples, fallback.missed) == (6, 0)
+
+
 def test_rate_stats_regular_and_within():
     times = [i * 0.5 for i in range(7)]
     stats = RateStats.from_times(times)
@@ -374,3 +391,40 @@ def test_learner_env(ros_env):
         assert "ROS_LOCALHOST_ONLY" not in env
         assert env["KEEP"] == "me"
         assert env["PYTHONUNBUFFERED"] == "1"
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_parts_graded_at_once_share_one_check_graph(ros_env, tmp_path):
+    """The part without a graph of its own and the part with one, started together (kit.parts.at_once):
+    each thread's ``s.graph`` is fixed for the whole part, and the check has one ``s.ros``.
+
+    Regression: ``s.graph`` of the own-graph part used to evaluate ``s.ros`` too, and two threads making
+    ``s.ros`` at once made two graphs: the other part launched its node in one and looked for its
+    services in the other ("serves: none" for a correct server, 5 of 12 runs of two checks at once).
+    """
+    import threading  # noqa: PLC0415
+    import time  # noqa: PLC0415
+
+    from ros2course.grade.engine import Check, GradingSession  # noqa: PLC0415
+    from ros2course.kit import parts  # noqa: PLC0415
+    from ros2course.lesson.catalog import load_catalog  # noqa: PLC0415
+
+    lesson = load_catalog().get("service-server-client")
+    for _ in range(5):
+        s = GradingSession(lesson, [Check("a", "a", 1)], tmp_path, tmp_path / "log", ros_env)
+        seen: dict[str, list] = {"shared": [], "own": []}
+        both = threading.Barrier(2)
+
+        def look(name: str) -> None:
+            both.wait()  # the two parts touch the graph at the same moment
+            for _ in range(3):
+                seen[name].append(s.graph)
+                time.sleep(0.01)
+
+        try:
+            parts.at_once(s, "shared", lambda: look("shared"), "own", lambda: look("own"), own_graphs={"own"})
+        finally:
+            s.close()
+        assert all(graph is s.ros for graph in seen["shared"])
+        assert len({id(graph) for graph in seen["own"]}) == 1 and seen["own"][0] is not s.ros

@@ -154,6 +154,9 @@ class GradingSession:
         # Closing actions of the open parts, innermost last (see :meth:`part`), per thread:
         # a lesson's two halves may be graded on two threads at once, each in its own part.
         self._local = threading.local()
+        # parts graded at once (kit.parts.at_once) may first touch ros, a new graph or the recording together:
+        # one of each must be made, and the ExitStack that closes them is not thread-safe
+        self._making = threading.RLock()
         self._timings_lock = threading.Lock()
         self.workspace_root = workspace_root
         self.log_dir = log_dir
@@ -459,8 +462,9 @@ class GradingSession:
 
     @property
     def ros(self):
-        """The private ROS graph of this check (created on first use)."""
-        if self._ros is None:
+        """The private ROS graph of this check (created on first use, by one thread only)."""
+        with self._making:
+            if self._ros is None:
                 self._ros = self._stack.enter_context(RosSession(recorder=self._recording()))
         return self._ros
 
@@ -471,9 +475,10 @@ class GradingSession:
         """
         if os.environ.get("ROS2COURSE_RECORD", "1") == "0":
             return None
-        if self.recorder is None:
-            self.log_dir.mkdir(parents=True, exist_ok=True)
-            self.recorder = Recorder(self.log_dir / RECORDING_FILE)
+        with self._making:
+            if self.recorder is None:
+                self.log_dir.mkdir(parents=True, exist_ok=True)
+                self.recorder = Recorder(self.log_dir / RECORDING_FILE)
         return self.recorder
 
     def overlay(self) -> dict[str, str]:
@@ -600,8 +605,8 @@ class GradingSession:
     def graph(self) -> Any:
         """The graph the calling thread's steps observe: the innermost open part's own graph
         (``part(..., own_graph=True)``), else :attr:`ros` (a :class:`~ros2course.run.probes.RosSession`)."""
-        return next((state.own_graph for state in reversed(self._part_states) if state.own_graph is not None),
-                    self.ros)
+        own = next((state.own_graph for state in reversed(self._part_states) if state.own_graph is not None), None)
+        return own if own is not None else self.ros
 
     def new_graph(self):
         """Another private ROS graph (its own domain id) for this check, closed with it.
@@ -614,7 +619,8 @@ class GradingSession:
         Pass it as ``graph=`` to the kit steps and :meth:`launch`, or open the part
         with ``part(name, own_graph=True)``, which makes one and uses it by default.
         """
-        return self._stack.enter_context(RosSession(recorder=self._recording()))
+        with self._making:
+            return self._stack.enter_context(RosSession(recorder=self._recording()))
 
     def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:
         """Start a learner executable in the private domain; it is stopped at the end of the check.

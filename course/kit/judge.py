@@ -15,7 +15,7 @@ STANDARD_TOPICS = frozenset({"/rosout", "/parameter_events"})
 
 def rate(s: GradingSession, check_id: str, times: list[float], *, period: float, needed: int = 0,
          waited: float = 0.0, noun: str, source: str, where: str = "", few_note: str = "",
-         span: float | None = None, expected_note: str = "") -> bool:
+         span: float | None = None, expected_note: str = "", sequence: list[int | None] | None = None) -> bool:
     """Record ``check_id`` on the mean period of ``times`` (seconds, oldest first).
 
     The one rate judgement of the kit. The formula is ``ros2 topic hz``'s
@@ -37,8 +37,12 @@ def rate(s: GradingSession, check_id: str, times: list[float], *, period: float,
             seconds (fast streams, e.g. sas's 500 Hz joint states, where a count says
             less than the time covered).
         expected_note: appended to the expected text.
+        sequence: each event's publication sequence number, when the reader has them: messages
+            the grader's reader missed then count as intervals of the publisher's
+            (:meth:`RateStats.from_times`); ``ros2course evidence`` recomputes the rate from the
+            recorded messages only.
     """
-    stats = RateStats.from_times(times)
+    stats = RateStats.from_times(times, sequence)
     # the span judged, for the check's recording (``ros2course evidence`` recomputes the rate from it)
     window = (min(times), max(times)) if times else None
     band = (period * (1 - RATE_TOLERANCE), period * (1 + RATE_TOLERANCE))  # the mean period allowed, seconds

@@ -29,6 +29,7 @@ import ctypes
 import importlib
 import os
 import sys
+import threading
 from pathlib import Path
 from typing import Any
 
@@ -71,8 +72,15 @@ def _forget_other_prefix(package: str, prefix: Path) -> None:
         del sys.modules[module]
 
 
+#: One lookup at a time: two parts graded at once (kit.parts.at_once) may ask for the same type together,
+#: and a module another thread is still importing is already in ``sys.modules`` with none of its classes.
+_LOOKUP = threading.Lock()
+
+
 def workspace_type(overlay: dict[str, str], package: str, kind: str, name: str) -> Any:
     """The generated class ``package.kind.name`` (e.g. ``package_with_interfaces``, ``msg``, ``AmazingQuote``).
+
+    Thread-safe (one lookup at a time in the process).
 
     Args:
         overlay: the sourced workspace environment (``GradingSession.overlay()``).
@@ -81,12 +89,18 @@ def workspace_type(overlay: dict[str, str], package: str, kind: str, name: str) 
     Raises:
         NotGradable: the package is not installed in the workspace, or its types do not load.
     """
-    module_name = f"{package}.{kind}"
     prefix = package_prefix(package, overlay)
     if prefix is None:
         # Checked before the module cache: a build imported from another workspace would hide it.
         raise NotGradable(f"interface package {package} is not installed in the workspace",
                           f"build it: colcon build --packages-up-to {package}")
+    with _LOOKUP:
+        return _import_type(prefix, overlay, package, kind, name)
+
+
+def _import_type(prefix: Path, overlay: dict[str, str], package: str, kind: str, name: str) -> Any:
+    """:func:`workspace_type` once the package's install prefix is known (called holding ``_LOOKUP``)."""
+    module_name = f"{package}.{kind}"
     lib_dir = str(prefix / "lib")
     paths = [p for p in os.environ.get("LD_LIBRARY_PATH", "").split(os.pathsep) if p and p != lib_dir]
     os.environ["LD_LIBRARY_PATH"] = os.pathsep.join([lib_dir, *paths])

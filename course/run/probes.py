@@ -40,7 +40,9 @@ class RateStats:
         mean_period: mean delta, seconds.
         min_period, max_period: extreme deltas, seconds.
         std_dev: population standard deviation of the deltas, seconds.
-        samples: number of deltas (messages - 1).
+        samples: number of deltas (messages - 1, the missed ones included).
+        missed: messages the reader never got between its first and last, known from the
+            publisher's sequence numbers (0 when none were given).
     """
 
     rate_hz: float
@@ -49,16 +51,28 @@ class RateStats:
     max_period: float
     std_dev: float
     samples: int
+    missed: int = 0
 
     @classmethod
-    def from_times(cls, times: list[float]) -> RateStats | None:
-        """Stats over arrival (or stamp) times in seconds; None with fewer than 2 times."""
+    def from_times(cls, times: list[float], sequence: list[int | None] | None = None) -> RateStats | None:
+        """Stats over arrival (or stamp) times in seconds; None with fewer than 2 times.
+
+        ``sequence``: each message's publication sequence number (``rmw_message_info_t``'s
+        ``publication_sequence_number``, which rclpy passes a subscription callback as
+        ``publication_sequence_number``), used only when every one is given and they increase (one
+        writer). A gap of k numbers between two messages then counts as k intervals of delta / k: a
+        message the reader lost on a loaded machine (a best-effort reader, a full shared-memory
+        port) does not lengthen the publisher's measured period.
+        """
         if len(times) < 2:
             return None
-        deltas = [b - a for a, b in zip(times, times[1:])]
+        counted = (sequence is not None and len(sequence) == len(times) and None not in sequence
+                   and all(b > a for a, b in zip(sequence, sequence[1:])))
+        steps = [b - a for a, b in zip(sequence, sequence[1:])] if counted else [1] * (len(times) - 1)
+        deltas = [(b - a) / k for a, b, k in zip(times, times[1:], steps) for _ in range(k)]
         mean = sum(deltas) / len(deltas)
         return cls(1.0 / mean if mean > 0 else float("inf"), mean, min(deltas), max(deltas),
-                   statistics.pstdev(deltas), len(deltas))
+                   statistics.pstdev(deltas), len(deltas), len(deltas) - (len(times) - 1))
 
     def within(self, expected_hz: float, tolerance: float) -> bool:
         """True when the mean period is within ``tolerance`` (fraction, e.g. 0.15) of 1/expected_hz."""
@@ -67,12 +81,16 @@ class RateStats:
 
     def describe(self) -> str:
         """Human summary, e.g. ``2.00 Hz (mean period 0.500 s, min 0.498, max 0.502, 6 intervals)``;
-        periods under 0.1 s in milliseconds (``500.0 Hz (mean period 2.00 ms, min 1.95, max 2.10, ...)``)."""
+        periods under 0.1 s in milliseconds (``500.0 Hz (mean period 2.00 ms, min 1.95, max 2.10, ...)``);
+        messages the reader missed are counted after the intervals."""
+        missed = (f", {self.missed} message(s) the grader's reader missed counted by the publisher's sequence "
+                  "numbers" if self.missed else "")
         if self.mean_period < 0.1:
             return (f"{self.rate_hz:.1f} Hz (mean period {self.mean_period * 1000:.2f} ms, min "
-                    f"{self.min_period * 1000:.2f}, max {self.max_period * 1000:.2f}, {self.samples} intervals)")
+                    f"{self.min_period * 1000:.2f}, max {self.max_period * 1000:.2f}, {self.samples} intervals"
+                    f"{missed})")
         return (f"{self.rate_hz:.2f} Hz (mean period {self.mean_period:.3f} s, min {self.min_period:.3f}, "
-                f"max {self.max_period:.3f}, {self.samples} intervals)")
+                f"max {self.max_period:.3f}, {self.samples} intervals{missed})")
 
 
 def wait_until(predicate: Callable[[], bool], timeout: float, interval: float = 0.02,
