@@ -302,11 +302,19 @@ def next_(workspace: WorkspaceOpt = None) -> None:
     out.print("When ready: [bold]ros2course check[/]   Stuck: [bold]ros2course hint[/]")
 
 
-def _lesson_for(lesson_id: str | None, ws: Workspace):
+def _lesson_for(lesson_id: str | None, ws: Workspace, progress=None):
+    """The lesson named, else the workspace's current one. ``progress``: the workspace's progress, when the
+    caller has read it already (read it once per command); else it is read here when needed.
+
+    Raises:
+        CourseError: no lesson named and none current. ProgressError: the progress file is unreadable.
+    """
     catalog = load_catalog()
     if lesson_id:
         return catalog.get(lesson_id)
-    current = ws.load_progress().current if ws.initialised else None
+    if progress is None and ws.initialised:
+        progress = ws.load_progress()
+    current = progress.current if progress is not None else None
     if current is None:
         raise CourseError("no lesson given and no current lesson", "name one (ros2course list) or run 'ros2course next'")
     return catalog.get(current)
@@ -331,9 +339,10 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
                               f"ros2course check {lesson_id}   or   ros2course check --all")
         _check_all(ws, as_json)
         return
-    lesson = _lesson_for(lesson_id, ws)
-    if ws.initialised:
-        ws.load_progress()  # a corrupt progress file is reported before, not after, a long check
+    # read once, before the long check: a corrupt progress file is reported first (the attempt is recorded
+    # on a fresh read afterwards, so one that `watch` recorded meanwhile is kept)
+    progress = ws.load_progress() if ws.initialised else None
+    lesson = _lesson_for(lesson_id, ws, progress)
     result = _grade(ws, lesson, quiet=as_json)
     if as_json:
         sys.stdout.write(result_json(result))

@@ -12,7 +12,7 @@ from __future__ import annotations
 import time
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks, params
+from ros2course.kit import Check, GradingSession, checks, params, parts
 from ros2course.kit.quotes import (
     DEFAULTS,
     EXECUTABLE,
@@ -79,26 +79,25 @@ CHECKS = [
 
 
 def grade(s: GradingSession) -> None:
-    """Run the node with its defaults (messages, then read/set its parameters, Ctrl+C), and with overrides."""
+    """Run the node with its defaults (messages, then read/set its parameters, Ctrl+C), and at the same time
+    with overrides, in a graph of its own (its own domain id: its messages cannot mix in)."""
     path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)
-    graph = s.new_graph()  # the second run, overlapping the first: its own domain, so its messages cannot mix in
-    configured = graph.topic(f"/{CONFIGURED_TOPIC}", amazing_quote(s))
-    args = ["--ros-args", "-p", f"topic_name:={CONFIGURED_TOPIC}", "-p", f"period:={CONFIGURED_PERIOD}"]
-    configured_proc = s.launch(path, f"{EXECUTABLE}.configured", args, graph=graph)
-    configured_began = time.monotonic()
-    with s.part("defaults"):
-        probe = s.ros.topic(DEFAULT_TOPIC, amazing_quote(s))
-        began = time.monotonic()
-        # a misnamed node is still graded through its parameter services (need_node=False)
-        node = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit", need_node=False)
-        _default_messages(s, probe, node.proc, began)
-        services = params.connect(s, node.name, proc=node.proc, why=s.results["node_name"].observed)
-        params.declared(s, "declared", "defaults", services, DEFAULTS)
-        set_at_runtime(s, "runtime_change", services, probe, node.proc, quote=RUNTIME_QUOTE,
-                       philosopher=RUNTIME_PHILOSOPHER, count=RUNTIME_MESSAGES, period=DEFAULT_PERIOD,
-                       topic=DEFAULT_TOPIC)
-    with s.part("configured"):
-        _configured_run(s, graph, configured_proc, configured, configured_began)
+    parts.at_once(s, "configured", lambda: _configured_run(s, path), "defaults", lambda: _defaults(s, path),
+                  own_graphs={"configured"})
+
+
+def _defaults(s: GradingSession, path) -> None:
+    """The run with the defaults: node_name, default_messages, default_rate, declared, runtime_change."""
+    probe = s.graph.topic(DEFAULT_TOPIC, amazing_quote(s))
+    began = time.monotonic()
+    # a misnamed node is still graded through its parameter services (need_node=False)
+    node = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit", need_node=False)
+    _default_messages(s, probe, node.proc, began)
+    services = params.connect(s, node.name, proc=node.proc, why=s.results["node_name"].observed)
+    params.declared(s, "declared", "defaults", services, DEFAULTS)
+    set_at_runtime(s, "runtime_change", services, probe, node.proc, quote=RUNTIME_QUOTE,
+                   philosopher=RUNTIME_PHILOSOPHER, count=RUNTIME_MESSAGES, period=DEFAULT_PERIOD,
+                   topic=DEFAULT_TOPIC)
 
 
 def _default_messages(s: GradingSession, probe, proc, began: float) -> None:
@@ -121,8 +120,12 @@ def _default_messages(s: GradingSession, probe, proc, began: float) -> None:
              waited=timeout, noun="message", source="the messages' send stamps")
 
 
-def _configured_run(s: GradingSession, graph, proc, probe, began: float) -> None:
+def _configured_run(s: GradingSession, path) -> None:
     """``configured_topic`` and ``configured_rate`` from the run started with ``--ros-args -p`` overrides."""
+    probe = s.graph.topic(f"/{CONFIGURED_TOPIC}", amazing_quote(s))  # the part's own graph
+    args = ["--ros-args", "-p", f"topic_name:={CONFIGURED_TOPIC}", "-p", f"period:={CONFIGURED_PERIOD}"]
+    proc = s.launch(path, f"{EXECUTABLE}.configured", args)
+    began = time.monotonic()
     shown = f"-p topic_name:={CONFIGURED_TOPIC} -p period:={CONFIGURED_PERIOD}"
     with s.phase("observe"):
         probe.observe(CONFIGURED_SAMPLES, CONFIGURED_PERIOD, max(0.5, START_TIMEOUT - (time.monotonic() - began)),
@@ -131,7 +134,7 @@ def _configured_run(s: GradingSession, graph, proc, probe, began: float) -> None
     count = len(probe.samples())
     s.record("configured_topic", count > 0, f"started with {shown}: " + (
         f"{count} message(s) on /{CONFIGURED_TOPIC}" if count else f"no message on /{CONFIGURED_TOPIC} within "
-        f"{timeout:.1f} s; topics seen: {kit.topics_seen(graph)}; {kit.process_state(proc)}"),
+        f"{timeout:.1f} s; topics seen: {kit.topics_seen(s.graph)}; {kit.process_state(proc)}"),
         f"AmazingQuote messages on /{CONFIGURED_TOPIC} when started with {shown}")
     kit.rate(s, "configured_rate", probe.send_stamps(), period=CONFIGURED_PERIOD, needed=CONFIGURED_SAMPLES,
              waited=timeout, noun="message", source="the messages' send stamps")

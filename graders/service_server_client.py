@@ -109,13 +109,13 @@ def _grade_server(s: GradingSession, srv_type: type) -> None:
                          where)
 
 
-def _grade_client(s: GradingSession, srv_type: type, graph) -> None:
+def _grade_client(s: GradingSession, srv_type: type) -> None:
     path = kit.executable(s, "client_executable", PACKAGE, CLIENT_EXE)
-    rosout = graph.rosout()
+    rosout = s.graph.rosout()  # the part's own graph
     # Made before the client starts, so it closes after the client's Ctrl+C (closing actions run newest first):
     # the client is stopped while the service still exists, as a learner would stop it.
-    server = ts.stand_in_server(s, srv_type, SERVICE, services.point_answers(), graph)
-    node = kit.start_node(s, "client_node_name", path, CLIENT_NODE, sigint_check="client_sigint_exit", graph=graph,
+    server = ts.stand_in_server(s, srv_type, SERVICE, services.point_answers())
+    node = kit.start_node(s, "client_node_name", path, CLIENT_NODE, sigint_check="client_sigint_exit",
                           need_node=False)
     services.says_it_waits(s, "client_waits", rosout, node, SERVICE)  # 1. no service yet
     server.offer()  # 2. prompt answers: the calls, their rate, the points in the log
@@ -136,4 +136,4 @@ def grade(s: GradingSession) -> None:
     kit.depends(s, "depends", PACKAGE, ("rclpy", ts.INTERFACES))
     srv_type = ts.workspace_types(s, "srv", "WhatIsThePoint")
     parts.at_once(s, "server", lambda: _grade_server(s, srv_type),
-                  "client", lambda: _grade_client(s, srv_type, s.new_graph()))
+                  "client", lambda: _grade_client(s, srv_type), own_graphs={"client"})

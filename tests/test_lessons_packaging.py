@@ -6,7 +6,6 @@ accept every reasonable way of printing the numbers, and still catch a wrong c.
 
 from __future__ import annotations
 
-import importlib
 import inspect
 import random
 import string

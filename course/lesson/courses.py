@@ -19,7 +19,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ros2course.errors import CourseError, LessonFormatError
-from ros2course.lesson import ID_PATTERN as _ID, MANIFEST, bundled_course
+from ros2course.lesson import ID_PATTERN as _ID, MANIFEST
 
 #: the entry-point group a course package registers its folder in
 ENTRY_POINT_GROUP = "ros2course.courses"
