@@ -28,7 +28,10 @@ def test_dev_validate(lesson_id, cli):
     assert len(batch) == 2, batch
     wrong = [o for o in outcomes if o["case"] not in ("reference", "starter") and o not in batch]
     assert wrong, f"{lesson_id} has no wrong-solution fixtures"
-    bad = [f"{o['case']}: expected {o['expected']}, got {o['got']}" for o in outcomes if not o["ok"]]
+    # each failed check's observed text too: a flaky check found by CI is diagnosed from this message
+    bad = [f"{o['case']}: expected {o['expected']}, got {o['got']}" + "".join(
+        f"\n    {c['id']}: {c['observed'][:400]}" for c in ((o.get("result") or {}).get("checks") or [])
+        if not c["passed"]) for o in outcomes if not o["ok"]]
     assert not bad, "\n".join(bad)
     assert proc.returncode == 0
 
@@ -50,6 +53,28 @@ def test_a_fixture_that_does_not_build_fails_only_for_the_build() -> None:
     assert judge_fixture(["rate"], graded)[0]
     assert not judge_fixture(["rate", "log"], graded)[0]
     assert "unknown check ids: nope" in judge_fixture(["nope"], graded)[1]
+
+
+
+def test_a_wrong_case_shows_what_its_failed_checks_observed() -> None:
+    """A reference that lost a check once (a flaky check) leaves in the CI log what the check saw."""
+    import io  # noqa: PLC0415
+
+    from rich.console import Console  # noqa: PLC0415
+
+    from ros2course.grade.results import CheckResult, LessonResult  # noqa: PLC0415
+    from ros2course.grade.validate import Outcome, render_outcomes  # noqa: PLC0415
+
+    result = LessonResult("lifecycle-node", 21.0, 25.0, "failed", [
+        CheckResult("activate", "a", 2, 2, True, "activated", "", ""),
+        CheckResult("active_messages", "m", 0, 2, False, "nothing sent on /heartbeat in 2.1 s", "", "")])
+    out = io.StringIO()
+    render_outcomes([Outcome("lifecycle-node", "reference", False, "full marks", "failed 21/25", 8.0, result),
+                     Outcome("lifecycle-node", "starter", True, "not full marks", "failed 3/25", 1.0, result)],
+                    Console(file=out, width=200))
+    shown = out.getvalue()
+    assert "lifecycle-node reference: active_messages: nothing sent on /heartbeat in 2.1 s" in shown
+    assert "starter: active_messages" not in shown and "activated" not in shown
 
 
 def test_a_fixture_can_require_the_words_its_feedback_must_contain() -> None:

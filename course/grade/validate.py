@@ -579,13 +579,18 @@ def with_lessons_table(readme: str) -> str:
 
 
 def render_outcomes(outcomes: list[Outcome], console: Console) -> None:
-    """Table of every case, then a one-line summary."""
+    """Table of every case, what the failed checks of each WRONG case observed, then a one-line summary."""
     table = Table(title="ros2course dev validate", title_justify="left")
     for column in ("lesson", "case", "", "expected", "got"):
         table.add_column(column, overflow="fold")
     for o in outcomes:
         table.add_row(o.lesson, o.case, "[green]ok[/]" if o.ok else "[red]WRONG[/]", o.expected, o.got)
     console.print(table)
+    for o in outcomes:  # what each failed check of a WRONG case observed: a flaky check is diagnosed from this
+        if not o.ok and o.result is not None:
+            for check in o.result.checks:
+                if not check.passed:
+                    console.print(f"  {o.lesson} {o.case}: {check.id}: {check.observed[:400]}", markup=False)
     bad = sum(not o.ok for o in outcomes)
     console.print(f"{len(outcomes) - bad} passed, {bad} failed")
 
