@@ -19,7 +19,9 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ros2course.errors import CourseError, LessonFormatError
-from ros2course.lesson import ID_PATTERN as _ID, MANIFEST
+# bundled_course is imported here on purpose: pyproject's entry point ros2course.courses names
+# ros2course.lesson.courses:bundled_course (the bundled tutorial course registers itself like any other)
+from ros2course.lesson import ID_PATTERN as _ID, MANIFEST, bundled_course  # noqa: F401
 
 #: the entry-point group a course package registers its folder in
 ENTRY_POINT_GROUP = "ros2course.courses"
