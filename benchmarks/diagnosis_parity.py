@@ -33,8 +33,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
-from ros2course.grade import engine  # noqa: E402
-from ros2course.grade.engine import DIAGNOSE_ENV, grade_lesson  # noqa: E402
+from ros2course.grade import session as session_mod  # noqa: E402
+from ros2course.grade.engine import grade_lesson  # noqa: E402
+from ros2course.grade.session import DIAGNOSE_ENV  # noqa: E402
 from ros2course.grade.results import LessonResult  # noqa: E402
 from ros2course.grade.validate import build_underlay, lesson_cases  # noqa: E402
 from ros2course.lesson.catalog import load_catalog  # noqa: E402
@@ -53,19 +54,19 @@ def diagnosis_seconds() -> Iterator[list[float]]:
     here keeps a benchmark's bookkeeping out of the engine.
     """
     collected: list[float] = []
-    original = engine.GradingSession.close
+    original = session_mod.GradingSession.close
 
-    def close(self: engine.GradingSession) -> None:
+    def close(self: session_mod.GradingSession) -> None:
         try:
             original(self)
         finally:
             collected.extend(self.diagnose_seconds)
 
-    engine.GradingSession.close = close  # type: ignore[method-assign]
+    session_mod.GradingSession.close = close  # type: ignore[method-assign]
     try:
         yield collected
     finally:
-        engine.GradingSession.close = original  # type: ignore[method-assign]
+        session_mod.GradingSession.close = original  # type: ignore[method-assign]
 
 
 def graded(lesson, root: Path, underlays: tuple[Path, ...], diagnose: bool) -> LessonResult:

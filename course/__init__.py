@@ -2,7 +2,7 @@
 
 Subpackages follow the pipeline: ``lesson`` (catalog, starters, the learner's
 progress) -> ``build`` (colcon, the workspace overlay) -> ``run`` (learner
-processes, probes on the ROS graph) -> ``grade`` (the engine, the result
+processes, probes on the ROS graph) -> ``grade`` (check declarations, the grading session, the engine, the result
 model, ``watch``, course validation) -> ``report`` (console table,
 gradebook). ``sandbox`` keeps a submission's code under its own uid and
 limits (used by build and run); ``ros`` is the ROS 2 install (activation,

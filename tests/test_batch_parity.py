@@ -18,7 +18,9 @@ import pytest
 
 from ros2course.build.reference import trusted_interface_packages
 from ros2course.errors import CourseError
-from ros2course.grade.engine import Check, GradingSession, load_grader
+from ros2course.grade.checks import Check
+from ros2course.grade.engine import load_grader
+from ros2course.grade.session import GradingSession
 from ros2course.lesson.catalog import load_catalog
 from ros2course import sandbox
 

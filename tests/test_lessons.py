@@ -14,7 +14,8 @@ import pytest
 import yaml
 
 from ros2course.errors import LessonFormatError
-from ros2course.grade.engine import Check, load_grader
+from ros2course.grade.checks import Check
+from ros2course.grade.engine import load_grader
 from ros2course.grade.validate import (
     apply_edits,
     fixtures_dir,

@@ -13,7 +13,11 @@ from types import SimpleNamespace
 
 import pytest
 
-from ros2course.grade.engine import GradingSession, Unmet, check_dependencies, load_grader
+from ros2course.grade.checks import Unmet, check_dependencies
+
+from ros2course.grade.engine import load_grader
+
+from ros2course.grade.session import GradingSession
 from ros2course.kit.packaging import (
     classify,
     data_files_mapping,

@@ -39,7 +39,8 @@ the service lessons' steps), imported with ``from . import _<name>``.
 
 from ros2course.build.colcon import colcon_command, overlay_env
 from ros2course.errors import NotGradable
-from ros2course.grade.engine import Check, GradingSession, Unmet
+from ros2course.grade.checks import Check, Unmet
+from ros2course.grade.session import GradingSession
 from ros2course.kit_version import API_VERSION
 from ros2course.ros.env import foreign_python_prefix
 from ros2course.ros.index import package_prefix

@@ -24,7 +24,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from ros2course.grade.engine import GradingSession
+from ros2course.grade.session import GradingSession
 from ros2course.kit.topics_services import reliable_qos
 from ros2course.run.probes import record, stop_spinning, wait_until
 

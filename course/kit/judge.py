@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ros2course.grade.engine import GradingSession
+from ros2course.grade.session import GradingSession
 from ros2course.run.probes import RateStats
 
 #: Tolerance on a mean period, as a fraction (shared/LESSONS.md: rates within ±15 %).

@@ -30,7 +30,7 @@ from typing import Any
 
 import yaml
 
-from ros2course.grade.engine import Unmet
+from ros2course.grade.checks import Unmet
 from ros2course.ros.env import probe_requirement, require
 from ros2course.kit.nodes import process_state
 
@@ -387,7 +387,7 @@ def start_node_action(s: Any, action: NodeAction, label: str) -> tuple[Any | Non
     """Start one literal ``Node`` action the way launch_ros does.
 
     Args:
-        s: the :class:`~ros2course.grade.engine.GradingSession`.
+        s: the :class:`~ros2course.grade.session.GradingSession`.
         action: a supported :class:`NodeAction`.
         label: name for the process's log files.
 
@@ -413,7 +413,7 @@ def start_launch_file(s: Any, launch_file: Path, label: str = "launch") -> Launc
     """Run ``launch_file`` with launch_ros, as ``ros2 launch`` does; read it statically for feedback.
 
     Args:
-        s: the :class:`~ros2course.grade.engine.GradingSession` (it starts the process,
+        s: the :class:`~ros2course.grade.session.GradingSession` (it starts the process,
             a ros2course.run.process.LearnerProcess, and stops it at its end).
         launch_file: the launch file (normally the installed one in ``share/<pkg>/launch``).
         label: prefix of the log files.
@@ -442,7 +442,7 @@ def installed_launch_file(s: Any, check_id: str, package: str, name: str, source
     """Record ``check_id``: ``share/<package>/launch/<name>`` is installed (found as ``ros2 launch`` finds it).
 
     Args:
-        s: the :class:`~ros2course.grade.engine.GradingSession`.
+        s: the :class:`~ros2course.grade.session.GradingSession`.
         source: the package's source folder (``src/.../<package>``), if any.
 
     Returns:

@@ -22,7 +22,7 @@ import time
 from typing import Any
 
 from ros2course.errors import NotGradable
-from ros2course.grade.engine import GradingSession
+from ros2course.grade.session import GradingSession
 from ros2course.run.probes import TopicProbe, stop_spinning
 
 _RANDOM = random.SystemRandom()

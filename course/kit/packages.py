@@ -5,7 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ros2course.grade.engine import GradingSession, Unmet
+from ros2course.grade.checks import Unmet
+
+from ros2course.grade.session import GradingSession
 from ros2course.ros.packages import find_packages
 
 

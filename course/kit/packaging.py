@@ -20,7 +20,8 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.build.colcon import colcon_command
-from ros2course.grade.engine import GradingSession, Unmet
+from ros2course.grade.checks import Unmet
+from ros2course.grade.session import GradingSession
 from ros2course.ros import index as ament_index
 from ros2course import sandbox
 from ros2course.run.probes import stamp_seconds

@@ -16,7 +16,7 @@ import time
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from ros2course.grade.engine import GradingSession
+from ros2course.grade.session import GradingSession
 from ros2course.run.probes import wait_until
 
 #: What a signal that ended a program usually means, for C++ programs (signal(7)).

@@ -17,7 +17,9 @@ import re
 import sys
 from pathlib import Path
 
-from ros2course.grade.engine import GradingSession, Unmet
+from ros2course.grade.checks import Unmet
+
+from ros2course.grade.session import GradingSession
 from ros2course.kit.programs import ProgramRun, last_line, run_program
 
 #: Variables that would make a child interpreter import something other than what the learner wrote

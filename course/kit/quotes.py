@@ -13,7 +13,9 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ros2course.grade.engine import GradingSession, Unmet
+from ros2course.grade.checks import Unmet
+
+from ros2course.grade.session import GradingSession
 from ros2course.run.probes import LATE_DELIVERY, wait_until
 from ros2course.kit.judge import topics_seen
 from ros2course.kit.launch import NodeAction, start_node_action

@@ -38,7 +38,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from ros2course import sandbox
-from ros2course.grade.engine import GradingSession
+from ros2course.grade.session import GradingSession
 from ros2course.kit.packaging import colcon_python
 from ros2course.run.probes import wait_until
 

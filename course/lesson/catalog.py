@@ -43,7 +43,7 @@ class GraphNode(BaseModel):
 
     Attributes:
         name: fully qualified, e.g. ``/amazing_quote_publisher_node``.
-        part: the grader's part (:attr:`ros2course.grade.engine.Check.part`) whose graph holds it; "" for every part.
+        part: the grader's part (:attr:`ros2course.grade.checks.Check.part`) whose graph holds it; "" for every part.
     """
 
     model_config = ConfigDict(extra="forbid")
@@ -138,11 +138,11 @@ class Lesson(BaseModel):
             ``sas_lite.py``). Like every starter file, a learner's own version is kept. Below
             ``starter_includes`` and ``starter`` where paths overlap.
         interfaces: interface packages whose generated types the grader itself imports
-            (:meth:`ros2course.grade.engine.GradingSession.interface_type` refuses any other). Batch
+            (:meth:`ros2course.grade.session.GradingSession.interface_type` refuses any other). Batch
             grading builds them once from ``solutions/`` and imports that trusted build, never
             the submission's, even when the lesson teaches the package itself.
         references: reference packages of ``solutions/src`` whose sources the grader itself reads
-            (:meth:`ros2course.grade.engine.GradingSession.reference_package` refuses any other): the
+            (:meth:`ros2course.grade.session.GradingSession.reference_package` refuses any other): the
             code a testing lesson runs the learner's tests against. Batch grading copies them with
             its trusted build, since ``solutions/`` is hidden from the sandbox.
         folders: workspace folders holding the lesson's files outside any ROS package

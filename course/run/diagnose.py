@@ -2,7 +2,7 @@
 
 A lesson may declare the graph its contract expects (``graph:`` in its
 ``lesson.yaml``: :class:`ros2course.lesson.catalog.LessonGraph`). When a check
-that watched a graph fails, the engine (:meth:`ros2course.grade.engine.GradingSession.record`)
+that watched a graph fails, the engine (:meth:`ros2course.grade.session.GradingSession.record`)
 calls :func:`diagnose` once per part and attaches what it finds to the check.
 Each finding is a :class:`Diagnosis` of one of these kinds, and where its rule
 comes from:
