@@ -128,6 +128,26 @@ def test_exits_on_sigint_with_zero(tmp_path):
     assert proc.stop() is report  # idempotent
 
 
+def test_ctrl_c_reaches_a_program_when_ros2course_itself_started_with_sigint_ignored(tmp_path):
+    # `ros2course grade ... &` in a script (or nohup'd from one) starts with SIGINT ignored, and exec
+    # keeps an ignored signal: a correct program would then sit through Ctrl+C and lose its check.
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        proc = python_learner(tmp_path, "plain", """
+            import time
+            print("ready", flush=True)
+            while True:
+                time.sleep(0.1)
+        """)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    wait_ready(proc)
+    assert not sig_ignored(proc.pid, signal.SIGINT)
+    report = proc.stop(sigint_timeout=10.0, sigterm_timeout=5.0)
+    assert report.signal_used == "SIGINT"  # KeyboardInterrupt ended it: SIGTERM was never needed
+    assert "KeyboardInterrupt" in report.traceback
+
+
 def test_ignores_sigint_escalates_to_sigterm(tmp_path):
     proc = python_learner(tmp_path, "deaf_int", """
         import signal, time

@@ -97,12 +97,9 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
     if wanted:
         ros2_daemon(s, env, wanted, label)
     if interrupt_after_s is not None:
-        # Ctrl+C as in a terminal: bash starts with SIGINT at its default action (GNU env
-        # --default-signal, coreutils >= 8.31). A grader started from a background job inherits
-        # SIGINT *ignored*, and a bash that starts with it ignored can neither die of Ctrl+C nor
-        # trap it (bash(1), SIGNALS), so a script without ``trap`` would look right.
-        if shutil.which("env", path=env.get("PATH")):
-            argv = ["env", "--default-signal=INT", *argv]
+        # Ctrl+C as in a terminal: bash starts with SIGINT at its default action, whatever
+        # ros2course's own disposition (LearnerProcess: a bash that starts with it ignored can
+        # neither die of Ctrl+C nor trap it, bash(1) SIGNALS, so a script without `trap` would look right).
         return interrupt_after(s, argv, label, interrupt_after_s, exit_timeout=exit_timeout, env=env,
                                cwd=s.workspace_root)
     return run_program(s, argv, label, timeout=timeout, env=env, cwd=s.workspace_root)

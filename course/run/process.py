@@ -46,6 +46,28 @@ DEFAULT_DEADLINE = 120.0
 _TAIL_BYTES = 64_000
 
 
+_DEFAULT_SIGINT: list[list[str]] = []
+
+
+def default_sigint_prefix() -> list[str]:
+    """The command prefix that execs a program with SIGINT at its default action: ``[env, --default-signal=INT]``.
+
+    GNU coreutils' ``env --default-signal`` (coreutils >= 8.31: Debian 12, Ubuntu 24.04) resets
+    the signal's disposition and execs, so the PID and exit code stay the program's. Empty when
+    this machine's ``env`` lacks the option (probed once per process): the program then inherits
+    ros2course's own disposition of SIGINT.
+    """
+    if not _DEFAULT_SIGINT:
+        env = shutil.which("env") or "/usr/bin/env"
+        try:
+            works = subprocess.run([env, "--default-signal=INT", "true"], capture_output=True,  # noqa: S603
+                                   timeout=10, check=False).returncode == 0
+        except (OSError, subprocess.TimeoutExpired):
+            works = False
+        _DEFAULT_SIGINT.append([env, "--default-signal=INT"] if works else [])
+    return list(_DEFAULT_SIGINT[0])
+
+
 @dataclasses.dataclass
 class ExitReport:
     """How a learner process ended.
@@ -233,7 +255,16 @@ class LearnerProcess:
         # setpriv sets the parent-death signal, so the node dies even if ros2course is
         # SIGKILLed. Both exec into the learner's program (same PID); no preexec_fn, which is
         # unsafe in a process with threads (the executor's).
-        wrapped = ["/bin/sh", "-c", "trap '' INT; exec \"$0\" \"$@\"", *argv] if ros_sigint else list(argv)
+        # Otherwise SIGINT starts at its default action, as in a terminal, even when ros2course
+        # itself was started with it ignored (a background job of a script, `cmd &`, inherits
+        # SIGINT ignored, and exec keeps an ignored signal): a program, a bash script or a node
+        # that ignores Ctrl+C only because its grader was started that way would lose its
+        # Ctrl+C check. A shell cannot undo that (POSIX: signals ignored on entry to a
+        # non-interactive shell cannot be reset); GNU env's --default-signal can, and execs.
+        if ros_sigint:
+            wrapped = ["/bin/sh", "-c", "trap '' INT; exec \"$0\" \"$@\"", *argv]
+        else:
+            wrapped = [*default_sigint_prefix(), *argv]
         # The kernel sends the parent-death signal when the *thread* that forked the child
         # ends (prctl(2)), so it is only safe from the main thread.
         main_thread = threading.current_thread() is threading.main_thread()
