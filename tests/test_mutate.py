@@ -3,7 +3,9 @@
 One smoke run on print-forever-node (5 of its node file's mutants, seed 3: three
 killed, two survivors) in a private copy of the course, whose ``mutation.yaml``
 triages one survivor and holds one stale entry; then the same command again
-(everything from the cache), and a malformed ``mutation.yaml``.
+(everything from the cache), and a malformed ``mutation.yaml``. On the small lab course
+(tests/data/lab_course): a check left out of its grader shows as a survivor, and adding the
+check kills that mutant.
 """
 
 from __future__ import annotations
@@ -162,3 +164,41 @@ def test_dev_validate_shows_the_lessons_last_mutation_score(tmp_path: Path) -> N
     record["course_version"] = "0.9"
     (tmp_path / mut.SCORE_FILE).write_text(json.dumps(record))
     assert "measured on course 0.9, now " in mut.describe_score(lesson)
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(600)
+def test_a_check_left_out_of_a_grader_shows_its_survivor_and_adding_it_kills_it(cli, tmp_path: Path) -> None:
+    """issue 24, on issue 18's small course: the lab course's grader has no Ctrl+C check, so the mutant
+    deleting the ExternalShutdownException import (Ctrl+C then ends in a NameError traceback) gets full
+    marks; with the check added to the grader, the same mutant is killed by it."""
+    course = tmp_path / "lab_course"
+    shutil.copytree(ROOT / "tests" / "data" / "lab_course", course,
+                    ignore=shutil.ignore_patterns("__pycache__", "build", "install", "log"))
+    node_file = "src/hello_node_pkg/hello_node_pkg/hello_node.py"
+    (course / "chapters" / "10-hello-node" / "mutation.yaml").write_text(
+        f'files: ["{node_file}"]\n', encoding="utf-8")
+    args = ("dev", "mutate", "hello-node", "--course", str(course), "--jobs", "2", "--out", str(tmp_path / "out"),
+            "--json")
+    import_line = "from rclpy.executors import ExternalShutdownException"
+
+    def the_import_mutant() -> dict:
+        proc = cli(*args, env={"ROS2COURSE_CONTENT": ""}, timeout=280)
+        assert proc.returncode == 0, proc.stderr[-3000:]
+        mutants = json.loads(proc.stdout)[0]["mutants"]
+        return next(m for m in mutants if m["original"] == import_line)
+
+    before = the_import_mutant()
+    assert before["outcome"] == mut.SURVIVED, before
+
+    grader = course / "graders" / "hello_node.py"
+    text = grader.read_text(encoding="utf-8")
+    text = text.replace(']\n\n\ndef grade', '    Check("sigint_exit", "Ctrl+C ends it with exit code 0 and no traceback", 1,\n'
+                                             '          needs=("executable",)),\n]\n\n\ndef grade', 1)
+    text = text.replace('kit.start_node(s, "node_name", path, NODE)',
+                        'kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit")')
+    assert text.count("sigint_exit") == 2
+    grader.write_text(text, encoding="utf-8")
+
+    after = the_import_mutant()  # the grader changed: its cache entries do not apply
+    assert after["outcome"] == mut.KILLED and after["lost"] == ["sigint_exit"], after
