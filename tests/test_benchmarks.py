@@ -59,3 +59,25 @@ def test_check_speed_benchmark_runs_once() -> None:
 def test_batch_speed_benchmark_runs_on_a_class_of_two() -> None:
     proc = _bench("batch_speed.py", "--count", "2", "--jobs", "2", timeout=850)
     assert "submissions/min" in proc.stdout and "verdicts changed between the runs: none" in proc.stdout
+
+
+def test_verdict_parity_names_a_new_check_and_fails_on_a_changed_verdict(tmp_path: Path) -> None:
+    def side(name: str, checks: list[tuple[str, float, bool]], ok: bool = True) -> Path:
+        folder = tmp_path / name
+        folder.mkdir()
+        result = {"score": sum(p for _, p, passed in checks if passed), "max_score": sum(p for _, p, _ in checks),
+                  "status": "failed", "checks": [{"id": i, "points": p if passed else 0, "passed": passed}
+                                                 for i, p, passed in checks]}
+        (folder / "lesson-a.json").write_text(json.dumps([{"lesson": "lesson-a", "case": "slow-timer", "ok": ok,
+                                                            "result": result}]), encoding="utf-8")
+        return folder
+
+    before = side("before", [("build", 1, True), ("rate", 2, False)])
+    after = side("after", [("build", 1, True), ("rate", 2, False), ("prints_progress", 1, True)])
+    proc = _bench("verdict_parity.py", str(before), str(after))
+    assert "| lesson-a | slow-timer | as expected: 1/3 (lost: rate) | as expected: 2/4 (lost: rate) | " \
+           "same on the common checks; new check prints_progress |" in proc.stdout
+    changed = side("changed", [("build", 1, False), ("rate", 2, False)], ok=False)
+    proc = subprocess.run([sys.executable, str(BENCH / "verdict_parity.py"), str(before), str(changed)],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 1 and "| DIFFERENT |" in proc.stdout and "1 DIFFERENT" in proc.stderr
