@@ -202,3 +202,25 @@ def test_a_check_left_out_of_a_grader_shows_its_survivor_and_adding_it_kills_it(
 
     after = the_import_mutant()  # the grader changed: its cache entries do not apply
     assert after["outcome"] == mut.KILLED and after["lost"] == ["sigint_exit"], after
+
+
+def test_comment_and_same_element_mutants_are_dropped_as_equivalent() -> None:
+    script = "#!/usr/bin/env bash\n# 2. A geometry message\nros2 interface show geometry_msgs/msg/Point\n"
+    assert mut.equivalent_mutant("cli/a.sh", script, script.replace("# 2.", "# 1."), "# 2. A geometry message",
+                                 "# 1. A geometry message")
+    # the #! line is read by the kernel, a command line by bash, and in a here-document '#' is data
+    assert not mut.equivalent_mutant("cli/a.sh", script, script.replace("#!/usr", "#!+usr"),
+                                     "#!/usr/bin/env bash", "#!+usr/bin/env bash")
+    assert not mut.equivalent_mutant("cli/a.sh", script, script.replace("Point", "Pose"),
+                                     "ros2 interface show geometry_msgs/msg/Point",
+                                     "ros2 interface show geometry_msgs/msg/Pose")
+    heredoc = "cat <<EOF\n# a line of data\nEOF\n"
+    assert not mut.equivalent_mutant("cli/b.sh", heredoc, heredoc.replace("# a", "# b"), "# a line of data",
+                                     "# b line of data")
+    assert mut.equivalent_mutant("src/p/action/Move.action", "# metres\nfloat64 x\n", "# metrs\nfloat64 x\n",
+                                 "# metres", "# metrs")
+    xml = '<?xml version="1.0"?>\n<package format="3">\n  <name>p</name>\n  <!-- built first -->\n</package>\n'
+    same = xml.replace("<!-- built first -->", "<!-- built (1-1) -->").replace("</name>\n", "</name>\nbreak;\n")
+    assert mut.equivalent_mutant("src/p/package.xml", xml, same, "", "break;")
+    assert not mut.equivalent_mutant("src/p/package.xml", xml, xml.replace(">p<", ">q<"), "", "")
+    assert not mut.equivalent_mutant("src/p/package.xml", xml, xml.replace("<name>", "<=name>"), "", "")

@@ -44,10 +44,12 @@ import hashlib
 import importlib.util
 import json
 import random
+import re
 import shutil
 import subprocess
 import sys
 import tempfile
+import xml.etree.ElementTree as ET  # noqa: N817 - the standard alias
 from pathlib import Path
 from typing import Any
 
@@ -289,11 +291,62 @@ def _changed_line(original: list[str], mutated: list[str]) -> tuple[int, str, st
     return 0, "", ""
 
 
+#: Files whose ``#`` starts a comment line: shell scripts, CMake, ROS interface definitions, YAML, setup.cfg.
+_HASH_COMMENT_SUFFIXES = {".sh", ".bash", ".cmake", ".msg", ".srv", ".action", ".yaml", ".yml", ".cfg"}
+_HEREDOC = re.compile(r"<<-?\s*['\"]?[A-Za-z_]")
+
+
+def _xml_shape(text: str) -> Any:
+    """An XML document as nested ``(tag, attributes, stripped text, children)``, or None when it does not parse.
+
+    Comments, whitespace and text between elements (``tail``) are not part of it: ROS reads a
+    package.xml's elements and their text (catkin_pkg's parser, REP 149).
+    """
+    def shape(element: ET.Element) -> Any:
+        return (element.tag, sorted(element.attrib.items()), (element.text or "").strip(),
+                [shape(child) for child in element])
+    try:
+        return shape(ET.fromstring(text))
+    except ET.ParseError:
+        return None
+
+
+def equivalent_mutant(rel: str, original: str, mutated: str, old_line: str, new_line: str) -> bool:
+    """Whether a mutant changes nothing a program can see, so it is dropped like universalmutator's own
+    equivalents (its Python handler drops mutants with the original's bytecode; its TCE, C++ duplicates).
+
+    Two kinds, for the files universalmutator mutates with its universal rules only: a changed comment
+    line (``#`` comments of shell scripts, CMake, ``.msg``/``.srv``/``.action`` definitions, YAML and
+    setup.cfg; not the ``#!`` line, and never in a script with a here-document, where ``#`` lines are
+    data), and an XML file (package.xml, launch XML) whose mutant parses to the same elements,
+    attributes and texts (:func:`_xml_shape`). A mutant that breaks the XML is kept (killed by the build).
+
+    Args:
+        rel: the file's path in the reference (its suffix and name pick the rule).
+        original, mutated: the whole file before and after.
+        old_line, new_line: the changed line before and after (:func:`_changed_line`).
+    """
+    name = Path(rel).name
+    suffix = Path(rel).suffix.lower()
+    if suffix == ".xml":
+        before = _xml_shape(original)
+        return before is not None and _xml_shape(mutated) == before
+    if suffix in _HASH_COMMENT_SUFFIXES or name == "CMakeLists.txt":
+        if suffix in {".sh", ".bash"} and _HEREDOC.search(original):
+            return False
+        old, new = old_line.lstrip(), new_line.lstrip()
+        return (old.startswith("#") and new.startswith("#") and not old.startswith("#!")
+                and "\n" not in old_line and "\n" not in new_line)
+    return False
+
+
 def generate_file_mutants(reference: Path, rel: str) -> list[Mutant]:
     """Every mutant universalmutator makes of ``reference/rel``, in its order.
 
     Python files are checked by universalmutator's Python handler (mutants that do not compile, or
-    compile to the original's bytecode, are dropped); other files are not checked (``--noCheck``).
+    compile to the original's bytecode, are dropped); other files are not checked (``--noCheck``),
+    but a mutant of a comment line or an XML mutant with the same elements is dropped as
+    equivalent (:func:`equivalent_mutant`).
 
     Raises:
         MissingRequirement: universalmutator is not installed.
@@ -334,6 +387,8 @@ def generate_file_mutants(reference: Path, rel: str) -> list[Mutant]:
         if content == original:
             continue
         line, old, new = _changed_line(lines, content.splitlines(keepends=True))
+        if equivalent_mutant(rel, original, content, old, new):
+            continue
         index = seen.get((old.strip(), new.strip()), 0)
         seen[(old.strip(), new.strip())] = index + 1
         out.append(Mutant(rel, line, old, new, content, number, index))
