@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.grade.checks import Unmet
-
 from ros2course.grade.session import GradingSession
 from ros2course.kit.programs import ProgramRun, judge_interrupted_run
 from ros2course.run.probes import wait_until

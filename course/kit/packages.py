@@ -6,7 +6,6 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.grade.checks import Unmet
-
 from ros2course.grade.session import GradingSession
 from ros2course.ros.packages import find_packages
 

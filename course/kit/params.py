@@ -18,7 +18,6 @@ from typing import Any
 import yaml
 
 from ros2course.grade.checks import Unmet
-
 from ros2course.grade.session import GradingSession
 from ros2course.lesson.catalog import yaml_error_text
 from ros2course.run.probes import wait_future, wait_until

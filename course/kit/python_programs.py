@@ -18,7 +18,6 @@ import sys
 from pathlib import Path
 
 from ros2course.grade.checks import Unmet
-
 from ros2course.grade.session import GradingSession
 from ros2course.kit.programs import ProgramRun, last_line, run_program
 

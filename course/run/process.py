@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import fcntl
+import functools
 import os
 import re
 import shutil
@@ -46,26 +47,22 @@ DEFAULT_DEADLINE = 120.0
 _TAIL_BYTES = 64_000
 
 
-_DEFAULT_SIGINT: list[list[str]] = []
-
-
-def default_sigint_prefix() -> list[str]:
-    """The command prefix that execs a program with SIGINT at its default action: ``[env, --default-signal=INT]``.
+@functools.cache
+def default_sigint_prefix() -> tuple[str, ...]:
+    """The command prefix that execs a program with SIGINT at its default action: ``(env, --default-signal=INT)``.
 
     GNU coreutils' ``env --default-signal`` (coreutils >= 8.31: Debian 12, Ubuntu 24.04) resets
     the signal's disposition and execs, so the PID and exit code stay the program's. Empty when
     this machine's ``env`` lacks the option (probed once per process): the program then inherits
     ros2course's own disposition of SIGINT.
     """
-    if not _DEFAULT_SIGINT:
-        env = shutil.which("env") or "/usr/bin/env"
-        try:
-            works = subprocess.run([env, "--default-signal=INT", "true"], capture_output=True,  # noqa: S603
-                                   timeout=10, check=False).returncode == 0
-        except (OSError, subprocess.TimeoutExpired):
-            works = False
-        _DEFAULT_SIGINT.append([env, "--default-signal=INT"] if works else [])
-    return list(_DEFAULT_SIGINT[0])
+    env = shutil.which("env") or "/usr/bin/env"
+    try:
+        works = subprocess.run([env, "--default-signal=INT", "true"], capture_output=True,  # noqa: S603
+                               timeout=10, check=False).returncode == 0
+    except (OSError, subprocess.TimeoutExpired):
+        works = False
+    return (env, "--default-signal=INT") if works else ()
 
 
 @dataclasses.dataclass
