@@ -32,6 +32,8 @@ from ros2course.run.probes import record, stop_spinning, wait_until
 STATUS_NAMES = {0: "UNKNOWN", 1: "ACCEPTED", 2: "EXECUTING", 3: "CANCELING", 4: "SUCCEEDED", 5: "CANCELED",
                 6: "ABORTED"}
 SUCCEEDED, CANCELED, ABORTED = 4, 5, 6
+#: action_msgs/srv/CancelGoal return_code: the goal had already ended when the cancel request arrived.
+GOAL_TERMINATED = 3
 
 
 def status_name(status: int | None) -> str:
@@ -100,6 +102,9 @@ class Goal:
         status: the terminal status (:data:`STATUS_NAMES`), None before the result.
         result: the ``Action.Result``, None before it.
         ended: ``time.time()`` seconds when the result arrived.
+        cancel_code: the ``return_code`` of the server's answer to the last cancel request
+            (action_msgs/srv/CancelGoal: 0 ERROR_NONE, 1 ERROR_REJECTED, 2 ERROR_UNKNOWN_GOAL_ID,
+            :data:`GOAL_TERMINATED`); None before an answer.
     """
 
     request: Any
@@ -111,6 +116,7 @@ class Goal:
     ended: float | None = None
     why: str = ""
     result_future: Any = None
+    cancel_code: int | None = None
 
     @property
     def uuid(self) -> bytes | None:
@@ -185,12 +191,14 @@ class GoalClient:
             future.cancel()
             return None, f"no answer to the cancel request within {timeout:.1f} s"
         response = future.result()
+        goal.cancel_code = response.return_code
         canceling = [bytes(info.goal_id.uuid) for info in response.goals_canceling]
         if goal.uuid in canceling:
             return True, ""
         if response.return_code == 0:  # rcl accepted it; the server's cancel_callback said REJECT (rclpy's default)
             return False, "the server refused it: the goal is not among goals_canceling (its cancel_callback rejected it)"
-        codes = {1: "ERROR_REJECTED", 2: "ERROR_UNKNOWN_GOAL_ID", 3: "ERROR_GOAL_TERMINATED: it had already ended"}
+        codes = {1: "ERROR_REJECTED", 2: "ERROR_UNKNOWN_GOAL_ID",
+                 GOAL_TERMINATED: "ERROR_GOAL_TERMINATED: it had already ended"}
         return False, f"the server refused it ({codes.get(response.return_code, response.return_code)})"
 
     def feedback(self, goal: Goal) -> list[tuple[float, Any]]:
