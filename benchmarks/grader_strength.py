@@ -34,7 +34,8 @@ sys.path.insert(0, str(ROOT))
 from rich.console import Console  # noqa: E402
 
 from ros2course.batch.mutate import mutate_lessons, render  # noqa: E402
-from ros2course.grade.mutate import SCORE_FILE  # noqa: E402
+from ros2course.batch.parity import case_workspace  # noqa: E402
+from ros2course.grade.mutate import SCORE_FILE, lesson_files  # noqa: E402
 from ros2course.grade.repeat import render_steadiness, repeat_lessons  # noqa: E402
 from ros2course.grade.strength import steadiness_text, write_steadiness  # noqa: E402
 from ros2course.grade.validate import with_lessons_table  # noqa: E402
@@ -72,6 +73,20 @@ def recorded_scores(lesson_ids: list[str]) -> dict[str, dict]:
         except (OSError, ValueError):
             continue
     return found
+
+
+def nothing_to_mutate(lesson_id: str) -> str | None:
+    """Why the lesson has no mutant (its reference is commands only, e.g. workspace-setup's ``colcon
+    build``), or None when it has files to mutate (:func:`ros2course.grade.mutate.lesson_files`)."""
+    lesson = load_catalog().get(lesson_id)
+    root = Path(tempfile.mkdtemp(prefix="ros2course-strength-"))
+    try:
+        if lesson_files(lesson, case_workspace(lesson, "reference", root / "reference")):
+            return None
+    finally:
+        shutil.rmtree(root, ignore_errors=True)
+    commands = "; ".join(lesson.reference.commands)
+    return "its reference is commands only" + (f" (`{commands}`)" if commands else "") + ": no file to mutate"
 
 
 def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: int, jobs: int,
@@ -127,6 +142,11 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
     if speedup:
         lines += [speedup, ""]
     never = [lesson_id for lesson_id in not_run if lesson_id not in recorded]
+    unmutable = {lesson_id: why for lesson_id in never if (why := nothing_to_mutate(lesson_id))}
+    if unmutable:
+        lines += ["Nothing to mutate: " + "; ".join(f"{lesson_id}, {why}" for lesson_id, why in unmutable.items())
+                  + ".", ""]
+    never = [lesson_id for lesson_id in never if lesson_id not in unmutable]
     if never:
         lines += ["Never measured (no `mutation-score.json`; the table has no row for them): "
                   + ", ".join(never) + ".", ""]
@@ -179,7 +199,9 @@ def main() -> int:
     chosen = args.lessons or every
     console = Console(stderr=True)
     begin = time.monotonic()
-    found = mutate_lessons(chosen, args.out, sample=args.sample, seed=args.seed, jobs=args.jobs, console=console)
+    chosen = [lesson_id for lesson_id in chosen if not nothing_to_mutate(lesson_id)]  # listed as such in the doc
+    found = mutate_lessons(chosen, args.out, sample=args.sample, seed=args.seed, jobs=args.jobs,
+                           console=console) if chosen else []
     render(found, console, diffs=False)
     speedup_file = args.out / "speedup.txt"
     speedup = speedup_file.read_text(encoding="utf-8").strip() if speedup_file.is_file() else ""

@@ -81,3 +81,13 @@ def test_verdict_parity_names_a_new_check_and_fails_on_a_changed_verdict(tmp_pat
     proc = subprocess.run([sys.executable, str(BENCH / "verdict_parity.py"), str(before), str(changed)],
                           capture_output=True, text=True, check=False)
     assert proc.returncode == 1 and "| DIFFERENT |" in proc.stdout and "1 DIFFERENT" in proc.stderr
+
+
+def test_grader_strength_lists_a_lesson_with_nothing_to_mutate(tmp_path: Path) -> None:
+    """workspace-setup's reference is a command (``colcon build``): a row of its own, not a crash (issue 24)."""
+    doc = tmp_path / "grader-strength.md"
+    _bench("grader_strength.py", "workspace-setup", "--doc", str(doc), "--out", str(tmp_path / "out"))
+    text = doc.read_text(encoding="utf-8")
+    assert "Nothing to mutate: workspace-setup, its reference is commands only (`colcon build`): no file to mutate" \
+        in text, text[-1500:]
+    assert "| print-forever-node |" in text  # the other lessons keep the rows of their last run

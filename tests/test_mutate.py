@@ -219,6 +219,11 @@ def test_comment_and_same_element_mutants_are_dropped_as_equivalent() -> None:
                                      "# b line of data")
     assert mut.equivalent_mutant("src/p/action/Move.action", "# metres\nfloat64 x\n", "# metrs\nfloat64 x\n",
                                  "# metres", "# metrs")
+    toml = '# installable with pip (ch. 2.6)\n[project]\nname = "p"\n'
+    assert mut.equivalent_mutant("python/p/pyproject.toml", toml, toml.replace("2.6", "1.6"),
+                                 "# installable with pip (ch. 2.6)", "# installable with pip (ch. 1.6)")
+    assert not mut.equivalent_mutant("python/p/pyproject.toml", toml, toml.replace('"p"', '""'),
+                                     'name = "p"', 'name = ""')
     xml = '<?xml version="1.0"?>\n<package format="3">\n  <name>p</name>\n  <!-- built first -->\n</package>\n'
     same = xml.replace("<!-- built first -->", "<!-- built (1-1) -->").replace("</name>\n", "</name>\nbreak;\n")
     assert mut.equivalent_mutant("src/p/package.xml", xml, same, "", "break;")

@@ -292,7 +292,7 @@ def _changed_line(original: list[str], mutated: list[str]) -> tuple[int, str, st
 
 
 #: Files whose ``#`` starts a comment line: shell scripts, CMake, ROS interface definitions, YAML, setup.cfg.
-_HASH_COMMENT_SUFFIXES = {".sh", ".bash", ".cmake", ".msg", ".srv", ".action", ".yaml", ".yml", ".cfg"}
+_HASH_COMMENT_SUFFIXES = {".sh", ".bash", ".cmake", ".msg", ".srv", ".action", ".yaml", ".yml", ".cfg", ".toml"}
 _HEREDOC = re.compile(r"<<-?\s*['\"]?[A-Za-z_]")
 
 
@@ -316,8 +316,8 @@ def equivalent_mutant(rel: str, original: str, mutated: str, old_line: str, new_
     equivalents (its Python handler drops mutants with the original's bytecode; its TCE, C++ duplicates).
 
     Two kinds, for the files universalmutator mutates with its universal rules only: a changed comment
-    line (``#`` comments of shell scripts, CMake, ``.msg``/``.srv``/``.action`` definitions, YAML and
-    setup.cfg; not the ``#!`` line, and never in a script with a here-document, where ``#`` lines are
+    line (``#`` comments of shell scripts, CMake, ``.msg``/``.srv``/``.action`` definitions, YAML,
+    setup.cfg and TOML such as pyproject.toml; not the ``#!`` line, and never in a script with a here-document, where ``#`` lines are
     data), and an XML file (package.xml, launch XML) whose mutant parses to the same elements,
     attributes and texts (:func:`_xml_shape`). A mutant that breaks the XML is kept (killed by the build).
 
