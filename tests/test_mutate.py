@@ -229,3 +229,7 @@ def test_comment_and_same_element_mutants_are_dropped_as_equivalent() -> None:
     assert mut.equivalent_mutant("src/p/package.xml", xml, same, "", "break;")
     assert not mut.equivalent_mutant("src/p/package.xml", xml, xml.replace(">p<", ">q<"), "", "")
     assert not mut.equivalent_mutant("src/p/package.xml", xml, xml.replace("<name>", "<=name>"), "", "")
+    # a package.xml that no longer parses is not a program (colcon rejects it before any check): invalid
+    assert mut.invalid_mutant("src/p/package.xml", xml.replace("<name>", "<=name>"))
+    assert not mut.invalid_mutant("src/p/package.xml", xml.replace(">p<", ">q<"))
+    assert not mut.invalid_mutant("src/p/setup.py", "def (")  # universalmutator's Python handler judges .py

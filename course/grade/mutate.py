@@ -14,7 +14,8 @@ Each mutant is graded by the lesson's grader (through the batch engine,
 
 * ``killed``: graded, lost points (the checks it lost are named);
 * ``killed by build``: the workspace does not build, so no check ran (C++ mutants that do not
-  compile, a package.xml colcon cannot read);
+  compile, a CMakeLists.txt or setup.cfg colcon cannot use; a package.xml that is not XML is never
+  generated: :func:`invalid_mutant`);
 * ``survived``: full marks: the grader did not notice the change;
 * ``timed out`` / ``grader error``: neither (reported, never counted as killed).
 
@@ -319,7 +320,7 @@ def equivalent_mutant(rel: str, original: str, mutated: str, old_line: str, new_
     line (``#`` comments of shell scripts, CMake, ``.msg``/``.srv``/``.action`` definitions, YAML,
     setup.cfg and TOML such as pyproject.toml; not the ``#!`` line, and never in a script with a here-document, where ``#`` lines are
     data), and an XML file (package.xml, launch XML) whose mutant parses to the same elements,
-    attributes and texts (:func:`_xml_shape`). A mutant that breaks the XML is kept (killed by the build).
+    attributes and texts (:func:`_xml_shape`). A mutant that breaks the XML is invalid (:func:`invalid_mutant`).
 
     Args:
         rel: the file's path in the reference (its suffix and name pick the rule).
@@ -340,13 +341,28 @@ def equivalent_mutant(rel: str, original: str, mutated: str, old_line: str, new_
     return False
 
 
+def invalid_mutant(rel: str, mutated: str) -> bool:
+    """Whether a mutant is not a program at all, so it is dropped as universalmutator's Python handler
+    drops a ``.py`` mutant that does not compile: an XML file (package.xml, launch XML) that no longer
+    parses. colcon (catkin_pkg) rejects such a package.xml before any check runs, so it would only be
+    "killed by build", telling nothing of the grader, and package.xml's character-level mutants are
+    mostly such (simplest-python-package: 25 of a 30-mutant sample), crowding a sample out.
+
+    Args:
+        rel: the file's path in the reference (its suffix picks the rule).
+        mutated: the whole mutated file.
+    """
+    return Path(rel).suffix.lower() == ".xml" and _xml_shape(mutated) is None
+
+
 def generate_file_mutants(reference: Path, rel: str) -> list[Mutant]:
     """Every mutant universalmutator makes of ``reference/rel``, in its order.
 
     Python files are checked by universalmutator's Python handler (mutants that do not compile, or
     compile to the original's bytecode, are dropped); other files are not checked (``--noCheck``),
-    but a mutant of a comment line or an XML mutant with the same elements is dropped as
-    equivalent (:func:`equivalent_mutant`).
+    but an XML mutant that does not parse is dropped as invalid (:func:`invalid_mutant`), and a
+    mutant of a comment line or an XML mutant with the same elements as equivalent
+    (:func:`equivalent_mutant`).
 
     Raises:
         MissingRequirement: universalmutator is not installed.
@@ -387,7 +403,7 @@ def generate_file_mutants(reference: Path, rel: str) -> list[Mutant]:
         if content == original:
             continue
         line, old, new = _changed_line(lines, content.splitlines(keepends=True))
-        if equivalent_mutant(rel, original, content, old, new):
+        if invalid_mutant(rel, content) or equivalent_mutant(rel, original, content, old, new):
             continue
         index = seen.get((old.strip(), new.strip()), 0)
         seen[(old.strip(), new.strip())] = index + 1
