@@ -95,6 +95,9 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
     score each lesson's last run recorded (so a run on a few lessons keeps the others'); then the
     lessons never measured."""
     recorded = recorded_scores(not_run)
+    # a lesson run now has just written its score file (mutate_lessons): one row format for every lesson
+    just_run = recorded_scores([f.lesson for f in found])
+    rows_found = [f for f in found if f.lesson not in just_run]
     order = {lesson_id: index for index, lesson_id in enumerate(load_catalog().ids())}  # rows in `list` order
     lines = [
         "# Grader strength: mutation analysis per lesson",
@@ -123,12 +126,12 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "`chapters/<lesson>/steadiness.json`): steady when no check changed its verdict.",
         "",
         "| lesson | mutants generated | graded | killed by build | killed | survived | triaged | "
-        "timed out / grader error | score | wall time of this run, s (cached mutants cost nothing), or when it last ran | "
+        "timed out / grader error | score | last run: its wall time (cached mutants cost nothing), date, course version | "
         "reference steadiness (`dev validate --repeat`) |",
         "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---|",
-        *[row for _, row in sorted([(order.get(f.lesson, 0), _row(f, sample)) for f in found]
+        *[row for _, row in sorted([(order.get(f.lesson, 0), _row(f, sample)) for f in rows_found]
                                    + [(order.get(lesson_id, 0), _recorded_row(lesson_id, data))
-                                      for lesson_id, data in recorded.items()])],
+                                      for lesson_id, data in {**recorded, **just_run}.items()])],
         "",
     ]
     survivors = [f"- {f.lesson} `{g.mutant.key}`: {g.mutant.file}:{g.mutant.line}: "

@@ -17,6 +17,7 @@ import pytest
 from ros2course.build.colcon import build_log_excerpt, build_packages, overlay_env
 from ros2course.errors import NotGradable
 from ros2course.ros import env as env_mod
+from ros2course.ros.packages import find_packages
 
 DATA = Path(__file__).parent / "data"
 
@@ -282,3 +283,17 @@ def test_colcon_test_runs_a_launch_testing_test_of_a_learners_node(tmp_path):
     assert test.returncode == 0, shown
     # launch_testing reports its test description as one pytest item
     assert "Summary: 1 test, 0 errors, 0 failures" in summary.stdout, summary.stdout + shown
+
+
+@pytest.mark.parametrize("attribute", ['format="(3-1)"', 'format="3a"'])
+def test_a_package_format_that_is_no_number_is_not_gradable(tmp_path, attribute):
+    """catkin_pkg raises a bare ValueError (int() of the format): a clear NotGradable, not a grader error
+    (found by ``dev mutate cpp-node``: ``<package format="(3-1)">`` crashed the grader)."""
+    package = tmp_path / "src" / "p"
+    package.mkdir(parents=True)
+    (package / "package.xml").write_text(
+        f'<?xml version="1.0"?>\n<package {attribute}>\n  <name>p</name>\n  <version>0.0.0</version>\n'
+        '  <description>d</description>\n  <maintainer email="a@b.c">a</maintainer>\n'
+        '  <license>MIT</license>\n</package>\n', encoding="utf-8")
+    with pytest.raises(NotGradable, match="a package.xml under .* is invalid: invalid literal for int"):
+        find_packages(tmp_path / "src")

@@ -95,6 +95,11 @@ def test_the_lessons_own_files_are_mutated(tmp_path: Path) -> None:
     files = mut.lesson_files(lesson, case_workspace(lesson, "reference", tmp_path / "ref"), mut.MutationConfig())
     assert NODE_FILE in files and "src/python_package_with_a_node/package.xml" in files
     assert not any(f.endswith(("sample_python_node.py", "__init__.py", "setup.cfg")) for f in files), files
+    # the finished files a starter hands out ("do not change it") are not the learner's work
+    sas = load_catalog().get("sas-robot-driver")
+    files = mut.lesson_files(sas, case_workspace(sas, "reference", tmp_path / "sas"), mut.MutationConfig())
+    driver = "src/sas_robot_driver_myrobot/sas_robot_driver_myrobot/"
+    assert f"{driver}robot_driver_myrobot.py" in files and f"{driver}sas_lite.py" not in files, files
 
 
 @pytest.mark.ros
@@ -131,6 +136,18 @@ def test_dev_mutate_smoke(cli, tmp_path: Path) -> None:
     assert again.returncode == 0, again.stderr[-3000:]
     assert "5 known from the cache, 0 to grade" in " ".join(again.stderr.split()), again.stderr
     assert "75%" in again.stdout and "stale" in again.stdout and "+if __name__ < '__main__':" in again.stdout
+
+
+def test_every_mutant_of_a_free_text_line_is_triaged_by_one_entry() -> None:
+    entry = mut.TriageEntry(file="src/p/package.xml", line="<description>A node</description>", every_mutant=True,
+                            reason="free text no program reads")
+    line = "  <description>A node</description>"
+    for mutated in ("  <description>A nod</description>", "  <description>=A node</description>"):
+        assert entry.matches(mut.Mutant("src/p/package.xml", 3, line, mutated, ""))
+    assert not entry.matches(mut.Mutant("src/p/package.xml", 4, "  <license>MIT</license>", "  <license>MI</license>", ""))
+    assert not entry.matches(mut.Mutant("src/q/package.xml", 3, line, "  <description>A nod</description>", ""))
+    with pytest.raises(ValueError, match="every_mutant"):
+        mut.TriageEntry(file="x.py", line="a = 1", mutant="a = 2", every_mutant=True, reason="not both of them")
 
 
 @pytest.mark.parametrize("triage,words", [
@@ -228,6 +245,8 @@ def test_comment_and_same_element_mutants_are_dropped_as_equivalent() -> None:
     same = xml.replace("<!-- built first -->", "<!-- built (1-1) -->").replace("</name>\n", "</name>\nbreak;\n")
     assert mut.equivalent_mutant("src/p/package.xml", xml, same, "", "break;")
     assert not mut.equivalent_mutant("src/p/package.xml", xml, xml.replace(">p<", ">q<"), "", "")
+    # text inside an element that has children is read by neither catkin_pkg nor Fast DDS
+    assert mut.equivalent_mutant("src/p/package.xml", xml, xml.replace('format="3">', 'format="3">='), "", "")
     assert not mut.equivalent_mutant("src/p/package.xml", xml, xml.replace("<name>", "<=name>"), "", "")
     # a package.xml that no longer parses is not a program (colcon rejects it before any check): invalid
     assert mut.invalid_mutant("src/p/package.xml", xml.replace("<name>", "<=name>"))

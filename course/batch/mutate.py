@@ -100,6 +100,7 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         cache = _read_cache(cache_path)
         todo = [m for m in picked if mut.cache_key(grader, course, m) not in cache]
         this_run: dict[str, dict[str, Any]] = {}  # outcomes of this run that are never cached (UNFINISHED)
+        graded_now: dict[str, dict[str, Any]] = {}  # outcomes of this run that are cached
         if console is not None:
             console.print(f"{lesson.id}: {len(every)} mutants generated, {len(picked)} picked"
                           f"{f' (--sample {sample} --seed {seed})' if len(picked) < len(every) else ''}, "
@@ -125,9 +126,13 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
                        "message": (result.message or "").splitlines()[0][:300] if result.message else ""}
                 # a grader error or a timeout says something about this run (a loaded machine, a grader
                 # bug since fixed), not about the mutant: reported now, graded again next time
-                (this_run if outcome in UNFINISHED else cache)[mut.cache_key(grader, course, mutant)] = row
+                (this_run if outcome in UNFINISHED else graded_now)[mut.cache_key(grader, course, mutant)] = row
             out.mkdir(parents=True, exist_ok=True)
-            atomic_write_text(cache_path, json.dumps(cache, indent=1, sort_keys=True) + "\n")
+            # merged into the file as it is now: another run on the same --out (another lesson) may have
+            # written it since this one read it
+            cache.update(graded_now)
+            atomic_write_text(cache_path, json.dumps({**_read_cache(cache_path), **graded_now}, indent=1,
+                                                     sort_keys=True) + "\n")
         graded = []
         fresh = {m.key for m in todo}
         for mutant in picked:

@@ -30,6 +30,10 @@ triage of survivors judged equivalent or outside the lesson's contract::
         line: "def main(args=None):"          # the original line (stripped)
         mutant: "def main(args=None):  pass"  # the mutated line (stripped); or `key: <mutant key>`
         reason: "..."
+      - file: src/python_package_with_a_node/package.xml
+        line: "<description>Prints forever</description>"
+        every_mutant: true                    # any change of this line (free text no program reads)
+        reason: "..."
 
 Score = killed / (generated - killed by build - triaged), over the graded mutants
 (a sample when ``--sample`` is given). An entry matching no current mutant is *stale*.
@@ -94,14 +98,21 @@ class TriageEntry(BaseModel):
     file: str = Field(min_length=1)
     line: str | None = None
     mutant: str | None = None
+    #: With ``line``: every mutant of that line (free text such as a package.xml description, which no
+    #: program reads: any change is outside the contract, whatever the sample draws).
+    every_mutant: bool = False
     key: str | None = None
     reason: str = Field(min_length=10)
 
     @model_validator(mode="after")
     def _identifies(self) -> TriageEntry:
-        if self.key is None and (self.line is None or self.mutant is None):
+        if self.every_mutant:
+            if self.line is None or self.mutant is not None or self.key is not None:
+                raise ValueError("'every_mutant: true' goes with 'line' (the original line) alone, "
+                                 "without 'mutant' or 'key'")
+        elif self.key is None and (self.line is None or self.mutant is None):
             raise ValueError("an entry names its mutant by 'line' and 'mutant' (the original and mutated lines, "
-                             "stripped) or by 'key'")
+                             "stripped), by 'key', or every mutant of a line by 'line' and 'every_mutant: true'")
         return self
 
     def matches(self, mutant: Mutant) -> bool:
@@ -110,7 +121,9 @@ class TriageEntry(BaseModel):
             return False
         if self.key is not None:
             return self.key == mutant.key
-        return self.line.strip() == mutant.original.strip() and self.mutant.strip() == mutant.mutated.strip()
+        if self.line.strip() != mutant.original.strip():
+            return False
+        return self.every_mutant or self.mutant.strip() == mutant.mutated.strip()
 
 
 class MutationConfig(BaseModel):
@@ -250,7 +263,8 @@ def lesson_files(lesson: Lesson, reference: Path, config: MutationConfig | None 
     Otherwise the lesson's own work: each text file under the lesson's packages and folders that its
     own starter gives with different content (the learner completes it) or does not give at all (the
     learner writes it), leaving out the files of the lessons it includes (``starter_includes``: their
-    graders answer for them).
+    graders answer for them) and the finished files its starter hands out (``starter_solutions``, e.g.
+    sas-robot-driver's ``sas_lite.py``, "do not change it").
 
     Args:
         reference: a reference workspace of the lesson (:func:`ros2course.build.reference.reference_workspace`).
@@ -270,8 +284,11 @@ def lesson_files(lesson: Lesson, reference: Path, config: MutationConfig | None 
                                     f"name files relative to the workspace, e.g. {every[0] if every else 'src/<pkg>/...'}")
         return chosen
     own, included = _own_starter(lesson), _others_starters(lesson)
+    given = tuple(lesson.starter_solutions)
     out = []
     for rel in every:
+        if any(rel == folder or rel.startswith(folder + "/") for folder in given):
+            continue
         if rel in own:
             if own[rel].read_bytes() != (reference / rel).read_bytes():
                 out.append(rel)
@@ -300,12 +317,14 @@ _HEREDOC = re.compile(r"<<-?\s*['\"]?[A-Za-z_]")
 def _xml_shape(text: str) -> Any:
     """An XML document as nested ``(tag, attributes, stripped text, children)``, or None when it does not parse.
 
-    Comments, whitespace and text between elements (``tail``) are not part of it: ROS reads a
-    package.xml's elements and their text (catkin_pkg's parser, REP 149).
+    Comments, whitespace and text between elements (``tail``, and the text of an element that has
+    children) are not part of it: ROS reads a package.xml's elements and the text of its leaf
+    elements (catkin_pkg's parser, REP 149), and Fast DDS an XML profile the same way (its parser,
+    on tinyxml2, asks leaf elements for their text).
     """
     def shape(element: ET.Element) -> Any:
-        return (element.tag, sorted(element.attrib.items()), (element.text or "").strip(),
-                [shape(child) for child in element])
+        text = (element.text or "").strip() if len(element) == 0 else ""
+        return (element.tag, sorted(element.attrib.items()), text, [shape(child) for child in element])
     try:
         return shape(ET.fromstring(text))
     except ET.ParseError:

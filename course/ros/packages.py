@@ -26,7 +26,7 @@ def find_packages(src: Path) -> dict[str, tuple[Path, object]]:
         return {}
     try:
         found = catkin_find(str(src))
-    except InvalidPackage as exc:
+    except (InvalidPackage, ValueError) as exc:  # catkin_pkg raises a bare ValueError for format="3a"
         detail = " ".join(line.strip() for line in str(exc).splitlines() if line.strip())
         raise NotGradable(f"a package.xml under {src} is invalid: {detail[:400]}",
                           "fix package.xml (format 3; name, version, description, maintainer with a valid email, license)") from exc
