@@ -45,7 +45,8 @@ from ros2course.ros import env as env_mod  # noqa: E402
 
 def _row(f, sample: int) -> str:
     score = "n/a" if f.score is None else f"{100 * f.score:.0f} %"
-    graded = f"{len(f.graded)} of {f.generated} (seeded sample)" if f.sampled else f"{len(f.graded)} (all)"
+    graded = (f"{len(f.graded)} of {f.generated - f.set_aside} (seeded sample)" if f.sampled
+              else f"{len(f.graded)} (all)") + (f"; {f.set_aside} set aside" if f.set_aside else "")
     return (f"| {f.lesson} | {f.generated} | {graded} | {f.count('killed by build')} | {f.count('killed')} | "
             f"{f.count('survived')} | {f.triaged} | {f.count('timed out') + f.count('grader error')} | {score} | "
             f"{f.seconds:.0f} | {steadiness_text(load_catalog().get(f.lesson))} |")
@@ -54,8 +55,9 @@ def _row(f, sample: int) -> str:
 def _recorded_row(lesson_id: str, data: dict) -> str:
     """A table row for a lesson not run this time, from its ``mutation-score.json`` (its last run)."""
     score = "n/a" if data.get("score") is None else f"{100 * data['score']:.0f} %"
-    graded = (f"{data['graded']} of {data['generated']} (seeded sample)" if data.get("sampled")
-              else f"{data['graded']} (all)")
+    aside = data.get("set_aside", 0)
+    graded = (f"{data['graded']} of {data['generated'] - aside} (seeded sample)" if data.get("sampled")
+              else f"{data['graded']} (all)") + (f"; {aside} set aside" if aside else "")
     when = f"{data.get('seconds', 0):.0f} s on {data.get('date', '?')}, course {data.get('course_version') or '?'}"
     return (f"| {lesson_id} | {data['generated']} | {graded} | {data['killed_by_build']} | {data['killed']} | "
             f"{data['survived']} | {data['triaged']} | {data.get('timed_out', 0) + data.get('grader_error', 0)} | "
@@ -118,8 +120,10 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "",
         "Score = killed / (graded - killed by build - triaged). Triaged survivors are listed with a reason in "
         "`chapters/<lesson>/mutation.yaml`, whose `files:` may also narrow the files mutated (default: the files "
-        "the lesson's own starter gives with TODOs or does not give). Survivors' diffs are in the run's "
-        "`survivors/` folder.",
+        "the lesson's own starter gives with TODOs or does not give). An entry may triage a line whole "
+        "(`every_mutant: true`: a script's `#!` line the checker never reads, a package.xml description); that "
+        "line's mutants are *set aside* before sampling, never graded, so the sample is spent on mutants that "
+        "count. Survivors' diffs are in the run's `survivors/` folder.",
         "",
         "Reference steadiness: the lesson's reference graded N times, K at once (two learners' checks on one "
         "machine), by `python benchmarks/grader_strength.py LESSON... --repeat N --load K` (recorded in "

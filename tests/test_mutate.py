@@ -146,6 +146,12 @@ def test_every_mutant_of_a_free_text_line_is_triaged_by_one_entry() -> None:
         assert entry.matches(mut.Mutant("src/p/package.xml", 3, line, mutated, ""))
     assert not entry.matches(mut.Mutant("src/p/package.xml", 4, "  <license>MIT</license>", "  <license>MI</license>", ""))
     assert not entry.matches(mut.Mutant("src/q/package.xml", 3, line, "  <description>A nod</description>", ""))
+    # set aside before sampling: never graded
+    config = mut.MutationConfig(survivors=[entry])
+    mutants = [mut.Mutant("src/p/package.xml", 3, line, "  <description>A nod</description>", ""),
+               mut.Mutant("src/p/package.xml", 4, "  <license>MIT</license>", "  <license>MI</license>", "")]
+    kept, aside = mut.set_aside(mutants, config)
+    assert [m.line for m in kept] == [4] and [m.line for m in aside] == [3]
     with pytest.raises(ValueError, match="every_mutant"):
         mut.TriageEntry(file="x.py", line="a = 1", mutant="a = 2", every_mutant=True, reason="not both of them")
 

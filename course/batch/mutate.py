@@ -94,7 +94,8 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
     try:
         reference = case_workspace(lesson, "reference", root / "reference")
         every = mut.generate_mutants(lesson, reference, config)
-        picked = mut.sample_mutants(every, sample, seed)
+        candidates, aside = mut.set_aside(every, config)
+        picked = mut.sample_mutants(candidates, sample, seed)
         grader, course = mut.grader_hash(lesson), mut.course_hash(reference, lesson)
         cache_path = out / CACHE_FILE
         cache = _read_cache(cache_path)
@@ -102,8 +103,10 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         this_run: dict[str, dict[str, Any]] = {}  # outcomes of this run that are never cached (UNFINISHED)
         graded_now: dict[str, dict[str, Any]] = {}  # outcomes of this run that are cached
         if console is not None:
-            console.print(f"{lesson.id}: {len(every)} mutants generated, {len(picked)} picked"
-                          f"{f' (--sample {sample} --seed {seed})' if len(picked) < len(every) else ''}, "
+            console.print(f"{lesson.id}: {len(every)} mutants generated"
+                          + (f" ({len(aside)} of lines triaged whole, set aside)" if aside else "")
+                          + f", {len(picked)} picked"
+                          f"{f' (--sample {sample} --seed {seed})' if len(picked) < len(candidates) else ''}, "
                           f"{len(picked) - len(todo)} known from the cache, {len(todo)} to grade")
         if todo:
             submissions = root / "submissions"
@@ -152,8 +155,8 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         for key, diff in diffs.items():
             folder.mkdir(parents=True, exist_ok=True)
             (folder / f"{key}.diff").write_text(diff, encoding="utf-8")
-        return mut.LessonMutation(lesson.id, len(every), graded, stale, len(picked) < len(every),
-                                  time.monotonic() - begin, diffs)
+        return mut.LessonMutation(lesson.id, len(every), graded, stale, len(picked) < len(candidates),
+                                  time.monotonic() - begin, diffs, set_aside=len(aside))
     finally:
         shutil.rmtree(root, ignore_errors=True)
 
@@ -199,13 +202,14 @@ def render(found: list[mut.LessonMutation], console: Console, diffs: bool = True
         table.add_column(column, justify="right", no_wrap=True)
     for f in found:
         score = "n/a" if f.score is None else f"{100 * f.score:.0f}%"
-        table.add_row(f.lesson, str(f.generated), f"{len(f.graded)}{'*' if f.sampled else ''}",
+        table.add_row(f.lesson, f"{f.generated}" + (f" (-{f.set_aside})" if f.set_aside else ""),
+                      f"{len(f.graded)}{'*' if f.sampled else ''}",
                       str(f.count(mut.KILLED)), str(f.count(mut.KILLED_BY_BUILD)), str(f.count(mut.SURVIVED)),
                       str(f.triaged), f"{f.count(mut.TIMED_OUT)}+{f.count(mut.GRADER_ERROR)}", score,
                       f"{f.seconds:.0f}")
     console.print(table)
-    console.print("build: killed by the build (no check ran); *: a seeded sample; "
-                  "score: killed / (graded - build - triaged)")
+    console.print("build: killed by the build (no check ran); *: a seeded sample; (-N): mutants of lines "
+                  "mutation.yaml triages whole, set aside; score: killed / (graded - build - triaged)")
     for f in found:
         killers: dict[str, int] = {}
         for g in f.graded:

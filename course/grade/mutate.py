@@ -528,6 +528,17 @@ class Graded:
                 "triaged": self.triaged}
 
 
+def set_aside(mutants: list[Mutant], config: MutationConfig) -> tuple[list[Mutant], list[Mutant]]:
+    """``(to grade, set aside)``: the mutants of lines ``mutation.yaml`` triages whole (``every_mutant``)
+    are set aside before sampling. Whatever they change, the author judged it outside the contract (a
+    script's ``#!`` line the checker never reads, a package.xml description), so grading them would
+    only spend the sample (inspect-topics: 18 of its first 30 were such)."""
+    whole = [e for e in config.survivors if e.every_mutant]
+    aside = [m for m in mutants if any(e.matches(m) for e in whole)]
+    keys = {m.key for m in aside}
+    return [m for m in mutants if m.key not in keys], aside
+
+
 def apply_triage(graded: list[Graded], config: MutationConfig, every: list[Mutant]) -> list[TriageEntry]:
     """Mark triaged survivors (``Graded.triaged``); return the *stale* entries (matching no current mutant).
 
@@ -554,6 +565,8 @@ class LessonMutation:
         stale: ``mutation.yaml`` entries matching no generated mutant.
         sampled: True when ``graded`` is a sample.
         seconds: wall time of the lesson (generation, grading, classification), seconds.
+        set_aside: generated mutants of lines ``mutation.yaml`` triages whole (``every_mutant``):
+            never sampled nor graded (:func:`set_aside`), so a sample is spent on mutants that count.
     """
 
     lesson: str
@@ -563,6 +576,7 @@ class LessonMutation:
     sampled: bool
     seconds: float = 0.0
     diffs: dict[str, str] = dataclasses.field(default_factory=dict)  #: survivor key -> unified diff
+    set_aside: int = 0
 
     def count(self, outcome: str) -> int:
         """How many graded mutants ended with ``outcome`` (one of :data:`OUTCOMES`)."""
@@ -585,6 +599,7 @@ class LessonMutation:
                 "sampled": self.sampled, "killed": self.count(KILLED), "killed_by_build": self.count(KILLED_BY_BUILD),
                 "survived": self.count(SURVIVED), "triaged": self.triaged, "timed_out": self.count(TIMED_OUT),
                 "grader_error": self.count(GRADER_ERROR), "score": self.score, "seconds": round(self.seconds, 1),
+                "set_aside": self.set_aside,
                 "stale": [e.model_dump(exclude_none=True) for e in self.stale],
                 "mutants": [g.to_dict() for g in self.graded]}
 
