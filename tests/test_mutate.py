@@ -258,3 +258,21 @@ def test_comment_and_same_element_mutants_are_dropped_as_equivalent() -> None:
     assert mut.invalid_mutant("src/p/package.xml", xml.replace("<name>", "<=name>"))
     assert not mut.invalid_mutant("src/p/package.xml", xml.replace(">p<", ">q<"))
     assert not mut.invalid_mutant("src/p/setup.py", "def (")  # universalmutator's Python handler judges .py
+
+
+def test_every_lessons_mutation_yaml_is_valid() -> None:
+    """Each lesson's triage parses (TriageEntry's rules) and names files of the reference: a broken one would
+    only show when someone runs dev mutate on that lesson."""
+    from ros2course.lesson.catalog import load_catalog
+
+    catalog = load_catalog()
+    checked = 0
+    for lesson_id in catalog.ids():
+        lesson = catalog.get(lesson_id)
+        if not mut.triage_path(lesson).is_file():
+            continue
+        config = mut.load_config(lesson)
+        for entry in config.survivors:
+            assert (ROOT / "solutions" / entry.file).is_file(), f"{lesson_id}: {entry.file}"
+        checked += 1
+    assert checked >= 20
