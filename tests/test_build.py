@@ -285,15 +285,18 @@ def test_colcon_test_runs_a_launch_testing_test_of_a_learners_node(tmp_path):
     assert "Summary: 1 test, 0 errors, 0 failures" in summary.stdout, summary.stdout + shown
 
 
-@pytest.mark.parametrize("attribute", ['format="(3-1)"', 'format="3a"'])
-def test_a_package_format_that_is_no_number_is_not_gradable(tmp_path, attribute):
-    """catkin_pkg raises a bare ValueError (int() of the format): a clear NotGradable, not a grader error
-    (found by ``dev mutate cpp-node``: ``<package format="(3-1)">`` crashed the grader)."""
+@pytest.mark.parametrize(("attribute", "words"), [('format="(3-1)"', "invalid literal for int"),
+                                                  ('format="3a"', "invalid literal for int"),
+                                                  ('format="-1"', "Unable to handle package.xml format")])
+def test_a_package_format_that_is_no_number_is_not_gradable(tmp_path, attribute, words):
+    """catkin_pkg raises a bare ValueError (int() of the format) or an AssertionError (a format it does not
+    know): a clear NotGradable, not a grader error (found by ``dev mutate``: ``<package format="(3-1)">``
+    and ``format="-1"`` crashed the grader)."""
     package = tmp_path / "src" / "p"
     package.mkdir(parents=True)
     (package / "package.xml").write_text(
         f'<?xml version="1.0"?>\n<package {attribute}>\n  <name>p</name>\n  <version>0.0.0</version>\n'
         '  <description>d</description>\n  <maintainer email="a@b.c">a</maintainer>\n'
         '  <license>MIT</license>\n</package>\n', encoding="utf-8")
-    with pytest.raises(NotGradable, match="a package.xml under .* is invalid: invalid literal for int"):
+    with pytest.raises(NotGradable, match=f"a package.xml under .* is invalid: {words}"):
         find_packages(tmp_path / "src")

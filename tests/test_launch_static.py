@@ -183,6 +183,28 @@ def test_files_that_cannot_launch_are_problems(tmp_path, text, words):
     assert any(words in p for p in found.problems), found.problems
 
 
+def test_a_name_never_imported_is_a_problem(tmp_path):
+    """``from launch import LaunchDescription`` forgotten: ros2 launch would stop with a NameError
+    (a survivor of ``dev mutate sas-robot-driver`` until pyflakes read the file)."""
+    found = read_launch_file(write(tmp_path, """
+        from launch_ros.actions import Node
+
+        def generate_launch_description():
+            return LaunchDescription([Node(package='p', executable='e')])
+        """))
+    assert [n.executable for n in found.nodes] == ["e"]
+    assert found.problems == ["x_launch.py line 5: name 'LaunchDescription' is not defined (not imported: ros2 "
+                              "launch would stop with a NameError)"], found.problems
+    imported = read_launch_file(write(tmp_path, """
+        from launch import LaunchDescription
+        from launch_ros.actions import Node
+
+        def generate_launch_description():
+            return LaunchDescription([Node(package='p', executable='e')])
+        """))
+    assert imported.problems == []
+
+
 def test_reading_executes_nothing(tmp_path):
     """A launch file with side effects at import and in generate_launch_description leaves no trace."""
     marker = tmp_path / "was_executed.txt"

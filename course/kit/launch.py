@@ -293,6 +293,18 @@ def _read_node_call(call: ast.Call, text: str) -> NodeAction:
     return action
 
 
+def _undefined_names(tree: ast.Module, path: Path) -> list[str]:
+    """One problem per name the file uses but never imports or defines (a forgotten
+    ``from launch import LaunchDescription``: ``ros2 launch`` ends in a NameError), found by pyflakes,
+    which reads the syntax tree and runs nothing (found by ``dev mutate sas-robot-driver``)."""
+    from pyflakes import checker, messages  # noqa: PLC0415 - only launch-file graders need it
+
+    found = checker.Checker(tree, filename=str(path))
+    return [f"{path.name} line {m.lineno}: name {m.message_args[0]!r} is not defined (not imported: ros2 launch "
+            f"would stop with a NameError)" for m in sorted(found.messages, key=lambda m: m.lineno)
+            if isinstance(m, messages.UndefinedName)]
+
+
 def read_launch_file(path: Path) -> StaticLaunch:
     """Parse a Python launch file without running it and collect its literal ``Node`` actions.
 
@@ -320,6 +332,7 @@ def read_launch_file(path: Path) -> StaticLaunch:
     if not functions:
         found.problems.append(f"{path.name} defines no generate_launch_description() function at module level")
         return found
+    found.problems += _undefined_names(tree, path)
     node_names, prefixes = _node_aliases(tree)
     for call in ast.walk(functions[-1]):
         if not isinstance(call, ast.Call):

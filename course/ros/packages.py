@@ -26,7 +26,8 @@ def find_packages(src: Path) -> dict[str, tuple[Path, object]]:
         return {}
     try:
         found = catkin_find(str(src))
-    except (InvalidPackage, ValueError) as exc:  # catkin_pkg raises a bare ValueError for format="3a"
+    # catkin_pkg raises a bare ValueError for format="3a" and an AssertionError for format="-1"
+    except (InvalidPackage, ValueError, AssertionError) as exc:
         detail = " ".join(line.strip() for line in str(exc).splitlines() if line.strip())
         raise NotGradable(f"a package.xml under {src} is invalid: {detail[:400]}",
                           "fix package.xml (format 3; name, version, description, maintainer with a valid email, license)") from exc
