@@ -35,6 +35,7 @@ from rich.console import Console  # noqa: E402
 
 from ros2course.batch.mutate import mutate_lessons, render  # noqa: E402
 from ros2course.batch.parity import case_workspace  # noqa: E402
+from ros2course.grade import mutate as mut  # noqa: E402
 from ros2course.grade.mutate import SCORE_FILE, lesson_files  # noqa: E402
 from ros2course.grade.repeat import render_steadiness, repeat_lessons  # noqa: E402
 from ros2course.grade.strength import steadiness_text, write_steadiness  # noqa: E402
@@ -164,6 +165,30 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
     path.write_text("\n".join(lines), encoding="utf-8")
 
 
+def retriage(lesson_ids: list[str], out: Path) -> list:
+    """Apply each lesson's ``mutation.yaml`` as it is now to the outcomes of its last run (``OUT/mutation.json``),
+    grading nothing, and record the score (``mutation-score.json``): a survivor triaged after its run.
+
+    The outcomes are that run's; only which survivors are triaged changes (entries match by file, line and
+    mutant, or by line with ``every_mutant``). A lesson the file does not have is skipped.
+    """
+    rows = json.loads((out / "mutation.json").read_text(encoding="utf-8")).get("lessons", {})
+    catalog, found = load_catalog(), []
+    for lesson_id in lesson_ids:
+        row = rows.get(lesson_id)
+        if row is None:
+            continue
+        lesson = catalog.get(lesson_id)
+        graded = [mut.Graded(mut.Mutant(m["file"], m["line"], m["original"], m["mutant"], ""), m["outcome"],
+                             list(m["lost"]), m.get("score", 0.0), m.get("max_score", 0.0), m.get("message", ""),
+                             cached=True) for m in row["mutants"]]
+        mut.apply_triage(graded, mut.load_config(lesson), [])
+        found.append(mut.LessonMutation(lesson_id, row["generated"], graded, [], row["sampled"],
+                                        row.get("seconds", 0.0), set_aside=row.get("set_aside", 0)))
+        mut.write_score(lesson, found[-1])
+    return found
+
+
 def update_readme(readme: Path = ROOT / "README.md") -> None:
     """Rewrite the README's lesson table (:func:`ros2course.grade.validate.with_lessons_table`)."""
     readme.write_text(with_lessons_table(readme.read_text(encoding="utf-8")), encoding="utf-8")
@@ -196,6 +221,9 @@ def main() -> int:
                         help="instead of mutants: grade each lesson's reference N times (--load at once) and record "
                              "its steadiness (chapters/<lesson>/steadiness.json)")
     parser.add_argument("--load", type=int, default=2, metavar="K", help="with --repeat: gradings at once")
+    parser.add_argument("--retriage", action="store_true",
+                        help="grade nothing: apply each lesson's mutation.yaml as it is now to its last run's outcomes "
+                             "(--out's mutation.json) and rewrite the scores, the doc and README's table")
     parser.add_argument("--readme", action="store_true",
                         help="only rewrite README.md's lesson table from the scores the lessons recorded (no mutants graded)")
     args = parser.parse_args()
@@ -208,6 +236,12 @@ def main() -> int:
     every = load_catalog().ids()
     chosen = args.lessons or every
     console = Console(stderr=True)
+    if args.retriage:
+        found = retriage(chosen, args.out)
+        render(found, console, diffs=False)
+        write_doc(args.doc, found, [i for i in every if i not in chosen], args.sample, args.seed, args.jobs)
+        update_readme()
+        return 0
     begin = time.monotonic()
     chosen = [lesson_id for lesson_id in chosen if not nothing_to_mutate(lesson_id)]  # listed as such in the doc
     found = mutate_lessons(chosen, args.out, sample=args.sample, seed=args.seed, jobs=args.jobs,
