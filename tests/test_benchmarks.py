@@ -9,6 +9,7 @@ CI's setup builds the same underlay through ``ros2course env --build``).
 from __future__ import annotations
 
 import json
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -91,3 +92,32 @@ def test_grader_strength_lists_a_lesson_with_nothing_to_mutate(tmp_path: Path) -
     assert "Nothing to mutate: workspace-setup, its reference is commands only (`colcon build`): no file to mutate" \
         in text, text[-1500:]
     assert "| print-forever-node |" in text  # the other lessons keep the rows of their last run
+
+
+def test_grader_strength_retriage_applies_todays_triage_to_the_last_runs_outcomes(tmp_path: Path, monkeypatch) -> None:
+    """--retriage grades nothing: a survivor triaged after its run counts as triaged, the killed stay killed."""
+    import importlib.util
+
+    course = tmp_path / "course"
+    course.mkdir()
+    shutil.copy(ROOT / "course.yaml", course / "course.yaml")
+    shutil.copytree(ROOT / "chapters", course / "chapters")
+    monkeypatch.setenv("ROS2COURSE_CONTENT", str(course))
+    node = "src/python_package_with_a_node/python_package_with_a_node/print_forever_node.py"
+    (course / "chapters" / "13-print-forever-node" / "mutation.yaml").write_text(
+        f"survivors:\n  - file: {node}\n    line: 'x = 1'\n    every_mutant: true\n    reason: a line nothing reads\n",
+        encoding="utf-8")
+    mutants = [{"file": node, "line": 3, "original": "x = 1", "mutant": "x = 2", "outcome": "survived", "lost": []},
+               {"file": node, "line": 4, "original": "y = 1", "mutant": "y = 2", "outcome": "killed", "lost": ["rate"]},
+               {"file": node, "line": 5, "original": "z = 1", "mutant": "z = 2", "outcome": "survived", "lost": []}]
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "mutation.json").write_text(json.dumps({"lessons": {"print-forever-node": {
+        "generated": 9, "sampled": True, "seconds": 12.0, "mutants": mutants}}}), encoding="utf-8")
+    spec = importlib.util.spec_from_file_location("grader_strength", BENCH / "grader_strength.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    [found] = module.retriage(["print-forever-node"], out)
+    assert (found.count("killed"), found.count("survived"), found.triaged, found.score) == (1, 2, 1, 0.5)
+    record = json.loads((course / "chapters" / "13-print-forever-node" / "mutation-score.json").read_text())
+    assert (record["triaged"], record["score"], record["generated"]) == (1, 0.5, 9), record
