@@ -19,6 +19,7 @@ from ros2course.kit.quotes import (
     NODE,
     PACKAGE,
     amazing_quote,
+    id_counts,
     set_at_runtime,
     short,
 )
@@ -59,6 +60,9 @@ CHECKS = [
           "period 0.5 (a float literal, so the parameter is a double)", needs=RUNS, part="defaults"),
     Check("default_messages", "With the defaults it publishes AmazingQuote on /amazing_quote with the default texts", 2,
           "create the publisher on the topic_name parameter's value and fill quote/philosopher_name from the parameters",
+          needs=RUNS, part="defaults"),
+    Check("default_ids", "The id counts up by 1 from one message to the next, as in publisher-subscriber", 1,
+          "keep the id in an attribute (self.incremental_id), put it in each message, then add 1",
           needs=RUNS, part="defaults"),
     Check("default_rate", "With the defaults it publishes at 2 Hz (period 0.5 s)", 2,
           "create the timer with the period parameter's value: self.create_timer(timer_period, self.timer_callback)",
@@ -101,7 +105,8 @@ def _defaults(s: GradingSession, path) -> None:
 
 
 def _default_messages(s: GradingSession, probe, proc, began: float) -> None:
-    """``default_messages`` and ``default_rate`` from the messages on /amazing_quote (rate on send stamps)."""
+    """``default_messages``, ``default_ids`` and ``default_rate`` from the messages on /amazing_quote (rate on
+    send stamps)."""
     with s.phase("observe"):
         timeout = probe.observe(DEFAULT_SAMPLES, DEFAULT_PERIOD, max(0.5, START_TIMEOUT - (time.monotonic() - began)),
                                 abort=lambda: proc.poll() is not None)
@@ -116,6 +121,7 @@ def _default_messages(s: GradingSession, probe, proc, began: float) -> None:
         s.record("default_messages", not odd, f"{len(samples)} message(s); " + (
             f"e.g. quote {short(odd[0].quote)}, philosopher_name {short(odd[0].philosopher_name)}"
             if odd else "all with the defaults"), expected)
+    id_counts(s, "default_ids", [m for _, m in samples], f" on {DEFAULT_TOPIC}")
     kit.rate(s, "default_rate", probe.send_stamps(), period=DEFAULT_PERIOD, needed=DEFAULT_SAMPLES,
              waited=timeout, noun="message", source="the messages' send stamps")
 

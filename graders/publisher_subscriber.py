@@ -12,7 +12,6 @@ and each ends with its Ctrl+C check.
 
 from __future__ import annotations
 
-import itertools
 
 from ros2course import kit
 from ros2course.kit import Check, GradingSession, Unmet, checks, quotes
@@ -90,13 +89,7 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
                 f"e.g. {_show(bad)}")
     s.record("pub_contents", share == 1.0, observed + where,
              f"quote: {QUOTE!r}, philosopher_name: {PHILOSOPHER!r} in every message", fraction=share)
-    ids = [m.id for m in messages]
-    shown = ", ".join(map(str, ids))
-    if len(ids) < 2:
-        s.record("pub_id_counts", False, f"only one message (id {shown}) to compare", "ids n, n+1, n+2, ...")
-    else:
-        s.record("pub_id_counts", all(b - a == 1 for a, b in itertools.pairwise(ids)), f"ids {shown}" + where,
-                 f"ids {ids[0]}, {ids[0] + 1}, {ids[0] + 2}, ... (each one more than the previous)")
+    quotes.id_counts(s, "pub_id_counts", messages, where)
     kit.rate(s, "pub_rate", probe.send_stamps(SAMPLES), period=PERIOD, needed=SAMPLES, waited=window,
              noun="message", source="the messages' send stamps", where=where)
 

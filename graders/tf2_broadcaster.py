@@ -76,6 +76,9 @@ CHECKS = [
     Check("cli_script", f"{SCRIPT} exists and is valid bash", 1, part="cli"),
     Check("cli_echo", f"It prints the transform {CHILD} -> {CAMERA} with tf2_echo", 2,
           f"timeout --signal=INT 3 ros2 run tf2_ros tf2_echo {CHILD} {CAMERA}", **CLI),
+    Check("cli_ends", "It ends by itself (tf2_echo stopped after 3 s)", 1,
+          "tf2_echo prints until it is stopped: `timeout --signal=INT 3 ros2 run tf2_ros tf2_echo ...` "
+          "(a duration of 0 means no timeout at all)", **CLI),
 ]
 
 
@@ -201,6 +204,11 @@ def _grade_cli(s: GradingSession, tf_message: type) -> None:
     shown = f"- Translation: [{offset[0]:.3f}, {offset[1]:.3f}, {offset[2]:.3f}]"
     scripts.printed(s, "cli_echo", run, [shown], f"the grader's {CHILD} -> {CAMERA} transform ({shown[2:]})",
                     f"ros2 run tf2_ros tf2_echo {CHILD} {CAMERA}")
+    # the lesson's script "ends by itself" (an exit code is not asked for: `timeout` itself exits 124)
+    s.record("cli_ends", not run.timed_out,
+             f"your script was still running after {SCRIPT_TIMEOUT:.0f} s and was stopped ({run.describe()})"
+             if run.timed_out else f"it ended by itself: {run.describe()}",
+             f"the script ends by itself within {SCRIPT_TIMEOUT:.0f} s")
 
 
 def grade(s: GradingSession) -> None:

@@ -243,6 +243,22 @@ def set_at_runtime(s: GradingSession, check_id: str, services: Any, probe: Any, 
                        stale=" -- the node still publishes the old values: does it read the parameters only once?")
 
 
+def id_counts(s: GradingSession, check_id: str, messages: list, where: str = "") -> bool:
+    """Record ``check_id``: the AmazingQuote ``id`` of ``messages`` (in arrival order) counts up by 1 from one
+    message to the next (the publisher-subscriber lesson's counter, kept by the parameters lesson: "the id
+    field counts up from 0, as before"). ``where``: appended to what was observed (e.g. the topic).
+
+    Returns whether it passed; one message is not enough to tell (failed, saying so).
+    """
+    ids = [int(m.id) for m in messages]
+    shown = ", ".join(map(str, ids))
+    if len(ids) < 2:
+        return s.record(check_id, False, f"only {len(ids)} message(s) (id {shown or 'none'}) to compare" + where,
+                        "ids n, n+1, n+2, ...")
+    return s.record(check_id, all(b - a == 1 for a, b in zip(ids, ids[1:])), f"ids {shown}" + where,
+                    f"ids {ids[0]}, {ids[0] + 1}, {ids[0] + 2}, ... (each one more than the previous)")
+
+
 def texts(s: GradingSession, check_id: str, messages: list, quote: str, philosopher: str, source: str) -> bool:
     """Record ``check_id``: every AmazingQuote in ``messages`` says ``quote`` by ``philosopher``.
 
