@@ -96,7 +96,11 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
               speedup: str = "") -> None:
     """Write the Markdown report: rows of what ran; rows of the lessons not run this time, from the
     score each lesson's last run recorded (so a run on a few lessons keeps the others'); then the
-    lessons never measured."""
+    lessons never measured. Without ``speedup``, the doc's last parallel speed-up line is kept (it is
+    measured only by ``--speedup``)."""
+    if not speedup and path.is_file():
+        speedup = next((line for line in path.read_text(encoding="utf-8").splitlines()
+                        if line.startswith("Parallel speed-up")), "")
     recorded = recorded_scores(not_run)
     # a lesson run now has just written its score file (mutate_lessons): one row format for every lesson
     just_run = recorded_scores([f.lesson for f in found])
@@ -194,7 +198,8 @@ def update_readme(readme: Path = ROOT / "README.md") -> None:
     readme.write_text(with_lessons_table(readme.read_text(encoding="utf-8")), encoding="utf-8")
 
 
-def record_steadiness(lesson_ids: list[str], repeat: int, load: int, doc: Path) -> int:
+def record_steadiness(lesson_ids: list[str], repeat: int, load: int, doc: Path, sample: int = 30, seed: int = 1,
+                      jobs: int = 2) -> int:
     """Grade each lesson's reference ``repeat`` times, ``load`` at once (``dev validate --repeat``), record
     each in its ``steadiness.json``, then rewrite the doc and the README's table from the records."""
     catalog = load_catalog()
@@ -203,7 +208,7 @@ def record_steadiness(lesson_ids: list[str], repeat: int, load: int, doc: Path) 
     for row in rows:
         write_steadiness(catalog.get(row.lesson), row)
     render_steadiness(rows, console)
-    write_doc(doc, [], catalog.ids(), 20, 1, 2)
+    write_doc(doc, [], catalog.ids(), sample, seed, jobs)  # the mutation rows as recorded: the doc's header stays true
     update_readme()
     return 0 if all(r.ok for r in rows) else 1
 
@@ -232,7 +237,8 @@ def main() -> int:
         return 0
     env_mod.activate()
     if args.repeat:
-        return record_steadiness(args.lessons or load_catalog().ids(), args.repeat, args.load, args.doc)
+        return record_steadiness(args.lessons or load_catalog().ids(), args.repeat, args.load, args.doc,
+                                 args.sample, args.seed, args.jobs)
     every = load_catalog().ids()
     chosen = args.lessons or every
     console = Console(stderr=True)

@@ -87,8 +87,12 @@ def test_verdict_parity_names_a_new_check_and_fails_on_a_changed_verdict(tmp_pat
 def test_grader_strength_lists_a_lesson_with_nothing_to_mutate(tmp_path: Path) -> None:
     """workspace-setup's reference is a command (``colcon build``): a row of its own, not a crash (issue 24)."""
     doc = tmp_path / "grader-strength.md"
+    speedup = "Parallel speed-up (print-forever-node, 30 mutants, uncached): --jobs 1 90 s, --jobs 2 45 s, x2.00."
+    doc.write_text(f"# an earlier run\n\n{speedup}\n", encoding="utf-8")
     _bench("grader_strength.py", "workspace-setup", "--doc", str(doc), "--out", str(tmp_path / "out"))
     text = doc.read_text(encoding="utf-8")
+    assert speedup in text  # measured only by --speedup: a run without it keeps the last figure
+    assert "`ros2course dev mutate --sample 30 --seed 1 --jobs 2`" in text
     assert "Nothing to mutate: workspace-setup, its reference is commands only (`colcon build`): no file to mutate" \
         in text, text[-1500:]
     assert "| print-forever-node |" in text  # the other lessons keep the rows of their last run
