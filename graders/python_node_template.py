@@ -9,7 +9,6 @@ graph is started.
 from __future__ import annotations
 
 from ros2course.kit import wait_until
-from ros2course.kit import LearnerProcess
 from ros2course.kit import Check, GradingSession
 from ros2course.kit.packaging import ros2_run_executable
 
@@ -43,10 +42,9 @@ def _lines(text: str, limit: int = 3) -> str:
 def grade(s: GradingSession) -> None:
     """Run the executable once, wait for it to end, judge its stdout and exit code."""
     path = ros2_run_executable(s, "executable", PACKAGE, EXECUTABLE)
-    proc = LearnerProcess([str(path)], s.overlay(), s.log_dir, EXECUTABLE, cwd=s.workspace_root,
-                          deadline=EXIT_TIMEOUT + 20.0)
+    # not a ROS node (the template uses no ROS API): a program, with the workspace sourced as 'ros2 run' has it
+    proc = s.start_program([str(path)], EXECUTABLE, env=s.overlay(), deadline=EXIT_TIMEOUT + 20.0)
     try:
-        proc.start()
         with s.phase("run"):
             wait_until(lambda: proc.poll() is not None, timeout=EXIT_TIMEOUT, interval=0.02)
         ended_alone = proc.poll() is not None

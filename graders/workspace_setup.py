@@ -7,10 +7,8 @@ from __future__ import annotations
 
 import ast
 import re
-import subprocess
 from pathlib import Path
 
-from ros2course.kit import colcon_command, overlay_env, sandbox_run
 from ros2course.kit import NotGradable
 from ros2course.kit import Check, GradingSession, Unmet
 
@@ -74,9 +72,8 @@ def grade(s: GradingSession) -> None:
     s.record("src_folder", has_src, f"{root} holds: {entries}", "a src/ folder for the packages")
 
     # --log-base /dev/null: 'colcon list' must not create log/ itself (colcon's documented way to disable logs)
-    # colcon list runs each setup.py: the submission's code (ros2course.sandbox)
-    proc = sandbox_run([*colcon_command(s.base_env), "--log-base", "/dev/null", "list"], cwd=root, env=s.base_env,
-                       capture_output=True, text=True, timeout=120, check=False, stdin=subprocess.DEVNULL)
+    # colcon list runs each setup.py: the submission's code, run as the submission (GradingSession.run_colcon)
+    proc = s.run_colcon(["--log-base", "/dev/null", "list"])
     packages = proc.stdout.strip().splitlines()
     s.record("colcon_reads", proc.returncode == 0,
              f"'colcon list' exited {proc.returncode}" + (f", {len(packages)} package(s)" if proc.returncode == 0
@@ -101,7 +98,7 @@ def grade(s: GradingSession) -> None:
     if not setup:
         raise Unmet("install/setup.bash does not exist")
     try:
-        env = overlay_env(root, s.base_env)
+        env = s.overlay()  # what 'source install/setup.bash' makes of the ROS install's environment
     except NotGradable as exc:
         s.record("sourceable", False, exc.message, "'source install/setup.bash' succeeds")
         return

@@ -64,7 +64,7 @@ def test_a_malformed_manifest_names_the_file_the_field_and_a_hint(tmp_path: Path
 def test_a_course_written_for_another_grading_api_is_refused(tmp_path: Path) -> None:
     course = tmp_path / "future"
     shutil.copytree(LAB_COURSE, course)
-    (course / "course.yaml").write_text((course / "course.yaml").read_text().replace('kit: "1"', 'kit: "7"'))
+    (course / "course.yaml").write_text((course / "course.yaml").read_text().replace('kit: "2"', 'kit: "7"'))
     with pytest.raises(LessonFormatError, match="grading API 7"):
         load_manifest(course)
 
@@ -136,7 +136,7 @@ def test_a_moved_course_is_named_with_how_to_get_it_back(tmp_path: Path) -> None
 def test_version_names_the_engine_the_grading_api_and_the_course(tmp_path: Path) -> None:
     proc = ros2course("--version", cwd=tmp_path)
     assert proc.returncode == 0
-    assert proc.stdout.startswith("ros2course ") and "ros2course.kit 1." in proc.stdout
+    assert proc.stdout.startswith("ros2course ") and "ros2course.kit 2." in proc.stdout
     assert "course ros2-tutorial" in proc.stdout
     lab = ros2course("--course", str(LAB_COURSE), "--version", cwd=tmp_path)
     assert "course lab-course 0.1.0" in lab.stdout

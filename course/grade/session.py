@@ -14,6 +14,7 @@ import json
 import logging
 import os
 import shutil
+import subprocess
 import threading
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -603,6 +604,27 @@ class GradingSession:
         self._processes.append(proc)
         proc.start()
         return proc
+
+    def run_colcon(self, args: Sequence[str], *, timeout: float = 120.0) -> subprocess.CompletedProcess:
+        """Run ``colcon ARGS`` in the workspace folder as the learner's terminal would, and wait for it.
+
+        colcon runs each package's ``setup.py`` (the submission's code), so it runs as the
+        submission (:mod:`ros2course.sandbox`), with the ROS install's environment
+        (:attr:`base_env`, no workspace overlay) and no standard input.
+
+        Args:
+            args: colcon's arguments, global options first (``["--log-base", "/dev/null", "list"]``).
+            timeout: seconds before colcon is killed.
+
+        Returns:
+            the finished process (``returncode``, ``stdout`` and ``stderr`` as text).
+
+        Raises:
+            subprocess.TimeoutExpired: colcon ran longer than ``timeout``.
+        """
+        return sandbox.run([*build_mod.colcon_command(self.base_env), *args], cwd=self.workspace_root,
+                           env=dict(self.base_env), capture_output=True, text=True, timeout=timeout, check=False,
+                           stdin=subprocess.DEVNULL)
 
     def close(self) -> None:
         """Close the grader's ROS graphs, stop every learner process, remove stale shared memory.

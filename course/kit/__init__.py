@@ -16,7 +16,11 @@ graders/README.md for a whole grader.
 This is the engine's public grading API (issue 18): a course's graders import
 ``ros2course.kit`` and its modules, nothing else of the engine. Its version is
 :data:`API_VERSION` (``ros2course --version`` prints it); a course's ``course.yaml``
-names the major version its graders are written for (``kit: "1"``).
+names the major version its graders are written for (``kit: "2"``).
+
+A grader reaches the machine only through the :class:`GradingSession` it is handed
+(learner processes: ``s.launch``, ``s.start_program``; colcon: ``s.run_colcon``; the
+sourced workspace: ``s.overlay()``) and the steps here, which take that session.
 
 The kit's modules, by what they observe (graders import the ones they use,
 ``from ros2course.kit import scripts``):
@@ -37,7 +41,6 @@ stand-in driver, the mystery services, the launch node watch, pip installs and
 the service lessons' steps), imported with ``from . import _<name>``.
 """
 
-from ros2course.build.colcon import colcon_command, overlay_env
 from ros2course.errors import NotGradable
 from ros2course.grade.checks import Check, Unmet
 from ros2course.grade.session import GradingSession
@@ -54,7 +57,6 @@ from ros2course.run.probes import (
     wait_until,
 )
 from ros2course.run.process import LearnerProcess
-from ros2course.sandbox import run as sandbox_run
 from ros2course.kit.judge import RATE_TOLERANCE, STANDARD_TOPICS, rate, topics_seen
 from ros2course.kit.nodes import (
     StartedNode,
@@ -72,8 +74,8 @@ from ros2course.kit.packages import (
 )
 
 __all__ = [
-    "LATE_DELIVERY", "LearnerProcess", "NotGradable", "RateStats", "call_service", "colcon_command",
-    "foreign_python_prefix", "overlay_env", "package_prefix", "record", "sandbox_run", "stamp_seconds", "stop_spinning",
+    "LATE_DELIVERY", "LearnerProcess", "NotGradable", "RateStats", "call_service",
+    "foreign_python_prefix", "package_prefix", "record", "stamp_seconds", "stop_spinning",
     "wait_until",
     "API_VERSION", "RATE_TOLERANCE", "STANDARD_TOPICS", "Check", "GradingSession", "StartedNode", "Unmet", "declared_dependencies",
     "depends", "executable", "process_state", "project_files", "rate", "sigint_exit", "source_package", "start_node", "topics_seen",

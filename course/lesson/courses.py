@@ -48,7 +48,7 @@ class CourseManifest(BaseModel):
     title: Annotated[str, Field(min_length=3)]
     version: Annotated[str, Field(pattern=r"^\d+(\.\d+)*$")]
     ros_distro: str = "jazzy"
-    kit: str = "1"
+    kit: str = "2"
     fixtures: str = "fixtures"
     lessons: list[Annotated[str, Field(pattern=_ID)]] = Field(min_length=1)
     requires: list[str] = Field(default_factory=list)

@@ -28,7 +28,7 @@ title: "{title}"
 version: "0.1.0"
 ros_distro: jazzy
 # the major version of ros2course's grading API (ros2course.kit) the graders use
-kit: "1"
+kit: "2"
 # wrong solutions `ros2course dev validate` grades: <fixtures>/<lesson-id>/<case>.yaml
 fixtures: fixtures
 # lesson ids in course order (ros2course dev new-lesson appends here)
