@@ -6,5 +6,6 @@ Kept apart from the kit so reading a course manifest does not import the kit (st
 #: bumped in its major part when a kit step changes its arguments or what it records, in its minor
 #: part when the kit gains a step (1.1: kit.quotes.id_counts, kit.actions.Goal.cancel_code; 2.0: the
 #: kit no longer exports colcon_command, overlay_env and sandbox_run, a grader reaches colcon and the
-#: sourced workspace through its session, GradingSession.run_colcon and overlay())
+#: sourced workspace through its session, GradingSession.run_colcon and overlay(); kit.testing.Mutant is
+#: DeclaredMutant, apart from dev mutate's generated Mutant)
 API_VERSION = "2.0"

@@ -59,8 +59,12 @@ TESTS_CAP = 2_000_000
 
 
 @dataclasses.dataclass(frozen=True)
-class Mutant:
-    """A hidden wrong version of a reference package: the learner's tests must fail on it.
+class DeclaredMutant:
+    """A hidden wrong version of a reference package, by the course's author: the learner's tests must fail on it.
+
+    Declared by hand, with the words of its feedback, unlike the mutants ``dev mutate``
+    generates to measure a grader (:class:`ros2course.grade.mutate.Mutant`, universalmutator's):
+    two tools of one method, mutation analysis, with one name each.
 
     Attributes:
         check: the id of the check it grades (``catches_doubled_sum``), one check per mutant.
@@ -161,7 +165,7 @@ def learner_tests(s: GradingSession, package: str) -> Path | None:
     return folder
 
 
-def prepare_cases(s: GradingSession, packages: Sequence[str], mutants: Sequence[Mutant]) -> dict[str, Path]:
+def prepare_cases(s: GradingSession, packages: Sequence[str], mutants: Sequence[DeclaredMutant]) -> dict[str, Path]:
     """Copies of the reference packages holding the learner's tests: ``{case: folder}``.
 
     ``folder/<package>`` is a package folder (the reference's files, its own ``test/``
@@ -179,7 +183,7 @@ def prepare_cases(s: GradingSession, packages: Sequence[str], mutants: Sequence[
     sources = {package: s.reference_package(package) for package in dict.fromkeys([*packages,
                                                                                    *(m.package for m in mutants)])}
 
-    def copy(case_folder: Path, package: str, mutant: Mutant | None) -> None:
+    def copy(case_folder: Path, package: str, mutant: DeclaredMutant | None) -> None:
         target = case_folder / package
         shutil.copytree(sources[package], target, ignore=shutil.ignore_patterns("test", "__pycache__",
                                                                                "*.egg-info"))
@@ -241,7 +245,7 @@ def judge_reference(s: GradingSession, check_id: str, run: TestRun, where: str, 
     return run.passed
 
 
-def judge_mutant(s: GradingSession, mutant: Mutant, run: TestRun) -> bool:
+def judge_mutant(s: GradingSession, mutant: DeclaredMutant, run: TestRun) -> bool:
     """Record ``mutant.check``: the learner's tests failed on the mutant (it was *caught*)."""
     if run.caught:
         observed = f"your tests failed on it, as they should: {run.summary()}" + (
