@@ -157,22 +157,12 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
 
     if lesson.packages:
         try:
-            # the lesson's interfaces and the earlier lessons' packages its reference depends on are built
-            # too when src/ holds them: a package.xml that forgets a <depend> then loses only the check on
-            # its dependencies, in a fresh hand-in (grade) as in a learner's workspace built lesson by lesson
-            built = build_mod.build_packages(workspace_root, lesson.packages, base_env, log_dir / "build.log",
-                                             progress=progress,
-                                             also=[*lesson.interfaces, *(lesson_dependencies(lesson)
-                                                                         if build_also is None else build_also)])
+            built = _build(lesson, workspace_root, base_env, log_dir, progress, build_also)
         except NotGradable as exc:
             return not_gradable(exc.message, exc.hint)
         timings["build"] = built.seconds
         build_info = {"ok": built.ok, "cached": built.cached, "seconds": round(built.seconds, 3),
                       "log": str(built.log_path) if built.log_path else "", "repairs": built.repairs}
-        if progress is not None:
-            for repair in built.repairs:
-                progress(f"repaired the build: {repair}")
-            progress("running and grading your nodes ...")
         if not built.ok:
             return not_gradable(f"colcon build failed for {', '.join(lesson.packages)}:\n{built.excerpt}",
                                 f"fix the build error; full log: {built.log_path}")
@@ -182,9 +172,54 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
                        + (" (unchanged since the last build)" if build_info.get("cached") else "")
                        + "".join(f"; {repair}" for repair in build_info.get("repairs", [])),
                        "the package builds with colcon")
+    try:
+        status, message, hint = _run_grader(module, session, timings)
+    except NotGradable as exc:
+        return not_gradable(exc.message, exc.hint)
+    results = session.ordered_results()
+    score = round(sum(r.points for r in results), 3)
+    if status is None:
+        status = Status.PASSED if score >= max_score else Status.FAILED
+    result = LessonResult(lesson.id, score, max_score, status, results, message, hint, timings, build_info,
+                          str(log_dir), session.plots)
+    with contextlib.suppress(OSError):
+        (log_dir / "result.json").write_text(json.dumps(result.to_json(), indent=2), encoding="utf-8")
+    return result
+
+
+def _build(lesson: Lesson, workspace_root: Path, base_env: dict[str, str], log_dir: Path, progress: Any,
+           build_also: Sequence[str] | None) -> build_mod.BuildResult:
+    """:func:`grade_lesson`'s colcon build of the lesson's packages (``log_dir/build.log``).
+
+    The lesson's interfaces and the earlier lessons' packages its reference depends on are built
+    too when ``src/`` holds them: a package.xml that forgets a ``<depend>`` then loses only the
+    check on its dependencies, in a fresh hand-in (``grade``) as in a learner's workspace built
+    lesson by lesson.
+
+    Raises:
+        NotGradable: colcon could not be run on the workspace.
+    """
+    also = [*lesson.interfaces, *(lesson_dependencies(lesson) if build_also is None else build_also)]
+    built = build_mod.build_packages(workspace_root, lesson.packages, base_env, log_dir / "build.log",
+                                     progress=progress, also=also)
+    if progress is not None:
+        for repair in built.repairs:
+            progress(f"repaired the build: {repair}")
+        progress("running and grading your nodes ...")
+    return built
+
+
+def _run_grader(module: Any, session: GradingSession, timings: dict[str, float]) -> tuple[Status | None, str, str]:
+    """Run the grader's ``grade(session)``, then close the session; fill ``timings`` (seconds).
+
+    Returns:
+        ``(None, "", "")`` when the grader ran to its end (the checks decide), or
+        ``(Status.GRADER_ERROR, message, hint)`` when it crashed (traceback in ``grader-error.txt``).
+
+    Raises:
+        NotGradable: the grader found the submission cannot be graded.
+    """
     begin = time.monotonic()
-    status = None
-    message = hint = ""
     try:
         try:
             with session.part():  # Unmet in grade(): the unrecorded checks become "not checked" with its reason
@@ -195,20 +230,11 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
             session.close()
             timings["teardown"] = time.monotonic() - graded
             timings.update(session.timings)
-    except NotGradable as exc:
-        return not_gradable(exc.message, exc.hint)
+    except NotGradable:
+        raise
     except Exception as exc:  # noqa: BLE001 - any grader crash becomes a visible "grader error"
-        status = Status.GRADER_ERROR
-        trace = traceback.format_exc()
-        (log_dir / "grader-error.txt").write_text(trace, encoding="utf-8")
-        message = f"the grader failed: {type(exc).__name__}: {exc}"
-        hint = f"this is a fault of the course, not of your code; traceback in {log_dir / 'grader-error.txt'}"
-    results = session.ordered_results()
-    score = round(sum(r.points for r in results), 3)
-    if status is None:
-        status = Status.PASSED if score >= max_score else Status.FAILED
-    result = LessonResult(lesson.id, score, max_score, status, results, message, hint, timings, build_info,
-                          str(log_dir), session.plots)
-    with contextlib.suppress(OSError):
-        (log_dir / "result.json").write_text(json.dumps(result.to_json(), indent=2), encoding="utf-8")
-    return result
+        trace_file = session.log_dir / "grader-error.txt"
+        trace_file.write_text(traceback.format_exc(), encoding="utf-8")
+        return (Status.GRADER_ERROR, f"the grader failed: {type(exc).__name__}: {exc}",
+                f"this is a fault of the course, not of your code; traceback in {trace_file}")
+    return None, "", ""
