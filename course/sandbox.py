@@ -183,6 +183,11 @@ class Isolation:
         uid: the job's uid (None without the uid protection).
         pids_limit: tasks the submission may have at once (None: no limit).
         pids_via: ``"cgroup pids"`` and/or ``"RLIMIT_NPROC"``.
+        memory: the address-space limit in words (``"RLIMIT_AS 2048 MiB per process"``, ``"none"``;
+            ``""`` before the worker is started).
+        pids_stats: the pids cgroup's counters after the job (``peak``, ``events_max``, ...), when there was one.
+        killed_after: processes of the job still alive after its worker ended, then killed.
+        not_run: why the job never started a worker (``"not run (not gradable)"``); ``""`` when it ran.
     """
 
     protections: dict[str, str | None]
@@ -190,13 +195,36 @@ class Isolation:
     uid: int | None = None
     pids_limit: int | None = None
     pids_via: str = ""
+    memory: str = ""
+    pids_stats: dict[str, int] = dataclasses.field(default_factory=dict)
+    killed_after: int = 0
+    not_run: str = ""
+
+    @classmethod
+    def never_ran(cls, reason: str) -> Isolation:
+        """The isolation of a job that started no worker (nothing was protected, nothing needed to be)."""
+        return cls({}, {}, not_run=reason)
+
+    @property
+    def mount_namespace(self) -> bool:
+        """True when the job ran in a mount namespace of its own (its shared memory died with it)."""
+        return bool(self.protections.get(MOUNTS))
 
     def to_json(self) -> dict[str, Any]:
-        """The JSON shape in ``results.jsonl``: the protections, what is missing and why, plus the older flags."""
-        return {"netns": bool(self.protections.get(NETWORK)), "mountns": bool(self.protections.get(MOUNTS)),
+        """The JSON shape in ``results.jsonl``: the protections, what is missing and why, plus the older flags,
+        the memory limit, the pids cgroup's counters (``pids_<name>``) and ``killed_after`` when set."""
+        if self.not_run:
+            return {"netns": False, "mountns": False, "reason": self.not_run}
+        data = {"netns": bool(self.protections.get(NETWORK)), "mountns": self.mount_namespace,
                 "pidns": bool(self.protections.get(PIDNS)), "uid": self.uid, "pids_limit": self.pids_limit,
                 "pids_via": self.pids_via, "protections": dict(self.protections), "missing": dict(self.missing),
                 "reason": self.summary()}
+        if self.memory:
+            data["memory"] = self.memory
+        data.update({f"pids_{name}": value for name, value in self.pids_stats.items()})
+        if self.killed_after:
+            data["killed_after"] = self.killed_after
+        return data
 
     def summary(self) -> str:
         """One line: what is in effect, then what is missing and why."""

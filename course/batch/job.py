@@ -193,8 +193,7 @@ class JobResult:
     Attributes:
         student: the submission's student id.
         records: one result per lesson graded (none when the job was cancelled: a resumed batch grades it again).
-        isolation: the ``isolation`` field of its results (:meth:`ros2course.sandbox.Isolation.to_json`
-            plus the memory limit, the pids cgroup's counters and ``killed_after``).
+        isolation: what protected it (its results carry :meth:`~ros2course.sandbox.Isolation.to_json`).
         peak_rss: bytes, the worker and its children at their largest (sampled every 0.5 s).
         seconds: wall time of the job.
         cancelled: the batch was interrupted while it ran.
@@ -202,7 +201,7 @@ class JobResult:
 
     student: str
     records: list[LessonResult]
-    isolation: dict[str, Any]
+    isolation: sandbox.Isolation
     peak_rss: int = 0
     seconds: float = 0.0
     cancelled: bool = False
@@ -219,7 +218,7 @@ def run_job(job: Job) -> JobResult:
     student_logs = Path(job.out_dir) / job.student / "logs"
     scratch = Path(tempfile.mkdtemp(prefix=f"ros2course-grade-{job.student[:40]}-", dir=job.scratch_root))
     scratch.chmod(0o711)  # the submission's uid may pass through to its own ws/, home/ and logs/ros/, nothing else
-    isolation: dict[str, Any] = {"netns": False, "mountns": False, "reason": "not run"}
+    isolation = sandbox.Isolation.never_ran("not run")
     peak = 0
     cancelled = False
     records: list[LessonResult] = []
@@ -227,7 +226,7 @@ def run_job(job: Job) -> JobResult:
         try:
             ws = prepare(Submission(job.student, Path(job.entry), job.problem), scratch)
         except NotGradable as exc:
-            isolation = {"netns": False, "mountns": False, "reason": "not run (not gradable)"}
+            isolation = sandbox.Isolation.never_ran("not run (not gradable)")
             records = [unfinished_result(lesson, Status.NOT_GRADABLE, exc.message, exc.hint) for lesson in job.lessons]
             ws = None
         if ws is not None:
@@ -241,12 +240,12 @@ def run_job(job: Job) -> JobResult:
                                            (scratch, "<scratch>")])
     finally:
         shutil.rmtree(scratch, ignore_errors=True)
-        if not isolation.get("mountns"):
+        if not isolation.mount_namespace:
             sweep_stale_fastdds_shm()
     seconds = time.monotonic() - begin
     for record in records:
         record.student = job.student
-        record.isolation = isolation
+        record.isolation = isolation.to_json()
         record.timings["total"] = round(seconds, 3)
         record.peak_rss = peak
     return JobResult(job.student, [] if cancelled else records, isolation, peak, seconds, cancelled)
@@ -323,7 +322,7 @@ def _reference_dependencies(lesson_id: str) -> tuple[str, ...]:
     return _dependencies_of(content_root(), lesson_id)
 
 
-def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], dict[str, Any], int, bool]:
+def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], sandbox.Isolation, int, bool]:
     logs = scratch / "logs"
     logs.mkdir()
     result_file = scratch / "result.json"  # in the root-owned scratch folder: out of the submission's reach
@@ -335,15 +334,15 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], 
         why = "; ".join(f"{name} ({reason})" for name, reason in walls.missing.items())
         return ([unfinished_result(lesson, Status.GRADER_ERROR, f"not graded: --require-isolation and missing {why}",
                              "grade on a machine that gives every protection (root, Linux, util-linux, dumb-init)")
-                 for lesson in job.lessons], walls.to_json(), 0, False)
+                 for lesson in job.lessons], walls, 0, False)
     cmd = [sys.executable, "-m", "ros2course.batch.worker", "--workspace", str(ws), "--results", str(result_file),
            "--logs", str(logs), "--memory-limit", str(job.memory_limit), "--file-limit", str(job.file_limit),
            *worker_args]
     for lesson in job.lessons:
         # the course's reference dependencies, read here: solutions/ is hidden from the worker
         cmd += ["--lesson", lesson, "--build-also", f"{lesson}={','.join(_reference_dependencies(lesson))}"]
-    isolation = {**walls.to_json(),
-                 "memory": f"RLIMIT_AS {job.memory_limit / 2**20:.0f} MiB per process" if job.memory_limit else "none"}
+    isolation = dataclasses.replace(
+        walls, memory=f"RLIMIT_AS {job.memory_limit / 2**20:.0f} MiB per process" if job.memory_limit else "none")
     # parent-death signal: the worker dies with the thread that started it (a pool thread lives as long as
     # the batch), so a SIGKILLed batch leaves no worker behind
     setpriv = shutil.which("setpriv")
@@ -392,7 +391,7 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], 
             break
     killed = _kill_job(popen, marker)  # whatever is left of it (forked children, escaped sessions)
     if cgroup is not None:
-        isolation.update({f"pids_{k}": v for k, v in cgroup.stats().items()})
+        isolation.pids_stats = dict(cgroup.stats())
         cgroup.close()  # kills anything still in it (none, with a PID namespace), then removes it
     drain.join(timeout=5)
     try:
@@ -416,8 +415,7 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], 
                                        "see logs/worker.log; a fault of the grading machine or a limit reached"))
     order = {lesson: i for i, lesson in enumerate(job.lessons)}
     records.sort(key=lambda r: order.get(r.lesson, 0))
-    if killed:
-        isolation = {**isolation, "killed_after": len(killed)}
+    isolation.killed_after = len(killed)
     return records, isolation, peak, cancelled
 
 

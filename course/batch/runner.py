@@ -337,7 +337,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
                     records.append(record)
                 if outcome.records:
                     write_outputs(out_dir, records, lessons, [job.student])
-                    isolation = outcome.isolation or isolation
+                    isolation = outcome.isolation.to_json()
                     peaks.append(outcome.peak_rss)
                 if progress:
                     progress.update(task, advance=1, last=job.student)
