@@ -297,17 +297,12 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
             shutil.rmtree(scratch_root, ignore_errors=True)
             raise
     todo: list[Job] = []
-    skipped = 0
-    for entry in entries:
-        theirs = lessons if student_lessons is None else [l for l in lessons if l in student_lessons.get(entry.student, ())]
-        missing = [lesson for lesson in theirs if (entry.student, lesson) not in done]
-        if not missing:
-            skipped += 1
-            continue
+    for entry, missing in _to_grade(entries, lessons, student_lessons, done):
         todo.append(Job(batch_id, entry.student, str(entry.path), entry.problem, missing, str(out_dir), timeout,
                         memory_limit, hide=hide, isolate=isolate, scratch_root=str(scratch_root),
                         pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""),
                         require_isolation=require_isolation))
+    skipped = len(entries) - len(todo)
     records = list(existing)
     peaks: list[int] = []
     isolation: dict[str, Any] = next((r.isolation for r in reversed(existing)), {})
@@ -324,20 +319,14 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
             futures = {executor.submit(run_job, job): job for job in todo}
             for future in cf.as_completed(futures):
                 job = futures[future]
-                try:
-                    outcome = future.result()
-                except Exception as exc:  # noqa: BLE001 - an infrastructure fault is this student's "grader error"
-                    failed = [unfinished_result(lesson, Status.GRADER_ERROR, f"the job failed: {type(exc).__name__}: {exc}")
-                              for lesson in job.lessons]
-                    for result in failed:
-                        result.student = job.student
-                    outcome = JobResult(job.student, failed, {})
+                outcome = _outcome(future, job)
                 for record in outcome.records:
                     gradebook.append_record(results_path, record)
                     records.append(record)
                 if outcome.records:
                     write_outputs(out_dir, records, lessons, [job.student])
-                    isolation = outcome.isolation.to_json()
+                    if outcome.isolation.not_run != _JOB_FAILED:  # a failed job tells nothing of the walls
+                        isolation = outcome.isolation.to_json()
                     peaks.append(outcome.peak_rss)
                 if progress:
                     progress.update(task, advance=1, last=job.student)
@@ -359,6 +348,36 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
             trusted.discard()
     return BatchReport(out_dir, list(gradebook.latest(records).values()), len(todo), skipped,
                        time.monotonic() - begin, isolation, peaks)
+
+
+#: Why a job that raised ran no worker (:func:`_outcome`).
+_JOB_FAILED = "not run (the job failed)"
+
+
+def _to_grade(entries: list, lessons: list[str], student_lessons: dict[str, list[str]] | None,
+              done: set[tuple[str, str]]) -> list[tuple[Any, list[str]]]:
+    """``(submission entry, lessons still to grade for it)`` for each entry with any left: its lessons
+    (``student_lessons``, else every lesson) less the ``(student, lesson)`` pairs already ``done`` (resume)."""
+    pending = []
+    for entry in entries:
+        theirs = lessons if student_lessons is None else [l for l in lessons if l in student_lessons.get(entry.student, ())]
+        missing = [lesson for lesson in theirs if (entry.student, lesson) not in done]
+        if missing:
+            pending.append((entry, missing))
+    return pending
+
+
+def _outcome(future: cf.Future, job: Job) -> JobResult:
+    """The job's result; a job that raised (a fault of the grading machine, never of the submission)
+    gives each of its lessons a "grader error" row, so the class report still lists the student."""
+    try:
+        return future.result()
+    except Exception as exc:  # noqa: BLE001 - an infrastructure fault is this student's "grader error"
+        failed = [unfinished_result(lesson, Status.GRADER_ERROR, f"the job failed: {type(exc).__name__}: {exc}")
+                  for lesson in job.lessons]
+        for result in failed:
+            result.student = job.student
+        return JobResult(job.student, failed, sandbox.Isolation.never_ran(_JOB_FAILED))
 
 
 def _progress(console: Any):
