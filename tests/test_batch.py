@@ -370,3 +370,36 @@ def test_relocate_paths_names_the_workers_folders_as_the_instructor_sees_them(tm
     assert out.message == "colcon failed in <submission>"
     assert out.build == {"log": "/out/alice/logs/build.log", "ok": True}
     assert (out.score, out.status, out.checks[1].passed) == (1.0, Status.FAILED, False)
+
+
+def test_a_job_that_raises_is_a_grader_error_row_and_tells_nothing_of_the_walls(tmp_path: Path, monkeypatch) -> None:
+    """A fault of the grading machine in one job (run_job raised) gives that student a "grader error" row per
+    lesson; the batch's isolation summary keeps what the jobs that ran reported (issue 23: typed isolation)."""
+    import concurrent.futures as cf
+
+    from ros2course.batch import runner as batch
+    from ros2course.batch.job import JobResult
+    from ros2course import sandbox
+
+    for name in ("alice", "bob"):
+        (tmp_path / "subs" / name / "src").mkdir(parents=True)
+    walls = sandbox.Isolation({sandbox.NETWORK: "loopback only"}, {}, memory="none", pids_stats={"peak": 3},
+                              killed_after=2)
+
+    def fake_job(job):
+        if job.student == "bob":
+            raise OSError("no space left on device")
+        result = batch.unfinished_result(job.lessons[0], "failed", "graded")
+        result.student, result.isolation = job.student, walls.to_json()
+        return JobResult(job.student, [result], walls)
+
+    monkeypatch.setattr(batch, "run_job", fake_job)
+    with cf.ThreadPoolExecutor(max_workers=1) as pool:
+        report = batch.run_batch(tmp_path / "subs", ["workspace-setup"], tmp_path / "out", executor=pool)
+    rows = {r.student: r for r in gradebook.read_results(tmp_path / "out" / "results.jsonl")}
+    assert rows["bob"].status == "grader error" and "OSError: no space left on device" in rows["bob"].message
+    assert rows["alice"].status == "failed"
+    assert report.isolation["protections"] == {sandbox.NETWORK: "loopback only"}
+    assert (report.isolation["memory"], report.isolation["pids_peak"], report.isolation["killed_after"]) == ("none", 3, 2)
+    assert sandbox.Isolation.never_ran("not run (not gradable)").to_json() == {
+        "netns": False, "mountns": False, "reason": "not run (not gradable)"}
