@@ -429,3 +429,25 @@ def test_parts_graded_at_once_share_one_check_graph(ros_env, tmp_path):
             s.close()
         assert all(graph is s.ros for graph in seen["shared"])
         assert len({id(graph) for graph in seen["own"]}) == 1 and seen["own"][0] is not s.ros
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(60)
+def test_a_checks_domain_stays_reserved_until_its_processes_are_stopped(ros_env):
+    """GradingSession closes its graphs before it stops its learner processes (a ros2 daemon among them):
+    the domain id must stay reserved until the holder is closed, after them, or another check could take
+    the domain and find the old daemon there ("already running", then gone: CI, inspect-topics)."""
+    import contextlib
+    import socket
+
+    from ros2course.run.probes import RosSession  # noqa: PLC0415
+
+    holder = contextlib.ExitStack()
+    with RosSession(domain_holder=holder) as graph:
+        domain = graph.domain_id
+    port = 32768 + domain  # domain_coordinator's reservation: a bound port per domain id
+    with socket.socket() as other, pytest.raises(OSError):
+        other.bind(("", port))
+    holder.close()
+    with socket.socket() as other:
+        other.bind(("", port))

@@ -108,6 +108,8 @@ class GradingSession:
         self.results: dict[str, CheckResult] = {}
         self._processes: list[LearnerProcess] = []
         self._stack = contextlib.ExitStack()
+        # the domain ids of the check's graphs, released only once its processes are stopped (RosSession)
+        self._domains = contextlib.ExitStack()
         self._ros = None
         self._overlay: dict[str, str] | None = None
         self.notes: list[str] = []
@@ -408,7 +410,8 @@ class GradingSession:
         """The private ROS graph of this check (created on first use, by one thread only)."""
         with self._making:
             if self._ros is None:
-                self._ros = self._stack.enter_context(RosSession(recorder=self._recording()))
+                self._ros = self._stack.enter_context(RosSession(recorder=self._recording(),
+                                                                domain_holder=self._domains))
         return self._ros
 
     def _recording(self) -> Recorder | None:
@@ -563,7 +566,7 @@ class GradingSession:
         with ``part(name, own_graph=True)``, which makes one and uses it by default.
         """
         with self._making:
-            return self._stack.enter_context(RosSession(recorder=self._recording()))
+            return self._stack.enter_context(RosSession(recorder=self._recording(), domain_holder=self._domains))
 
     def launch(self, path: Path, name: str, args: list[str] | None = None, graph=None) -> LearnerProcess:
         """Start a learner executable in the private domain; it is stopped at the end of the check.
@@ -635,10 +638,15 @@ class GradingSession:
         the whole grading process in ``SharedMemChannelResource::release`` (a shared-memory
         port the killed peer shared being regenerated meanwhile; core dump of a segfault
         seen in 1 of about 30 ``inspect-services`` gradings under load, and in CI).
+        The graphs' domain ids are released last, once no process of the check is left in them
+        (:class:`~ros2course.run.probes.RosSession`'s ``domain_holder``).
         """
-        self._stack.close()
-        for proc in self._processes:
-            proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
+        try:
+            self._stack.close()
+            for proc in self._processes:
+                proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
+        finally:
+            self._domains.close()  # last: no process of this check (its ros2 daemon included) is left in them
         if self.recorder is not None:  # after the graphs: no callback writes any more
             self.recorder.metadata(CHECKS_METADATA, {
                 check_id: json.dumps({"start_ns": start, "end_ns": end, "passed": self.results[check_id].passed,

@@ -189,12 +189,22 @@ class RosSession:
         matched: topic -> ``time.monotonic()`` since when a :class:`TopicProbe` on it has had a matched
             publisher (rmw's ``matched`` event, ``current_count`` > 0); removed when none is left.
 
+    Args:
+        recorder: see the attribute.
+        domain_holder: an ``ExitStack`` that holds the domain id instead of the session, released
+            when the caller closes it (default: released when the session closes). A check holds
+            its domains until its learner processes are stopped: a ``ros2`` daemon of the check
+            (XML-RPC on port 11511 + domain id) outlives the check's graph, and another check that
+            took the domain meanwhile would find it "already running" and then lose it (CI: an
+            inspect-topics reference printed "Unknown topic", its daemon killed under it).
+
     Raises:
         RuntimeError: from ``domain_coordinator`` when no domain id is free.
     """
 
-    def __init__(self, recorder: Any = None) -> None:
+    def __init__(self, recorder: Any = None, domain_holder: contextlib.ExitStack | None = None) -> None:
         self.recorder = recorder
+        self._domain_holder = domain_holder
         self.heard: dict[str, float] = {}
         self.matched: dict[str, float] = {}
         self.domain_id = -1
@@ -222,7 +232,8 @@ class RosSession:
         from rclpy.signals import SignalHandlerOptions  # noqa: PLC0415 - rclpy only when grading
 
         try:
-            self.domain_id = self._stack.enter_context(domain_coordinator.domain_id(_domain_selector()))
+            holder = self._stack if self._domain_holder is None else self._domain_holder
+            self.domain_id = holder.enter_context(domain_coordinator.domain_id(_domain_selector()))
             configure_process_discovery()
             self.context = rclpy.Context()
             rclpy.init(context=self.context, domain_id=self.domain_id,
