@@ -193,7 +193,8 @@ class JobResult:
     Attributes:
         student: the submission's student id.
         records: one result per lesson graded (none when the job was cancelled: a resumed batch grades it again).
-        isolation: what protected it (its results carry :meth:`~ros2course.sandbox.Isolation.to_json`).
+        isolation: what protected it (its results carry :meth:`~ros2course.sandbox.Isolation.to_json`);
+            None when the job itself raised (:func:`ros2course.batch.runner.run_batch` makes its rows).
         peak_rss: bytes, the worker and its children at their largest (sampled every 0.5 s).
         seconds: wall time of the job.
         cancelled: the batch was interrupted while it ran.
@@ -201,7 +202,7 @@ class JobResult:
 
     student: str
     records: list[LessonResult]
-    isolation: sandbox.Isolation
+    isolation: sandbox.Isolation | None
     peak_rss: int = 0
     seconds: float = 0.0
     cancelled: bool = False

@@ -325,7 +325,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
                     records.append(record)
                 if outcome.records:
                     write_outputs(out_dir, records, lessons, [job.student])
-                    if outcome.isolation.not_run != _JOB_FAILED:  # a failed job tells nothing of the walls
+                    if outcome.isolation is not None:  # a job that raised tells nothing of the walls
                         isolation = outcome.isolation.to_json()
                     peaks.append(outcome.peak_rss)
                 if progress:
@@ -348,10 +348,6 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
             trusted.discard()
     return BatchReport(out_dir, list(gradebook.latest(records).values()), len(todo), skipped,
                        time.monotonic() - begin, isolation, peaks)
-
-
-#: Why a job that raised ran no worker (:func:`_outcome`).
-_JOB_FAILED = "not run (the job failed)"
 
 
 def _to_grade(entries: list, lessons: list[str], student_lessons: dict[str, list[str]] | None,
@@ -377,7 +373,7 @@ def _outcome(future: cf.Future, job: Job) -> JobResult:
                   for lesson in job.lessons]
         for result in failed:
             result.student = job.student
-        return JobResult(job.student, failed, sandbox.Isolation.never_ran(_JOB_FAILED))
+        return JobResult(job.student, failed, None)
 
 
 def _progress(console: Any):
