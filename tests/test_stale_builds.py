@@ -71,7 +71,9 @@ def test_new_learner_sequence_with_a_changed_version_gets_full_marks(tmp_path: P
     first = grade_lesson(lesson, ws)
     assert first.status != Status.PASSED
     package = ws / "src" / "python_package_with_a_node"
-    shutil.copytree(SOLUTIONS / "python_package_with_a_node", package, dirs_exist_ok=True,
+    # pasted: fresh modification times, so colcon's own incremental build sees the change (files that keep
+    # older times are rebuilt from clean first: tests/test_source_drift.py)
+    shutil.copytree(SOLUTIONS / "python_package_with_a_node", package, dirs_exist_ok=True, copy_function=shutil.copy,
                     ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
     setup = package / "setup.py"
     setup.write_text(setup.read_text().replace("version='0.0.1'", "version='0.0.0'"))

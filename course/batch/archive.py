@@ -24,6 +24,7 @@ import tarfile
 import zipfile
 from pathlib import Path, PurePosixPath
 
+from ros2course.build.colcon import RECORDS
 from ros2course.errors import NotGradable
 
 #: Archive suffixes recognised, longest first.
@@ -208,6 +209,10 @@ def _workspace_root(folder: Path) -> Path:
 def prepare(submission: Submission, scratch: Path) -> Path:
     """Copy or extract ``submission`` into ``scratch``; returns the workspace root to grade.
 
+    A ``build/`` or ``install/`` the submission holds is kept (workspace-setup grades it), but
+    never trusted: the engine's build record is removed, so each lesson's packages are rebuilt
+    from clean (:func:`ros2course.build.colcon.build_packages`).
+
     The workspace is ``scratch/ws``: the submission's workspace as is (``src/``
     and whatever else it holds, symbolic links kept as links), or a folder of
     packages moved under ``scratch/ws/src/``.
@@ -252,4 +257,9 @@ def prepare(submission: Submission, scratch: Path) -> Path:
         raise NotGradable("neither a workspace (no src/ folder) nor a folder of ROS packages (no package.xml)",
                           "submit your workspace folder (with src/) or your package folders")
     shutil.rmtree(raw, ignore_errors=True)
+    # a hand-in is built from its own sources: the engine's record of what a build holds is never taken from
+    # the submission (issue 36), so every package it brought built is rebuilt from clean before it is graded
+    records = ws / "build" / RECORDS
+    if records.is_file() or records.is_symlink():
+        records.unlink()
     return ws

@@ -82,7 +82,8 @@ def main(argv: list[str] | None = None) -> int:
         try:
             lesson = catalog.get(lesson_id)
             result = grade_lesson(lesson, args.workspace, log_dir=log_dir,
-                                  trusted_interfaces=args.trusted_interfaces, build_also=build_also.get(lesson_id))
+                                  trusted_interfaces=args.trusted_interfaces, build_also=build_also.get(lesson_id),
+                                  hand_in=True)
         except Exception as exc:  # noqa: BLE001 - any failure is this lesson's "grader error" row
             (log_dir / "grader-error.txt").write_text(traceback.format_exc(), encoding="utf-8")
             result = LessonResult.unfinished(lesson_id, Status.GRADER_ERROR,

@@ -2,11 +2,15 @@
 
 * Packages are found with ``catkin_pkg`` (the library colcon-ros itself uses to
   read ``package.xml``), built with ``colcon build --packages-up-to``.
-* colcon re-runs every package's build even when nothing changed (a second or
-  more per ament_python package). So that a warm ``check`` costs milliseconds,
-  we keep a fingerprint of each built package's source tree (paths, sizes,
-  mtimes) in ``build/.ros2course-fingerprints.json`` and skip colcon when the
-  packages and their in-workspace dependencies are unchanged and installed.
+* The engine records, per package it builds, what it built by content (every
+  source file's bytes and mode; :mod:`ros2course.build.sources`) in
+  ``build/.ros2course-builds.json``. A warm ``check`` skips colcon (a second or
+  more per package) when the packages and their in-workspace dependencies are
+  built from exactly the files present. When the files changed in a way colcon's
+  time-based incremental build cannot see (older or future-dated files, removed
+  files, a moved package, an interrupted build), the package is rebuilt from
+  clean and the build check says why (issue 36); a package ``src/`` no longer
+  holds is removed from ``install/``. The learner's files are never touched.
 * The environment learner executables run in is what ``source
   install/setup.bash`` produces (we source it in bash and read ``env -0``),
   so colcon's own setup files decide it, exactly as for a learner's terminal.
@@ -15,7 +19,6 @@
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import json
 import os
 import re
@@ -31,9 +34,12 @@ from ros2course.errors import NotGradable
 from ros2course.files import atomic_write_text
 from ros2course.ros.colcon_log import BuildProgress
 from ros2course.ros.compiler_cache import with_compiler_cache
+from ros2course.build.sources import PackageRecord, PackageSources, rebuild_reason, scan_package
 from ros2course.ros.packages import dependency_closure, find_packages
 
-FINGERPRINTS = ".ros2course-fingerprints.json"
+#: The engine's record of what it built (:class:`BuildRecords`), beside colcon's own state in ``build/``.
+RECORDS = ".ros2course-builds.json"
+RECORDS_FORMAT = 2
 #: colcon arguments every build uses; ``BUILD_TESTING=OFF`` because ament_lint_auto
 #: is not available from the wheels (shared/ROS_ENV.md).
 COLCON_ARGS = ["--cmake-args", "-DBUILD_TESTING=OFF"]
@@ -48,7 +54,7 @@ class BuildResult:
         ok: colcon succeeded (or nothing needed building).
         packages: the packages asked for.
         seconds: wall time spent, seconds.
-        cached: True when the fingerprints matched and colcon was not run.
+        cached: True when every package was built from exactly the files present, and colcon was not run.
         log_path: the captured colcon output (None if colcon was not run).
         excerpt: the relevant lines of a failed build, for the learner.
         repairs: one sentence per stale install state found and repaired by a clean
@@ -163,27 +169,98 @@ def stale_metadata(workspace_root: Path, closure: list[str]) -> dict[str, list[s
 
 
 def fingerprint(folder: Path) -> str:
-    """Hash of every file's relative path, size and mtime under ``folder`` (caches skipped)."""
-    digest = hashlib.sha256()
-    for root, dirs, files in os.walk(folder):
-        dirs[:] = sorted(d for d in dirs if d not in ("__pycache__", ".git") and not d.endswith(".egg-info"))
-        for name in sorted(files):
-            path = Path(root, name)
-            try:
-                stat = path.stat()
-            except OSError:
+    """Content digest of the package sources in ``folder`` (:func:`ros2course.build.sources.scan_package`):
+    the same for a copy, whatever its files' times.
+
+    Raises:
+        NotGradable: a file there cannot be read (see :func:`~ros2course.build.sources.scan_package`).
+    """
+    return scan_package(folder, folder).digest
+
+
+class BuildRecords:
+    """The engine's record of what it built, per package (``build/.ros2course-builds.json``; issue 36).
+
+    Read with :meth:`load`, changed with :meth:`put`/:meth:`drop`, written with :meth:`save`.
+    Records made under another interpreter or colcon arguments are not used (the build tree
+    was made by another toolchain).
+    """
+
+    def __init__(self, path: Path, packages: dict[str, PackageRecord]) -> None:
+        self.path, self.packages = path, packages
+
+    @staticmethod
+    def _toolchain() -> str:
+        return f"{sys.executable}\0{COLCON_ARGS}"
+
+    @classmethod
+    def load(cls, workspace_root: Path) -> BuildRecords:
+        """The workspace's records (none when the file is missing, damaged, or of another toolchain)."""
+        path = workspace_root / "build" / RECORDS
+        packages: dict[str, PackageRecord] = {}
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            data = None
+        if isinstance(data, dict) and data.get("format") == RECORDS_FORMAT and data.get("toolchain") == cls._toolchain():
+            for name, value in dict(data.get("packages", {})).items():
+                record = PackageRecord.from_json(value)
+                if record is not None:
+                    packages[str(name)] = record
+        return cls(path, packages)
+
+    def get(self, name: str) -> PackageRecord | None:
+        """The record of package ``name``, if any."""
+        return self.packages.get(name)
+
+    def put(self, name: str, record: PackageRecord) -> None:
+        """Set the record of package ``name``."""
+        self.packages[name] = record
+
+    def drop(self, name: str) -> None:
+        """Forget package ``name`` (its build was removed)."""
+        self.packages.pop(name, None)
+
+    def save(self) -> None:
+        """Write the records (atomically; ``build/`` is created when missing)."""
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        data = {"format": RECORDS_FORMAT, "toolchain": self._toolchain(),
+                "packages": {name: dataclasses.asdict(record) for name, record in sorted(self.packages.items())}}
+        atomic_write_text(self.path, json.dumps(data, sort_keys=True, separators=(",", ":")))
+
+
+def orphan_installs(workspace_root: Path, found: dict[str, tuple[Path, object]]) -> list[str]:
+    """Packages colcon installed in ``install/`` that ``src/`` no longer holds (renamed or removed).
+
+    A package prefix is recognised by colcon's own marker, ``install/<pkg>/share/colcon-core/packages/<pkg>``
+    (colcon_core.shell.create_environment_hook's package index), so nothing else in ``install/`` is touched.
+    """
+    install = workspace_root / "install"
+    if not install.is_dir():
+        return []
+    out = []
+    for entry in sorted(install.iterdir()):
+        if entry.name in found or entry.is_symlink() or not entry.is_dir():
+            continue
+        if (entry / "share" / "colcon-core" / "packages" / entry.name).is_file():
+            out.append(entry.name)
+    return out
+
+
+def _dependents(cleaned: set[str], closure: list[str], found: dict[str, tuple[Path, object]]) -> list[str]:
+    """The CMake packages of ``closure`` that depend on a ``cleaned`` one, recursively: they compiled against
+    its installed headers, which a clean rebuild installs again with the sources' (possibly older) times."""
+    out: set[str] = set()
+    changed = True
+    while changed:
+        changed = False
+        for name in closure:
+            if name in cleaned or name in out or not _build_type(found[name][1]).startswith(("ament_cmake", "cmake")):
                 continue
-            digest.update(f"{path.relative_to(folder)}\0{stat.st_size}\0{stat.st_mtime_ns}\n".encode())
-    digest.update(f"{sys.executable}\0{COLCON_ARGS}".encode())
-    return digest.hexdigest()
-
-
-def _read_fingerprints(path: Path) -> dict[str, str]:
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        return {str(k): str(v) for k, v in data.items()} if isinstance(data, dict) else {}
-    except (OSError, ValueError):
-        return {}
+            if set(dependency_closure([name], found)) & (cleaned | out):
+                out.add(name)
+                changed = True
+    return sorted(out)
 
 
 _RELEVANT = re.compile(r"error|Error|ERROR|Traceback|failed|Failed|CMake Error|SyntaxError|not found|No such", re.MULTILINE)
@@ -236,40 +313,93 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
                           "create it under src/ (check the <name> in its package.xml)")
     packages = list(dict.fromkeys([*packages, *(name for name in also if name in found)]))
     closure = dependency_closure(packages, found)
-    prints = {name: fingerprint(found[name][0]) for name in closure}
-    store = workspace_root / "build" / FINGERPRINTS
-    known = _read_fingerprints(store)
+    records = BuildRecords.load(workspace_root)
+    repairs: list[str] = []
+    orphans = orphan_installs(workspace_root, found)
+    if orphans:
+        _clean(workspace_root, orphans)
+        for name in orphans:
+            records.drop(name)
+        records.save()
+        repairs.append(f"install/ held {_names(orphans)}, no longer in src/ (renamed or removed): removed "
+                       f"{'its' if len(orphans) == 1 else 'their'} build, so nothing imports or runs it by accident "
+                       f"(in your terminal: `rm -rf {' '.join(f'build/{n} install/{n}' for n in orphans)}`)")
+    sources = {name: scan_package(workspace_root, found[name][0]) for name in closure}
     installed = all((workspace_root / "install" / name).is_dir() for name in closure)
     have_setup = (workspace_root / "install" / "setup.bash").is_file()
-    if installed and have_setup and all(known.get(name) == value for name, value in prints.items()):
-        return BuildResult(True, packages, time.monotonic() - begin, cached=True)
+    if installed and have_setup and all(_up_to_date(records.get(name), sources[name]) for name in closure):
+        return BuildResult(True, packages, time.monotonic() - begin, cached=True, repairs=repairs)
     log_path.parent.mkdir(parents=True, exist_ok=True)
-    repairs = stale_install(workspace_root, closure, found)
-    ok = _colcon(workspace_root, packages, closure, env, log_path, timeout, progress, "wb")
-    stale = stale_metadata(workspace_root, closure) if ok else {}
+    repairs += stale_install(workspace_root, closure, found)
+    repairs += _rebuild_from_clean(workspace_root, closure, found, records, sources)
+    for name in closure:  # until colcon ends: a build stopped halfway (Ctrl+C, a timeout) is rebuilt from clean
+        if records.get(name) is not None:
+            records.get(name).complete = False
+    records.save()
+    outcome = _colcon(workspace_root, packages, closure, env, log_path, timeout, progress, "wb")
+    stale = stale_metadata(workspace_root, closure) if outcome == "ok" else {}
     if stale:
         _clean(workspace_root, list(stale))
         repairs += [f"install/{name} held the metadata of versions {' and '.join(versions)} (a changed version in "
                     "setup.py leaves the old .egg-info behind, and Python may read the old entry points): rebuilt "
                     f"{name} cleanly (in your terminal: `rm -rf build/{name} install/{name}`)"
                     for name, versions in stale.items()]
-        ok = _colcon(workspace_root, packages, closure, env, log_path, timeout, progress, "ab")
+        outcome = _colcon(workspace_root, packages, closure, env, log_path, timeout, progress, "ab")
+    if outcome != "stopped":
+        # colcon ended: its build tree reflects these sources, or holds outputs older than them (make, build_py
+        # and the install steps redo those); a failed build is never taken as up to date
+        for name in closure:
+            records.put(name, PackageRecord.of(sources[name], complete=True, failed=outcome != "ok"))
+        records.save()
     text = log_path.read_text(encoding="utf-8", errors="replace")
-    if ok:
-        known.update(prints)
-        atomic_write_text(store, json.dumps(known, indent=1, sort_keys=True))
+    if outcome == "ok":
         return BuildResult(True, packages, time.monotonic() - begin, cached=False, log_path=log_path, repairs=repairs)
-    for name in closure:  # a failed build must not look cached next time
-        known.pop(name, None)
-    if store.parent.is_dir():
-        atomic_write_text(store, json.dumps(known, indent=1, sort_keys=True))
     return BuildResult(False, packages, time.monotonic() - begin, cached=False, log_path=log_path,
                        excerpt=build_log_excerpt(text), repairs=repairs)
 
 
+def _names(names: list[str]) -> str:
+    return ", ".join(names[:-1]) + f" and {names[-1]}" if len(names) > 1 else names[0]
+
+
+def _up_to_date(record: PackageRecord | None, sources: PackageSources) -> bool:
+    """The package was built, completely and successfully, from exactly ``sources`` (by content and folder)."""
+    return (record is not None and record.complete and not record.failed and record.digest == sources.digest
+            and record.folder == sources.folder)
+
+
+def _rebuild_from_clean(workspace_root: Path, closure: list[str], found: dict[str, tuple[Path, object]],
+                        records: BuildRecords, sources: dict[str, PackageSources]) -> list[str]:
+    """Remove colcon's build of every package an incremental build would get wrong (:func:`rebuild_reason`),
+    and of the CMake packages built against it; one sentence for the learner, or none."""
+    reasons: dict[str, str] = {}
+    for name in closure:
+        built = (workspace_root / "build" / name).exists() or (workspace_root / "install" / name).exists()
+        reason = rebuild_reason(records.get(name), sources[name], built)
+        if reason is not None:
+            reasons[name] = reason
+    if not reasons:
+        return []
+    dependents = [name for name in _dependents(set(reasons), closure, found)
+                  if (workspace_root / "build" / name).exists() or (workspace_root / "install" / name).exists()]
+    cleaned = [*reasons, *dependents]
+    _clean(workspace_root, cleaned)
+    for name in cleaned:
+        records.drop(name)
+    what = "; ".join(f"{name}: {reason}" for name, reason in reasons.items())
+    also = f" (and {_names(dependents)}, built against it)" if dependents else ""
+    return [f"rebuilt from clean ({what}){also}: colcon rebuilds a file only when it is newer than its last "
+            f"build, so it would have kept the old build (in your terminal: `rm -rf "
+            f"{' '.join(f'build/{n} install/{n}' for n in cleaned)}` before `colcon build`)"]
+
+
 def _colcon(workspace_root: Path, packages: list[str], closure: list[str], env: dict[str, str], log_path: Path,
-            timeout: float, progress: Callable[[str], None] | None, mode: str) -> bool:
-    """One ``colcon build --packages-up-to`` into ``log_path`` (``mode`` "wb" or "ab"); True when it succeeded."""
+            timeout: float, progress: Callable[[str], None] | None, mode: str) -> str:
+    """One ``colcon build --packages-up-to`` into ``log_path`` (``mode`` "wb" or "ab").
+
+    Returns:
+        "ok" (colcon succeeded), "failed" (colcon ended with an error) or "stopped" (stopped at ``timeout``).
+    """
     command = [*colcon_command(env), "build", "--packages-up-to", *packages, *COLCON_ARGS]
     if sandbox.current() is None:  # never a cache shared between a batch's submissions (see the module)
         env = with_compiler_cache(env, workspace_root)
@@ -283,14 +413,14 @@ def _colcon(workspace_root: Path, packages: list[str], closure: list[str], env: 
             # colcon runs the submission's setup.py and CMake code: as the submission (ros2course.sandbox)
             proc = sandbox.run(command, cwd=workspace_root, env=env, stdout=log, stderr=subprocess.STDOUT,
                                stdin=subprocess.DEVNULL, timeout=timeout, start_new_session=True, check=False)
-            ok = proc.returncode == 0
+            outcome = "ok" if proc.returncode == 0 else "failed"
         except subprocess.TimeoutExpired:
-            ok = False
+            outcome = "stopped"
             log.write(f"\nros2course: build stopped after {timeout:.0f} s (error: timeout)\n".encode())
         finally:
             if follower is not None:
                 follower.stop()
-    return ok
+    return outcome
 
 
 _IGNORE_MARKERS = ("COLCON_IGNORE", "AMENT_IGNORE", "CATKIN_IGNORE")  # catkin_pkg's DEFAULT_IGNORE_MARKERS

@@ -116,7 +116,7 @@ def new_log_dir(workspace_root: Path, lesson_id: str) -> Path:
 
 def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = None,
                  underlays: tuple[Path, ...] | list[Path] = (), trusted_interfaces: Path | None = None,
-                 progress: Any = None, build_also: Sequence[str] | None = None) -> LessonResult:
+                 progress: Any = None, build_also: Sequence[str] | None = None, hand_in: bool = False) -> LessonResult:
     """Build the lesson's packages in ``workspace_root``, run its grader, return the result.
 
     ``underlays`` are built workspaces sourced before building and running the
@@ -133,6 +133,10 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     course's reference dependencies of the lesson's packages
     (:func:`~ros2course.build.reference.lesson_dependencies`, read from ``solutions/``); batch
     grading passes them in, since its worker cannot see ``solutions/``.
+
+    ``hand_in`` (batch grading): the workspace is a submission unpacked by ``grade``, whose
+    build the engine never trusts (:func:`ros2course.batch.archive.prepare` drops its build
+    record, so its packages are built from clean); the build check says so.
 
     Never raises for problems of the submission (they become the result);
     raises :class:`~ros2course.errors.MissingRequirement` when the machine lacks
@@ -169,6 +173,8 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     session = GradingSession(lesson, checks, workspace_root, log_dir, base_env, trusted_interfaces)
     if lesson.packages and "build" in session.checks:
         session.record("build", True, "colcon built " + ", ".join(lesson.packages)
+                       + (" from clean, as every hand-in is (a build the submission brought is never used)"
+                          if hand_in else "")
                        + (" (unchanged since the last build)" if build_info.get("cached") else "")
                        + "".join(f"; {repair}" for repair in build_info.get("repairs", [])),
                        "the package builds with colcon")

@@ -36,6 +36,7 @@ from typing import Any, Literal
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 from rich.console import Console
+from rich.markup import escape
 from rich.table import Table
 from ros2course.build.colcon import fingerprint
 from ros2course.build.reference import (
@@ -46,6 +47,7 @@ from ros2course.build.reference import (
 )
 from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
 from ros2course.grade.child import grade_in_child
+from ros2course.grade.coverage import lesson_coverage
 from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.grade.mutate import describe_score, score_text
 from ros2course.grade.results import LessonResult, Status
@@ -220,11 +222,42 @@ class Outcome:
     got: str
     seconds: float = 0.0
     result: LessonResult | None = None
+    #: ``path:line: message`` lines of the case (the ``contract.yaml`` case: :func:`contract_outcome`).
+    problems: list[str] = dataclasses.field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
-        return {"lesson": self.lesson, "case": self.case, "ok": self.ok, "expected": self.expected,
-                "got": self.got, "seconds": round(self.seconds, 2),
-                "result": self.result.to_json() if self.result else None}
+        found = {"lesson": self.lesson, "case": self.case, "ok": self.ok, "expected": self.expected,
+                 "got": self.got, "seconds": round(self.seconds, 2),
+                 "result": self.result.to_json() if self.result else None}
+        if self.problems:
+            found["problems"] = list(self.problems)
+        return found
+
+
+#: The case name of a lesson's contract coverage (issue 37); no fixture is named so (a fixture's name has no dot).
+CONTRACT_CASE = "contract.yaml"
+#: What ``dev validate`` says of a lesson without a ``contract.yaml``: a warning, not a failure.
+NO_CONTRACT = "no contract coverage"
+
+
+def contract_outcome(lesson: Lesson) -> Outcome | None:
+    """The ``contract.yaml`` case of ``lesson``: its requirements traced to checks, every problem a failure.
+
+    None when the lesson has no ``contract.yaml`` (:data:`NO_CONTRACT`, a warning the caller prints).
+    """
+    begin = time.monotonic()
+    row = lesson_coverage(lesson)
+    expected = "every requirement traced to checks of the grader or marked not graded (issue 37)"
+    if row.contract is None and not row.problems:
+        return None
+    if row.problems:
+        return Outcome(lesson.id, CONTRACT_CASE, False, expected, f"{len(row.problems)} problem(s): {row.problems[0]}",
+                       time.monotonic() - begin, problems=[str(p) for p in row.problems])
+    assert row.contract is not None
+    contract = row.contract
+    return Outcome(lesson.id, CONTRACT_CASE, True, expected,
+                   f"{len(contract.requirements)} requirements: {len(contract.mapped)} mapped, "
+                   f"{len(contract.not_graded)} not graded", time.monotonic() - begin)
 
 
 def _describe(result: LessonResult) -> str:
@@ -349,7 +382,7 @@ _BUILT = ("build", "install")
 
 
 def _src_fingerprints(root: Path) -> dict[str, str] | None:
-    """``package folder -> fingerprint`` of a workspace's ``src/`` (the build cache's own key);
+    """``package folder -> content digest`` of a workspace's ``src/`` (what the build record compares);
     None when a ``package.xml`` there does not parse (such a case is always graded from scratch)."""
     try:
         found = find_packages(root / "src")
@@ -366,8 +399,8 @@ def grade_in_built(lesson: Lesson, case: Case, built: Path, reference_src: dict[
     not a package: their build would be the reference's, to the byte. Their
     workspace is made fresh in a scratch folder and moved into ``built`` over
     everything but ``build/`` and ``install/`` (nothing the reference's grading
-    wrote survives), so the engine's build cache (fingerprints of path, size
-    and mtime; copies keep mtimes) finds the packages built. A case whose
+    wrote survives), so the engine's build record (the sources' content, in the
+    same folders) finds the packages built. A case whose
     ``src/`` differs in any file returns None, to be graded from scratch. ``built`` may
     also be an empty folder: the case is then built there, for the next case to reuse.
     """
@@ -532,6 +565,18 @@ def validate_course(lesson_ids: list[str] | None = None, progress: Console | Non
     for lesson in lessons:
         if progress is not None:
             progress.print(f"validating {lesson.id} ...")
+        contract = contract_outcome(lesson)
+        if contract is None:
+            if progress is not None:
+                progress.print(f"  [yellow]warning[/] {lesson.id}: {NO_CONTRACT} "
+                               f"({lesson.folder.name}/contract.yaml is missing)")
+        else:
+            outcomes.append(contract)
+            if progress is not None:
+                mark = "[green]ok[/]" if contract.ok else "[red]WRONG[/]"
+                progress.print(f"  {mark} {contract.case}: {escape(contract.got)}")
+                for problem in contract.problems:
+                    progress.print(f"    {problem}", markup=False, soft_wrap=True)
         for outcome in validate_lesson(lesson, jobs):
             outcomes.append(outcome)
             if progress is not None:
@@ -587,6 +632,8 @@ def render_outcomes(outcomes: list[Outcome], console: Console) -> None:
         table.add_row(o.lesson, o.case, "[green]ok[/]" if o.ok else "[red]WRONG[/]", o.expected, o.got)
     console.print(table)
     for o in outcomes:  # what each failed check of a WRONG case observed: a flaky check is diagnosed from this
+        for problem in o.problems:  # a contract.yaml's problems, path:line: message
+            console.print(f"  {o.lesson} {o.case}: {problem}", markup=False, soft_wrap=True)
         if not o.ok and o.result is not None:
             for check in o.result.checks:
                 if not check.passed:
