@@ -60,6 +60,8 @@ from ros2course.run.process import kill_marked
 LESSON_ID = "print-forever-node"
 #: What "warm overhead above floor" should stay under, seconds.
 GOAL_SECONDS = 1.0
+#: Issue 36: the check a learner types within this many seconds of the floor.
+CLI_GOAL_ABOVE_FLOOR = 0.5
 #: Every process this script starts inherits this variable (value: a per-run id), so
 #: leftovers are found by their environment and killed by PID at the end.
 BENCH_MARKER_VAR = "ROS2COURSE_BENCH_MARKER"
@@ -331,6 +333,86 @@ def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, f
     return out
 
 
+LAUNCH_TEST = '''\
+"""The plainest launch_testing test a teacher would write for the lesson: the fifth print, then exit codes."""
+import unittest
+
+import launch
+import launch_ros.actions
+import launch_testing
+import launch_testing.actions
+import launch_testing.asserts
+import pytest
+
+
+@pytest.mark.launch_test
+def generate_test_description():
+    node = launch_ros.actions.Node(package="python_package_with_a_node", executable="print_forever_node",
+                                   output="screen")
+    return launch.LaunchDescription([node, launch_testing.actions.ReadyToTest()]), {{"node": node}}
+
+
+class TestPrints(unittest.TestCase):
+    def test_fifth_print(self, proc_output, node):
+        proc_output.assertWaitFor("Printed {last} times.", process=node, timeout=15)
+
+
+@launch_testing.post_shutdown_test()
+class TestExit(unittest.TestCase):
+    def test_exit_codes(self, proc_info):
+        launch_testing.asserts.assertExitCodes(proc_info)
+'''
+
+
+def run_launch_test(runs: int, workspace: Path, folder: Path, samples: int) -> list[float]:
+    """``launch_test`` of :data:`LAUNCH_TEST` (waits for the ``samples``-th print, index ``samples - 1``),
+    ``runs`` times, in the workspace's overlay as a learner's sourced terminal has it; wall seconds each.
+
+    Raises:
+        BenchmarkFailed: ``launch_test`` is not installed, or a run fails.
+    """
+    base_env = dict(os.environ)
+    env_mod.activate(base_env)
+    overlay = build_mod.overlay_env(workspace, base_env)
+    launch_test = shutil.which("launch_test", path=overlay.get("PATH"))
+    if launch_test is None:
+        raise BenchmarkFailed("launch_test is not on the overlay's PATH (the underlay's launch_testing)")
+    test = folder / "test_print_forever.py"
+    test.write_text(LAUNCH_TEST.format(last=samples - 1), encoding="utf-8")
+    env = learner_shell_env_from(overlay)
+    times = []
+    for _ in range(runs):
+        done = timed_run([launch_test, str(test)], env, folder, timeout=CLI_TIMEOUT)
+        if done.returncode != 0:
+            raise BenchmarkFailed(f"launch_test failed ({done.returncode}): {(done.stdout + done.stderr).decode()[-800:]}")
+        times.append(done.seconds)
+    return times
+
+
+def learner_shell_env_from(env: dict[str, str]) -> dict[str, str]:
+    """``env`` as a learner's terminal has it (the wheels' bootstrap guard removed: the interpreter re-execs)."""
+    env = dict(env)
+    env.pop(BOOTSTRAP_GUARD, None)
+    return env
+
+
+def measure_source_digest(runs: int) -> dict[str, Any]:
+    """The build record's content digest of every package of the course's reference (``solutions/src``, the
+    largest package set a check reads), as a warm check computes it; milliseconds, median of ``runs``."""
+    from ros2course.build.sources import scan_package  # noqa: PLC0415
+    from ros2course.lesson import content_root  # noqa: PLC0415
+    from ros2course.ros.packages import find_packages  # noqa: PLC0415
+
+    src = content_root() / "solutions" / "src"
+    found = find_packages(src)
+    times, files = [], 0
+    for _ in range(runs):
+        begin = time.perf_counter()
+        files = sum(len(scan_package(src.parent, folder).files) for folder, _ in found.values())
+        times.append((time.perf_counter() - begin) * 1000)
+    return {"packages": len(found), "files": files, "ms": summary(times)}
+
+
 def run_cli_check(workspace: Path, folder: Path) -> dict[str, Any]:
     """``python -m ros2course check LESSON --workspace WS --json`` once, as a learner's terminal would run it."""
     argv = [sys.executable, "-m", "ros2course", "check", LESSON_ID, "--workspace", str(workspace), "--json"]
@@ -382,8 +464,15 @@ def benchmark(runs: int, root: Path, progress: Console) -> dict[str, Any]:
     first_record = statistics.median(floor_rows["first_record"])
     floor = first_record + window
 
-    progress.print("ros2course check through the CLI (warm) ...")
-    cli = run_cli_check(workspace, root / "floor")
+    progress.print("ros2course check through the CLI (warm) and the plainest launch_test, in turn ...")
+    cli_runs, launch_runs = [], []
+    for _ in range(runs):
+        cli_runs.append(run_cli_check(workspace, root / "floor"))
+        launch_runs.extend(run_launch_test(1, workspace, root / "floor", samples))
+    cli = dict(cli_runs[len(cli_runs) // 2])
+    cli["wall"] = statistics.median(run["wall"] for run in cli_runs)
+    cli["exit_after_output"] = statistics.median(run["exit_after_output"] for run in cli_runs)
+    cli["runs"] = [run["wall"] for run in cli_runs]
 
     progress.print("diagnostics (interpreter start, imports, overlay sourcing) ...")
     diagnostics = measure_diagnostics(runs, workspace, root / "floor")
@@ -405,6 +494,10 @@ def benchmark(runs: int, root: Path, progress: Console) -> dict[str, Any]:
         "goal_overhead_below": GOAL_SECONDS,
         "cli": {**cli, "above_floor": cli["wall"] - floor,
                 "above_in_process_warm": cli["wall"] - warm["total"]["median"]},
+        "launch_test": {"runs": launch_runs, "median": statistics.median(launch_runs),
+                        "cli_ratio": cli["wall"] / statistics.median(launch_runs)},
+        "goal_cli_above_floor": CLI_GOAL_ABOVE_FLOOR,
+        "source_digest": measure_source_digest(max(runs, 5)),
         "diagnostics": diagnostics,
     }
 
@@ -443,10 +536,23 @@ def render(data: dict[str, Any], console: Console) -> None:
     console.print(f"[{colour}]warm overhead above floor: {overhead:.2f} s "
                   f"(goal < {data['goal_overhead_below']:.0f} s)[/]", soft_wrap=True)
     cli = data["cli"]
-    console.print(f"CLI check, warm, 1 run: {cli['wall']:.2f} s wall "
+    console.print(f"CLI check, warm, median of {len(cli['runs'])}: {cli['wall']:.2f} s wall "
                   f"({cli['above_in_process_warm']:+.2f} s vs in-process warm median, "
                   f"{cli['above_floor']:.2f} s above floor; "
                   f"{cli['exit_after_output']:.2f} s from its JSON to its exit)", soft_wrap=True)
+    lt = data["launch_test"]
+    within = cli["above_floor"] <= data["goal_cli_above_floor"]
+    faster = cli["wall"] < lt["median"]
+    console.print(f"side by side, same run: floor {floor['floor']:.2f} s | ros2course check (CLI, 14 checks) "
+                  f"{cli['wall']:.2f} s | plainest launch_test (2 checks) {lt['median']:.2f} s "
+                  f"(median of {len(lt['runs'])}); check / launch_test = {lt['cli_ratio']:.2f}", soft_wrap=True)
+    console.print(f"[{'green' if within else 'red'}]CLI within {data['goal_cli_above_floor']:.1f} s of the floor: "
+                  f"{'yes' if within else 'no'}[/]; [{'green' if faster else 'red'}]faster than launch_test: "
+                  f"{'yes' if faster else 'no'}[/]", soft_wrap=True)
+    digest = data["source_digest"]
+    console.print(f"build record: content digest of the course's {digest['packages']} packages "
+                  f"({digest['files']} files): {digest['ms']['median']:.1f} ms median "
+                  f"(min {digest['ms']['min']:.1f}, max {digest['ms']['max']:.1f})", soft_wrap=True)
     if data["warm_builds_not_cached"]:
         console.print(f"[yellow]note:[/] {data['warm_builds_not_cached']} warm run(s) ran colcon "
                       "(fingerprint cache missed)", soft_wrap=True)

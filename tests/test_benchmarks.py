@@ -53,6 +53,8 @@ def test_diagnosis_parity_benchmark_runs_on_one_fixture() -> None:
 def test_check_speed_benchmark_runs_once() -> None:
     data = json.loads(_bench("check_speed.py", "--runs", "1", "--json").stdout)
     assert data.get("leftover_processes_killed") == 0
+    assert len(data["cli"]["runs"]) == 1 and len(data["launch_test"]["runs"]) == 1  # both passed, side by side
+    assert data["source_digest"]["packages"] >= 15 and data["source_digest"]["files"] > 0
 
 
 @pytest.mark.ros

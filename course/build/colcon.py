@@ -18,7 +18,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
+import hashlib
 import json
 import os
 import re
@@ -449,11 +451,59 @@ def colcon_command(env: dict[str, str]) -> list[str]:
     return ["colcon"]
 
 
-_overlay_cache: dict[tuple, dict[str, str]] = {}
+_overlay_cache: dict[str, dict[str, str]] = {}
+#: The overlay environment of a learner's last ``check``, kept beside the build records: a fresh ``ros2course``
+#: process (every CLI call) would otherwise source ``install/setup.bash`` again (0.15 s, issue 36).
+OVERLAY_CACHE = ".ros2course-overlay.json"
+
+
+#: Variables a shell changes on its own (``cd``, nesting) and that sourcing's result never keeps.
+_SHELL_NOISE = frozenset({"SHLVL", "_", "PWD", "OLDPWD"})
+
+
+def _overlay_key(workspace_root: Path, base_env: dict[str, str]) -> str:
+    """What ``source install/setup.bash`` depends on: the base environment and, per package prefix in
+    ``install/``, colcon's package marker, its environment hooks (``package.dsv``, ``hook/``) and the folders
+    those hooks test for (``bin``, ``lib``, site-packages), each by inode and mtime (colcon writes them anew
+    on every build of the package)."""
+    digest = hashlib.sha256(repr(sorted(i for i in base_env.items() if i[0] not in _SHELL_NOISE)).encode())
+    install = workspace_root / "install"
+    python = f"lib/python{sys.version_info.major}.{sys.version_info.minor}/site-packages"
+    for entry in sorted(os.scandir(install), key=lambda e: e.name):
+        st = entry.stat(follow_symlinks=False)
+        digest.update(f"{entry.name}\0{st.st_ino}\0{st.st_mtime_ns}\n".encode())
+        if not entry.is_dir(follow_symlinks=False):
+            continue
+        for rel in (f"share/colcon-core/packages/{entry.name}", f"share/{entry.name}/package.dsv",
+                    f"share/{entry.name}/hook", "bin", "lib", python, "share/ament_index/resource_index/packages"):
+            try:
+                st = os.stat(os.path.join(entry.path, rel))
+                digest.update(f"{rel}\0{st.st_ino}\0{st.st_mtime_ns}\n".encode())
+            except OSError:
+                digest.update(f"{rel}\0-\n".encode())
+    return digest.hexdigest()
+
+
+def _read_overlay_cache(path: Path, key: str, base_env: dict[str, str]) -> dict[str, str] | None:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(data, dict) or data.get("key") != key:
+        return None
+    env = dict(base_env)
+    env.update({str(k): str(v) for k, v in dict(data.get("set", {})).items()})
+    for name in data.get("unset", []):
+        env.pop(str(name), None)
+    return env
 
 
 def overlay_env(workspace_root: Path, base_env: dict[str, str]) -> dict[str, str]:
     """The environment after ``source install/setup.bash`` on top of ``base_env``.
+
+    Kept in memory and, for a learner's own check (never in a sandboxed hand-in, whose ``build/`` the
+    submission could write), in ``build/.ros2course-overlay.json`` as the variables sourcing set or
+    unset (never the rest of the learner's environment), under :func:`_overlay_key`.
 
     Raises:
         NotGradable: the workspace was never built (no ``install/setup.bash``),
@@ -463,12 +513,30 @@ def overlay_env(workspace_root: Path, base_env: dict[str, str]) -> dict[str, str
     if not setup.is_file():
         raise NotGradable(f"{workspace_root} is not built (no install/setup.bash)",
                           f"run 'colcon build' in {workspace_root}")
-    layout = workspace_root / "install"
-    key = (str(workspace_root), tuple(sorted(base_env.items())),
-           tuple(sorted((p.name, p.stat().st_mtime_ns) for p in layout.iterdir())))
+    key = _overlay_key(workspace_root, base_env) + str(workspace_root)
     cached = _overlay_cache.get(key)
     if cached is not None:
         return dict(cached)
+    on_disk = workspace_root / "build" / OVERLAY_CACHE if sandbox.current() is None else None
+    env = _read_overlay_cache(on_disk, key, base_env) if on_disk is not None else None
+    if env is None:
+        env = _source_overlay(setup, workspace_root, base_env)
+        if on_disk is not None and on_disk.parent.is_dir():
+            changed = {k: v for k, v in env.items() if base_env.get(k) != v}
+            with contextlib.suppress(OSError):
+                atomic_write_text(on_disk, json.dumps({"key": key, "set": changed,
+                                                       "unset": sorted(set(base_env) - set(env))}))
+    _overlay_cache.clear()
+    _overlay_cache[key] = env
+    return dict(env)
+
+
+def _source_overlay(setup: Path, workspace_root: Path, base_env: dict[str, str]) -> dict[str, str]:
+    """Source ``setup`` in bash on top of ``base_env`` and read the environment it leaves (``env -0``).
+
+    Raises:
+        NotGradable: sourcing fails.
+    """
     # the workspace's setup.bash is the submission's code too (ros2course.sandbox)
     proc = sandbox.run(["bash", "-c", 'source "$1" >/dev/null 2>&1 && env -0', "bash", str(setup)],
                        capture_output=True, env=base_env, cwd=workspace_root, timeout=60, check=False)
@@ -480,8 +548,6 @@ def overlay_env(workspace_root: Path, base_env: dict[str, str]) -> dict[str, str
         if b"=" in item:
             k, _, v = item.partition(b"=")
             env[k.decode()] = v.decode(errors="replace")
-    for noise in ("SHLVL", "_", "PWD", "OLDPWD"):
+    for noise in _SHELL_NOISE:
         env.pop(noise, None)
-    _overlay_cache.clear()
-    _overlay_cache[key] = env
-    return dict(env)
+    return env
