@@ -653,6 +653,36 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
         raise typer.Exit(int(ExitStatus.VALIDATION_FAILED))
 
 
+@dev_app.command("contract-coverage")
+@_handle_errors
+def contract_coverage(write: Annotated[bool, typer.Option("--write", help="Write docs/contract-coverage.md instead of printing it.")] = False,
+                      check: Annotated[bool, typer.Option("--check", help="Print nothing; fail unless docs/contract-coverage.md is up to date.")] = False,
+                      course: CourseOpt = None,
+                      ) -> None:
+    """Every lesson's contract.yaml (issue 37) as docs/contract-coverage.md: requirements, their checks, what is not graded."""
+    _choose_course(None, course)
+    from ros2course.grade.coverage import coverage_doc_path, coverage_document  # noqa: PLC0415 - start time, see the imports
+
+    text, problems = coverage_document()
+    err = stderr_console()
+    for problem in problems:
+        sys.stderr.write(f"{problem}\n")
+    path = coverage_doc_path()
+    if check:
+        current = path.read_text(encoding="utf-8") if path.is_file() else ""
+        if current != text:
+            err.print(f"{path} is not up to date: run `ros2course dev contract-coverage --write`", markup=False)
+            raise typer.Exit(int(ExitStatus.VALIDATION_FAILED))
+    elif write:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(text, encoding="utf-8")
+        err.print(f"wrote {path}", markup=False)
+    else:
+        sys.stdout.write(text)
+    if problems:
+        raise typer.Exit(int(ExitStatus.VALIDATION_FAILED))
+
+
 @dev_app.command("new-lesson")
 @_handle_errors
 def new_lesson(lesson_id: Annotated[str, typer.Argument(metavar="ID", help="The new lesson's id (kebab-case).")],

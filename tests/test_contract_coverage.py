@@ -1,0 +1,119 @@
+"""Contract coverage (issue 37): every lesson's ``contract.yaml`` loads cleanly, and docs/contract-coverage.md is current.
+
+No ROS: a grader module loads for its ``CHECKS`` alone. The loader's problems are
+``path:line: message``; each kind is shown on a small bad file.
+"""
+
+from __future__ import annotations
+
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from ros2course.grade.coverage import COVERAGE_DOC, coverage_document, lesson_coverage
+from ros2course.lesson.catalog import content_root, load_catalog
+from ros2course.lesson.contract import CONTRACT_FILE, load_contract
+
+CATALOG = load_catalog()
+TRACED = [lesson.id for lesson in CATALOG.lessons if (lesson.folder / CONTRACT_FILE).is_file()]
+
+
+@pytest.mark.parametrize("lesson_id", TRACED)
+def test_a_lesson_s_contract_loads_without_problems(lesson_id: str) -> None:
+    row = lesson_coverage(CATALOG.get(lesson_id))
+    assert not row.problems, "\n".join(map(str, row.problems))
+    assert row.contract is not None and row.contract.requirements
+
+
+def test_every_lesson_has_a_contract() -> None:
+    missing = [lesson.folder.name for lesson in CATALOG.lessons if not (lesson.folder / CONTRACT_FILE).is_file()]
+    assert not missing, f"no {CONTRACT_FILE} in: {', '.join(missing)}"
+
+
+def test_the_committed_coverage_document_is_current() -> None:
+    text, _ = coverage_document()  # each contract's problems: test_a_lesson_s_contract_loads_without_problems
+    committed = (content_root() / COVERAGE_DOC).read_text(encoding="utf-8")
+    assert committed == text, "run `ros2course dev contract-coverage --write`"
+
+
+GOOD = """\
+    lesson: demo
+    requirements:
+      - id: topic-name
+        says: "it publishes /chatter"
+        from: instructions
+        checks: [topic]
+      - id: depth
+        says: "with depth 10"
+        from: contract
+        not_graded: "the graph carries no remote history depth"
+"""
+
+
+def _load(tmp_path: Path, text: str, lesson: str = "demo", checks=("topic", "rate")):
+    path = tmp_path / CONTRACT_FILE
+    path.write_text(textwrap.dedent(text), encoding="utf-8")
+    return path, *load_contract(path, lesson, set(checks))
+
+
+def test_a_good_contract_loads(tmp_path: Path) -> None:
+    _, contract, problems = _load(tmp_path, GOOD)
+    assert not problems
+    assert contract is not None and [r.id for r in contract.mapped] == ["topic-name"]
+    assert [r.id for r in contract.not_graded] == ["depth"] and contract.requirements[0].source == "instructions"
+
+
+def _one(problems, path: Path, line: int, *words: str) -> None:
+    assert len(problems) == 1, problems
+    text = str(problems[0])
+    assert text.startswith(f"{path}:{line}: "), text
+    for word in words:
+        assert word in text, text
+
+
+def test_a_requirement_with_neither_checks_nor_not_graded(tmp_path: Path) -> None:
+    path, contract, problems = _load(tmp_path, GOOD.replace("        checks: [topic]\n", ""))
+    assert contract is None
+    _one(problems, path, 3, "requirements.0", "checks", "not_graded")
+
+
+def test_a_requirement_with_both(tmp_path: Path) -> None:
+    path, _, problems = _load(tmp_path, GOOD.replace("        checks: [topic]\n",
+                                                     "        checks: [topic]\n        not_graded: \"because it is so\"\n"))
+    _one(problems, path, 3, "requirements.0", "not both")
+
+
+def test_an_empty_checks_list(tmp_path: Path) -> None:
+    path, _, problems = _load(tmp_path, GOOD.replace("checks: [topic]", "checks: []"))
+    _one(problems, path, 3, "empty")
+
+
+def test_a_check_the_grader_does_not_declare(tmp_path: Path) -> None:
+    path, contract, problems = _load(tmp_path, GOOD.replace("checks: [topic]", "checks: [topic,\n          spins]"))
+    assert contract is None
+    _one(problems, path, 7, "'spins'", "not a check")
+
+
+def test_a_duplicate_requirement_id(tmp_path: Path) -> None:
+    path, _, problems = _load(tmp_path, GOOD.replace("id: depth", "id: topic-name"))
+    _one(problems, path, 7, "duplicate", "topic-name", "line 3")
+
+
+def test_an_unknown_key(tmp_path: Path) -> None:
+    path, _, problems = _load(tmp_path, GOOD.replace("        from: contract\n", "        from: contract\n        points: 2\n"))
+    _one(problems, path, 10, "unknown key `points`")
+    path, _, problems = _load(tmp_path, GOOD + "    owner: h1\n")
+    _one(problems, path, 11, "unknown key `owner`")
+
+
+def test_a_lesson_that_is_not_the_folder_s(tmp_path: Path) -> None:
+    path, _, problems = _load(tmp_path, GOOD, lesson="qos")
+    _one(problems, path, 1, "'demo'", "'qos'")
+
+
+def test_a_bad_source_and_bad_yaml(tmp_path: Path) -> None:
+    path, _, problems = _load(tmp_path, GOOD.replace("from: contract", "from: readme"))
+    _one(problems, path, 9, "requirements.1.from")
+    path, _, problems = _load(tmp_path, GOOD.replace('says: "with depth 10"', 'says: "with depth 10'))
+    assert problems and str(problems[0]).startswith(f"{path}:") and "not valid YAML" in str(problems[0])
