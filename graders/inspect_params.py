@@ -48,8 +48,8 @@ CHECKS = [
           needs=SCRIPTED),
     Check("set", "It sets quote to the lesson's text and the next messages carry it (ros2 param set)", 3,
           SET_COMMAND, needs=SCRIPTED),
-    Check("dump_file", f"It writes {DUMP} in the ros2 param dump format", 2,
-          f"ros2 param dump {NODE} > {DUMP}", needs=SCRIPTED),
+    Check("dump_file", f"It writes {DUMP} in the ros2 param dump format, with every parameter of the node", 2,
+          f"ros2 param dump {NODE} > {DUMP} (the whole output: it lists every parameter)", needs=SCRIPTED),
     Check("dump_after_set", "The dump holds the new quote (dumped after the set)", 1,
           "dump after the set, so the file saves the node's parameters as they are now", needs=("dump_file",)),
 ]
@@ -91,9 +91,15 @@ def judge_set(s: GradingSession, node: ConfigurableQuotePublisher, run: Any) -> 
 
 
 def judge_dump(s: GradingSession, dump, started: float, current: dict[str, Any]) -> None:
-    """Record ``dump_file`` (written by this run, the dump format, the node's parameters) and ``dump_after_set``."""
+    """Record ``dump_file`` (written by this run, the dump format, every parameter of the node with its current
+    value, ``quote`` aside) and ``dump_after_set``.
 
-    expected = f"{DUMP} written by your script: '{NODE}:' -> 'ros__parameters:' -> the node's parameters"
+    ``current``: the node's parameters when the script has ended (``ros2 param dump`` writes all of them,
+    ``use_sim_time`` and ``start_type_description_service`` included: the lesson asks for all).
+    """
+
+    expected = (f"{DUMP} written by your script: '{NODE}:' -> 'ros__parameters:' -> every parameter of the node "
+                f"({', '.join(sorted(current))})")
     if not dump.is_file() or dump.stat().st_mtime < started - 1.0:
         state = "does not exist" if not dump.is_file() else "was not written by this run (it is older)"
         s.record("dump_file", False, f"{DUMP} {state}", expected,
@@ -110,10 +116,13 @@ def judge_dump(s: GradingSession, dump, started: float, current: dict[str, Any])
     if values is None:
         s.record("dump_file", False, f"{DUMP}: {problem}", expected)
         return
-    wrong = [f"{name} = {values.get(name)!r} (the node has {current[name]!r})" for name in NAMES
-             if name != "quote" and values.get(name) != current[name]]
-    s.record("dump_file", not wrong and "quote" in values,
-             f"{DUMP}: " + ("; ".join(wrong) if wrong else "no quote" if "quote" not in values
+    missing = [name for name in sorted(current) if name not in values]
+    wrong = [f"{name} = {values[name]!r} (the node has {current[name]!r})" for name in sorted(current)
+             if name != "quote" and name in values and values[name] != current[name]]
+    problems = wrong + ([f"missing {', '.join(missing)} (ros2 param dump writes every parameter of the node)"]
+                        if missing else [])
+    s.record("dump_file", not problems,
+             f"{DUMP}: " + ("; ".join(problems) if problems
                             else f"{NODE} -> ros__parameters with {len(values)} parameters"), expected)
     s.record("dump_after_set", values.get("quote") == NEW_QUOTE, f"the dump's quote is {short(str(values.get('quote')))}",
              f"the dump's quote is {NEW_QUOTE!r} (the value after your set)")

@@ -22,10 +22,12 @@ LIFE_CALL = (f"ros2 service call {SERVICE} {SERVICE_TYPE} "
 OTHER_CALL = (f"ros2 service call {SERVICE} {SERVICE_TYPE} "
               "\"{quote: {id: 7, quote: Use the force, philosopher_name: Ben}}\"")
 
-#: Without a running ``ros2`` daemon (a fresh domain) ``ros2 service list`` listens for the graph itself
-#: for ``--spin-time`` seconds (default 0.5 s, ros2cli ``node/direct.py``): too short on a busy machine.
-LIST_HINT = ("ros2 service list --spin-time 2 (with no ros2 daemon running yet, as in the check's fresh ROS domain, "
-             "the default 0.5 s of listening can miss nodes)")
+#: Without a running ``ros2`` daemon (a fresh terminal) ``ros2 service list`` listens for the graph itself
+#: for ``--spin-time`` seconds (default 0.5 s, ros2cli ``node/direct.py``): too short on a busy machine. The
+#: check starts a daemon that already lists the oracle before the script runs, so there the list comes from
+#: that daemon and ``--spin-time`` changes nothing (contract.yaml: list-spin-time, not graded).
+LIST_HINT = ("ros2 service list --spin-time 2, its output printed (no `> /dev/null`, no `| grep`): in the check a "
+             "ros2 daemon already lists the server, so the list is complete when the command runs")
 
 SCRIPTED = ("script",)
 CHECKS = [

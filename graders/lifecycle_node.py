@@ -9,6 +9,9 @@ design.ros2.org/articles/node_lifecycle.html::
     unconfigured -configure-> inactive -activate-> active -deactivate-> inactive
     -cleanup-> unconfigured -configure-> inactive -activate-> active -shutdown-> finalized, then Ctrl+C
 
+and two more runs, each in a graph of its own: shutdown straight from unconfigured, and configure then
+shutdown from inactive (the state machine's other two shutdowns).
+
 "Nothing while X" is judged on the messages' send stamps (written while the
 node was in X, whenever they arrive), rates on send stamps too; a quiet
 window ends early on the first message sent in it.
@@ -22,7 +25,8 @@ import time
 from typing import Any
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, Unmet, checks, wait_until
+from ros2course.kit import Check, GradingSession, Unmet, call_service, checks, wait_until
+from ros2course.kit.nodes import StartedNode
 from ros2course.kit import topics_services as ts
 
 from . import _services
@@ -100,6 +104,9 @@ CHECKS = [
           "in on_shutdown destroy the timer and the publisher (shutdown may come while active: the base class does "
           "not deactivate the publisher) and return TransitionCallbackReturn.SUCCESS", needs=("managed",)),
     checks.ctrl_c("sigint_exit", "the finalized node", 1, needs=RUN),
+    Check("shutdown_any_state", "shutdown also reaches finalized from unconfigured (before any configure) and from "
+          "inactive", 2, "__init__ sets self.heartbeat_publisher = None and self.timer = None, and on_shutdown "
+          "destroys each only if it is not None: shutdown may come before configure ever ran", needs=("managed",)),
 ]
 
 
@@ -110,20 +117,19 @@ class _Lifecycle:
         node: the started node (its ``name`` is the node the services belong to).
     """
 
-    def __init__(self, s: GradingSession, node: kit.StartedNode) -> None:
+    def __init__(self, s: GradingSession, node: kit.StartedNode, graph: Any = None) -> None:
         # lifecycle_msgs is a wheel of the venv, not a course package (no s.interface_type); imported
         # here because graders load for CHECKS without ROS
         from lifecycle_msgs.srv import ChangeState, GetState
 
-        self.s, self.node = s, node
+        self.s, self.node, self.graph = s, node, graph
         self.change_state_type, self.get_state_type = ChangeState, GetState
         self.get_state_name = f"/{node.name}/get_state"
         self.change_state_name = f"/{node.name}/change_state"
 
     def state(self) -> tuple[int, str]:
         """``(state id, what ros2 lifecycle get would say)``; id 0 when there was no answer."""
-        response, why = _services.ask(self.s, self.get_state_type, self.get_state_name,
-                                      self.get_state_type.Request(), self.node, timeout=ANSWER_TIMEOUT)
+        response, why = self._ask(self.get_state_type, self.get_state_name, self.get_state_type.Request())
         if response is None:
             return 0, why
         return response.current_state.id, response.current_state.label or STATE_LABELS.get(response.current_state.id, "?")
@@ -132,9 +138,19 @@ class _Lifecycle:
         """Ask for ``transition`` (a Transition id): ``(success, "")``, or ``(None, why)`` without an answer."""
         request = self.change_state_type.Request()
         request.transition.id = transition
-        response, why = _services.ask(self.s, self.change_state_type, self.change_state_name, request, self.node,
-                                      timeout=ANSWER_TIMEOUT)
+        response, why = self._ask(self.change_state_type, self.change_state_name, request)
         return (None, why) if response is None else (bool(response.success), "")
+
+    def _ask(self, srv_type: type, service: str, request: Any) -> tuple[Any, str]:
+        """One call from the node's graph (``_services.ask`` when it is the session's own)."""
+        if self.graph is None:
+            return _services.ask(self.s, srv_type, service, request, self.node, timeout=ANSWER_TIMEOUT)
+        if self.node.ended():
+            return None, f"not asked, {kit.process_state(self.node.proc)}"
+        try:
+            return call_service(self.graph, srv_type, service, request, timeout=ANSWER_TIMEOUT), ""
+        except TimeoutError as exc:
+            return None, f"{exc}; {kit.process_state(self.node.proc)}"
 
 
 def grade(s: GradingSession) -> None:
@@ -150,16 +166,76 @@ def grade(s: GradingSession) -> None:
         raise Unmet(s.results["node_name"].observed)
     life = _Lifecycle(s, node)
     since = _managed(s, life)
-    _quiet(s, "quiet_unconfigured", probe, node, since, "unconfigured")
-    since = _transition(s, "configure", life, CONFIGURE, INACTIVE)
-    _quiet(s, "quiet_inactive", probe, node, since, "inactive (after configure)")
-    since = _transition(s, "activate", life, ACTIVATE, ACTIVE)
-    _active(s, probe, node, since)
-    since = _transition(s, "deactivate", life, DEACTIVATE, INACTIVE)
-    _quiet(s, "quiet_deactivated", probe, node, since, "inactive (after deactivate)")
-    _cleanup(s, life)
-    _reconfigure(s, life, probe)
-    _shutdown(s, life, probe)
+    try:
+        _quiet(s, "quiet_unconfigured", probe, node, since, "unconfigured")
+        since = _transition(s, "configure", life, CONFIGURE, INACTIVE)
+        _quiet(s, "quiet_inactive", probe, node, since, "inactive (after configure)")
+        since = _transition(s, "activate", life, ACTIVATE, ACTIVE)
+        _active(s, probe, node, since)
+        since = _transition(s, "deactivate", life, DEACTIVATE, INACTIVE)
+        _quiet(s, "quiet_deactivated", probe, node, since, "inactive (after deactivate)")
+        _cleanup(s, life)
+        _reconfigure(s, life, probe)
+        _shutdown(s, life, probe)
+    finally:  # judged whatever stopped the sequence above: the runs are of their own
+        _shutdown_any_state(s, path, node.name)
+
+
+#: Seconds for a further run's lifecycle services to show in its graph (only a node that never serves them,
+#: already failed by ``managed``, waits that long).
+RUN_TIMEOUT = 10.0
+#: The other shutdowns the lesson's state machine draws: (the state shut down from, the transitions that reach it).
+OTHER_SHUTDOWNS = ((UNCONFIGURED, ()), (INACTIVE, ((CONFIGURE, "configure", INACTIVE),)))
+
+
+def _shutdown_any_state(s: GradingSession, path: Any, name: str) -> None:
+    """Record ``shutdown_any_state``: two more runs of the node, each in a graph of its own, started at once.
+
+    One is shut down straight from unconfigured (its ``on_shutdown`` runs before any ``on_configure``:
+    nothing was created yet), the other configured, then shut down from inactive. Each must answer
+    ``success: true`` and reach finalized, as ``ros2 lifecycle set <node> shutdown`` would.
+    """
+    runs = []
+    for origin, steps in OTHER_SHUTDOWNS:
+        graph = s.new_graph()  # a fresh graph each: the same node name, never seen by the other runs
+        proc = s.launch(path, f"{EXECUTABLE}.shutdown_from_{STATE_LABELS[origin]}", [], graph=graph)
+        runs.append((origin, steps, graph, StartedNode(proc, name, True)))
+    observed, ok, judged = [], True, 0
+    for origin, steps, graph, node in runs:
+        origin_label = STATE_LABELS[origin]
+        life = _Lifecycle(s, node, graph)
+        # not ts.wait_for_endpoint: it stops 1 s after the node's first service, and two runs starting at once on
+        # a loaded machine show their parameter services seconds before the lifecycle ones (seen in dev validate)
+        with s.phase("start"):
+            wait_until(lambda: life.change_state_name in ts.endpoints(graph, name, "services"), RUN_TIMEOUT,
+                       interval=0.05, abort=node.ended)
+        if life.change_state_name not in ts.endpoints(graph, name, "services"):
+            ok = False
+            observed.append(f"from {origin_label}: a new run served no {life.change_state_name}; "
+                            f"{kit.process_state(node.proc)}")
+            continue
+        said = []
+        for transition, label, target in steps:
+            success, why = life.change(transition)
+            state, state_label = life.state()
+            said.append(f"{label} -> {state_label} [{state}]" if success is not None else f"{label}: {why}")
+        state, state_label = life.state()
+        if state != origin:  # e.g. configure fails: judged by `configure`, not counted twice
+            observed.append(f"from {origin_label}: not judged, {origin_label} was not reached "
+                            f"({', '.join(said) or f'the node is {state_label}'})")
+            continue
+        judged += 1
+        success, why = life.change(SHUTDOWN_FROM[origin])
+        final, final_label = life.state()
+        done = bool(success) and final == FINALIZED
+        ok = ok and done
+        observed.append(f"from {origin_label}" + (f" ({', '.join(said)})" if said else "") + ": " + (
+            f"no answer to shutdown: {why}" if success is None else
+            f"shutdown {'succeeded' if success else 'failed (success: false)'}, the node is now {final_label} [{final}]"
+            + ("" if done else f"; {kit.process_state(node.proc)}")))
+    s.record("shutdown_any_state", ok and judged > 0, "; ".join(observed),
+             "ros2 lifecycle set <node> shutdown: 'Transition successful' and finalized [4], from unconfigured "
+             "(a node just started) and from inactive (after configure)")
 
 
 def _managed(s: GradingSession, life: _Lifecycle) -> float:

@@ -1,16 +1,20 @@
 """Grader for ``print-forever-node`` (seed ch. 12-13; contract in shared/LESSONS.md).
 
 Black-box: watches /rosout for the node's records, never reads its source
-(except package.xml, whose rclpy dependency the contract names).
+(except package.xml, whose rclpy dependency the contract names), and asks the
+node's parameter services once (``spins``: a node that never spins, a ``while``
+loop instead of a timer, cannot answer; :func:`record_spins`, used by the
+use-python-library and publisher-subscriber graders too).
 """
 
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 
 from ros2course.kit import LATE_DELIVERY, stamp_seconds, wait_until
 from ros2course import kit
-from ros2course.kit import Check, GradingSession
+from ros2course.kit import Check, GradingSession, Unmet, params
 
 PACKAGE = "python_package_with_a_node"
 EXECUTABLE = "print_forever_node"
@@ -62,27 +66,65 @@ def make_checks(client_library: str = "rclpy", package: str = PACKAGE, node: str
     ]
 
 
-CHECKS = make_checks()
+def spins_check(check_id: str = "spins", needs: tuple[str, ...] = ("executable",), part: str = "") -> Check:
+    """``check_id``: the node spins, so it answers its parameter services (1 point).
+
+    The lessons put periodic work in a timer callback and spin the node (seed ch. 13.3): a
+    ``while True`` loop with ``time.sleep`` logs and publishes the same, but never lets
+    the node answer anything (:func:`record_spins`).
+    """
+    return Check(check_id, "The node spins: it answers a call to its parameter services (ros2 param list)", 1,
+                 "put the periodic work in a timer callback (self.create_timer) and call rclpy.spin(node) in main(): "
+                 "a while loop with time.sleep never lets the node answer anything", needs=needs, part=part)
+
+
+#: Seconds for a node's parameter services to appear, then to answer (:func:`record_spins`).
+SPIN_TIMEOUT = 5.0
+
+
+def record_spins(s: GradingSession, check_id: str, started: kit.StartedNode) -> bool:
+    """Record ``check_id``: the running node answers ``list_parameters`` (what ``ros2 param list`` calls).
+
+    Every rclpy and rclcpp node offers its parameter services; the executor that spins
+    the node serves them. A node whose process never spins (a ``while`` loop with
+    ``time.sleep`` instead of a timer) has the services but never answers.
+    """
+    expected = f"/{started.name or '<your node>'} answers list_parameters within {SPIN_TIMEOUT:.0f} s"
+    try:
+        names = params.connect(s, started.name, proc=started.proc, why="no node of yours appeared",
+                               timeout=SPIN_TIMEOUT).names()
+    except Unmet as exc:
+        return s.record(check_id, False, f"{exc}: the node does not spin", expected)
+    return s.record(check_id, True, f"/{started.name} answered with {len(names)} parameter name(s)", expected)
+
+
+CHECKS = [*make_checks(), spins_check()]
 
 
 def grade(s: GradingSession) -> None:
-    """Run print_forever_node, read its /rosout records, then Ctrl+C it."""
-    grade_node(s, PACKAGE, NODE, "rclpy")
+    """Run print_forever_node, read its /rosout records, ask its parameter services, then Ctrl+C it."""
+    # asked while the records come in (the node answers as soon as it spins): no time added after the window
+    grade_node(s, PACKAGE, NODE, "rclpy", while_waiting=lambda started: record_spins(s, "spins", started))
 
 
-def grade_node(s: GradingSession, package: str, node: str, client_library: str, aliases: tuple[str, ...] = ()
-               ) -> None:
+def grade_node(s: GradingSession, package: str, node: str, client_library: str, aliases: tuple[str, ...] = (),
+               while_waiting: Callable[[kit.StartedNode], object] | None = None) -> kit.StartedNode:
     """The print-forever checks (:func:`make_checks`) of ``package``'s ``print_forever_node`` named ``node``
     (or one of ``aliases``, :func:`ros2course.kit.nodes.wait_for_node`).
 
     Black-box: the node's /rosout records and exit; the language only shows in
-    the ``package.xml`` dependency checked (``rclpy`` or ``rclcpp``).
+    the ``package.xml`` dependency checked (``rclpy`` or ``rclcpp``). Returns the
+    started node, still running (the engine stops it, Ctrl+C check included).
+    ``while_waiting(started)``, when given, runs once the node is started, before the
+    records are waited for (their subscription keeps collecting meanwhile).
     """
     kit.depends(s, "depends_rclpy" if client_library == "rclpy" else "depends_client", package, (client_library,))
     path = kit.executable(s, "executable", package, EXECUTABLE)
     rosout = s.ros.rosout()
     # a misnamed node is still graded on its records (need_node=False)
     started = kit.start_node(s, "node_name", path, node, sigint_check="sigint_exit", need_node=False, aliases=aliases)
+    if while_waiting is not None:
+        while_waiting(started)
 
     def counted():
         return [r for r in rosout.records(level=INFO) if LOG.match(r.msg)]
@@ -99,7 +141,7 @@ def grade_node(s: GradingSession, package: str, node: str, client_library: str, 
             observed += f"; 'Printed 0 times.' appeared on stdout only ({instead} instead of the logger?)"
         s.record("log_format", False, f"{observed}; {kit.process_state(started.proc)}",
                  "INFO records 'Printed N times.'")
-        return
+        return started
     loggers = sorted({r.name for r in records})
     s.record("log_format", True, f"{len(records)} records like '{records[0].msg}' from {', '.join(loggers)}",
              "INFO records 'Printed N times.'")
@@ -112,3 +154,4 @@ def grade_node(s: GradingSession, package: str, node: str, client_library: str, 
              "N = " + ", ".join(map(str, range(min(len(counts), 8)))) + ", ...")
     kit.rate(s, "rate", [stamp_seconds(r.stamp) for r in mine], period=PERIOD, needed=SAMPLES,
              waited=waited, noun="record", source="the records' stamps")
+    return started

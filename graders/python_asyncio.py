@@ -16,6 +16,7 @@ task that printed it (:mod:`graders._asyncio_trace`). The checks read that trace
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 from ros2course.kit import Check, GradingSession, Unmet
@@ -32,6 +33,10 @@ WRAPPER = Path(__file__).resolve().parent / "data" / "python_asyncio" / "wrapper
 EXAMPLE_PLANS = [[0.52, 0.81, 0.67, 0.93, 0.58, 0.74, 0.85, 0.0312], [0.61, 0.77, 0.0687]]
 #: The successful roll of each plan above: what each task must return.
 EXAMPLE_RESULTS = [plan[-1] for plan in EXAMPLE_PLANS]
+#: The tags the examples give their two tasks, in creation order (the lesson's task1 and task2).
+EXAMPLE_TAGS = ["task1", "task2"]
+#: A result line of the await example, as the lesson words it: The result of task=<tag> was <result>.
+RESULT_LINE = re.compile(r"^The result of task=(?P<tag>\S+) was (?P<value>\S+)\.$")
 #: How close a printed number must be to a result to count as printing it (allows rounding to 2 decimals).
 RESULT_TOLERANCE = 0.005
 #: Median seconds between two draws of one call that count as the contract's `asyncio.sleep(0.1)`: a loaded
@@ -69,6 +74,9 @@ CHECKS = [
     Check("await_order", "async_await_example prints the results in await order", 2,
           "await the tasks in the order you created them and print each result right after its await",
           needs=("await_runs",), part="await"),
+    Check("await_result_lines", "async_await_example prints 'The result of task=<tag> was <result>.' for each task", 1,
+          "after each await: print(f\"The result of task={tag} was {result}.\") with the tags task1 and task2",
+          needs=("await_runs",), part="await"),
     Check("callback_runs", "python -m ...async_callback_example runs two tasks and exits 0", 1,
           "run it yourself from python/minimalist_package: python -m minimalist_package.async_callback_example",
           needs=("module",), part="callback"),
@@ -94,6 +102,7 @@ def grade(s: GradingSession) -> None:
                  f"{finished_first} finished first; task {1 if first[0] < second[0] else 2}'s result was printed first",
                  f"task 1's result ({EXAMPLE_RESULTS[0]}) printed before task 2's ({EXAMPLE_RESULTS[1]}), "
                  "even though task 2 finishes first")
+        _result_lines(s, trace)
     with s.part("callback"):
         trace = _example(s, "async_callback_example", "callback_runs", "callback_concurrent")
         second, last_first = trace.mentions(1, EXAMPLE_RESULTS[1], RESULT_TOLERANCE), trace.last_draw(0)
@@ -105,6 +114,31 @@ def grade(s: GradingSession) -> None:
                  else "task 2's result was printed while task 1 was still retrying" if second[0] < last_first else
                  "task 2's result was printed only after task 1 had finished",
                  f"task 2's result ({EXAMPLE_RESULTS[1]}) printed as soon as task 2 ends, before task 1's last roll")
+
+
+def _result_lines(s: GradingSession, trace: Trace) -> None:
+    """``await_result_lines``: a line 'The result of task=<tag> was <result>.' for task1 and task2, with their results."""
+    text = "".join(str(e[2]) for e in trace.events if e[0] == "out")
+    found = {}
+    for line in text.splitlines():
+        match = RESULT_LINE.match(line.strip())
+        if match:
+            try:
+                found.setdefault(match.group("tag"), []).append(float(match.group("value")))
+            except ValueError:
+                continue
+    wanted = list(zip(EXAMPLE_TAGS, EXAMPLE_RESULTS))
+    missing = [f"task={tag} ({value})" for tag, value in wanted
+               if not any(abs(v - value) <= RESULT_TOLERANCE for v in found.get(tag, []))]
+    printed = [line.strip() for line in text.splitlines() if line.strip()]
+    others = [line for line in printed if not RESULT_LINE.match(line) and "retry" not in line.lower()
+              and not line.endswith("Done.")]
+    s.record("await_result_lines", not missing,
+             "both result lines were printed" if not missing else
+             f"no result line for {' and '.join(missing)}" + (
+                 f"; result lines printed: {', '.join(f'task={tag}' for tag in found)}" if found else "")
+             + (f"; other lines: {'; '.join(repr(o) for o in others[:3])}" if others else ""),
+             "; ".join(f"'The result of task={tag} was {value}.'" for tag, value in wanted))
 
 
 def _cancelled(trace: Trace) -> str:

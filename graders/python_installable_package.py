@@ -13,6 +13,7 @@ must remove both.
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
@@ -32,15 +33,27 @@ FIRST_LINE_TIMEOUT = 10.0
 FOLDER = Path("python") / "minimalist_package"
 PACKAGE = "minimalist_package"
 SCRIPT = "minimalist_script"
+#: The project's test folder, which [tool.setuptools.packages.find] must leave out of the install.
+TEST_FOLDER = "test"
+#: A build requirement naming setuptools ("setuptools", "setuptools>=61", "setuptools ; python_version..."),
+#: not another distribution whose name starts the same (setuptools_scm, setuptools-rust).
+SETUPTOOLS_REQUIREMENT = re.compile(r"^\s*setuptools\s*(?:[<>=!~;\[(@]|$)", re.IGNORECASE)
 
 CHECKS = [
     Check("project_file", "python/minimalist_package has a valid pyproject.toml (or setup.py)", 1,
           "create python/minimalist_package/pyproject.toml with [build-system], [project] and [project.scripts]"),
+    Check("build_requires", "[build-system] requires names setuptools", 1,
+          "in pyproject.toml: [build-system] requires = [\"setuptools>=61\"] (what pip installs to build the package)",
+          needs=("project_file",)),
     Check("installs", "pip installs it into a fresh venv", 3,
           "run 'python3 -m pip install ./minimalist_package' from python/ in a venv and read pip's error",
           needs=("project_file",)),
     Check("importable", "'import minimalist_package' works from any folder after installing", 2,
           "let setuptools find the package: [tool.setuptools.packages.find] include = [\"minimalist_package*\"]",
+          needs=("installs",)),
+    Check("leaves_out_tests", "The install leaves the project's test/ folder out", 1,
+          "include only the package: [tool.setuptools.packages.find] include = [\"minimalist_package*\"] "
+          "(without it setuptools also installs test/ as a top-level package named test)",
           needs=("installs",)),
     Check("console_script", "The installed minimalist_script command prints Howdy!", 3,
           "[project.scripts] minimalist_script = \"minimalist_package.minimalist_script:main\"",
@@ -69,10 +82,30 @@ def _project_file(s: GradingSession) -> None:
         ok = (backend or "").startswith("setuptools") and (name is not None or setup_py.is_file())
         s.record("project_file", ok, f"pyproject.toml: build-backend {backend!r}, [project] name {name!r}",
                  "build-backend = \"setuptools.build_meta\" and a [project] table with name = \"minimalist_package\"")
+        _build_requires(s, data)
     else:
         s.record("project_file", setup_py.is_file(), "setup.py found (no pyproject.toml)" if setup_py.is_file() else
                  f"neither {FOLDER}/pyproject.toml nor {FOLDER}/setup.py exists", f"{FOLDER}/pyproject.toml")
+        # recorded after project_file: without any project file it is "not checked", not a pass
+        s.record("build_requires", True, "no pyproject.toml: pip builds a setup.py with setuptools",
+                 "setuptools named as the build requirement")
     s.require("project_file")
+
+
+def _build_requires(s: GradingSession, data: dict) -> None:
+    """``build_requires``: ``[build-system] requires`` lists setuptools (pip installs it for an isolated build).
+
+    The grader builds offline without isolation, so its own setuptools builds the package whatever ``requires``
+    says; ``pip install`` on the learner's machine installs exactly the listed requirements first.
+    """
+    build_system = data.get("build-system")
+    requires = build_system.get("requires") if isinstance(build_system, dict) else None
+    named = isinstance(requires, list) and any(isinstance(r, str) and SETUPTOOLS_REQUIREMENT.match(r)
+                                               for r in requires)
+    s.record("build_requires", named, "pyproject.toml has no [build-system] table" if build_system is None else
+             f"[build-system] requires = {requires!r}" if requires is not None else
+             "[build-system] has no requires key",
+             "[build-system] requires = [\"setuptools>=61\"]: pip installs setuptools before building")
 
 
 def grade(s: GradingSession) -> None:
@@ -97,7 +130,8 @@ def grade(s: GradingSession) -> None:
 
     # the import and the uninstall (in a copy of the venv: graders._pip.venv_copy) are judged while the command runs
     removal = kpip.venv_copy(s, python, "uninstall_venv")
-    at_once(s, "install", lambda: (_importable(s, python, env), _uninstall(s, removal, tools, env)), "command",
+    at_once(s, "install", lambda: (_importable(s, python, env), _leaves_out_tests(s, python),
+                                   _uninstall(s, removal, tools, env)), "command",
             lambda: _console_script(s, venv / "bin" / SCRIPT, env))
 
 
@@ -112,6 +146,20 @@ def _importable(s: GradingSession, python: Path, env: dict[str, str]) -> None:
              f"from /, the venv's python imported minimalist_package from {where}" if imported.returncode == 0 else
              f"from /, 'import minimalist_package' failed: {kpip.last_error(imported.stderr)}",
              f"it imports from the venv's site-packages ({venv}/lib/...), i.e. pip installed the package's modules")
+
+
+def _leaves_out_tests(s: GradingSession, python: Path) -> None:
+    """``leaves_out_tests``: the venv's site-packages holds no top-level ``test`` (package or module) after the install.
+
+    The fresh venv holds nothing of its own (made without pip), so a ``test`` there came from this install.
+    """
+    venv = python.parent.parent
+    found = sorted(str(entry.relative_to(venv)) for root in venv.glob("lib/python3*/site-packages")
+                   for entry in (root / TEST_FOLDER, root / f"{TEST_FOLDER}.py") if entry.exists())
+    s.record("leaves_out_tests", not found,
+             f"the install put the project's tests into site-packages: {', '.join(found)}" if found else
+             f"no top-level {TEST_FOLDER} in the venv's site-packages",
+             f"only minimalist_package installed: {TEST_FOLDER}/ stays out of site-packages")
 
 
 def _uninstall(s: GradingSession, python: Path, tools: Path, env: dict[str, str]) -> None:

@@ -45,6 +45,10 @@ CHECKS = [
     Check("sample_class", "SampleClass(name).get_name() returns that name", 2,
           "store the name in __init__ (self._name = name) and return it from get_name(); "
           "export SampleClass in sample_python_library/__init__.py", needs=("importable",)),
+    Check("layout", "The function and the class live in their private modules, re-exported by __init__.py", 1,
+          "define sample_function_for_square_of_sum in sample_python_library/_sample_function.py and SampleClass "
+          "in sample_python_library/_sample_class.py; the sub-package's __init__.py only imports them",
+          needs=("importable",)),
 ]
 
 _PROBE = """
@@ -72,6 +76,7 @@ except BaseException as exc:
 out["names"] = sorted(n for n in dir(mod) if not n.startswith("__"))
 f = getattr(mod, @FUNCTION@, None)
 if f is not None:
+    out["function_module"] = str(getattr(f, "__module__", None))
     out["calls"] = []
     for a, b in cases:
         try:
@@ -82,6 +87,7 @@ if f is not None:
             out["calls"].append({"a": a, "b": b, "error": text(exc)})
 cls = getattr(mod, @CLASS@, None)
 if cls is not None:
+    out["class_module"] = str(getattr(cls, "__module__", None))
     got = []
     try:
         first = cls(names[0])
@@ -137,6 +143,23 @@ def _record_class(s: GradingSession, result: dict) -> None:
                  f"get_name() returned {' and '.join(result['names_returned'])}", expected)
 
 
+#: Where each public name must be defined (seed ch. 14.2: one private module per piece).
+HOMES = {FUNCTION: (f"{MODULE}._sample_function", "function_module"),
+         CLASS: (f"{MODULE}._sample_class", "class_module")}
+
+
+def _record_layout(s: GradingSession, result: dict) -> None:
+    """``layout``: the function and the class are defined in ``_sample_function.py`` and ``_sample_class.py``
+    (their ``__module__``), so ``sample_python_library/__init__.py`` only re-exports them (seed ch. 14.2)."""
+    expected = ", ".join(f"{name} defined in {home}" for name, (home, _) in HOMES.items())
+    found = {name: result.get(key) for name, (_, key) in HOMES.items()}
+    wrong = [f"{name} is defined in {found[name]}" if found[name] else f"{MODULE} has no {name}"
+             for name, (home, _) in HOMES.items() if found[name] != home]
+    observed = ("; ".join(wrong) if wrong
+                else ", ".join(f"{name} from {found[name]}" for name in HOMES))
+    s.record("layout", not wrong, observed, expected, fraction=(len(HOMES) - len(wrong)) / len(HOMES))
+
+
 def grade(s: GradingSession) -> None:
     """Check the install tree, then import and exercise the installed library in a subprocess."""
     installed = installed_subpackage(s, "installed", PACKAGE, SUBPACKAGE)
@@ -145,3 +168,4 @@ def grade(s: GradingSession) -> None:
                               note="" if installed else " (it is not installed, see above)", code=_PROBE)
     _record_function(s, result)
     _record_class(s, result)
+    _record_layout(s, result)

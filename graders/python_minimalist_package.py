@@ -12,6 +12,7 @@ that asserts nothing catches none of them.
 
 from __future__ import annotations
 
+import ast
 import sys
 from pathlib import Path
 
@@ -41,6 +42,10 @@ MIN_LINES, MAX_LINES = 4, 8
 FIRST_LINE_TIMEOUT = 10.0  # seconds to wait for the first line (interpreter start-up under load)
 SIGINT_EXIT_TIMEOUT = 3.0  # seconds the script may take to end after Ctrl+C
 CHILD_TIMEOUT = 30.0  # seconds for each child interpreter (class probe, test runs): generous under load
+#: Seconds main() runs, called directly, after its first 'Howdy!' (check main_function: one line is enough).
+MAIN_SECONDS = 0.3
+#: Printed by the grader's child between importing minimalist_script and calling its main().
+MAIN_MARK = "<ros2course: calling main()>"
 
 #: Observation time the contract needs (benchmarks read it): the script's run from its first line to Ctrl+C.
 WINDOW = RUN_SECONDS
@@ -60,9 +65,18 @@ CHECKS = [
           "sleep 0.5 s between two prints: time.sleep(0.5) in the loop", needs=("howdy",), part="script"),
     Check("sigint_exit", "Ctrl+C ends it with exit code 0 and no traceback", 2,
           "wrap the loop of main() in try: ... except KeyboardInterrupt: pass", part="script"),
+    Check("main_function", "main() of minimalist_package.minimalist_script prints 'Howdy!' when called", 1,
+          "put the loop inside def main(); the file ends with if __name__ == \"__main__\": followed only by main(), "
+          "so importing the module prints nothing", part="script"),
     Check("import_class", "'from minimalist_package import MinimalistClass' works", 1,
           "in minimalist_package/__init__.py write: from minimalist_package._minimalist_class import MinimalistClass",
           part="class"),
+    Check("absolute_import", "__init__.py imports with the package's full name, not a relative import", 1,
+          "write from minimalist_package._minimalist_class import MinimalistClass, not from ._minimalist_class import ...",
+          part="class"),
+    Check("class_attribute", "attribute_reference is the class attribute 'Hello ' that static_method() builds on", 1,
+          "in the class body: attribute_reference: str = \"Hello \"; static_method() returns "
+          "MinimalistClass.attribute_reference + \"World!\"", needs=("import_class",), part="class"),
     Check("attribute", "MinimalistClass(attribute_arg=...) stores it in .attribute (default 10.0)", 1,
           "__init__(self, attribute_arg: float = 10.0, ...) stores self.attribute = attribute_arg",
           needs=("import_class",), part="class"),
@@ -121,10 +135,39 @@ def _judge_script(s: GradingSession, project: Path) -> None:
              f"{RUN_SECONDS / 0.5:.0f} more before Ctrl+C)",
              hint=None if howdy <= MAX_LINES else "too many lines: is there a time.sleep(0.5) inside the loop?")
     sigint_exit(s, "sigint_exit", run, SIGINT_EXIT_TIMEOUT)
+    _judge_main(s, project)
+
+
+def _judge_main(s: GradingSession, project: Path) -> None:
+    """``main_function``: import minimalist_script (it prints nothing), then call main(): it prints 'Howdy!'.
+
+    What an installed console script (and ``ros2 run`` later) does; a loop under the ``if __name__`` block,
+    or at the top of the module, is not in main().
+    """
+    code = f"import minimalist_package.minimalist_script as m\nprint({MAIN_MARK!r}, flush=True)\nm.main()\n"
+    run = interrupt_after(s, [sys.executable, "-c", code], "minimalist_script_main", MAIN_SECONDS,
+                          exit_timeout=SIGINT_EXIT_TIMEOUT, env=py.python_env(s), cwd=project, wait_for=GREETING,
+                          first_timeout=FIRST_LINE_TIMEOUT)
+    before, marked, after = run.stdout.partition(MAIN_MARK)
+    at_import = [line.strip() for line in before.splitlines()].count(GREETING)
+    called = [line.strip() for line in after.splitlines()].count(GREETING)
+    if not marked:
+        observed = (f"importing minimalist_package.minimalist_script printed {at_import} 'Howdy!' line(s) and never "
+                    "returned: the loop runs at import, not in main()" if at_import else
+                    f"importing minimalist_package.minimalist_script failed: {run.exception() or run.describe()}")
+    elif at_import:
+        observed = f"importing the module already printed {at_import} 'Howdy!' line(s), before main() was called"
+    else:
+        observed = f"main() printed {called} 'Howdy!' line(s)" + (
+            "" if called else f" and {'raised: ' + run.exception() if run.traceback else 'returned'}")
+    s.record("main_function", bool(marked) and not at_import and called > 0, observed,
+             "'import minimalist_package.minimalist_script' prints nothing; calling its main() prints Howdy! "
+             "(what an installed console script does)")
 
 
 def _judge_class(s: GradingSession, project: Path) -> None:
     """Exercise MinimalistClass in a child interpreter (class_probe.py), judge each element (class_expectations)."""
+    _absolute_import(s, project / "minimalist_package" / "__init__.py")
     probe = py.run_probe(s, DATA / "class_probe.py", [], "class_probe", cwd=project, timeout=CHILD_TIMEOUT,
                          what="Importing and exercising MinimalistClass")
     if not isinstance(probe, dict):
@@ -140,6 +183,21 @@ def _judge_class(s: GradingSession, project: Path) -> None:
     s.record("hints_docstrings", hints == [], "; ".join(hints) if isinstance(hints, list) and hints else
              "every public method has both" if hints == [] else f"inspecting the methods {py.shown(hints)}",
              "type hints on every argument and return value, and a docstring, on each public method")
+
+
+def _absolute_import(s: GradingSession, init: Path) -> None:
+    """``absolute_import``: no ``from . import ...`` (a relative import) in the package's __init__.py."""
+    expected = "from minimalist_package._minimalist_class import MinimalistClass (the package's full name)"
+    try:
+        tree = ast.parse(init.read_text(encoding="utf-8"), filename=str(init))
+    except (OSError, UnicodeDecodeError, SyntaxError) as exc:
+        s.record("absolute_import", False, f"__init__.py cannot be read as Python: {exc}", expected)
+        return
+    relative = [f"line {node.lineno}: from {'.' * node.level}{node.module or ''} import "
+                + ", ".join(alias.name for alias in node.names)
+                for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.level > 0]
+    s.record("absolute_import", not relative, "relative import(s) in __init__.py: " + "; ".join(relative)
+             if relative else "__init__.py has no relative import", expected)
 
 
 def _judge_tests(s: GradingSession, project: Path) -> None:

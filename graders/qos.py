@@ -5,7 +5,7 @@ prints, judged with ``rclpy.qos.qos_check_compatible``) and on what the
 grader's probes of chosen profiles receive:
 
 * **sensor**: a BEST_EFFORT probe (``qos_profile_sensor_data``) must receive the
-  10 Hz stream; a RELIABLE probe must not match the sensor publisher.
+  10 Hz stream; a RELIABLE probe must not match the sensor publisher; the offer is VOLATILE.
 * **config**: the grader changes the ``units`` parameter, then a
   TRANSIENT_LOCAL probe made after that (a late joiner) must receive the
   current configuration, and only it (depth 1).
@@ -23,6 +23,7 @@ is also loaded for its CHECKS alone (``ros2course list``, ``hint``), where ROS i
 from __future__ import annotations
 
 import math
+import re
 
 from ros2course import kit
 from ros2course.kit import LATE_DELIVERY, Check, GradingSession, Unmet, checks, scripts
@@ -76,6 +77,9 @@ CHECKS = [
     Check("sensor_best_effort", "It offers BEST_EFFORT: a RELIABLE subscription never matches it", 2,
           "a reading lost is not worth resending: use qos_profile_sensor_data (BEST_EFFORT, VOLATILE, KEEP_LAST 5) "
           "instead of a plain depth", **SENSOR),
+    Check("sensor_volatile", "It offers VOLATILE durability, as the sensor-data profile does", 1,
+          "qos_profile_sensor_data is VOLATILE: a stale reading is never replayed to a subscription that joins later "
+          "(TRANSIENT_LOCAL is for a latched configuration, not a stream)", **SENSOR),
     Check("sensor_stream", f"A BEST_EFFORT subscription receives the readings (frame_id {FRAME_ID!r})", 2,
           f"set msg.header.frame_id = '{FRAME_ID}' and msg.temperature, then publish", **SENSOR),
     Check("sensor_rate", "One reading every 0.1 s (10 Hz)", 2, "self.create_timer(0.1, self.timer_callback)",
@@ -84,6 +88,10 @@ CHECKS = [
     *checks.started("config", PACKAGE, CONFIG_EXE, CONFIG_NODE, part="config"),
     Check("config_topic", f"It publishes {CONFIG_TOPIC} of type {CONFIG_TYPE}", 1,
           f"create_publisher(String, '{CONFIG_TOPIC}', latched_qos)", **CONFIG),
+    Check("config_initial", f"At start it publishes 'units: {DEFAULT_UNITS}' (the parameter's default), "
+          "replayed to a later TRANSIENT_LOCAL subscription", 1,
+          f"declare_parameter('units', '{DEFAULT_UNITS}'), create the latched publisher, then publish "
+          f"String(data='units: {DEFAULT_UNITS}') once in __init__", **CONFIG),
     Check("config_republish", "Setting the parameter units publishes 'units: <new value>'", 1,
           "declare_parameter('units', 'celsius'); add_post_set_parameters_callback(...) publishes the new "
           "configuration", **CONFIG),
@@ -102,8 +110,9 @@ CHECKS = [
     Check("monitor_sensor_qos", f"Its {SENSOR_TOPIC} subscription matches a BEST_EFFORT publisher", 2,
           "a RELIABLE request never matches a BEST_EFFORT offer: subscribe with qos_profile_sensor_data",
           **MONITOR),
-    Check("monitor_config_qos", f"Its {CONFIG_TOPIC} subscription asks for TRANSIENT_LOCAL", 2,
-          "a VOLATILE subscription gets nothing published before it started: " + LATCHED_HINT, **MONITOR),
+    Check("monitor_config_qos", f"Its {CONFIG_TOPIC} subscription asks for the latched profile: RELIABLE, "
+          "TRANSIENT_LOCAL", 2, "a VOLATILE subscription gets nothing published before it started; the monitor "
+          "subscribes with the same latched profile as the publisher: " + LATCHED_HINT, **MONITOR),
     Check("monitor_logs_config", "It logs the configuration published before it started ('Config: ...')", 2,
           "self.get_logger().info(f'Config: {msg.data}') in the configuration callback", **MONITOR),
     Check("monitor_logs_sensor", "It logs the readings it receives ('Temperature: 21.50')", 2,
@@ -157,6 +166,10 @@ def _grade_sensor(s: GradingSession, temperature: type) -> None:
              "BEST_EFFORT offered: qos_check_compatible(offered, RELIABLE request) is ERROR and the RELIABLE probe "
              "receives nothing")
 
+    volatile = bool(profiles) and all(_qos.word(p.durability) == "VOLATILE" for p in profiles)
+    s.record("sensor_volatile", volatile, f"it offers {offered}{where}",
+             "VOLATILE (qos_profile_sensor_data: no reading is kept for subscriptions that join later)")
+
     if not readings:
         raise Unmet(f"no reading reached a BEST_EFFORT subscription on {target} in {window:.1f} s; "
                     f"{kit.process_state(node.proc)}")
@@ -182,11 +195,26 @@ def _grade_config(s: GradingSession, string: type) -> None:
     # durability and reliability (those are judged by the late joiner and config_latched)
     reliable = bool(profiles) and all(_qos.word(p.reliability) == "RELIABLE" for p in profiles)
     early = _qos.Probe(s.ros, target, string, _qos.profile(reliable=reliable, transient_local=False, depth=10))
+    # a RELIABLE, TRANSIENT_LOCAL subscription made after the node started, before units is set: what the
+    # node published at start is replayed to it (a VOLATILE offer cannot match it: nothing to wait for)
+    start = _qos.Probe(s.ros, target, string, _qos.profile(reliable=True, transient_local=True, depth=10))
+    start_can_match = any(_qos.compatible(p, start.qos)[0] for p in profiles)
 
     # the configuration changes once: with depth 1 only the new one is kept for late joiners
     services = kit_params.connect(s, node.name, proc=node.proc)
     with s.phase("observe"):
         _qos.wait_for(lambda: early.matched() > 0, 3.0, abort=node.ended)  # else the new configuration is missed
+        if start_can_match:  # before units is set: the first message replayed is the one of the start
+            _qos.wait_for(lambda: bool(start.messages()), LATE_DELIVERY, abort=node.ended)
+    initial = [m.data for m in start.messages()]
+    wanted = f"units: {DEFAULT_UNITS}"
+    s.record("config_initial", initial[:1] == [wanted],
+             "a RELIABLE, TRANSIENT_LOCAL subscription made after the node started, before units was set, received "
+             + (", ".join(map(repr, initial[:3])) or "nothing")
+             + ("" if start_can_match or not profiles else
+                f" (it cannot match the publisher's {', '.join(f'({_qos.describe(p)})' for p in profiles)})"),
+             f"{wanted!r}, published at start and kept for subscriptions that join later")
+    with s.phase("observe"):
         # The listener has matched the publisher; the publisher may learn of the listener a moment
         # later (discovery runs both ways) and a VOLATILE listener misses what is sent before: a
         # second change, to another unit, is the retry. The late joiner's verdicts use the last one.
@@ -234,8 +262,8 @@ def _grade_config(s: GradingSession, string: type) -> None:
 
 
 def _matching(readings: list[float], text: str) -> list[float]:
-    numbers = ts.numbers_in(text)
-    return [r for r in readings if any(abs(n - r) <= 0.006 for n in numbers)]
+    """The readings ``text`` logs as the lesson asks: ``Temperature: <value with two decimals>``."""
+    return [r for r in readings if re.search(rf"Temperature: {r:.2f}(?![0-9])", text)]
 
 
 def _grade_monitor(s: GradingSession, temperature: type, string: type) -> None:
@@ -272,8 +300,10 @@ def _grade_monitor(s: GradingSession, temperature: type, string: type) -> None:
     requested = _qos.wait_endpoint_qos(graph, CONFIG_TOPIC, node.name, "subscriptions", 1.0)
     asked = ", ".join(f"({_qos.describe(p)})" for p in requested) or f"no subscription on {CONFIG_TOPIC}"
     latched = bool(requested) and all(_qos.word(p.durability) == "TRANSIENT_LOCAL"
+                                      and _qos.word(p.reliability) == "RELIABLE"
                                       and _qos.compatible(feed.config_offered, p)[0] for p in requested)
-    s.record("monitor_config_qos", latched, f"it requests {asked}", "TRANSIENT_LOCAL (and RELIABLE or BEST_EFFORT)")
+    s.record("monitor_config_qos", latched, f"it requests {asked}",
+             "the latched profile: RELIABLE, TRANSIENT_LOCAL (as the configuration publisher offers)")
 
     def records() -> list[str]:
         return [r.msg for r in rosout.records(node=node.name)]
@@ -283,23 +313,27 @@ def _grade_monitor(s: GradingSession, temperature: type, string: type) -> None:
         return sorted({r for text in records() for r in _matching(published, text)})
 
     with s.phase("observe"):
-        _qos.wait_for(lambda: any(feed.config in t for t in records())
+        _qos.wait_for(lambda: any(f"Config: {feed.config}" in t for t in records())
                       and len(logged_readings()) >= LOGGED_READINGS, LATE_DELIVERY, abort=node.ended)
     texts = records()
     recent = " | ".join(t.strip()[:60] for t in texts[-2:]) or "no log records"
-    config_logged = any(feed.config in t for t in texts)
+    config_logged = any(f"Config: {feed.config}" in t for t in texts)
+    unlabelled = not config_logged and any(feed.config in t for t in texts)
     on_stdout = feed.config in node.proc.stdout()
     s.record("monitor_logs_config", config_logged,
              f"the grader published {feed.config!r} on {CONFIG_TOPIC} before the node started; "
-             + ("it is in the node's log" if config_logged else f"not in the node's log (last records: {recent})")
+             + ("it is in the node's log" if config_logged else
+                "the node logged it without the label 'Config: '" if unlabelled else
+                f"not in the node's log (last records: {recent})")
              + ("; it appeared on stdout only (print() instead of the logger?)" if on_stdout and not config_logged
                 else ""),
-             f"a log record containing {feed.config!r}")
+             f"a log record containing 'Config: {feed.config}'")
     readings = logged_readings()
     s.record("monitor_logs_sensor", len(readings) >= LOGGED_READINGS,
              f"{len(readings)} of the grader's {len(feed.published())} readings found in the node's log"
              + (f", e.g. {readings[0]:.2f}" if readings else f" (last records: {recent})"),
-             f"at least {LOGGED_READINGS} of the grader's random temperatures logged (two decimals)",
+             f"at least {LOGGED_READINGS} of the grader's random temperatures logged as 'Temperature: <value with "
+             "two decimals>'",
              fraction=min(1.0, len(readings) / LOGGED_READINGS))
 
 

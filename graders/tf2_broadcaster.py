@@ -5,13 +5,14 @@ Black-box, on the ``tf2_msgs/msg/TFMessage`` streams the learner's node publishe
 * **broadcaster**: the grader listens on ``/tf`` before the node starts and judges the
   ``world -> robot`` transforms: frame ids, rate (send stamps), the radius and height
   of every position, unit quaternions, the angular speed (a least-squares fit of the
-  unwrapped angle over the send stamps), the heading (facing the direction of motion)
-  and the header stamps; then a subscription made *after* the node has run (a late
-  joiner, TRANSIENT_LOCAL like tf2's own listener) must still receive the static
-  ``robot -> camera`` transform on ``/tf_static``.
+  unwrapped angle over the send stamps), the heading (facing the direction of motion),
+  where the angle starts (0 at the node's start) and the header stamps; then a subscription
+  made *after* the node has run (a late joiner, TRANSIENT_LOCAL like tf2's own listener)
+  must still receive the static ``robot -> camera`` transform on ``/tf_static``, sent once
+  (a probe made before the start counts the messages carrying it).
 * **cli**: the learner's ``cli/tf2_echo_camera.sh`` runs in a graph of its own where the
   grader broadcasts a static ``robot -> camera`` of random offsets; its output must show
-  that offset as ``ros2 run tf2_ros tf2_echo`` prints it.
+  that offset as ``ros2 run tf2_ros tf2_echo`` prints it, and end by itself after its 3 s.
 
 ROS modules are imported inside the functions that grade: a grader module is also loaded
 for its CHECKS alone (``ros2course list``, ``hint``), where ROS is not needed.
@@ -22,6 +23,7 @@ from __future__ import annotations
 import itertools
 import math
 import random
+import time
 
 from ros2course import kit
 from ros2course.kit import LATE_DELIVERY, Check, GradingSession, checks, scripts
@@ -41,6 +43,11 @@ START_TIMEOUT = 5.0  # seconds from start to the first transform
 POSITION_TOLERANCE, SPEED_TOLERANCE, HEADING_TOLERANCE, NORM_TOLERANCE, STAMP_TOLERANCE = 0.01, 0.15, 0.05, 1e-3, 0.5
 SCRIPT = "cli/tf2_echo_camera.sh"
 SCRIPT_TIMEOUT = 15.0  # seconds: tf2_echo takes about 1 s to start, the script stops it after 3
+#: Seconds the script may take in all to count as "tf2_echo for 3 s" (issue 37): 3 s of tf2_echo, the start of
+#: `ros2 run` and bash, and slack for a loaded machine; a script that lets tf2_echo run 10 s ends too late.
+SCRIPT_LENGTH = 7.0
+#: Radians: how far the first angle may fall outside what "0.5 rad/s * seconds since the node started" allows.
+ORIGIN_TOLERANCE = 0.05
 #: Seconds of observation the contract needs: 21 transforms at 20 Hz, the late joiner's replay.
 WINDOW = (WARM_UP + SAMPLES) * PERIOD + 0.5
 
@@ -66,12 +73,18 @@ CHECKS = [
           f"angle = {ANGULAR_SPEED} * seconds since the start (from the node's clock)", **MOTION),
     Check("heading", "The robot faces the direction it drives in (yaw = angle + pi/2)", 1,
           "rotate by yaw = angle + math.pi / 2 about z: " + QUATERNION_HINT, **MOTION),
+    Check("starts_at_zero", "The angle counts from the node's start: angle 0 (at x = 1, y = 0) when it starts", 1,
+          f"angle = {ANGULAR_SPEED} * (now - self.start) in seconds, with self.start = self.get_clock().now() "
+          "taken in __init__: not the clock's own seconds (since 1970), not an offset", **MOTION),
     Check("stamps", "Each transform is stamped with the time it was made (increasing)", 1,
           "t.header.stamp = self.get_clock().now().to_msg() in the timer callback: tf2 looks transforms up by "
           "time", **MOTION),
     Check("static_latched", f"A listener that starts later still gets {CHILD} -> {CAMERA} from /tf_static", 3,
           "StaticTransformBroadcaster(self).sendTransform(...) once: /tf_static is TRANSIENT_LOCAL, so a late "
           "listener receives it; a TransformBroadcaster (/tf) would lose it", **BROADCASTER),
+    Check("static_once", f"{CHILD} -> {CAMERA} is sent once, not again and again", 1,
+          "build the camera's TransformStamped in __init__ and send it there, once: the publisher keeps it for "
+          "every later listener; never in the timer callback", needs=("static_latched",), part="broadcaster"),
     checks.ctrl_c("broadcaster_sigint_exit", "the broadcaster", **BROADCASTER),
     Check("cli_script", f"{SCRIPT} exists and is valid bash", 1, part="cli"),
     Check("cli_echo", f"It prints the transform {CHILD} -> {CAMERA} with tf2_echo", 2,
@@ -99,8 +112,14 @@ def _yaw(q) -> float:
 
 
 def _grade_broadcaster(s: GradingSession, tf_message: type) -> None:
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
     path = kit.executable(s, "broadcaster_executable", PACKAGE, EXE)
     tf = s.graph.topic("/tf", tf_message, 100)
+    # every /tf_static message from the node's start on (static_once); static_latched has a late joiner of its own
+    early_static = s.graph.topic("/tf_static", tf_message, QoSProfile(
+        depth=100, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    launched = time.time()  # the node starts after this (send stamps are seconds since the epoch too)
     node = kit.start_node(s, "broadcaster_node_name", path, NODE, sigint_check="broadcaster_sigint_exit",
                           need_node=False)
     with s.phase("observe"):
@@ -113,12 +132,16 @@ def _grade_broadcaster(s: GradingSession, tf_message: type) -> None:
     if s.record("tf_frames", bool(ours), f"{len(samples)} message(s) on /tf in {window:.1f} s with "
                 f"{', '.join(pairs) or 'no transform'}"
                 + ("" if samples else f"; {kit.process_state(node.proc)}"), f"transforms {PARENT} -> {CHILD} on /tf"):
-        _judge_motion(s, ours, window)
-    _judge_static(s, tf, node, tf_message)
+        _judge_motion(s, ours, window, launched)
+    if _judge_static(s, tf, node, tf_message):
+        _judge_static_once(s, early_static)
 
 
-def _judge_motion(s: GradingSession, ours: list, window: float) -> None:
-    """tf_rate, radius, unit_quaternion, angular_speed, heading, stamps over ``ours``: (send stamp, transform)."""
+def _judge_motion(s: GradingSession, ours: list, window: float, launched: float) -> None:
+    """tf_rate, radius, unit_quaternion, angular_speed, heading, starts_at_zero, stamps over ``ours``.
+
+    ``ours``: (send stamp, transform); ``launched``: when the grader started the process (seconds since the epoch).
+    """
     kit.rate(s, "tf_rate", [sent for sent, _ in ours][WARM_UP:], period=PERIOD, needed=SAMPLES, waited=window,
              noun="transform", source=f"the send stamps of the {PARENT} -> {CHILD} messages, the first left out")
     moves = [t.transform for _, t in ours]
@@ -143,6 +166,7 @@ def _judge_motion(s: GradingSession, ours: list, window: float) -> None:
     s.record("heading", bool(errors) and max(errors) <= HEADING_TOLERANCE,
              f"yaw - (angle + pi/2) up to {max(errors):.3f} rad" if errors else "no rotation is a unit quaternion",
              f"yaw = atan2(y, x) + pi/2 ± {HEADING_TOLERANCE} rad")
+    _judge_origin(s, ours[0][0], angles[0], launched)
     headers = [t.header.stamp.sec + t.header.stamp.nanosec * 1e-9 for _, t in ours]
     backwards = sum(1 for a, b in itertools.pairwise(headers) if b <= a)
     away = max(abs(h - sent) for h, (sent, _) in zip(headers, ours))
@@ -154,7 +178,30 @@ def _judge_motion(s: GradingSession, ours: list, window: float) -> None:
 
 
 
-def _judge_static(s: GradingSession, tf, node, tf_message: type) -> None:
+def _judge_origin(s: GradingSession, sent: float, angle: float, launched: float) -> None:
+    """starts_at_zero: angle = 0.5 rad/s * seconds since the node started, so at the first transform (sent at
+    ``sent``, at ``angle`` = atan2(y, x)) it lies between 0 (the node started just before) and 0.5 * (sent -
+    ``launched``) (the node started as the process did): a clock's own seconds, or an offset, land elsewhere.
+    """
+    most = ANGULAR_SPEED * max(0.0, sent - launched)
+    wrapped = (angle + math.pi) % (2 * math.pi) - math.pi  # in [-pi, pi)
+    s.record("starts_at_zero", -ORIGIN_TOLERANCE <= wrapped <= most + ORIGIN_TOLERANCE,
+             f"the first transform, {sent - launched:.2f} s after the process was started, is at angle {wrapped:.3f} rad",
+             f"an angle in [0, {most:.3f}] rad ± {ORIGIN_TOLERANCE} ({ANGULAR_SPEED} rad/s * the seconds the node has "
+             "run, which are fewer than the process has): the robot starts at (1, 0)")
+
+
+def _judge_static_once(s: GradingSession, early) -> None:
+    """static_once: the node's /tf_static messages carrying robot -> camera, from its start to now: one."""
+    carrying = [m for m in early.messages()
+                if any(t.header.frame_id == CHILD and t.child_frame_id == CAMERA for t in m.transforms)]
+    s.record("static_once", len(carrying) == 1,
+             f"{len(carrying)} message(s) on /tf_static carried {CHILD} -> {CAMERA} while the grader listened, from "
+             "before the node started until the late listener got it",
+             "one message: the static transform is sent once (TRANSIENT_LOCAL keeps it for later listeners)")
+
+
+def _judge_static(s: GradingSession, tf, node, tf_message: type) -> bool:
     """static_latched: a late TRANSIENT_LOCAL subscription gets robot -> camera (``tf``: the /tf probe)."""
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
@@ -170,14 +217,13 @@ def _judge_static(s: GradingSession, tf, node, tf_message: type) -> None:
                 "received by a TRANSIENT_LOCAL subscription made after the node started")
     if not camera:
         seen = ", ".join(f"{t.header.frame_id} -> {t.child_frame_id}" for t in static) or "nothing"
-        s.record("static_latched", False, f"a late subscription to /tf_static received {seen}"
-                 + (f"; {CAMERA} came on /tf instead (a TransformBroadcaster: volatile, a late listener never gets "
-                    "it)" if on_tf else ""), expected)
-        return
+        return s.record("static_latched", False, f"a late subscription to /tf_static received {seen}"
+                        + (f"; {CAMERA} came on /tf instead (a TransformBroadcaster: volatile, a late listener never "
+                           "gets it)" if on_tf else ""), expected)
     t = camera[-1].transform
     found = (t.translation.x, t.translation.y, t.translation.z)
     rotation = (t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w)
-    s.record("static_latched", all(abs(a - b) <= POSITION_TOLERANCE for a, b in zip(found, CAMERA_OFFSET))
+    return s.record("static_latched", all(abs(a - b) <= POSITION_TOLERANCE for a, b in zip(found, CAMERA_OFFSET))
              and all(abs(a - b) <= NORM_TOLERANCE for a, b in zip(rotation, (0.0, 0.0, 0.0, 1.0))),
              f"a late subscription to /tf_static received {CHILD} -> {CAMERA} at "
              f"({', '.join(f'{v:.3f}' for v in found)}) m, rotation ({', '.join(f'{v:.3f}' for v in rotation)})",
@@ -205,10 +251,11 @@ def _grade_cli(s: GradingSession, tf_message: type) -> None:
     scripts.printed(s, "cli_echo", run, [shown], f"the grader's {CHILD} -> {CAMERA} transform ({shown[2:]})",
                     f"ros2 run tf2_ros tf2_echo {CHILD} {CAMERA}")
     # the lesson's script "ends by itself" (an exit code is not asked for: `timeout` itself exits 124)
-    s.record("cli_ends", not run.timed_out,
+    # "tf2_echo ... for 3 s" (issue 37): it must also end soon after those 3 s, not after 10
+    s.record("cli_ends", not run.timed_out and run.seconds <= SCRIPT_LENGTH,
              f"your script was still running after {SCRIPT_TIMEOUT:.0f} s and was stopped ({run.describe()})"
-             if run.timed_out else f"it ended by itself: {run.describe()}",
-             f"the script ends by itself within {SCRIPT_TIMEOUT:.0f} s")
+             if run.timed_out else f"it ended by itself after {run.seconds:.1f} s: {run.describe()}",
+             f"the script ends by itself after about 3 s of tf2_echo (within {SCRIPT_LENGTH:.0f} s in all)")
 
 
 def grade(s: GradingSession) -> None:

@@ -5,7 +5,8 @@ Black-box, on the node's ``/rosout`` records while the grader itself is the tf2 
 1. the node starts with no transform anywhere: it must keep running and say (WARN)
    that ``world -> target`` is not available yet, never crash;
 2. the grader broadcasts ``world -> target`` on ``/tf`` at 20 Hz with a random
-   translation: the node must log it (three decimals);
+   translation: the node must log it (INFO, three decimals), and again at the next
+   lookups while it stays (one record per lookup: never throttled, never only on change);
 3. the grader moves ``target`` to another random place: the node must log the new
    position (a listener that looked up once and kept the value fails).
 
@@ -20,7 +21,7 @@ import random
 import threading
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks, wait_until
+from ros2course.kit import LATE_DELIVERY, Check, GradingSession, checks, wait_until
 from ros2course.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_tf2"
@@ -36,6 +37,12 @@ TOLERANCE = 0.002  # metres: logged with three decimals
 #: the waiting phase and the two positions give 7 or more.
 RATE_RECORDS = 6
 WARN = 30  # rcl_interfaces/msg/Log WARN level
+INFO = 20  # rcl_interfaces/msg/Log INFO level
+#: Records of the first position judged for "every time": the first and the next two lookups' (issue 37).
+REPEATS = 3
+#: Seconds their stamps may span: two intervals of PERIOD, with half a period of slack for a late tick (the rate
+#: itself is lookup_rate's); a position logged every 1 s or more, or only when it changes, spans more or never repeats.
+REPEAT_SPAN = (REPEATS - 1) * PERIOD + PERIOD
 
 WINDOW = UNAVAILABLE_WINDOW + 2 * 2 * PERIOD
 
@@ -47,9 +54,13 @@ CHECKS = [
     Check("waits_for_transform", f"With no {PARENT} -> {CHILD} yet, it keeps running and warns", 2,
           "catch tf2_ros.TransformException around lookup_transform and log a warning: a frame nobody broadcasts "
           "yet is normal at start-up", **LISTENER),
-    Check("logs_transform", f"It logs where {CHILD} is in {PARENT} once the transform exists", 3,
+    Check("logs_transform", f"It logs (INFO) where {CHILD} is in {PARENT} once the transform exists", 3,
           f"t = self.buffer.lookup_transform('{PARENT}', '{CHILD}', rclpy.time.Time()); log "
-          "t.transform.translation's x, y, z with three decimals", needs=("waits_for_transform",), part="listener"),
+          "t.transform.translation's x, y, z with three decimals with self.get_logger().info(...) (the warning is "
+          "for the failed lookups)", needs=("waits_for_transform",), part="listener"),
+    Check("logs_every_lookup", "It logs the position at every lookup, not only once or when it changes", 1,
+          "log the position in every timer callback, with no throttle_duration_sec, once=True or 'only if it "
+          "moved' test: one record per lookup", needs=("logs_transform",), part="listener"),
     Check("follows_changes", f"When {CHILD} moves, it logs the new position", 2,
           "look the transform up again at every tick: never keep the first answer", needs=("logs_transform",),
           part="listener"),
@@ -97,15 +108,36 @@ def _random_position(far_from: tuple[float, float, float] | None = None) -> tupl
             return found
 
 
-def _logged(rosout, node: str, position: tuple[float, float, float]) -> list[str]:
-    """The node's records that show ``position`` (three numbers within :data:`TOLERANCE`, in order)."""
+def _logged(rosout, node: str, position: tuple[float, float, float]) -> list:
+    """The node's records (any level) that show ``position`` (three numbers within :data:`TOLERANCE`, in order)."""
     out = []
     for record in rosout.records(node=node):
         numbers = ts.numbers_in(record.msg)
         if any(all(abs(a - b) <= TOLERANCE for a, b in zip(numbers[i:i + 3], position))
                for i in range(len(numbers) - 2)):
-            out.append(record.msg)
+            out.append(record)
     return out
+
+
+def _every_lookup(s: GradingSession, rosout, name: str, node: kit.StartedNode,
+                  position: tuple[float, float, float]) -> None:
+    """logs_every_lookup: the unchanged position is logged again at the next lookups (the lesson's "every time").
+
+    Judged on the records' stamps: :data:`REPEATS` records showing ``position`` within :data:`REPEAT_SPAN` s of
+    the first one. A throttled log (``throttle_duration_sec``), a log made once, or one made only when the value
+    changed, does not repeat it in time; the mean rate of all records is lookup_rate's.
+    """
+    with s.phase("observe"):
+        wait_until(lambda: len(_logged(rosout, name, position)) >= REPEATS, REPEAT_SPAN + LATE_DELIVERY,
+                   abort=node.ended)
+    shown = [kit.stamp_seconds(r.stamp) for r in _logged(rosout, name, position)]
+    span = shown[REPEATS - 1] - shown[0] if len(shown) >= REPEATS else None
+    s.record("logs_every_lookup", span is not None and span <= REPEAT_SPAN,
+             f"{len(shown)} record(s) showed the unchanged position"
+             + (f", the first {REPEATS} over {span:.2f} s (their stamps)" if span is not None else
+                f" within {REPEAT_SPAN + LATE_DELIVERY:.1f} s"),
+             f"the unchanged position logged again at the next lookups: {REPEATS} records within {REPEAT_SPAN:.2f} s "
+             f"(one lookup every {PERIOD} s, each logged)")
 
 
 def _grade_listener(s: GradingSession) -> None:
@@ -155,14 +187,17 @@ def _follow(s: GradingSession, rosout, name: str, node: kit.StartedNode, tf_mess
     with s.phase("observe"):
         wait_until(lambda: bool(_logged(rosout, name, first)), LOG_TIMEOUT, abort=node.ended)
     shown = _logged(rosout, name, first)
+    info = [r for r in shown if r.level == INFO]
     latest = [r.msg for r in rosout.records(node=name)][-2:]
-    if not s.record("logs_transform", bool(shown),
-                    f"it logged {shown[0][:120]!r}" if shown else
+    if not s.record("logs_transform", bool(info),
+                    f"it logged {info[0].msg[:120]!r}" if info else
+                    f"it logged {shown[0].msg[:120]!r} at level {shown[0].level}, not INFO ({INFO})" if shown else
                     f"no record shows ({', '.join(f'{v:.3f}' for v in first)}) within {LOG_TIMEOUT:.0f} s; its last "
                     f"records: {latest or 'none'}; {kit.process_state(node.proc)}",
-                    f"a record with x, y, z of {PARENT} -> {CHILD}: ({', '.join(f'{v:.3f}' for v in first)}) "
+                    f"an INFO record with x, y, z of {PARENT} -> {CHILD}: ({', '.join(f'{v:.3f}' for v in first)}) "
                     f"(± {TOLERANCE} m, the grader's broadcast)"):
         return
+    _every_lookup(s, rosout, name, node, first)
     # 3. target moves
     second = _random_position(far_from=first)
     broadcast.position = second
@@ -171,7 +206,7 @@ def _follow(s: GradingSession, rosout, name: str, node: kit.StartedNode, tf_mess
     moved = _logged(rosout, name, second)
     latest = [r.msg for r in rosout.records(node=name)][-1:]
     s.record("follows_changes", bool(moved),
-             f"after the move it logged {moved[0][:120]!r}" if moved else
+             f"after the move it logged {moved[0].msg[:120]!r}" if moved else
              f"no record shows the new position within {LOG_TIMEOUT:.0f} s; its last record: {latest or 'none'}",
              f"a record with the new position ({', '.join(f'{v:.3f}' for v in second)})")
 

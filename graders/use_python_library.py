@@ -7,6 +7,8 @@ Every 0.5 s the node logs ``sample_function_for_square_of_sum(a,b) returned c.``
 letters). Numbers are parsed however the node formats them; c is compared with
 (a+b)**2 within the rounding of the printed digits (``ros2course.kit.packaging.SquareLine``).
 Only ``package.xml`` is read, for the dependency on the library the contract names.
+The node's parameter services are asked once: a timer and ``rclpy.spin()``, not a
+``while`` loop (``spins``, graders/print_forever_node.py).
 """
 
 from __future__ import annotations
@@ -17,10 +19,13 @@ from ros2course.kit import Check, GradingSession
 from ros2course.kit.packaging import (
     classify,
     name_lines,
+    parse_square_line,
     ros2_run_executable,
     shorten,
     square_lines,
 )
+
+from .print_forever_node import record_spins, spins_check
 
 PACKAGE = "python_package_that_uses_the_library"
 LIBRARY = "python_package_with_a_library"
@@ -51,6 +56,9 @@ CHECKS = [
           "callback; print() does not reach /rosout", needs=("executable",)),
     Check("ranges", "a is in [0, 1] and b in [1, 2]", 1, "a = random.uniform(0, 1), b = random.uniform(1, 2)",
           needs=("square_log",)),
+    Check("numbers_random", "a and b are new random numbers on every tick", 1,
+          "draw a = random.uniform(0, 1) and b = random.uniform(1, 2) inside the timer callback, not once in __init__ "
+          "or as constants", needs=("square_log",)),
     Check("square_values", "c is (a + b)**2, computed by the library", 2,
           "c = sample_function_for_square_of_sum(a, b), with the same a and b you log", needs=("square_log",)),
     Check("name_log", f"It logs '{NAME_FORMAT}' with ten ASCII letters", 2,
@@ -66,7 +74,24 @@ CHECKS = [
     Check("sigint_exit", "Ctrl+C ends it with exit code 0 and no traceback", 2,
           "in Jazzy rclpy.spin() may raise ExternalShutdownException on Ctrl+C: catch it together with "
           "KeyboardInterrupt", needs=("executable",)),
+    spins_check(),
 ]
+
+
+def _numbers_random(s: GradingSession, records: list) -> None:
+    """``numbers_random``: the logged a and b are not the same in every square-of-sum record (seed ch. 15.1:
+    two random numbers per tick). Two uniform draws printed with Python's default repr never repeat."""
+    lines = [parse_square_line(r.msg) for r in records]
+    expected = "a and b change from one record to the next (random.uniform in the timer callback)"
+    if len(lines) < 2:
+        s.record("numbers_random", False, f"only {len(lines)} record(s) to compare", expected)
+        return
+    constant = [name for name, values in (("a", {line.a for line in lines}), ("b", {line.b for line in lines}))
+                if len(values) == 1]
+    shown = ", ".join(f"({line.a:g}, {line.b:g})" for line in lines[:4]) + (", ..." if len(lines) > 4 else "")
+    s.record("numbers_random", not constant,
+             (f"{' and '.join(constant)} the same in all {len(lines)} records: " if constant else "")
+             + f"(a, b) = {shown}", expected, fraction=(2 - len(constant)) / 2)
 
 
 def _busiest(records: list) -> str | None:
@@ -109,8 +134,10 @@ def grade(s: GradingSession) -> None:
         s.record("square_log", False, f"{observed}; {kit.process_state(started.proc)}",
                  f"INFO records '{SQUARE_FORMAT}'")
     square_lines(s, "ranges", "square_values", mine)
+    _numbers_random(s, mine)
     # this node's records of either kind, in order (other lines it may log are ignored)
     ordered = [r for r in rosout.records(node=main, level=INFO) if classify(r.msg) != "other"] if main else []
     name_lines(s, "name_log", "pairs", "names_differ", ordered, max_gap=PERIOD / 2)
     kit.rate(s, "rate", [stamp_seconds(r.stamp) for r in mine], period=PERIOD, needed=SAMPLES, waited=waited,
              noun="record", source="the records' stamps")
+    record_spins(s, "spins", started)

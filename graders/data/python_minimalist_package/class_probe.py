@@ -2,7 +2,8 @@
 
 Run in a child interpreter with the learner's ``python/minimalist_package`` as
 the working directory. Imports ``MinimalistClass``, exercises each element the
-lesson asks for (3.5 and 4.25 as arguments) and prints one JSON object: each
+lesson asks for (3.5 and 4.25 as arguments; the class attribute
+last, since one key changes it for a moment) and prints one JSON object: each
 key maps to the repr of what came back, or ``{"error": "..."}`` when the
 learner's code raised (each key is computed on fresh instances, independently).
 """
@@ -69,5 +70,24 @@ attempt("private_stored_after_set", lambda: after_set("_private_attribute"))
 attempt("method", lambda: repr(C(attribute_arg=3.5, private_attribute_arg=4.25).method()))
 attempt("static", lambda: repr(C.static_method()))
 attempt("static_instance", lambda: repr(C().static_method()))
+attempt("reference", lambda: repr(C.attribute_reference))
+attempt("reference_instance", lambda: repr(C().attribute_reference))
+
+
+def static_from_reference():
+    """What static_method() returns while MinimalistClass.attribute_reference is 'Bye ' (restored afterwards)."""
+    missing = object()
+    saved = C.__dict__.get("attribute_reference", missing)
+    C.attribute_reference = "Bye "
+    try:
+        return repr(C.static_method())
+    finally:
+        if saved is missing:
+            del C.attribute_reference
+        else:
+            C.attribute_reference = saved
+
+
+attempt("static_from_reference", static_from_reference)
 attempt("hints", hints)
 print(json.dumps(out))
