@@ -172,21 +172,70 @@ def test_a_bad_mutation_yaml_is_a_one_line_error(cli, tmp_path: Path, triage: st
 
 
 def test_dev_validate_shows_the_lessons_last_mutation_score(tmp_path: Path) -> None:
+    """The raw kill rate beside the score after triage, a denominator too small to judge by, and a row
+    measured under another grader fingerprint (or before fingerprints) marked stale with its date."""
     from types import SimpleNamespace
 
-    lesson = SimpleNamespace(id="demo-lesson", folder=tmp_path)
+    from ros2course.grade.fingerprint import grader_fingerprint
+
+    lesson = SimpleNamespace(id="demo-lesson", folder=tmp_path, grader="print_forever_node",
+                             packages=["python_package_with_a_node"], folders=[])
+    (tmp_path / "lesson.yaml").write_text("id: demo-lesson\n")
     assert mut.describe_score(lesson) == \
-        "demo-lesson: grader strength not measured (ros2course dev mutate demo-lesson --sample 20)"
+        "demo-lesson: grader strength not measured (ros2course dev mutate demo-lesson --sample 30)"
     record = {"generated": 57, "graded": 20, "sampled": True, "killed": 11, "killed_by_build": 4, "survived": 5,
               "triaged": 4, "timed_out": 0, "grader_error": 0, "score": 11 / 12, "seconds": 80.0,
-              "date": "2026-11-23", "course_version": mut.course_version(), "survivors": ["a.py:3 (abc)"]}
+              "date": "2026-11-23", "course_version": mut.course_version(), "survivors": ["a.py:3 (abc)"],
+              "fingerprint": grader_fingerprint(lesson)}
     (tmp_path / mut.SCORE_FILE).write_text(json.dumps(record))
     line = mut.describe_score(lesson)
-    assert line.startswith("demo-lesson: grader strength 92 % (11 of 12 counted mutants killed; 20 of 57 mutants")
-    assert "1 survivor(s) not triaged" in line and "measured on course" not in line
-    record["course_version"] = "0.9"
+    assert line.startswith("demo-lesson: grader strength 92 % after triage, 69 % raw (11 of 12 counted mutants killed; "
+                           "20 of 57 mutants")
+    assert "1 survivor(s) not triaged" in line and "12 counted mutants are too few to judge by" in line
+    assert "stale" not in line
+    assert mut.score_text(lesson) == "raw 69 %, triaged 92 % of 12 counted (too small)"
+    record["fingerprint"] = "0123456789abcdef"
     (tmp_path / mut.SCORE_FILE).write_text(json.dumps(record))
-    assert "measured on course 0.9, now " in mut.describe_score(lesson)
+    assert "stale: graded on 2026-11-23 under grader fingerprint 0123456789abcdef, now " in mut.describe_score(lesson)
+    assert mut.score_text(lesson).endswith("; stale")
+    del record["fingerprint"]
+    (tmp_path / mut.SCORE_FILE).write_text(json.dumps(record))
+    assert "stale: graded on 2026-11-23, before grader fingerprints were recorded" in mut.describe_score(lesson)
+
+
+def test_the_grader_fingerprint_follows_the_grader_its_helpers_and_the_lesson(tmp_path: Path) -> None:
+    from types import SimpleNamespace
+
+    from ros2course.grade.fingerprint import grader_files, grader_fingerprint
+
+    lesson = SimpleNamespace(id="demo", folder=tmp_path, grader="cpp_node", packages=["cpp_package_with_a_node"],
+                             folders=[])
+    (tmp_path / "lesson.yaml").write_text("id: demo\n")
+    names = {p.name for p in grader_files(lesson)}
+    # cpp_node imports print_forever_node's steps: a change there changes what cpp-node's figure was measured on
+    assert {"cpp_node.py", "print_forever_node.py", "lesson.yaml", "session.py", "nodes.py", "CMakeLists.txt"} <= names
+    before = grader_fingerprint(lesson)
+    assert before == grader_fingerprint(lesson) and len(before) == 16
+    (tmp_path / "lesson.yaml").write_text("id: demo\ntitle: changed\n")
+    assert grader_fingerprint(lesson) != before
+
+
+def test_the_committed_grader_strength_doc_is_made_from_the_recorded_runs(tmp_path: Path) -> None:
+    """docs/grader-strength.md is regenerated from each lesson's mutation-score.json (and steadiness.json) and
+    compared: the figure can only say what the records say (`python benchmarks/grader_strength.py --doc-only`)."""
+    import importlib.util
+
+    from ros2course.lesson.catalog import load_catalog
+
+    spec = importlib.util.spec_from_file_location("grader_strength", ROOT / "benchmarks" / "grader_strength.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    doc = tmp_path / "grader-strength.md"
+    module.write_doc(doc, [], load_catalog().ids(), 30, 1, 2,
+                     speedup=next((line for line in (ROOT / "docs" / "grader-strength.md").read_text(
+                         encoding="utf-8").splitlines() if line.startswith("Parallel speed-up")), ""))
+    assert doc.read_text(encoding="utf-8") == (ROOT / "docs" / "grader-strength.md").read_text(encoding="utf-8"), \
+        "run `python benchmarks/grader_strength.py --doc-only`"
 
 
 @pytest.mark.ros

@@ -76,6 +76,8 @@ from ros2course.lesson.courses import MANIFEST, load_manifest
 TRIAGE_FILE = "mutation.yaml"
 #: The lesson's last mutation score, beside ``lesson.yaml``: written by ``dev mutate``, shown by ``dev validate``.
 SCORE_FILE = "mutation-score.json"
+#: Every graded mutant's outcome of the lesson's last run, beside its score (:func:`write_score`).
+OUTCOMES_FILE = "mutation-outcomes.json"
 #: The outcomes of a mutant, in the order the table shows them.
 KILLED, KILLED_BY_BUILD, SURVIVED, TIMED_OUT, GRADER_ERROR = (
     "killed", "killed by build", "survived", "timed out", "grader error")
@@ -610,55 +612,115 @@ def course_version() -> str:
     return load_manifest(root).version if (root / MANIFEST).is_file() else ""
 
 
-def write_score(lesson: Lesson, found: LessonMutation) -> Path | None:
+def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] | None = None) -> Path | None:
     """Record ``found``'s counts and score in ``chapters/<lesson>/mutation-score.json``; its path, or None.
 
     The file lives with the lesson, like its ``mutation.yaml``, so that ``dev validate``
     (:func:`describe_score`) and whoever reads the course see the grader's last
-    measured strength; commit it with the lesson. None when the lesson folder is
-    read-only (an installed course): the run's ``mutation.json`` still has it all.
+    measured strength; commit it with the lesson. Every mutant's outcome goes to
+    ``mutation-outcomes.json`` beside it. ``measured`` (``date``, ``fingerprint``) names
+    the run the outcomes come from when it is not now (a re-triage of an old run keeps
+    its date and its grader fingerprint). None when the lesson folder is read-only (an
+    installed course): the run's ``mutation.json`` still has it all.
     """
+    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+
+    measured = measured or {"date": dt.date.today().isoformat(), "fingerprint": grader_fingerprint(lesson)}
+    fingerprint = measured["fingerprint"]
     data = {key: value for key, value in found.to_dict().items() if key not in ("mutants", "stale", "lesson")}
-    data.update(date=dt.date.today().isoformat(), course_version=course_version(),
+    data.update(date=measured["date"], course_version=course_version(), fingerprint=fingerprint,
                 survivors=sorted(f"{g.mutant.file}:{g.mutant.line} ({g.mutant.key})" for g in found.graded
                                  if g.outcome == SURVIVED and not g.triaged))
+    # every mutant's outcome, committed with the lesson: the figure can be checked and re-derived (issue 37)
+    outcomes = {"fingerprint": fingerprint, "date": data["date"],
+                "mutants": [{"key": g.mutant.key, "file": g.mutant.file, "line": g.mutant.line,
+                             "original": g.mutant.original.strip(), "mutant": g.mutant.mutated.strip(),
+                             "outcome": g.outcome, "lost": g.lost, **({"triaged": g.triaged} if g.triaged else {})}
+                            for g in sorted(found.graded, key=lambda g: (g.mutant.file, g.mutant.line, g.mutant.key))]}
     path = lesson.folder / SCORE_FILE
     try:
         atomic_write_text(path, json.dumps(data, indent=1) + "\n")
+        atomic_write_text(lesson.folder / OUTCOMES_FILE, json.dumps(outcomes, indent=0) + "\n")
     except OSError:
         return None
     return path
 
 
-def score_text(lesson: Lesson) -> str:
-    """The lesson's last mutation score in a few words (a table cell): ``"93 % (20 of 368 mutants)"``,
-    ``"n/a (every counted mutant triaged)"`` or ``"not measured"`` (no :func:`write_score` file)."""
+#: Below this many counted mutants a score is too small to judge a grader by (issue 37).
+MIN_COUNTED = 20
+
+
+@dataclasses.dataclass
+class RecordedScore:
+    """A lesson's recorded mutation run (``mutation-score.json``), as the figures the doc and ``dev validate`` show.
+
+    Attributes:
+        counted: graded - killed by build - triaged (the score's denominator).
+        tuned: killed / counted (triage applied), None when nothing counts.
+        raw: killed / (graded - killed by build), before any triage, None when nothing was graded.
+        stale: "" when measured under the lesson's current grader fingerprint, else why not, with the run's date.
+    """
+
+    data: dict
+    counted: int
+    tuned: float | None
+    raw: float | None
+    stale: str
+
+    @property
+    def too_small(self) -> bool:
+        """Fewer than :data:`MIN_COUNTED` counted mutants."""
+        return self.counted < MIN_COUNTED
+
+
+def recorded_score(lesson: Lesson) -> RecordedScore | None:
+    """The lesson's recorded mutation run (:func:`write_score`), or None when there is none or it is unreadable."""
     try:
         data = json.loads((lesson.folder / SCORE_FILE).read_text(encoding="utf-8"))
-        score = data["score"]
-        graded, generated = data["graded"], data["generated"]
+        graded, by_build, triaged, killed = (int(data[k]) for k in ("graded", "killed_by_build", "triaged", "killed"))
     except (OSError, ValueError, KeyError, TypeError):
+        return None
+    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+
+    counted = graded - by_build - triaged
+    judged = graded - by_build
+    recorded, now = data.get("fingerprint"), grader_fingerprint(lesson)
+    when = data.get("date", "?")
+    stale = ("" if recorded == now else
+             f"stale: graded on {when}, before grader fingerprints were recorded" if not recorded else
+             f"stale: graded on {when} under grader fingerprint {recorded}, now {now}")
+    return RecordedScore(data, counted, killed / counted if counted > 0 else None,
+                         killed / judged if judged > 0 else None, stale)
+
+
+def _share(value: float | None) -> str:
+    return "n/a" if value is None else f"{100 * value:.0f} %"
+
+
+def score_text(lesson: Lesson) -> str:
+    """The lesson's last mutation score in a few words (a table cell): the raw kill rate, the score after
+    triage and its counted denominator, ``too small`` below :data:`MIN_COUNTED`, ``stale`` when the grader
+    changed since (``"raw 62 %, triaged 100 % of 13 counted (too small); stale"``), or ``"not measured"``."""
+    row = recorded_score(lesson)
+    if row is None:
         return "not measured"
-    share = "n/a" if score is None else f"{100 * score:.0f} %"
-    return f"{share} ({graded} of {generated} mutants)" if data.get("sampled") else f"{share} (all {generated} mutants)"
+    return (f"raw {_share(row.raw)}, triaged {_share(row.tuned)} of {row.counted} counted"
+            + (" (too small)" if row.too_small else "") + ("; stale" if row.stale else ""))
 
 
 def describe_score(lesson: Lesson) -> str:
     """One line on the lesson's last mutation score (:func:`write_score`), or how to measure it."""
-    how = f"ros2course dev mutate {lesson.id} --sample 20"
-    try:
-        data = json.loads((lesson.folder / SCORE_FILE).read_text(encoding="utf-8"))
-        score = data["score"]
-    except (OSError, ValueError, KeyError, TypeError):
+    how = f"ros2course dev mutate {lesson.id} --sample 30"
+    row = recorded_score(lesson)
+    if row is None:
         return f"{lesson.id}: grader strength not measured ({how})"
-    counted = data["graded"] - data["killed_by_build"] - data["triaged"]
-    share = "n/a" if score is None else f"{100 * score:.0f} %"
+    data = row.data
     graded = (f"{data['graded']} of {data['generated']} mutants (a sample)" if data.get("sampled")
               else f"all {data['generated']} mutants")
-    version = data.get("course_version", "")
-    stale = f"; measured on course {version}, now {course_version()}: {how}" \
-        if version and version != course_version() else ""
+    small = f"; {row.counted} counted mutants are too few to judge by (< {MIN_COUNTED})" if row.too_small else ""
+    stale = f"; {row.stale}: {how}" if row.stale else ""
     left = f"; {len(data.get('survivors', []))} survivor(s) not triaged" if data.get("survivors") else ""
-    return (f"{lesson.id}: grader strength {share} ({data['killed']} of {counted} counted mutants killed; "
+    return (f"{lesson.id}: grader strength {_share(row.tuned)} after triage, {_share(row.raw)} raw "
+            f"({data['killed']} of {row.counted} counted mutants killed; "
             f"{graded}, {data['triaged']} triaged, {data['killed_by_build']} killed by the build; "
-            f"dev mutate {data.get('date', '?')}{left}{stale})")
+            f"dev mutate {data.get('date', '?')}{left}{small}{stale})")

@@ -27,7 +27,10 @@ def write_steadiness(lesson: Lesson, row: Any) -> Path | None:
     What docs/grader-strength.md and the README's lesson table show as the reference's
     steadiness (issue 24). None when the lesson folder is read-only (an installed course).
     """
-    data = {**row.to_dict(), "date": dt.date.today().isoformat(), "course_version": course_version()}
+    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+
+    data = {**row.to_dict(), "date": dt.date.today().isoformat(), "course_version": course_version(),
+            "fingerprint": grader_fingerprint(lesson)}
     data.pop("lesson", None)
     path = lesson.folder / STEADINESS_FILE
     try:
@@ -39,15 +42,19 @@ def write_steadiness(lesson: Lesson, row: Any) -> Path | None:
 
 def steadiness_text(lesson: Lesson) -> str:
     """The reference's last repeat run in a few words (a table cell): ``"steady, 20 runs (2 at once)"``,
-    ``"UNSTEADY: listed (passed 13, failed 7)"`` or ``"not measured"``."""
+    ``"UNSTEADY: listed (passed 13, failed 7)"`` or ``"not measured"``; ``"; stale (2026-11-25)"`` added
+    when it was measured under another grader fingerprint (:mod:`ros2course.grade.fingerprint`)."""
     try:
         data = json.loads((lesson.folder / STEADINESS_FILE).read_text(encoding="utf-8"))
         runs, load, flakes = data["runs"], data["load"], data["flakes"]
     except (OSError, ValueError, KeyError, TypeError):
         return "not measured"
+    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+
+    stale = "" if data.get("fingerprint") == grader_fingerprint(lesson) else f"; stale ({data.get('date', '?')})"
     if data.get("ok"):
-        return f"steady, {runs} runs ({load} at once)"
+        return f"steady, {runs} runs ({load} at once){stale}"
     if flakes:
         changed = ", ".join(f"{f['check']} (passed {f['passed']}, failed {f['failed']})" for f in flakes)
-        return f"UNSTEADY in {runs} runs ({load} at once): {changed}"
-    return f"not full marks in {runs - data.get('judged_ok', 0)} of {runs} runs ({load} at once)"
+        return f"UNSTEADY in {runs} runs ({load} at once): {changed}{stale}"
+    return f"not full marks in {runs - data.get('judged_ok', 0)} of {runs} runs ({load} at once){stale}"

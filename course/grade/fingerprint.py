@@ -1,0 +1,100 @@
+"""A lesson's grader fingerprint: what a recorded grader-strength figure was measured on (issue 37).
+
+A mutation score says how many wrong versions of the reference a grader catches. It stays
+true only while the grader, what it stands on and what it is measured against are the same.
+The fingerprint is one sha256 over the contents of:
+
+* the lesson's grader module and every course module it imports (``graders/_*.py``, another
+  lesson's grader), transitively, and the grader's data folder (``graders/data/<grader>/``);
+* the engine code a grader runs on: the kit (``ros2course.kit``), the grading session and
+  engine (``ros2course.grade``'s ``engine``, ``session``, ``checks``, ``results``) and the
+  runtime (``ros2course.run``);
+* the lesson's ``lesson.yaml``;
+* the reference files the mutants are made from (the lesson's packages, their dependencies in
+  ``solutions/src`` and its ``folders``: what :func:`ros2course.build.reference.reference_workspace`
+  copies).
+
+A row of docs/grader-strength.md or a ``dev validate`` line measured under another fingerprint
+is stale: it says so, with the date of its run.
+"""
+
+from __future__ import annotations
+
+import ast
+import hashlib
+from pathlib import Path
+
+from ros2course.lesson import content_root
+from ros2course.lesson.catalog import Lesson
+from ros2course.ros.packages import dependency_closure, find_packages
+
+#: The engine modules (relative to the ``ros2course`` package) whose code every grader runs on.
+ENGINE_PARTS = ("kit", "run", "grade/engine.py", "grade/session.py", "grade/checks.py", "grade/results.py")
+_SKIP = ("__pycache__", ".egg-info")
+
+
+def _files(root: Path) -> list[Path]:
+    if root.is_file():
+        return [root]
+    return sorted(p for p in root.rglob("*") if p.is_file() and not any(s in str(p) for s in _SKIP))
+
+
+def _course_imports(module: Path, graders: Path) -> list[Path]:
+    """The modules of the course's ``graders`` package that ``module`` imports (``from . import _x``,
+    ``from ._x import y``, ``from .other_lesson import z``)."""
+    try:
+        tree = ast.parse(module.read_text(encoding="utf-8"))
+    except (OSError, SyntaxError, ValueError):
+        return []
+    out = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.level == 1:
+            names = [node.module] if node.module else [alias.name for alias in node.names]
+            out += [graders / f"{name.split('.')[0]}.py" for name in names]
+    return [path for path in out if path.is_file()]
+
+
+def grader_files(lesson: Lesson) -> list[Path]:
+    """Every file :func:`grader_fingerprint` covers for ``lesson``, sorted, each once."""
+    import ros2course  # noqa: PLC0415 - the engine's own folder
+
+    root = content_root()
+    graders = root / "graders"
+    todo, modules = [graders / f"{lesson.grader}.py"], set()
+    while todo:
+        module = todo.pop()
+        if module in modules or not module.is_file():
+            continue
+        modules.add(module)
+        todo += _course_imports(module, graders)
+    files = set(modules)
+    files.update(_files(graders / "data" / lesson.grader) if (graders / "data" / lesson.grader).is_dir() else [])
+    engine = Path(ros2course.__file__).resolve().parent
+    for part in ENGINE_PARTS:
+        files.update(p for p in _files(engine / part) if p.suffix == ".py")
+    if (lesson.folder / "lesson.yaml").is_file():
+        files.add(lesson.folder / "lesson.yaml")
+    solutions = root / "solutions"
+    found = find_packages(solutions / "src")
+    for name in dependency_closure(list(lesson.packages), found):
+        files.update(_files(found[name][0]))
+    for folder in lesson.folders:
+        if (solutions / folder).exists():
+            files.update(_files(solutions / folder))
+    return sorted(files)
+
+
+def grader_fingerprint(lesson: Lesson) -> str:
+    """sha256 (hex, first 16 digits) over the paths (relative to the course or the engine) and contents
+    of :func:`grader_files`: equal only when the grader, the engine it runs on, the lesson and its
+    reference are the same."""
+    import ros2course  # noqa: PLC0415
+
+    bases = (content_root(), Path(ros2course.__file__).resolve().parent)
+    digest = hashlib.sha256()
+    for path in grader_files(lesson):
+        rel = next((path.resolve().relative_to(b.resolve()).as_posix() for b in bases
+                    if path.resolve().is_relative_to(b.resolve())), path.name)
+        digest.update(f"{rel}\0".encode())
+        digest.update(hashlib.sha256(path.read_bytes()).digest())
+    return digest.hexdigest()[:16]
