@@ -2,8 +2,9 @@
 # Inspect and call a service with `ros2 service` (tutorial ch. 21).
 # Run it from the workspace root, with the workspace sourced:  bash cli/inspect_services.sh
 
-# 1. Every service in the graph (-t would add their types). No ros2 daemon runs yet in a
-#    fresh ROS domain, so the command listens for the nodes itself: give it 2 s, not 0.5 s.
+# 1. Every service in the graph (-t would add their types). In a terminal where no ros2 daemon
+#    runs yet (a fresh ROS domain), the command listens for the nodes itself: give it 2 s, not
+#    0.5 s. (The check starts a daemon that already knows the server, so it cannot tell.)
 ros2 service list --spin-time 2
 
 # 2. The type of /what_is_the_point: the one to give `ros2 service call`.
