@@ -5,15 +5,19 @@ and judges the learner's client from its /rosout records and how its process end
 Three runs, each in a graph of its own, each with a goal of random coordinates
 given as the parameters ``x`` and ``y``:
 
-* **goal**: no server at first (the client must say it waits); then the grader's
+* **goal**: no server at first (the client must say it waits, at most once a second:
+  the server stays missing 2.5 s after the first such record); then the grader's
   server appears, accepts the goal, sends five feedback messages with random
   distances and ends the goal SUCCEEDED with a final position of its own. The log
-  must show every distance, the final position and the status; the process must
-  then end by itself with exit code 0.
+  must show every distance, each in a record of its own in the order sent, before
+  the result's record (logged as each arrives), the final position and the status;
+  the process must then end by itself with exit code 0.
 * **aborted**: the server accepts, sends two feedback messages and ABORTS: the log
-  must name that status (a client that always says "succeeded" fails).
-* **rejected**: the server rejects the goal: the client must say so and end cleanly
-  (a rejected goal has no result: asking for it gets an empty answer with status UNKNOWN).
+  must name that status with the final position (a client that always says
+  "succeeded" fails).
+* **rejected**: the server rejects the goal: the client must say so and end cleanly,
+  without a record that pretends the goal ended (a rejected goal has no result: asking
+  for it gets an empty answer with status UNKNOWN).
 * **interrupted**: no server at all; Ctrl+C while the client waits must end it with
   exit code 0 and no traceback.
 """
@@ -39,6 +43,12 @@ NODE = "move_straight_in_2d_action_client"
 ACTION = "/move_straight_in_2d"
 #: Seconds the client runs without a server before the grader's appears.
 WAIT_WINDOW = 3.0
+#: Seconds the server stays missing after the client's first "waiting" record: time for a client that
+#: says so at most once a second to say it three times (a client that says it at every 0.2 s tick: 13).
+THROTTLE_WINDOW = 2.5
+#: Seconds between two "waiting" records (the lesson: at most once a second); a record or two more than
+#: THROTTLE_WINDOW / WAIT_PERIOD + 1 is forgiven (a timer that catches up after a late tick).
+WAIT_PERIOD = 1.0
 #: Seconds a client may take to end by itself once its goal has ended.
 END_TIMEOUT = 3.0
 #: Seconds for the log records the grader looks for (one goal lasts under a second).
@@ -47,9 +57,11 @@ LOG_TIMEOUT = 5.0
 NUMBER_TOLERANCE = 0.0006
 PERIOD = 0.1  # seconds between the grader's feedback messages
 #: Seconds the contract needs the client watched (benchmarks/all_lessons.py): its first "waiting" record
-#: (rclpy's wait_for_server(timeout_sec=1.0) returns after 1 s), a goal of five feedback messages and
-#: an aborted one of two.
-WINDOW = 1.0 + (5 + 2) * PERIOD
+#: (rclpy's wait_for_server(timeout_sec=1.0) returns after 1 s), the records that follow while the server
+#: is still missing, a goal of five feedback messages and an aborted one of two.
+WINDOW = 1.0 + THROTTLE_WINDOW + (5 + 2) * PERIOD
+#: What a record pretending a rejected goal ended says (a status, a result).
+PRETENDS = re.compile(r"succe|abort|cancel|unknown|status|final|result", re.IGNORECASE)
 
 RUN = ("executable",)
 CHECKS = [
@@ -61,13 +73,17 @@ CHECKS = [
     Check("waits", f"While no server offers {ACTION}, it says in its log that it waits", 1,
           "in a timer: if not self.action_client.server_is_ready(): log 'action server not available, waiting...' "
           "(throttle_duration_sec=1.0) and return", needs=RUN, part="goal"),
+    Check("waits_throttled", "It says so at most once a second", 1,
+          "log the waiting record with throttle_duration_sec=1.0 (the timer that checks server_is_ready() may "
+          "tick faster; the log must not)", needs=("waits",), part="goal"),
     Check("goal_sent", "Once the server is there, it sends one goal: the parameters x and y", 2,
           "declare the parameters x and y (self.declare_parameter('x', 1.0).value), put them in "
           "goal.desired_position and call self.action_client.send_goal_async(goal, feedback_callback=...)",
           needs=RUN, part="goal"),
-    Check("logs_feedback", "It logs the distance_to_goal of every feedback message", 2,
-          "pass feedback_callback=self.feedback_callback to send_goal_async; log "
-          "feedback_message.feedback.distance_to_goal with get_logger().info()", needs=RUN, part="goal"),
+    Check("logs_feedback", "It logs the distance_to_goal of every feedback message, as each arrives", 2,
+          "pass feedback_callback=self.feedback_callback to send_goal_async; there, log "
+          "feedback_message.feedback.distance_to_goal with get_logger().info(): one record per message, the "
+          "last (0.0) too", needs=RUN, part="goal"),
     Check("logs_result", "It logs the result: the final position and the status SUCCEEDED", 2,
           "in goal_response_callback: goal_handle.get_result_async().add_done_callback(self.result_callback); "
           "there, response = future.result(): log response.result.final_position and the name of "
@@ -75,13 +91,14 @@ CHECKS = [
     Check("ends", "Once the goal has ended, the client ends by itself: exit code 0, no traceback", 1,
           "after logging the result, stop spinning: set a flag and loop `while rclpy.ok() and not node.done: "
           "rclpy.spin_once(node, timeout_sec=0.1)` in main", needs=RUN, part="goal"),
-    Check("logs_aborted", "A goal the server aborts is logged as ABORTED", 1,
+    Check("logs_aborted", "A goal the server aborts is logged as ABORTED, with its final position", 1,
           "log the status the result response carries (response.status: GoalStatus.STATUS_ABORTED is 6), "
-          "never a fixed 'succeeded'", needs=RUN, part="aborted"),
+          "never a fixed 'succeeded', and the final position whatever the status", needs=RUN, part="aborted"),
     checks.ctrl_c("sigint_exit", "the client while it waits for the server", 1, needs=RUN, part="interrupted"),
     Check("handles_rejection", "A rejected goal is logged as rejected, and the client ends cleanly", 2,
           "in goal_response_callback: if not goal_handle.accepted: log that the goal was rejected, set the flag "
-          "that ends main() and return (a rejected goal has no result: asking for it gets status UNKNOWN)",
+          "that ends main() and return before get_result_async() (a rejected goal has no result: asking for it "
+          "gets status UNKNOWN, and a log that pretends the goal ended)",
           needs=RUN, part="rejected"),
 ]
 
@@ -154,12 +171,15 @@ def _goal_run(s: GradingSession, action: Any, path: Any) -> None:
     """waits, goal_sent, logs_feedback, logs_result, ends."""
     xy = _goal_xy()
     distances = sorted((round(random.uniform(0.05, 0.95), 3) for _ in range(4)), reverse=True) + [0.0]
-    final = (round(xy[0] + random.uniform(-0.004, 0.004), 3), round(xy[1] + random.uniform(-0.004, 0.004), 3))
+    # x at least 2 mm off the goal's: the record of the goal sent (x, y) never holds the final position
+    final = (round(xy[0] + random.choice((-1, 1)) * random.uniform(0.002, 0.004), 3),
+             round(xy[1] + random.uniform(-0.004, 0.004), 3))
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
         action, final, distances, act.SUCCEEDED))
     rosout = s.graph.rosout()
     node = kit.start_node(s, "node_name", path, NODE, args=_params(xy), label=EXECUTABLE)
-    _services.says_it_waits(s, "waits", rosout, node, ACTION, timeout=WAIT_WINDOW, what="action server")
+    if _services.says_it_waits(s, "waits", rosout, node, ACTION, timeout=WAIT_WINDOW, what="action server"):
+        _throttled(s, rosout, node)
     server.offer()
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.goals), LOG_TIMEOUT, abort=node.ended)
@@ -178,11 +198,15 @@ def _goal_run(s: GradingSession, action: Any, path: Any) -> None:
     s.record("goal_sent", len(sent) == 1 and abs(sent[0][0] - xy[0]) < 1e-9 and abs(sent[0][1] - xy[1]) < 1e-9,
              f"{len(sent)} goal(s) by the time the first had ended: {shown}", expected)
     records = _records(rosout)
-    found = [d for d in distances if any(_has(text, d) for text in records)]
+    found = _feedback_records(records, distances, final)
+    anywhere = [d for d in distances if any(_has(text, d) for text in records)]
     s.record("logs_feedback", len(found) == len(distances),
              f"{len(found)} of the {len(distances)} distances sent ({', '.join(f'{d:.3f}' for d in distances)}) "
-             f"found in the log" + ("" if found else f"; last log records: {_last(rosout)}"),
-             "each distance_to_goal in a log record (the logger, not print())",
+             "found in the log, each in a record of its own, in the order sent, before the result"
+             + ("" if len(anywhere) == len(found) else
+                f" ({len(anywhere)} written somewhere: several in one record, out of order, or only with the result)")
+             + ("" if found else f"; last log records: {_last(rosout)}"),
+             "each distance_to_goal in a log record of its own as it arrives (the logger, not print())",
              fraction=len(found) / len(distances))
     shown = [text for text in records if _has(text, final[0]) and _has(text, final[1])]
     said = [text for text in shown if re.search(r"succe", text, re.IGNORECASE)]
@@ -195,6 +219,43 @@ def _goal_run(s: GradingSession, action: Any, path: Any) -> None:
         s.record("logs_result", False, f"no record with ({final[0]}, {final[1]}); last log records: {_last(rosout)}",
                  expected)
     _ends(s, "ends", node.proc, "once its goal had SUCCEEDED")
+
+
+def _throttled(s: GradingSession, rosout: Any, node: kit.StartedNode) -> None:
+    """Record ``waits_throttled``: with the server missing THROTTLE_WINDOW s more, the client's "waiting"
+    records (their own stamps) come at most once every WAIT_PERIOD s (one or two more are forgiven)."""
+    def waiting() -> list[float]:
+        return [r.stamp.sec + r.stamp.nanosec * 1e-9
+                for r in rosout.records(node=NODE, match=lambda text: _services.WAITING.search(text) is not None)]
+
+    with s.phase("observe"):
+        kit.wait_until(lambda: False, THROTTLE_WINDOW, abort=node.ended)
+    stamps = sorted(waiting())
+    if not stamps:  # the record said it waits under another logger name: nothing to time
+        stamps = sorted(r.stamp.sec + r.stamp.nanosec * 1e-9 for r in rosout.records(
+            match=lambda text: _services.WAITING.search(text) is not None))
+    span = stamps[-1] - stamps[0] if stamps else 0.0
+    allowed = int(span / WAIT_PERIOD) + 2
+    gaps = [b - a for a, b in zip(stamps, stamps[1:])]
+    s.record("waits_throttled", len(stamps) <= allowed,
+             f"{len(stamps)} 'waiting' record(s) in {span:.1f} s without the server"
+             + (f", {min(gaps):.2f} s apart at the closest" if gaps else ""),
+             f"at most one every {WAIT_PERIOD:.0f} s (at most {allowed} in {span:.1f} s; throttle_duration_sec=1.0)")
+
+
+def _feedback_records(records: list[str], distances: list[float], final: tuple[float, float]) -> list[float]:
+    """The distances logged as the feedback arrived: each in a record of its own (one record matches one
+    distance), in the order sent, not in a record holding the final position (the result's: a client that
+    logs the Point (x, y, z=0.0) would show the last distance, 0.0, there)."""
+    found: list[float] = []
+    for text in records:
+        if len(found) == len(distances):
+            break
+        if _has(text, final[0]) and _has(text, final[1]):
+            break  # the result is logged: the feedback came before it
+        if _has(text, distances[len(found)]):
+            found.append(distances[len(found)])
+    return found
 
 
 def _ends(s: GradingSession, check_id: str, proc: kit.LearnerProcess, when: str) -> bool:
@@ -228,12 +289,18 @@ def _aborted_run(s: GradingSession, action: Any, path: Any) -> None:
     with s.phase("observe"):
         kit.wait_until(lambda: any(re.search(r"abort", text, re.IGNORECASE) for text in _records(rosout)),
                        2 * LOG_TIMEOUT, abort=_gone(proc))
+    with s.phase("observe"):  # the position may be in a record of its own, just after
+        kit.wait_until(lambda: any(_has(text, final[0]) and _has(text, final[1]) for text in _records(rosout)),
+                       LOG_TIMEOUT, abort=_gone(proc))
     said = [text for text in _records(rosout) if re.search(r"abort", text, re.IGNORECASE)]
-    expected = "a log record naming the status ABORTED"
+    where = [text for text in _records(rosout) if _has(text, final[0]) and _has(text, final[1])]
+    expected = f"a log record naming the status ABORTED, and the final position ({final[0]}, {final[1]})"
     if not server.goals:
         raise Unmet(f"no goal reached the server; last log records: {_last(rosout)}; {kit.process_state(proc)}")
-    s.record("logs_aborted", bool(said), f"'{said[0][:120]}'" if said else
-             f"the goal was aborted; its log: {_last(rosout)}", expected)
+    s.record("logs_aborted", bool(said and where),
+             (f"'{said[0][:120]}'" + ("" if said[0] in where else f"; '{where[0][:120]}'" if where else
+                                     f": no record with the final position ({final[0]}, {final[1]})"))
+             if said else f"the goal was aborted; its log: {_last(rosout)}", expected)
 
 
 def _rejected_run(s: GradingSession, action: Any, path: Any) -> None:
@@ -249,7 +316,12 @@ def _rejected_run(s: GradingSession, action: Any, path: Any) -> None:
             raise Unmet(f"no goal reached the server; last log records: {_last(rosout)}; {kit.process_state(proc)}")
         kit.wait_until(lambda: any(re.search(r"reject", text, re.IGNORECASE) for text in _records(rosout))
                        and proc.poll() is not None, END_TIMEOUT, abort=_gone(proc))
-    said = [text for text in _records(rosout) if re.search(r"reject", text, re.IGNORECASE)]
+        if proc.poll() is not None:  # what it logged just before exiting may still be on its way
+            kit.wait_until(lambda: False, 0.5)
+    records = _records(rosout)
+    said = [text for text in records if re.search(r"reject", text, re.IGNORECASE)]
+    after = records[records.index(said[0]) + 1:] if said else []
+    pretends = [text for text in after if PRETENDS.search(text) and not re.search(r"reject", text, re.IGNORECASE)]
     ended = proc.exit_state()
     traceback = "Traceback (most recent call last)" in proc.stderr() + proc.stdout()
     problems = []
@@ -259,5 +331,9 @@ def _rejected_run(s: GradingSession, action: Any, path: Any) -> None:
         problems.append(f"still running {END_TIMEOUT:.0f} s after the rejection")
     elif ended.returncode != 0 or traceback:
         problems.append(f"the process {ended.describe()}" + (f" ({ended.last_line})" if ended.last_line else ""))
+    if pretends:
+        problems.append(f"after the rejection, a record that pretends the goal ended: '{pretends[0][:120]}' (a rejected "
+                        "goal has no result: do not ask for it)")
     s.record("handles_rejection", not problems, "; ".join(problems) or f"'{said[0][:120]}', then the process "
-             f"{ended.describe()}", "a log record saying the goal was rejected, then exit code 0, no traceback")
+             f"{ended.describe()}", "a log record saying the goal was rejected, no status or result logged after it, then exit code 0, "
+             "no traceback")

@@ -4,10 +4,12 @@ Black-box, as ``ros2 action send_goal`` would: the grader's own action client
 (:class:`ros2course.kit.actions.GoalClient`) sends the learner's server four goals
 in a row, the point it simulates carrying over from one to the next:
 
-1. a goal 1 m away: accepted, feedback every 0.1 s with the distance falling at
-   1 m/s (a least-squares fit over the feedback messages' send stamps), the result
-   the goal itself and the status SUCCEEDED;
-2. a goal 3 m away and a goal with a NaN coordinate: both rejected;
+1. a goal 1 m away (just under: its last step is a full one, so a server that skips the last
+   feedback (0.0) or does not land on the goal shows it in every run): accepted, feedback every
+   0.1 s with the distance falling at 1 m/s (a least-squares fit over the feedback messages' send
+   stamps), ending at 0.0, the result the goal itself and the status SUCCEEDED;
+2. goals 3 m away along y and along x, one 2.6 m away across the origin, and goals with a NaN x
+   and a NaN y: all rejected;
 3. a goal 1.6 m from where goal 1 ended, canceled after three feedback messages:
    its first feedback shows where the point started (the position is kept), the
    cancel is accepted, the goal ends CANCELED short of the goal and nothing moves
@@ -55,6 +57,10 @@ POSITION_TOLERANCE = 0.01
 STEP_TOLERANCE = 1.5 * SPEED * PERIOD
 #: Seconds a goal of distance d may take: d / SPEED plus this (start-up and a loaded machine).
 GOAL_SLACK = 3.0
+#: Metres: goal 1 from (0, 0). Just under 1 m (with its coordinates rounded to 3 decimals, 0.9983 to
+#: 0.9997 m): the step before the last leaves just under 0.1 m, so the last step is a full one and
+#: every run judges the last feedback (0.0) and the landing (a server that skips either is 0.1 m off).
+FIRST_DISTANCE = 0.999
 #: Metres: goal 3 (canceled) and goal 4 (preempted) from where the point is (see the module docstring).
 CANCEL_DISTANCE = 1.6
 PREEMPT_DISTANCE = 1.8
@@ -73,6 +79,10 @@ RUN = ("executable",)
 SERVED = ("action_served",)
 CHECKS = [
     Check("build", "The packages build with colcon", 1),
+    Check("depends", "The package.xml files declare the action's dependencies", 1,
+          "package_with_interfaces/package.xml: <depend>action_msgs</depend> (actions need it); "
+          f"{PACKAGE}/package.xml: <depend>rclpy</depend>, <depend>action_msgs</depend>, "
+          "<depend>package_with_interfaces</depend>"),
     Check("executable", f"ros2 run finds {EXECUTABLE}", 1,
           f"add '{EXECUTABLE} = {PACKAGE}.{EXECUTABLE}:main' to console_scripts in setup.py, then colcon build"),
     Check("node_name", f"A node named {NODE} starts", 1, f"pass '{NODE}' to super().__init__()", needs=RUN),
@@ -84,7 +94,8 @@ CHECKS = [
           "goal_callback returns GoalResponse.ACCEPT for a goal with finite coordinates within 2 m", needs=SERVED),
     Check("feedback", "While it moves, it publishes feedback: distance_to_goal falls at every step, to 0", 2,
           "after each step: feedback.distance_to_goal = the distance still to go; "
-          "goal_handle.publish_feedback(feedback)", needs=("goal_accepted",)),
+          "goal_handle.publish_feedback(feedback); when the goal is one step away or closer, land on it and "
+          "publish a last feedback of 0.0", needs=("goal_accepted",)),
     Check("feedback_rate", f"One feedback message every {PERIOD} s ({1 / PERIOD:.0f} Hz)", 1,
           f"sleep {PERIOD} s between two steps (time.sleep({PERIOD}) in execute_callback)", needs=("feedback",)),
     Check("speed", f"The point moves at {SPEED} m/s (the distance falls {SPEED * PERIOD} m per step)", 2,
@@ -92,9 +103,10 @@ CHECKS = [
           needs=("feedback",)),
     Check("result", "The goal ends SUCCEEDED, its result the goal itself", 2,
           "when the last step lands on the goal: goal_handle.succeed(), and return a Result whose final_position "
-          "is where the point is", needs=("goal_accepted",)),
-    Check("rejects", f"Goals more than {MAX_DISTANCE} m away, or not finite, are rejected", 2,
-          "in goal_callback: return GoalResponse.REJECT when math.isfinite() fails for x or y, or when the goal "
+          "is where the point is (put the point exactly on the goal when it is one step away or closer: "
+          "compare distances with a step, never == on floats)", needs=("goal_accepted",)),
+    Check("rejects", f"Goals more than {MAX_DISTANCE} m away, or with an x or a y not finite, are rejected", 2,
+          "in goal_callback: return GoalResponse.REJECT when math.isfinite() fails for x or for y, or when the goal "
           f"is more than {MAX_DISTANCE} m from the point (measure from where the point is now, not from the origin)",
           needs=SERVED),
     Check("position_kept", "The next goal starts where the last one ended", 1,
@@ -117,6 +129,10 @@ CHECKS = [
     Check("cli_send_goal", "It sends the goal given as its arguments, prints the feedback and the result", 2,
           f"ros2 action send_goal --feedback {ACTION} {ACTION_TYPE} \"{{desired_position: {{x: $1, y: $2}}}}\"",
           part="cli", needs=("cli_script",)),
+    Check("cli_sequence", "It runs list, info, then send_goal, in that order, and ends by itself", 1,
+          f"three commands, one after the other, in this order: ros2 action list; ros2 action info {ACTION}; "
+          "ros2 action send_goal --feedback ... (nothing that keeps running after it)",
+          part="cli", needs=("cli_list", "cli_info", "cli_send_goal")),
     checks.ctrl_c("sigint_exit", "the server", 1, needs=RUN),
 ]
 
@@ -164,6 +180,7 @@ def _wait_feedback(s: GradingSession, client: act.GoalClient, goal: act.Goal, co
 
 def grade(s: GradingSession) -> None:
     """Start the server, send it four goals, then run the learner's script against it."""
+    _depends(s)
     action = s.interface_type("package_with_interfaces", "action", "MoveStraightIn2D")
     path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)
     client = act.GoalClient(s, action, ACTION)  # before the node starts: no feedback is missed
@@ -186,6 +203,37 @@ def grade(s: GradingSession) -> None:
         _cli(s, node, stop[0])  # goal 4's second goal took a correct server back to stop[0]
 
 
+#: What each package's package.xml must declare (<depend>: build, export and run), CONTRACT.md.
+DEPENDENCIES = {"package_with_interfaces": ("action_msgs",),
+                PACKAGE: ("rclpy", "action_msgs", "package_with_interfaces")}
+
+
+def _depends(s: GradingSession) -> None:
+    """Record ``depends``: both package.xml declare what the lesson and its contract list (partial credit per name)."""
+    seen, missing = [], []
+    total = sum(len(needed) for needed in DEPENDENCIES.values())
+    for package, needed in DEPENDENCIES.items():
+        found = kit.source_package(s, package)
+        if found is None and package != PACKAGE:
+            # built beneath the workspace (an underlay, as dev validate builds the course's copy): not the learner's
+            seen.append(f"{package}: not in src/ (not judged)")
+            total -= len(needed)
+            continue
+        if found is None:
+            missing += [f"{package}: no such package in src/"]
+            seen.append(f"{package}: not found")
+            continue
+        deps = kit.declared_dependencies(found[1])
+        lacking = [name for name in needed if name not in deps]
+        missing += [f"{package}: {name}" for name in lacking]
+        seen.append(f"{package} declares {', '.join(sorted(deps)) or 'nothing'}"
+                    + (f" (missing {', '.join(lacking)})" if lacking else ""))
+    s.record("depends", not missing, "; ".join(seen),
+             "; ".join(f"{package}: " + ", ".join(f"<depend>{n}</depend>" for n in needed)
+                       for package, needed in DEPENDENCIES.items()),
+             fraction=max(0, total - len(missing)) / total)
+
+
 def _served(s: GradingSession, client: act.GoalClient, node: kit.StartedNode) -> None:
     """Record ``action_served``: the node lists the action and the grader's client reaches it."""
     found = act.wait_for_action(s, node.name, "servers", ACTION, 5.0, abort=node.ended)
@@ -201,12 +249,12 @@ def _served(s: GradingSession, client: act.GoalClient, node: kit.StartedNode) ->
 
 def _first_goal(s: GradingSession, action: Any, client: act.GoalClient,
                 node: kit.StartedNode) -> tuple[tuple[float, float], float]:
-    """Goal 1 (1 m from the origin): goal_accepted, feedback, feedback_rate, speed, result.
+    """Goal 1 (FIRST_DISTANCE from the origin): goal_accepted, feedback, feedback_rate, speed, result.
 
     Returns where the point is believed to be afterwards, and the goal's direction (radians).
     """
     angle = random.uniform(0.0, 2.0 * math.pi)
-    target = (round(math.cos(angle), 3), round(math.sin(angle), 3))
+    target = (round(FIRST_DISTANCE * math.cos(angle), 3), round(FIRST_DISTANCE * math.sin(angle), 3))
     distance = math.hypot(*target)
     goal = client.send(_goal(action, *target))
     s.record("goal_accepted", bool(goal.accepted),
@@ -233,21 +281,27 @@ def _judge_feedback(s: GradingSession, client: act.GoalClient, goal: act.Goal, d
         kit.wait_until(lambda: any(d <= POSITION_TOLERANCE for _, d in _distances(client, goal)), kit.LATE_DELIVERY)
     samples = _distances(client, goal)
     steps = int(distance / (SPEED * PERIOD))
-    expected = (f"about {steps} feedback messages, distance_to_goal falling at every one, from at most "
-                f"{distance:.2f} m to 0 (± {POSITION_TOLERANCE})")
+    expected = (f"about {steps} feedback messages, distance_to_goal falling at every one, from about "
+                f"{distance - SPEED * PERIOD:.2f} m (the point starts at (0, 0)) to a last 0.0 (± {POSITION_TOLERANCE})")
     if not samples:
         s.record("feedback", False, f"no feedback in {waited:.1f} s (status {act.status_name(goal.status)})",
                  expected)
         return
     values = [d for _, d in samples]
+    # the first message seen is at most one step (and those taken since the goal was sent) below the distance
+    # from (0, 0): a point that started elsewhere is farther from goal 1, or nearer
+    lowest = distance - STEP_TOLERANCE - SPEED * max(0.0, samples[0][0] - goal.sent)
     shown = ", ".join(f"{d:.3f}" for d in values[:4]) + (f", ..., {values[-1]:.3f}" if len(values) > 4 else "")
     falling = all(b < a for a, b in itertools.pairwise(values))
-    ok = (falling and len(values) >= steps // 2 and values[0] <= distance + POSITION_TOLERANCE
+    ok = (falling and len(values) >= steps // 2 and lowest <= values[0] <= distance + POSITION_TOLERANCE
           and values[-1] <= POSITION_TOLERANCE)
     why = "" if ok else (": it does not fall at every step" if not falling else
                          f": only {len(values)} message(s)" if len(values) < steps // 2 else
-                         ": it does not end at 0" if values[-1] > POSITION_TOLERANCE else
-                         f": it starts above the {distance:.3f} m to go")
+                         ": it does not end at 0 (a last feedback of 0.0 once on the goal)"
+                         if values[-1] > POSITION_TOLERANCE else
+                         f": it starts above the {distance:.3f} m from (0, 0) to go" if values[0] > distance else
+                         f": it starts below {lowest:.3f} m, nearer than the {distance:.3f} m from (0, 0) allows "
+                         "(did the point start at (0, 0)?)")
     s.record("feedback", ok, f"{len(values)} feedback message(s), distance_to_goal {shown}{why}", expected)
     stamps = [t for t, _ in samples]
     kit.rate(s, "feedback_rate", stamps[:-1] if len(stamps) > steps else stamps, period=PERIOD,
@@ -273,16 +327,23 @@ def _slope(points: list[tuple[float, float]]) -> float:
 
 
 def _rejects(s: GradingSession, action: Any, client: act.GoalClient, start: tuple[float, float]) -> None:
-    """Record ``rejects``: a goal 3 m from the point, one 2.6 m from it across the origin (only 1.6 m from
-    the origin: a server measuring from (0, 0) instead of from the point accepts it) and one with a NaN
-    coordinate are all rejected. ``start`` is the point after goal 1, 1 m from the origin."""
-    angle = random.uniform(0.0, 2.0 * math.pi)
-    far = (round(start[0] + 3.0 * math.cos(angle), 3), round(start[1] + 3.0 * math.sin(angle), 3))
+    """Record ``rejects``: goals 3 m from the point along y and along x, one 2.6 m from it across the
+    origin (only 1.6 m from the origin: a server measuring from (0, 0) instead of from the point accepts
+    it), one with a NaN x and one with a NaN y are all rejected. ``start`` is the point after goal 1, 1 m
+    from the origin.
+
+    The far goals go from the point towards the origin's side along one axis each, whatever goal 1's
+    random direction: the distance along the other axis is 0, so a server that ignores it, or mixes
+    the goal's and the point's coordinates on it, accepts one of them in every run."""
+    far_y = (round(start[0], 3), round(start[1] - math.copysign(3.0, start[1]), 3))
+    far_x = (round(start[0] - math.copysign(3.0, start[0]), 3), round(start[1], 3))
     across = (round(-1.6 * start[0], 3), round(-1.6 * start[1], 3))
-    cases = [(f"{_show(far)}, 3 m away", far),
+    cases = [(f"{_show(far_y)}, 3 m away", far_y),
+             (f"{_show(far_x)}, 3 m away", far_x),
              (f"{_show(across)}, {math.dist(across, start):.1f} m away (but {math.hypot(*across):.1f} m from the "
               "origin)", across),
-             ("(nan, 0.5)", (math.nan, 0.5))]
+             ("(nan, 0.5)", (math.nan, 0.5)),
+             ("(0.5, nan)", (0.5, math.nan))]
     seen, wrong = [], 0
     for label, xy in cases:
         goal = client.send(_goal(action, *xy))
@@ -487,6 +548,26 @@ def _cli(s: GradingSession, node: kit.StartedNode, start: tuple[float, float]) -
                     f"that /{NODE} serves {ACTION}", f"ros2 action info {ACTION}")
     needles = ["Feedback:", "distance_to_goal:", "Goal finished with status: SUCCEEDED",
                f"x: {target[0]}", f"y: {target[1]}"]
-    scripts.printed(s, "cli_send_goal", run, needles, f"the goal ({target[0]}, {target[1]}) sent, its feedback "
-                    "and its result", f"ros2 action send_goal --feedback {ACTION} {ACTION_TYPE} "
-                    "\"{desired_position: {x: $1, y: $2}}\"")
+    sent = scripts.printed(s, "cli_send_goal", run, needles, f"the goal ({target[0]}, {target[1]}) sent, its "
+                           "feedback and its result", f"ros2 action send_goal --feedback {ACTION} {ACTION_TYPE} "
+                           "\"{desired_position: {x: $1, y: $2}}\"")
+    if sent:
+        _sequence(s, run)
+
+
+def _sequence(s: GradingSession, run: Any) -> None:
+    """Record ``cli_sequence``: the outputs of list, info and send_goal come in that order, and the script
+    ended by itself before its deadline."""
+    lines = [line.rstrip() for line in run.stdout.splitlines()]
+    listed = lines.index(ACTION) if ACTION in lines else -1
+    info = next((i for i, line in enumerate(lines) if line.startswith("Action servers:")), -1)
+    sent = next((i for i, line in enumerate(lines) if line.startswith(("Sending goal", "Feedback:"))), -1)
+    problems = []
+    if not listed < info < sent:
+        order = sorted([(listed, "ros2 action list"), (info, "ros2 action info"), (sent, "ros2 action send_goal")])
+        problems.append("their outputs come in the order " + ", ".join(name for _, name in order))
+    if run.timed_out:
+        problems.append(f"it was still running after {SCRIPT_TIMEOUT:.0f} s and was stopped")
+    s.record("cli_sequence", not problems, "; ".join(problems) or "list, info, then send_goal, and it ended by itself",
+             f"ros2 action list, ros2 action info {ACTION}, then ros2 action send_goal, and the script ends by "
+             f"itself (within {SCRIPT_TIMEOUT:.0f} s)")

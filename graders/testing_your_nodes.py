@@ -38,9 +38,13 @@ NODE_FILE = f"{NODE_PACKAGE}/print_forever_node.py"
 LIBRARY_TIMEOUT = 30.0
 LAUNCH_TIMEOUT = 60.0
 #: Seconds the contract needs (benchmarks/all_lessons.py): the grader watches no node itself, but each
-#: launch test must see five records, 2 s of the node (0.5 s apart), on the reference and 5 node mutants,
+#: launch test must see five records, 2 s of the node (0.5 s apart), on the reference and 6 node mutants,
 #: two runs at once.
-WINDOW = 3 * 2.0
+WINDOW = 3.5 * 2.0
+#: What each package.xml must declare as <test_depend> (the lesson: python3-pytest in both, launch_testing
+#: and launch_ros for the node's package).
+TEST_DEPENDENCIES = {LIBRARY: ("python3-pytest",),
+                     NODE_PACKAGE: ("python3-pytest", "launch_testing", "launch_ros")}
 
 LIBRARY_MUTANTS = [
     DeclaredMutant("catches_sum_of_squares", LIBRARY, FUNCTION_FILE, "return (a + b) ** 2", "return a ** 2 + b ** 2",
@@ -66,6 +70,13 @@ NODE_MUTANTS = [
     DeclaredMutant("catches_counting_from_one", NODE_PACKAGE, NODE_FILE, "self.print_count: int = 0",
            "self.print_count: int = 1", "a node whose count starts at 1",
            "check that the first record is 'Printed 0 times.'"),
+    DeclaredMutant("catches_repeated_count", NODE_PACKAGE, NODE_FILE,
+           "        self.timer = self.create_timer(timer_period, self.timer_callback)\n",
+           "        self.timer = self.create_timer(timer_period, self.timer_callback)\n"
+           "        self.get_logger().info(f'Printed {self.print_count} times.')\n",
+           "a node that logs 'Printed 0 times.' twice (once more as it starts), then 1, 2, 3, ... every 0.5 s",
+           "check the counts of the first five records, in order: 0, 1, 2, 3, 4, each once (the first and the "
+           "fifth are still 2 s apart on this node: only the counts tell)"),
     DeclaredMutant("catches_slow_timer", NODE_PACKAGE, NODE_FILE, "timer_period: float = 0.5", "timer_period: float = 1.0",
            "a node that logs once a second instead of twice",
            "time the records by their stamps: each line of proc_output[node] starts '[INFO] [<seconds>] "
@@ -90,6 +101,9 @@ CHECKS = [
     Check("colcon_runs_pytest", "Both packages' setup.py ask colcon test for pytest", 1,
           "add tests_require=['pytest'] to setup() in each setup.py (what ros2 pkg create writes): without it "
           "colcon test runs unittest, which finds no pytest test functions and no launch test"),
+    Check("test_depends", "Both packages' package.xml declare their test dependencies", 1,
+          "<test_depend>python3-pytest</test_depend> in both package.xml, plus <test_depend>launch_testing</test_depend> "
+          "and <test_depend>launch_ros</test_depend> in python_package_with_a_node's"),
     Check("executable", "ros2 run finds print_forever_node (lesson 13), which the launch test starts", 1,
           "finish lesson 13 first: the console script print_forever_node in python_package_with_a_node's setup.py"),
     Check("library_tests_pass", "Your library tests pass on the course's library", 2,
@@ -119,9 +133,30 @@ def _asks_for_pytest(s: GradingSession) -> None:
              "tests_require=['pytest'] in the setup() of both packages")
 
 
+def _test_depends(s: GradingSession) -> None:
+    """``test_depends``: each package.xml lists TEST_DEPENDENCIES as <test_depend> (or <depend>, which includes it)."""
+    seen, missing = [], []
+    for package, needed in TEST_DEPENDENCIES.items():
+        found = kit.source_package(s, package)
+        if found is None:
+            missing.append(f"{package}: no such package in src/")
+            continue
+        declared = {d.name for d in found[1].test_depends} | kit.declared_dependencies(found[1])
+        lacking = [name for name in needed if name not in declared]
+        missing += [f"{package}: {name}" for name in lacking]
+        seen.append(f"{package}: {', '.join(sorted(d.name for d in found[1].test_depends)) or 'no test_depend'}"
+                    + (f" (missing {', '.join(lacking)})" if lacking else ""))
+    total = sum(len(needed) for needed in TEST_DEPENDENCIES.values())
+    s.record("test_depends", not missing, "; ".join(seen + [m for m in missing if "no such package" in m]),
+             "; ".join(f"{package}: " + ", ".join(f"<test_depend>{n}</test_depend>" for n in needed)
+                       for package, needed in TEST_DEPENDENCIES.items()),
+             fraction=max(0, total - len(missing)) / total)
+
+
 def grade(s: GradingSession) -> None:
-    """Static setup check, then the learner's tests on the reference, then on each mutant (two runs at once)."""
+    """Static setup checks, then the learner's tests on the reference, then on each mutant (two runs at once)."""
     _asks_for_pytest(s)
+    _test_depends(s)
     kit.executable(s, "executable", NODE_PACKAGE, EXECUTABLE)
     cases = prepare_cases(s, (LIBRARY, NODE_PACKAGE), LIBRARY_MUTANTS + NODE_MUTANTS)
     overlay = s.overlay()

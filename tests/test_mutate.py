@@ -117,7 +117,7 @@ def test_dev_mutate_smoke(cli, tmp_path: Path) -> None:
     killed = [m for m in outcomes.values() if m["outcome"] == mut.KILLED]
     assert len(killed) == 3 and all(m["lost"] for m in killed), row["mutants"]
     assert {c for m in killed for c in m["lost"]} <= {"node_name", "log_format", "counts_from_zero", "rate",
-                                                        "sigint_exit", "executable"}
+                                                        "sigint_exit", "executable", "spins"}
     assert (row["survived"], row["triaged"]) == (2, 1), row
     assert row["score"] == pytest.approx(3 / 4)
     triaged = [m for m in row["mutants"] if m["triaged"]]

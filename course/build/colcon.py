@@ -224,8 +224,15 @@ class BuildRecords:
         self.packages.pop(name, None)
 
     def save(self) -> None:
-        """Write the records (atomically; ``build/`` is created when missing)."""
-        self.path.parent.mkdir(parents=True, exist_ok=True)
+        """Write the records (atomically) into ``build/``, once colcon has made it.
+
+        Never creates ``build/`` itself: colcon does, as the submission when it is sandboxed
+        (:mod:`ros2course.sandbox`), and a ``build/`` the grader made first would be one the
+        submission's colcon cannot write in. Without ``build/`` nothing was built, so nothing
+        needs recording.
+        """
+        if not self.path.parent.is_dir():
+            return
         data = {"format": RECORDS_FORMAT, "toolchain": self._toolchain(),
                 "packages": {name: dataclasses.asdict(record) for name, record in sorted(self.packages.items())}}
         atomic_write_text(self.path, json.dumps(data, sort_keys=True, separators=(",", ":")))
