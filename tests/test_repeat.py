@@ -72,7 +72,8 @@ def test_a_reference_s_repeat_run_is_recorded_and_shown(tmp_path) -> None:
     from ros2course.grade.repeat import Flake
     from ros2course.grade.strength import STEADINESS_FILE, steadiness_text, write_steadiness
 
-    lesson = types.SimpleNamespace(folder=tmp_path)
+    lesson = types.SimpleNamespace(folder=tmp_path, grader="inspect_services", packages=["package_with_interfaces"],
+                                   folders=["cli"])
     assert steadiness_text(lesson) == "not measured"
     write_steadiness(lesson, Steadiness("inspect-services", "reference", 20, 2, [], 20, 300.0))
     recorded = json.loads((tmp_path / STEADINESS_FILE).read_text())

@@ -264,6 +264,6 @@ def test_reference_grading_is_deterministic(lesson, tmp_path):
         result = grade(lesson, root)
         verdicts.append((result.status, result.score, [(c.id, c.passed, c.points) for c in result.checks]))
     assert verdicts[0][0] == Status.PASSED, verdicts[0]
-    assert verdicts[0][1] == 14.0
+    assert verdicts[0][1] == 15.0
     assert verdicts[1] == verdicts[0]
     assert verdicts[2] == verdicts[0]

@@ -158,7 +158,7 @@ def test_new_learner_sequence_under_watch_gets_full_marks(tmp_path: Path) -> Non
                           dimensions=(60, 200), env={**os.environ, "TERM": "xterm"})
     try:
         child.expect("watching print-forever-node")
-        child.expect(r"\d+/14")  # the starter's verdict
+        child.expect(r"\d+/15")  # the starter's verdict
         assert "Full marks" not in child.before
         reference = SOLUTIONS / "python_package_with_a_node"
         setup = (reference / "setup.py").read_text().replace("version='0.0.1'", "version='0.0.0'")
