@@ -120,9 +120,10 @@ def grade_node(s: GradingSession, package: str, node: str, client_library: str, 
     """
     kit.depends(s, "depends_rclpy" if client_library == "rclpy" else "depends_client", package, (client_library,))
     path = kit.executable(s, "executable", package, EXECUTABLE)
-    rosout = s.ros.rosout()
-    # a misnamed node is still graded on its records (need_node=False)
+    # a misnamed node is still graded on its records (need_node=False); started first, so it boots while
+    # the grader's own participant opens: /rosout is transient local, its first records are replayed
     started = kit.start_node(s, "node_name", path, node, sigint_check="sigint_exit", need_node=False, aliases=aliases)
+    rosout = s.ros.rosout()
     if while_waiting is not None:
         while_waiting(started)
 

@@ -300,3 +300,42 @@ def test_a_package_format_that_is_no_number_is_not_gradable(tmp_path, attribute,
         '  <license>MIT</license>\n</package>\n', encoding="utf-8")
     with pytest.raises(NotGradable, match=f"a package.xml under .* is invalid: {words}"):
         find_packages(tmp_path / "src")
+
+
+def _fake_overlay(tmp_path: Path) -> tuple[Path, Path]:
+    """A workspace whose install/setup.bash prepends like colcon's and counts how often it is sourced."""
+    root = tmp_path / "ws"
+    (root / "build").mkdir(parents=True)
+    (root / "install" / "demo" / "share" / "colcon-core" / "packages").mkdir(parents=True)
+    count = tmp_path / "sourced"
+    (root / "install" / "setup.bash").write_text(
+        f'echo x >> "{count}"\n'
+        f'export PYTHONPATH="{root}/install/demo/lib${{PYTHONPATH:+:$PYTHONPATH}}"\n'
+        f'export LD_LIBRARY_PATH="{root}/install/demo/lib${{LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}}"\n'
+        'export DEMO_SET=1\n')
+    return root, count
+
+
+def test_overlay_is_sourced_once_whatever_order_the_wheels_give_ld_library_path(tmp_path, monkeypatch):
+    """A fresh `check` process reuses build/.ros2course-overlay.json (issue 36): the wheels' bootstrapper
+    lists its library folders in a different order in every interpreter, which must not miss the cache,
+    and the cached prepends are applied to the new process's own values."""
+    from ros2course.build import colcon as colcon_mod
+
+    root, count = _fake_overlay(tmp_path)
+    base = {"PATH": os.environ["PATH"], "HOME": str(tmp_path), "LD_LIBRARY_PATH": "/a/libs:/b/libs:/c/libs"}
+    first = overlay_env(root, base)
+    assert first["LD_LIBRARY_PATH"] == f"{root}/install/demo/lib:/a/libs:/b/libs:/c/libs"
+    assert first["DEMO_SET"] == "1" and count.read_text().count("x") == 1
+    assert (root / "build" / colcon_mod.OVERLAY_CACHE).is_file()
+
+    monkeypatch.setattr(colcon_mod, "_overlay_cache", {})  # a new process: only the file remains
+    reordered = dict(base, LD_LIBRARY_PATH="/c/libs:/a/libs:/b/libs")
+    again = overlay_env(root, reordered)
+    assert count.read_text().count("x") == 1, "sourced again for a reordered LD_LIBRARY_PATH"
+    assert again["LD_LIBRARY_PATH"] == f"{root}/install/demo/lib:/c/libs:/a/libs:/b/libs"
+    assert again["PYTHONPATH"] == f"{root}/install/demo/lib" and again["DEMO_SET"] == "1"
+
+    monkeypatch.setattr(colcon_mod, "_overlay_cache", {})
+    other = overlay_env(root, dict(base, PATH="/usr/bin:/bin"))  # another environment: sourced anew
+    assert count.read_text().count("x") == 2 and other["PATH"] == "/usr/bin:/bin"

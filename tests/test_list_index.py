@@ -137,3 +137,39 @@ def test_progress_view_raises_what_the_validating_loader_raises(tmp_path, data):
 def test_no_progress_file_means_nothing_started(tmp_path):
     view = progress_view(Workspace(tmp_path))
     assert view.status("terminal-basics") == "not started" and not view.lessons
+
+
+def test_the_kept_catalog_is_keyed_by_content_not_file_times(tmp_path, monkeypatch):
+    """`check` loads the validated catalog kept in the cache folder (issue 36); a lesson.yaml changed
+    with its size and mtime kept (a copy with old times) must still be read anew, and a cache file
+    another user could have written is never loaded."""
+    from ros2course.lesson import catalog as catalog_mod
+
+    monkeypatch.setenv("ROS2COURSE_CACHE_DIR", str(tmp_path / "cache"))
+    course = copy_course(tmp_path / "course")
+    (course / "course.yaml").write_bytes((content_root() / "course.yaml").read_bytes())
+    load = catalog_mod._catalog_of.__wrapped__  # past the in-process lru_cache: a new process each call
+    chapters = course / "chapters"
+    first = load(course)
+    key = catalog_mod._catalog_key(chapters)
+    kept = catalog_mod._cached_catalog(chapters, key)
+    assert kept is not None and kept.ids() == first.ids()
+    lesson = kept.get("print-forever-node")
+    assert lesson == first.get("print-forever-node") and lesson.folder == chapters / "13-print-forever-node"
+    assert [p.name for p in kept.get("launch-files").starter_layers] == [
+        p.name for p in first.get("launch-files").starter_layers]
+
+    path = chapters / "13-print-forever-node" / "lesson.yaml"
+    text, stat = path.read_text(encoding="utf-8"), path.stat()
+    title = first.get("print-forever-node").title
+    changed = text.replace(title, title[::-1], 1)
+    assert len(changed) == len(text) and changed != text
+    path.write_text(changed, encoding="utf-8")
+    os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))  # same size, same time: only the content differs
+    assert load(course).get("print-forever-node").title == title[::-1]
+
+    cache_file = catalog_mod._catalog_cache_path(chapters)
+    cache_file.chmod(0o666)  # anyone could have written it: not trusted
+    assert catalog_mod._cached_catalog(chapters, catalog_mod._catalog_key(chapters)) is None
+    assert load(course).get("print-forever-node").title == title[::-1]  # full load, kept again as 0600
+    assert cache_file.stat().st_mode & 0o777 == 0o600

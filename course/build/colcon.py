@@ -30,6 +30,7 @@ import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from ros2course import sandbox
 from ros2course.errors import NotGradable
@@ -170,16 +171,6 @@ def stale_metadata(workspace_root: Path, closure: list[str]) -> dict[str, list[s
     return out
 
 
-def fingerprint(folder: Path) -> str:
-    """Content digest of the package sources in ``folder`` (:func:`ros2course.build.sources.scan_package`):
-    the same for a copy, whatever its files' times.
-
-    Raises:
-        NotGradable: a file there cannot be read (see :func:`~ros2course.build.sources.scan_package`).
-    """
-    return scan_package(folder, folder).digest
-
-
 class BuildRecords:
     """The engine's record of what it built, per package (``build/.ros2course-builds.json``; issue 36).
 
@@ -259,17 +250,13 @@ def orphan_installs(workspace_root: Path, found: dict[str, tuple[Path, object]])
 def _dependents(cleaned: set[str], closure: list[str], found: dict[str, tuple[Path, object]]) -> list[str]:
     """The CMake packages of ``closure`` that depend on a ``cleaned`` one, recursively: they compiled against
     its installed headers, which a clean rebuild installs again with the sources' (possibly older) times."""
-    out: set[str] = set()
-    changed = True
-    while changed:
-        changed = False
-        for name in closure:
-            if name in cleaned or name in out or not _build_type(found[name][1]).startswith(("ament_cmake", "cmake")):
-                continue
-            if set(dependency_closure([name], found)) & (cleaned | out):
-                out.add(name)
-                changed = True
-    return sorted(out)
+    users: dict[str, set[str]] = {}  # package -> the packages of closure that depend on it (reverse map)
+    for name in closure:
+        for dep in dependency_closure([name], found):
+            if dep != name:
+                users.setdefault(dep, set()).add(name)
+    reached = set().union(*(users.get(name, set()) for name in cleaned)) - cleaned
+    return sorted(name for name in reached if _build_type(found[name][1]).startswith(("ament_cmake", "cmake")))
 
 
 _RELEVANT = re.compile(r"error|Error|ERROR|Traceback|failed|Failed|CMake Error|SyntaxError|not found|No such", re.MULTILINE)
@@ -473,7 +460,14 @@ def _overlay_key(workspace_root: Path, base_env: dict[str, str]) -> str:
     ``install/``, colcon's package marker, its environment hooks (``package.dsv``, ``hook/``) and the folders
     those hooks test for (``bin``, ``lib``, site-packages), each by inode and mtime (colcon writes them anew
     on every build of the package)."""
-    digest = hashlib.sha256(repr(sorted(i for i in base_env.items() if i[0] not in _SHELL_NOISE)).encode())
+    def value(name: str, text: str) -> str:
+        # ros_wheels_bootstrapper (the wheels' .pth re-exec) lists its ros_*.libs folders on LD_LIBRARY_PATH
+        # in a set's order, which differs from one interpreter to the next; the folders hold different
+        # libraries, so their order changes nothing sourcing does (colcon prepends unique values)
+        return ":".join(sorted(text.split(":"))) if name == "LD_LIBRARY_PATH" else text
+
+    digest = hashlib.sha256(repr(sorted((k, value(k, v)) for k, v in base_env.items()
+                                        if k not in _SHELL_NOISE)).encode())
     install = workspace_root / "install"
     python = f"lib/python{sys.version_info.major}.{sys.version_info.minor}/site-packages"
     for entry in sorted(os.scandir(install), key=lambda e: e.name):
@@ -500,9 +494,27 @@ def _read_overlay_cache(path: Path, key: str, base_env: dict[str, str]) -> dict[
         return None
     env = dict(base_env)
     env.update({str(k): str(v) for k, v in dict(data.get("set", {})).items()})
+    for name, added in dict(data.get("prepend", {})).items():
+        env[str(name)] = os.pathsep.join(part for part in (str(added), base_env.get(str(name), "")) if part)
     for name in data.get("unset", []):
         env.pop(str(name), None)
     return env
+
+
+def _overlay_delta(base_env: dict[str, str], env: dict[str, str]) -> dict[str, Any]:
+    """What sourcing did to ``base_env`` to make ``env``: path lists it prepended to (``prepend``: the added
+    part, re-applied to the next process's own value, see :func:`_overlay_key`), variables it set otherwise
+    (``set``) and removed (``unset``)."""
+    delta: dict[str, Any] = {"set": {}, "prepend": {}, "unset": sorted(set(base_env) - set(env))}
+    for name, new in env.items():
+        old = base_env.get(name)
+        if old == new:
+            continue
+        if old and new.endswith(os.pathsep + old):
+            delta["prepend"][name] = new[:-len(old) - 1]
+        else:
+            delta["set"][name] = new
+    return delta
 
 
 def overlay_env(workspace_root: Path, base_env: dict[str, str]) -> dict[str, str]:
@@ -529,10 +541,8 @@ def overlay_env(workspace_root: Path, base_env: dict[str, str]) -> dict[str, str
     if env is None:
         env = _source_overlay(setup, workspace_root, base_env)
         if on_disk is not None and on_disk.parent.is_dir():
-            changed = {k: v for k, v in env.items() if base_env.get(k) != v}
             with contextlib.suppress(OSError):
-                atomic_write_text(on_disk, json.dumps({"key": key, "set": changed,
-                                                       "unset": sorted(set(base_env) - set(env))}))
+                atomic_write_text(on_disk, json.dumps({"key": key, **_overlay_delta(base_env, env)}))
     _overlay_cache.clear()
     _overlay_cache[key] = env
     return dict(env)

@@ -30,13 +30,14 @@ from ros2course.ros.packages import dependency_closure, find_packages
 
 #: The engine modules (relative to the ``ros2course`` package) whose code every grader runs on.
 ENGINE_PARTS = ("kit", "run", "grade/engine.py", "grade/session.py", "grade/checks.py", "grade/results.py")
-_SKIP = ("__pycache__", ".egg-info")
 
 
 def _files(root: Path) -> list[Path]:
     if root.is_file():
         return [root]
-    return sorted(p for p in root.rglob("*") if p.is_file() and not any(s in str(p) for s in _SKIP))
+    return sorted(p for p in root.rglob("*")
+                  if p.is_file() and not any(part == "__pycache__" or part.endswith(".egg-info")
+                                             for part in p.relative_to(root).parts))
 
 
 def _course_imports(module: Path, graders: Path) -> list[Path]:
@@ -84,6 +85,19 @@ def grader_files(lesson: Lesson) -> list[Path]:
     return sorted(files)
 
 
+_DIGESTS: dict[tuple[str, int, int], bytes] = {}
+
+
+def _file_digest(path: Path) -> bytes:
+    """sha256 of ``path``'s bytes, remembered per (path, mtime in ns, size): the engine's modules are shared
+    by every lesson, and the strength doc asks for each lesson's fingerprint more than once."""
+    stat = path.stat()
+    key = (str(path), stat.st_mtime_ns, stat.st_size)
+    if key not in _DIGESTS:
+        _DIGESTS[key] = hashlib.sha256(path.read_bytes()).digest()
+    return _DIGESTS[key]
+
+
 def grader_fingerprint(lesson: Lesson) -> str:
     """sha256 (hex, first 16 digits) over the paths (relative to the course or the engine) and contents
     of :func:`grader_files`: equal only when the grader, the engine it runs on, the lesson and its
@@ -96,5 +110,5 @@ def grader_fingerprint(lesson: Lesson) -> str:
         rel = next((path.resolve().relative_to(b.resolve()).as_posix() for b in bases
                     if path.resolve().is_relative_to(b.resolve())), path.name)
         digest.update(f"{rel}\0".encode())
-        digest.update(hashlib.sha256(path.read_bytes()).digest())
+        digest.update(_file_digest(path))
     return digest.hexdigest()[:16]

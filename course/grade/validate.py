@@ -38,13 +38,13 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
-from ros2course.build.colcon import fingerprint
 from ros2course.build.reference import (
     ReferenceBuild,
     lesson_dependencies,
     reference_workspace,
     shared_reference_build,
 )
+from ros2course.build.sources import scan_package
 from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
 from ros2course.grade.child import grade_in_child
 from ros2course.grade.coverage import lesson_coverage
@@ -388,7 +388,7 @@ def _src_fingerprints(root: Path) -> dict[str, str] | None:
         found = find_packages(root / "src")
     except CourseError:
         return None
-    return {str(path.relative_to(root)): fingerprint(path) for path, _ in found.values()}
+    return {str(path.relative_to(root)): scan_package(path, path).digest for path, _ in found.values()}
 
 
 def grade_in_built(lesson: Lesson, case: Case, built: Path, reference_src: dict[str, str] | None,

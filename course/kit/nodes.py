@@ -95,7 +95,9 @@ def start_node(s: GradingSession, check_id: str, path: Path, node: str, *, sigin
         Unmet: the process died, or (``need_node``) no node to inspect appeared.
     """
     graph = graph or s.graph
-    before = set(graph.node_names())
+    # A graph no process has joined yet holds no node but the grader's: nothing to ignore, and the grader's
+    # participant may open while this node boots (RosSession opens on first use; issue 36)
+    before = set(graph.node_names()) if getattr(graph, "peers_started", 1) else set()
     proc = s.launch(path, label or path.name, list(args), graph=graph)
     if sigint_check is not None:
         s.on_close(lambda: sigint_exit(s, sigint_check, proc))

@@ -8,9 +8,14 @@ single manifest but one file per lesson.
 
 from __future__ import annotations
 
+import contextlib
 import difflib
 import functools
+import hashlib
+import os
+import pickle
 import re
+import sys
 from pathlib import Path
 from typing import Annotated, Literal
 
@@ -26,7 +31,7 @@ from ros2course.ros.requirements import KNOWN_REQUIREMENTS
 class ReferenceSolution(BaseModel):
     """How ``dev validate`` prepares the reference workspace for this lesson."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", defer_build=True)  # schema built on first validation (see _cached_catalog)
 
     #: Shell commands run in the workspace before grading (what the learner types).
     commands: list[str] = Field(default_factory=list)
@@ -46,7 +51,7 @@ class GraphNode(BaseModel):
         part: the grader's part (:attr:`ros2course.grade.checks.Check.part`) whose graph holds it; "" for every part.
     """
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", defer_build=True)  # schema built on first validation (see _cached_catalog)
 
     name: Annotated[str, Field(pattern=_ROS_NAME)]
     part: str = ""
@@ -69,7 +74,7 @@ class GraphEndpoint(BaseModel):
         part: as :attr:`GraphNode.part`.
     """
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", defer_build=True)  # schema built on first validation (see _cached_catalog)
 
     name: Annotated[str, Field(pattern=_ROS_NAME)]
     type: Annotated[str, Field(pattern=_TYPE_NAME)]
@@ -85,7 +90,7 @@ class LessonGraph(BaseModel):
     (:mod:`ros2course.run.diagnose`); it never changes a verdict.
     """
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", defer_build=True)  # schema built on first validation (see _cached_catalog)
 
     nodes: list[GraphNode] = Field(default_factory=list)
     topics: list[GraphEndpoint] = Field(default_factory=list)
@@ -152,7 +157,7 @@ class Lesson(BaseModel):
             or None; the engine diagnoses failed checks against it.
     """
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", defer_build=True)  # schema built on first validation (see _cached_catalog)
 
     id: Annotated[str, Field(pattern=_ID)]
     title: Annotated[str, Field(min_length=3)]
@@ -368,4 +373,80 @@ def load_catalog(root: Path | None = None) -> Catalog:
 
 @functools.lru_cache(maxsize=4)
 def _catalog_of(root: Path) -> Catalog:
-    return Catalog(root / "chapters")
+    chapters_dir = root / "chapters"
+    key = _catalog_key(chapters_dir)
+    cached = _cached_catalog(chapters_dir, key) if key is not None else None
+    if cached is not None:
+        return cached
+    catalog = Catalog(chapters_dir)
+    if key is not None:
+        _save_catalog(chapters_dir, key, catalog)
+    return catalog
+
+
+# --- the validated catalog, kept between processes ------------------------------------------------
+#
+# Every `check` loads the catalog before it starts the learner's nodes; validating 34 lesson.yaml files
+# builds pydantic's schemas (~50 ms of the CLI's start, issue 36). The validated Catalog is kept in the
+# user's cache folder, keyed by the *contents* of everything validation reads (never by file times: a
+# course copied with old times must not be graded on a stale lesson), and loaded without validation.
+# pickle rather than JSON because the lessons are pydantic models with Path fields: rebuilding them
+# from JSON would mean validating again. A cache file is trusted only when this user owns it and no one
+# else may write it (like ssh's own files); anything else, or any error, means a full load.
+
+#: Bumped when what the cache holds changes.
+_CACHE_FORMAT = 1
+
+
+def _catalog_key(chapters_dir: Path) -> str | None:
+    """sha256 (hex) of what a full load reads: every ``lesson.yaml``, ``course.yaml``, the loader's code and
+    versions; None when the folder cannot be read (the full load then reports why)."""
+    import pydantic  # noqa: PLC0415 - loaded already by the models above
+
+    digest = hashlib.sha256(f"{_CACHE_FORMAT}\0{sys.version}\0{pydantic.VERSION}\0{chapters_dir}\n".encode())
+    here = Path(__file__).resolve().parent
+    try:
+        for code in (here / "catalog.py", here / "courses.py", here.parent / "ros" / "requirements.py"):
+            digest.update(code.read_bytes())
+        with os.scandir(chapters_dir) as entries:
+            names = sorted(entry.name for entry in entries)
+        for name in names:
+            with contextlib.suppress(FileNotFoundError, NotADirectoryError):
+                data = (chapters_dir / name / "lesson.yaml").read_bytes()
+                digest.update(f"\0{name}\0{len(data)}\0".encode() + data)
+        with contextlib.suppress(FileNotFoundError):
+            digest.update(b"\0manifest\0" + (chapters_dir.parent / MANIFEST).read_bytes())
+    except OSError:
+        return None
+    return digest.hexdigest()
+
+
+def _catalog_cache_path(chapters_dir: Path) -> Path:
+    from ros2course.files import cache_dir  # noqa: PLC0415 - platformdirs only when needed
+
+    return cache_dir() / f"catalog-{hashlib.sha256(str(chapters_dir).encode()).hexdigest()[:16]}.pickle"
+
+
+def _cached_catalog(chapters_dir: Path, key: str) -> Catalog | None:
+    """The kept catalog when its key is ``key`` and the file is this user's own, else None."""
+    try:
+        with open(_catalog_cache_path(chapters_dir), "rb") as handle:
+            stat = os.fstat(handle.fileno())
+            if stat.st_uid != os.geteuid() or stat.st_mode & 0o022:
+                return None
+            data = pickle.load(handle)  # noqa: S301 - this user's own file, see the comment above
+    except Exception:  # noqa: BLE001 - a missing, damaged or outdated cache only costs the full load
+        return None
+    if not isinstance(data, dict) or data.get("key") != key or not isinstance(data.get("catalog"), Catalog):
+        return None
+    return data["catalog"]
+
+
+def _save_catalog(chapters_dir: Path, key: str, catalog: Catalog) -> None:
+    """Keep ``catalog`` (validated) under ``key``; an unwritable cache folder only costs the speed-up."""
+    from ros2course.files import atomic_write_bytes  # noqa: PLC0415 - see _catalog_cache_path
+
+    with contextlib.suppress(Exception):
+        path = _catalog_cache_path(chapters_dir)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        atomic_write_bytes(path, pickle.dumps({"key": key, "catalog": catalog}, protocol=pickle.HIGHEST_PROTOCOL))

@@ -39,7 +39,6 @@ import subprocess
 import sys
 import sysconfig
 import tarfile
-import urllib.request
 from pathlib import Path
 
 from ros2course.errors import CourseError, ExitStatus
@@ -250,6 +249,8 @@ def _fetch(name: str, url: str, mirror: Path | None, dest: Path) -> Path:
         return source
     partial = target.with_suffix(".part")
     try:
+        import urllib.request  # noqa: PLC0415 - 10 ms of import every check would pay; only a download needs it
+
         with urllib.request.urlopen(url, timeout=DOWNLOAD_TIMEOUT) as response, open(partial, "wb") as out:
             shutil.copyfileobj(response, out)
     except OSError as exc:

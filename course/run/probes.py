@@ -179,10 +179,15 @@ def stop_spinning(executor: Any, thread: threading.Thread, timeout: float = 5.0)
 class RosSession:
     """One check's private ROS graph.
 
-    Use as a context manager. Attributes once entered:
+    Use as a context manager. Entering only holds a domain id (no rclpy yet); the grader's
+    own participant (rclpy context, node, executor thread: ~0.07 s with rclpy's import) opens
+    on first use of :attr:`node` or :attr:`context`, so a check whose first step starts a
+    learner's node boots that node on the other core meanwhile (issue 36). Attributes once entered:
         domain_id: the ``ROS_DOMAIN_ID`` held for this session (1-100).
-        context: the rclpy ``Context``.
-        node: the hidden grader node.
+        context: the rclpy ``Context`` (opens the participant).
+        node: the hidden grader node (opens the participant).
+        peers_started: how many environments :meth:`learner_env` gave out (processes that may have
+            joined this graph; 0 means no node but the grader's was ever in it).
         recorder: where its probes write what they observe (:class:`~ros2course.run.recording.Recorder`), or None.
         heard: topic -> ``time.monotonic()`` of the last message a probe of this session received on it
             (kept by :func:`record`, with or without a recorder; the ``silent`` diagnosis reads it).
@@ -208,14 +213,18 @@ class RosSession:
         self.heard: dict[str, float] = {}
         self.matched: dict[str, float] = {}
         self.domain_id = -1
+        self.peers_started = 0
         self._stack = contextlib.ExitStack()
-        self.context = None
-        self.node = None
+        self._context = None
+        self._node = None
         self._executor = None
         self._thread: threading.Thread | None = None
+        self._opening = threading.Lock()
+        self._closed = False
 
     def learner_env(self, base: dict[str, str]) -> dict[str, str]:
         """``base`` plus this session's domain id and localhost-only discovery."""
+        self.peers_started += 1
         env = dict(base)
         env["ROS_DOMAIN_ID"] = str(self.domain_id)
         env["ROS_AUTOMATIC_DISCOVERY_RANGE"] = discovery_range()
@@ -226,33 +235,65 @@ class RosSession:
 
     def __enter__(self) -> RosSession:
         # ROS imports stay lazy: list/hint must not pay for them
-        import domain_coordinator  # noqa: PLC0415 - rclpy only when grading
-        import rclpy  # noqa: PLC0415 - rclpy only when grading
-        from rclpy.executors import MultiThreadedExecutor  # noqa: PLC0415 - rclpy only when grading
-        from rclpy.signals import SignalHandlerOptions  # noqa: PLC0415 - rclpy only when grading
+        import domain_coordinator  # noqa: PLC0415 - only when grading
 
         try:
             holder = self._stack if self._domain_holder is None else self._domain_holder
             self.domain_id = holder.enter_context(domain_coordinator.domain_id(_domain_selector()))
             configure_process_discovery()
-            self.context = rclpy.Context()
-            rclpy.init(context=self.context, domain_id=self.domain_id,
-                       signal_handler_options=SignalHandlerOptions.NO)
-            self._stack.callback(self._shutdown_context)
-            from rclpy.parameter import Parameter  # noqa: PLC0415 - rclpy only when grading (list/show stay light)
-
-            # The grader's node needs no type description service (saves ~70 ms per check).
-            self.node = rclpy.create_node(
-                GRADER_NODE, context=self.context, enable_rosout=False, start_parameter_services=False,
-                parameter_overrides=[Parameter("start_type_description_service", value=False)])
-            self._executor = MultiThreadedExecutor(num_threads=2, context=self.context)
-            self._executor.add_node(self.node)
-            self._thread = threading.Thread(target=self._spin, daemon=True, name="ros2course-executor")
-            self._thread.start()
         except BaseException:
             self._stack.close()
             raise
         return self
+
+    @property
+    def node(self) -> Any:
+        """The hidden grader node (``rclpy.node.Node``); opens the participant on first use."""
+        return self._open()
+
+    @property
+    def context(self) -> Any:
+        """The session's rclpy ``Context``; opens the participant on first use."""
+        self._open()
+        return self._context
+
+    @property
+    def opened(self) -> bool:
+        """Whether the grader's participant is open (:attr:`node` was used)."""
+        return self._node is not None
+
+    def _open(self) -> Any:
+        """Open the grader's participant once (any thread): rclpy context in this domain, node, executor.
+
+        Raises:
+            RuntimeError: the session is not entered, or already closed.
+        """
+        if self._node is not None:
+            return self._node
+        with self._opening:
+            if self._node is not None:
+                return self._node
+            if self.domain_id < 0 or self._closed:
+                raise RuntimeError("RosSession used outside its 'with' block")
+            import rclpy  # noqa: PLC0415 - rclpy only when grading
+            from rclpy.executors import MultiThreadedExecutor  # noqa: PLC0415 - rclpy only when grading
+            from rclpy.parameter import Parameter  # noqa: PLC0415 - rclpy only when grading
+            from rclpy.signals import SignalHandlerOptions  # noqa: PLC0415 - rclpy only when grading
+
+            self._context = rclpy.Context()
+            rclpy.init(context=self._context, domain_id=self.domain_id,
+                       signal_handler_options=SignalHandlerOptions.NO)
+            self._stack.callback(self._shutdown_context)
+            # The grader's node needs no type description service (saves ~70 ms per check).
+            node = rclpy.create_node(
+                GRADER_NODE, context=self._context, enable_rosout=False, start_parameter_services=False,
+                parameter_overrides=[Parameter("start_type_description_service", value=False)])
+            self._executor = MultiThreadedExecutor(num_threads=2, context=self._context)
+            self._executor.add_node(node)
+            self._thread = threading.Thread(target=self._spin, daemon=True, name="ros2course-executor")
+            self._thread.start()
+            self._node = node
+        return node
 
     def _spin(self) -> None:
         from rclpy.executors import ExternalShutdownException  # noqa: PLC0415 - rclpy only when grading (list/show stay light)
@@ -272,15 +313,17 @@ class RosSession:
         stopped = self._thread is None or stop_spinning(self._executor, self._thread)
         if not stopped:
             with contextlib.suppress(Exception):
-                rclpy.shutdown(context=self.context)
+                rclpy.shutdown(context=self._context)
             self._thread.join(timeout=3.0)
             stopped = not self._thread.is_alive()
-        if self.node is not None and stopped:
-            self.node.destroy_node()
+        if self._node is not None and stopped:
+            self._node.destroy_node()
         with contextlib.suppress(Exception):
-            rclpy.shutdown(context=self.context)
+            rclpy.shutdown(context=self._context)
 
     def __exit__(self, *exc: Any) -> None:
+        with self._opening:
+            self._closed = True
         self._stack.close()
 
     # --- graph ---------------------------------------------------------------

@@ -25,7 +25,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-from mcap.writer import CompressionType, Writer
 
 #: The recording's file name inside the check's log folder.
 FILE_NAME = "observed.mcap"
@@ -126,8 +125,7 @@ class Recorder:
         self.path = path
         self._lock = threading.Lock()
         self._file = path.open("wb")
-        self._writer = Writer(self._file, compression=CompressionType.ZSTD)
-        self._writer.start(profile="ros2", library="ros2course")
+        self._started: Any = None  # the mcap Writer, made on first use (:meth:`_writer`)
         self._schemas: dict[type, int] = {}
         self._channels: dict[tuple[int, str, type], int] = {}
         self._sequence = 0
@@ -135,6 +133,17 @@ class Recorder:
         #: wall-clock nanoseconds of the first and last message written
         self.first_ns: int | None = None
         self.last_ns: int | None = None
+
+    @property
+    def _writer(self) -> Any:
+        """The file's ``mcap.writer.Writer``, started on first use (with the lock held): mcap's import
+        (10 ms) then happens while a check waits for its nodes, not before it starts them (issue 36)."""
+        if self._started is None:
+            from mcap.writer import CompressionType, Writer  # noqa: PLC0415 - see the docstring
+
+            self._started = Writer(self._file, compression=CompressionType.ZSTD)
+            self._started.start(profile="ros2", library="ros2course")
+        return self._started
 
     def _channel(self, graph: int, topic: str, msg_type: type) -> int:
         key = (graph, topic, msg_type)
