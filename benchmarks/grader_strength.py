@@ -12,6 +12,12 @@ in ``--out`` (a second run grades only new mutants)::
     python benchmarks/grader_strength.py [LESSON ...] [--sample 30] [--seed 1] [--jobs 2] [--out DIR]
     python benchmarks/grader_strength.py print-forever-node --speedup   # also times --jobs 1 vs --jobs N
     python benchmarks/grader_strength.py --readme   # only README.md's lesson table, from the recorded scores
+    python benchmarks/grader_strength.py LESSON... --held-out 30 [--held-out-seed 2]   # the held-out sample
+
+``--held-out N`` grades, for each lesson already measured, a second seeded sample of N mutants disjoint
+from its first (:func:`ros2course.grade.mutate.held_out_sample`), triaged with ``mutation.yaml`` as it is
+(rules and entries; nothing is added), and records it beside the first (``held_out`` in
+``mutation-score.json`` and ``mutation-outcomes.json``); the doc shows both scores.
 
 ``--speedup`` grades the lesson's sample twice more without the cache (``--jobs 1`` then
 ``--jobs N``) and reports the parallel speed-up.
@@ -44,37 +50,72 @@ from ros2course.lesson.catalog import load_catalog  # noqa: E402
 from ros2course.ros import env as env_mod  # noqa: E402
 
 
+def _pct(value) -> str:
+    return "n/a" if value is None else f"{100 * value:.0f} %"
+
+
 def _row(f, sample: int) -> str:
     """A row for a lesson just run whose score file could not be written (a read-only course)."""
     counted = len(f.graded) - f.count("killed by build") - f.triaged
-    judged = len(f.graded) - f.count("killed by build")
-    raw = "n/a" if judged <= 0 else f"{100 * f.count('killed') / judged:.0f} %"
-    score = "n/a" if f.score is None else f"{100 * f.score:.0f} %"
     graded = (f"{len(f.graded)} of {f.generated - f.set_aside} (seeded sample)" if f.sampled
               else f"{len(f.graded)} (all)") + (f"; {f.set_aside} set aside" if f.set_aside else "")
     return (f"| {f.lesson} | {f.generated} | {graded} | {f.count('killed by build')} | {f.count('killed')} | "
-            f"{f.count('survived')} | {f.triaged} | {f.count('timed out') + f.count('grader error')} | {raw} | "
-            f"{counted} | {score} | current (this run, not recorded) | {steadiness_text(load_catalog().get(f.lesson))} |")
+            f"{f.count('survived')} | {f.triaged} ({f.by_rule}) | {f.count('timed out') + f.count('grader error')} | "
+            f"{_pct(f.raw)} | {counted} | {_pct(f.score)} | not recorded | current (this run, not recorded) | "
+            f"{steadiness_text(load_catalog().get(f.lesson))} |")
+
+
+def _held_out_cell(row) -> str:
+    """The held-out sample's figures (:attr:`ros2course.grade.mutate.RecordedScore.held_out`) in a cell."""
+    held = row.held_out
+    if held is None:
+        return "not drawn"
+    data = held.data
+    uncovered = len(data.get("survivors", []))
+    text = (f"{_pct(held.tuned)} of {held.counted} counted (raw {_pct(held.raw)}; {data['graded']} graded of the "
+            f"{data.get('pool', '?')} the first sample left, seed {data.get('seed', '?')}; {uncovered} uncovered)")
+    if held.too_small:
+        text += f" (too small to judge: {held.counted} < {mut.MIN_COUNTED})"
+    if held.stale and not row.stale:
+        text += f" **stale** ({data.get('date', '?')})"
+    return text
 
 
 def _recorded_row(lesson_id: str, data: dict) -> str:
     """A table row from the lesson's ``mutation-score.json`` (:func:`ros2course.grade.mutate.recorded_score`):
-    the raw kill rate beside the score after triage and its counted denominator, and whether the row was
-    measured under the lesson's current grader fingerprint."""
+    the raw kill rate beside the tuned score (first sample, after triage) and its counted denominator, the
+    held-out sample's score, and whether the row was measured under the lesson's current grader fingerprint."""
     lesson = load_catalog().get(lesson_id)
     row = mut.recorded_score(lesson)
     aside = data.get("set_aside", 0)
     graded = (f"{data['graded']} of {data['generated'] - aside} (seeded sample)" if data.get("sampled")
               else f"{data['graded']} (all)") + (f"; {aside} set aside" if aside else "")
-    raw = "n/a" if row.raw is None else f"{100 * row.raw:.0f} %"
-    tuned = "n/a" if row.tuned is None else f"{100 * row.tuned:.0f} %"
+    tuned = _pct(row.tuned)
     if row.too_small:
         tuned += f" (too small to judge: {row.counted} < {mut.MIN_COUNTED})"
     when = f"{data.get('date', '?')}, course {data.get('course_version') or '?'}"
     current = f"**stale** ({row.stale.removeprefix('stale: ')})" if row.stale else f"current ({when})"
+    by_rule = f" ({data['triaged_by_rule']})" if "triaged_by_rule" in data else ""
     return (f"| {lesson_id} | {data['generated']} | {graded} | {data['killed_by_build']} | {data['killed']} | "
-            f"{data['survived']} | {data['triaged']} | {data.get('timed_out', 0) + data.get('grader_error', 0)} | "
-            f"{raw} | {row.counted} | {tuned} | {current} | {steadiness_text(lesson)} |")
+            f"{data['survived']} | {data['triaged']}{by_rule} | "
+            f"{data.get('timed_out', 0) + data.get('grader_error', 0)} | "
+            f"{_pct(row.raw)} | {row.counted} | {tuned} | {_held_out_cell(row)} | {current} | {steadiness_text(lesson)} |")
+
+
+def _survivor_line(lesson_id: str, where: str, section: str) -> str:
+    """``- lesson `key`: file:line: `original` -> `mutated``` for a recorded survivor (``file:line (key)``), the lines
+    from the lesson's ``mutation-outcomes.json`` (``section``: ``mutants`` or ``held_out``)."""
+    key = where.rsplit("(", 1)[-1].rstrip(")")
+    lesson = load_catalog().get(lesson_id)
+    try:
+        outcomes = json.loads((lesson.folder / mut.OUTCOMES_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        outcomes = {}
+    rows = outcomes.get(section, []) if section == "mutants" else (outcomes.get(section) or {}).get("mutants", [])
+    row = next((r for r in rows if isinstance(r, dict) and r.get("key") == key), None)
+    if row is None:
+        return f"- {lesson_id} (last run): {where}"
+    return f"- {lesson_id} `{key}`: {row['file']}:{row['line']}: `{row['original']}` -> `{row['mutant']}`"
 
 
 def recorded_scores(lesson_ids: list[str]) -> dict[str, dict]:
@@ -139,36 +180,56 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "",
         "**Raw** kill rate = killed / (graded - killed by build), before any triage. **Counted** = graded - killed "
         f"by build - triaged. Score after triage = killed / counted; a row with fewer than {mut.MIN_COUNTED} counted "
-        "mutants is too small to judge a grader by, and says so. **Fingerprint**: each run records its lesson's "
+        "mutants is too small to judge a grader by, and says so. The score after triage is **tuned**: the triage "
+        "was written looking at that (first) sample. The **held-out** score is not: a second seeded sample of "
+        "mutants the first did not take (`--held-out 30`, another seed), graded afterwards with "
+        "`mutation.yaml`'s rules and entries as they were, nothing added; its survivors no rule or entry covers "
+        "count against it and are listed below for the author (strengthen the grader, or add a rule that "
+        "applies from the next held-out sample on). **Fingerprint**: each run records its lesson's "
         "grader fingerprint (`ros2course.grade.fingerprint`: the grader and the course modules it imports, the kit "
         "and grading engine, lesson.yaml, the reference files); a row measured under another fingerprint (the "
         "grader, engine or reference changed since) is **stale**, with the date of its run, and `dev validate` "
         "says so too. Triage is a configuration: the raw rate is the figure it cannot change. "
-        "Triaged survivors are listed with a reason in "
-        "`chapters/<lesson>/mutation.yaml`, whose `files:` may also narrow the files mutated (default: the files "
-        "the lesson's own starter gives with TODOs or does not give). An entry may triage a line whole "
-        "(`every_mutant: true`: a script's `#!` line the checker never reads, a package.xml description); that "
-        "line's mutants are *set aside* before sampling, never graded, so the sample is spent on mutants that "
-        "count. Survivors' diffs are in the run's `survivors/` folder.",
+        "Triage lives in `chapters/<lesson>/mutation.yaml` (whose `files:` may also narrow the files mutated; "
+        "default: the files the lesson's own starter gives with TODOs or does not give): first **rules**, kinds "
+        "of survivor decided before they are tested and applied mechanically (a docstring replaced by `pass`, "
+        "the `if __name__ == '__main__':` block of a console_scripts node, package.xml free text), each with a "
+        "reason; a rule may never cover a line that implements a requirement of the lesson's `contract.yaml` "
+        "(`ros2course.grade.mutate.rule_conflicts`); then per-mutant **entries** for what no rule covers, each "
+        "naming one mutant by its identity (its key), never by line text alone. `triaged (by rule)` counts both, "
+        "and in brackets those a rule covers. A rule marked `set_aside` (free text no program reads) takes its "
+        "mutants out before sampling, never graded, so the sample is spent on mutants that count. Survivors' "
+        "diffs are in the run's `survivors/` folder.",
         "",
         "Reference steadiness: the lesson's reference graded N times, K at once (two learners' checks on one "
         "machine), by `python benchmarks/grader_strength.py LESSON... --repeat N --load K` (recorded in "
         "`chapters/<lesson>/steadiness.json`): steady when no check changed its verdict.",
         "",
-        "| lesson | mutants generated | graded | killed by build | killed | survived | triaged | "
-        "timed out / grader error | raw kill rate | counted | score after triage | measured under the current grader? | "
-        "reference steadiness (`dev validate --repeat`) |",
-        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|",
+        "| lesson | mutants generated | graded | killed by build | killed | survived | triaged (by rule) | "
+        "timed out / grader error | raw kill rate | counted | tuned score (first sample, after triage) | "
+        "held-out score | measured under the current grader? | reference steadiness (`dev validate --repeat`) |",
+        "|---|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---|---|---|",
         *[row for _, row in sorted([(order.get(f.lesson, 0), _row(f, sample)) for f in rows_found]
                                    + [(order.get(lesson_id, 0), _recorded_row(lesson_id, data))
                                       for lesson_id, data in {**recorded, **just_run}.items()])],
         "",
     ]
+    records = {**recorded, **just_run}
+    ranked = sorted(records, key=lambda lesson_id: order.get(lesson_id, 0))
     survivors = [f"- {f.lesson} `{g.mutant.key}`: {g.mutant.file}:{g.mutant.line}: "
                  f"`{g.mutant.original.strip()}` -> `{g.mutant.mutated.strip()}`"
-                 for f in found for g in f.graded if g.outcome == "survived" and not g.triaged]
-    survivors += [f"- {lesson_id} (last run): {where}" for lesson_id, data in recorded.items()
-                  for where in data.get("survivors", [])]
+                 for f in rows_found for g in f.graded if g.outcome == "survived" and not g.triaged]
+    survivors += [_survivor_line(lesson_id, where, "mutants") for lesson_id in ranked
+                  for where in records[lesson_id].get("survivors", [])]
+    held = [_survivor_line(lesson_id, where, "held_out") for lesson_id in ranked
+            for where in (records[lesson_id].get("held_out") or {}).get("survivors", [])]
+    if held:
+        lines += ["## Held-out survivors no rule covers", "",
+                  "Each counts against its lesson's held-out score: a change the grader did not notice, in a sample "
+                  "the triage was not written for. For the author: strengthen the grader, or add a rule (it applies "
+                  "from the next held-out sample on).", ""]
+        lines += held
+        lines.append("")
     if survivors:
         lines += ["## Survivors not triaged", "",
                   "Each is a change the grader did not notice: a gap to close in the grader, or a mutant to triage "
@@ -194,8 +255,9 @@ def retriage(lesson_ids: list[str], out: Path) -> list:
     """Apply each lesson's ``mutation.yaml`` as it is now to the outcomes of its last run (``OUT/mutation.json``),
     grading nothing, and record the score (``mutation-score.json``): a survivor triaged after its run.
 
-    The outcomes are that run's; only which survivors are triaged changes (entries match by file, line and
-    mutant, or by line with ``every_mutant``). A lesson the file does not have is skipped.
+    The outcomes are that run's; only which survivors are triaged changes (rules, then entries by identity).
+    The held-out sample stays as it was graded and triaged: it is never re-triaged. A lesson the file does not
+    have is skipped.
     """
     rows = json.loads((out / "mutation.json").read_text(encoding="utf-8")).get("lessons", {})
     catalog, found = load_catalog(), []
@@ -207,14 +269,16 @@ def retriage(lesson_ids: list[str], out: Path) -> list:
         graded = [mut.Graded(mut.Mutant(m["file"], m["line"], m["original"], m["mutant"], ""), m["outcome"],
                              list(m["lost"]), m.get("score", 0.0), m.get("max_score", 0.0), m.get("message", ""),
                              cached=True) for m in row["mutants"]]
-        mut.apply_triage(graded, mut.load_config(lesson), [])
+        config = mut.load_config(lesson)
+        mut.apply_triage(graded, config, [], originals=mut.reference_texts(lesson, config=config))
         found.append(mut.LessonMutation(lesson_id, row["generated"], graded, [], row["sampled"],
-                                        row.get("seconds", 0.0), set_aside=row.get("set_aside", 0)))
+                                        row.get("seconds", 0.0), set_aside=row.get("set_aside", 0),
+                                        sample=row.get("sample"), seed=row.get("seed", 1), pool=row.get("pool", 0)))
         before = mut.recorded_score(lesson)
         # the outcomes are that run's: its date and fingerprint stay (none recorded: stale, as it should read)
         mut.write_score(lesson, found[-1], measured={"date": before.data.get("date", "?"),
                                                      "fingerprint": before.data.get("fingerprint", "")}
-                        if before is not None else {"date": "?", "fingerprint": ""})
+                        if before is not None else {"date": "?", "fingerprint": ""}, keep_held_out=True)
     return found
 
 
@@ -257,6 +321,11 @@ def main() -> int:
     parser.add_argument("--doc-only", action="store_true",
                         help="grade nothing: rewrite the doc and README's lesson table from the recorded runs "
                              "(what tests/test_mutate.py compares with the committed doc)")
+    parser.add_argument("--held-out", type=int, default=None, metavar="N",
+                        help="grade each lesson's held-out sample of N mutants (disjoint from its recorded first "
+                             "sample, another seed), triaged with mutation.yaml as it is, and record it beside the first")
+    parser.add_argument("--held-out-seed", type=int, default=None, metavar="S",
+                        help="with --held-out: its seed (default: --seed + 1)")
     parser.add_argument("--readme", action="store_true",
                         help="only rewrite README.md's lesson table from the scores the lessons recorded (no mutants graded)")
     args = parser.parse_args()
@@ -283,7 +352,8 @@ def main() -> int:
     begin = time.monotonic()
     chosen = [lesson_id for lesson_id in chosen if not nothing_to_mutate(lesson_id)]  # listed as such in the doc
     found = mutate_lessons(chosen, args.out, sample=args.sample, seed=args.seed, jobs=args.jobs,
-                           console=console) if chosen else []
+                           console=console, held_out=args.held_out,
+                           held_out_seed=args.held_out_seed) if chosen else []
     render(found, console, diffs=False)
     speedup_file = args.out / "speedup.txt"
     speedup = speedup_file.read_text(encoding="utf-8").strip() if speedup_file.is_file() else ""

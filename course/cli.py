@@ -705,6 +705,11 @@ def new_lesson(lesson_id: Annotated[str, typer.Argument(metavar="ID", help="The 
 def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", help="Lessons whose graders to test.")],
            sample: Annotated[Optional[int], typer.Option("--sample", metavar="K", help="Grade K mutants per lesson, picked with --seed (default: all).")] = None,
            seed: Annotated[int, typer.Option("--seed", metavar="S", help="Random seed of --sample.")] = 1,
+           held_out: Annotated[Optional[int], typer.Option(
+               "--held-out", metavar="N", help="Grade a held-out sample of N mutants instead: outside the lesson's recorded "
+                                               "first sample, with the triage as it is, recorded beside it (issue 37).")] = None,
+           held_out_seed: Annotated[Optional[int], typer.Option(
+               "--held-out-seed", metavar="S", help="Random seed of --held-out (default: --seed + 1).")] = None,
            jobs: Annotated[int, typer.Option("--jobs", "-j", help="Mutants graded at once.")] = 1,
            out: Annotated[Path, typer.Option("--out", "-o", metavar="DIR", help="Cache, batch outputs, mutation.json and survivors' diffs.")] = Path("mutation-out"),
            timeout: Annotated[float, typer.Option("--timeout", help="Wall-clock limit per mutant, seconds.")] = 300.0,
@@ -718,8 +723,10 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
 
     if timeout <= 0:
         raise CourseError(f"--timeout must be positive (got {timeout:g})", "e.g. --timeout 300")
+    if held_out is not None and held_out < 1:
+        raise CourseError(f"--held-out must be at least 1 (got {held_out})", "e.g. --held-out 30")
     found = mutate_lessons(lesson_ids, out, sample=sample, seed=seed, jobs=jobs, timeout=timeout,
-                           console=stderr_console())
+                           console=stderr_console(), held_out=held_out, held_out_seed=held_out_seed)
     if as_json:
         import json  # noqa: PLC0415 - start time, see the imports
 

@@ -111,7 +111,8 @@ def test_grader_strength_retriage_applies_todays_triage_to_the_last_runs_outcome
     monkeypatch.setenv("ROS2COURSE_CONTENT", str(course))
     node = "src/python_package_with_a_node/python_package_with_a_node/print_forever_node.py"
     (course / "chapters" / "13-print-forever-node" / "mutation.yaml").write_text(
-        f"survivors:\n  - file: {node}\n    line: 'x = 1'\n    every_mutant: true\n    reason: a line nothing reads\n",
+        f"survivors:\n  - file: {node}\n    line: 3\n    original: 'x = 1'\n    mutated: 'x = 2'\n"
+        "    reason: a line nothing reads\n",
         encoding="utf-8")
     mutants = [{"file": node, "line": 3, "original": "x = 1", "mutant": "x = 2", "outcome": "survived", "lost": []},
                {"file": node, "line": 4, "original": "y = 1", "mutant": "y = 2", "outcome": "killed", "lost": ["rate"]},

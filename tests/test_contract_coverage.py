@@ -117,3 +117,34 @@ def test_a_bad_source_and_bad_yaml(tmp_path: Path) -> None:
     _one(problems, path, 9, "requirements.1.from")
     path, _, problems = _load(tmp_path, GOOD.replace('says: "with depth 10"', 'says: "with depth 10'))
     assert problems and str(problems[0]).startswith(f"{path}:") and "not valid YAML" in str(problems[0])
+
+
+def test_which_reference_lines_implement_a_requirement() -> None:
+    """The lines a mutation rule may never cover (issue 37): the code-like terms of what a requirement says, each
+    found whole in a line, or the lines its `code:` names; comment and docstring lines implement nothing."""
+    from ros2course.lesson.contract import Requirement, implements, says_terms
+
+    assert says_terms("the node is named print_forever (super().__init__('print_forever'))") == \
+        ["print_forever", "super().__init__('print_forever')"]
+    assert says_terms("main() calls rclpy.init(), creates the node and spins it (rclpy.spin)") == \
+        ["main()", "rclpy.init()", "rclpy.spin"]
+    assert says_terms("it logs twice a second: a timer with period 0.5 s") == ["0.5"]
+    said = Requirement.model_validate({"id": "main-spins", "says": "main() calls rclpy.init() and spins (rclpy.spin)",
+                                       "from": "instructions", "checks": ["spins"]})
+    node = "src/p/p/node.py"
+    assert implements(said, node, "        rclpy.init(args=args)") == "names `rclpy.init()`"  # a call, with arguments
+    assert implements(said, node, "    main()") == "names `main()`"
+    assert implements(said, node, "            rclpy.spin_once(node)") is None  # a whole term: spin is not spin_once
+    assert implements(said, node, '    """main() spins with rclpy.spin."""') is None  # a docstring
+    assert implements(said, node, "    # rclpy.spin(node) blocks") is None  # a comment
+    rate = Requirement.model_validate({"id": "rate", "says": "a timer with period 0.1 s", "from": "contract",
+                                       "checks": ["rate"]})
+    assert implements(rate, "src/p/package.xml", "  <version>0.0.1</version>") is None
+    named = Requirement.model_validate({**said.model_dump(by_alias=True, exclude_none=True),
+                                        "code": [{"file": "src/*/node.py", "line": r"^def main\(|rclpy\.(init|spin)\("}]})
+    assert implements(named, node, "    main()") is None  # the call under `if __name__ == '__main__':`
+    assert implements(named, node, "def main(args=None):") == r"code: src/*/node.py /^def main\(|rclpy\.(init|spin)\(/"
+    assert implements(named, "src/p/other.py", "def main(args=None):") is None
+    with pytest.raises(ValueError, match="not a regular expression"):
+        Requirement.model_validate({**said.model_dump(by_alias=True, exclude_none=True),
+                                    "code": [{"file": "*", "line": "("}]})

@@ -26,12 +26,14 @@ TRIAGE = f"""\
 files: ["{NODE_FILE}"]
 survivors:
   - file: {NODE_FILE}
-    line: "if __name__ == '__main__':"
-    mutant: "if __name__ <= '__main__':"
+    key: 44dc05f30ba6
+    original: "if __name__ == '__main__':"
+    mutated: "if __name__ <= '__main__':"
     reason: "ros2 run starts the console_scripts entry point, which calls main() itself"
   - file: {NODE_FILE}
-    line: "self.print_count = 0"
-    mutant: "self.print_count = 7"
+    key: 1aafc02750ae
+    original: "self.print_count = 0"
+    mutated: "self.print_count = 7"
     reason: "a line the reference no longer has: reported as stale"
 """
 
@@ -122,7 +124,7 @@ def test_dev_mutate_smoke(cli, tmp_path: Path) -> None:
     assert row["score"] == pytest.approx(3 / 4)
     triaged = [m for m in row["mutants"] if m["triaged"]]
     assert triaged[0]["mutant"] == "if __name__ <= '__main__':"
-    assert [s["line"] for s in row["stale"]] == ["self.print_count = 0"]
+    assert [s["original"] for s in row["stale"]] == ["self.print_count = 0"]
     survivor = next(m for m in row["mutants"] if m["outcome"] == mut.SURVIVED and not m["triaged"])
     diff = (out / "survivors" / LESSON / f"{survivor['key']}.diff").read_text(encoding="utf-8")
     assert f"--- a/{NODE_FILE}" in diff and "+if __name__ < '__main__':" in diff
@@ -138,22 +140,246 @@ def test_dev_mutate_smoke(cli, tmp_path: Path) -> None:
     assert "75%" in again.stdout and "stale" in again.stdout and "+if __name__ < '__main__':" in again.stdout
 
 
-def test_every_mutant_of_a_free_text_line_is_triaged_by_one_entry() -> None:
-    entry = mut.TriageEntry(file="src/p/package.xml", line="<description>A node</description>", every_mutant=True,
-                            reason="free text no program reads")
-    line = "  <description>A node</description>"
-    for mutated in ("  <description>A nod</description>", "  <description>=A node</description>"):
-        assert entry.matches(mut.Mutant("src/p/package.xml", 3, line, mutated, ""))
-    assert not entry.matches(mut.Mutant("src/p/package.xml", 4, "  <license>MIT</license>", "  <license>MI</license>", ""))
-    assert not entry.matches(mut.Mutant("src/q/package.xml", 3, line, "  <description>A nod</description>", ""))
+PY = "src/p/p/node.py"
+NODE_SOURCE = """\
+\"\"\"A node.\"\"\"
+
+import rclpy
+
+
+def main(args=None):
+    \"\"\"Spin it.\"\"\"
+    rclpy.init(args=args)
+    node = rclpy.create_node('talker')
+    node.get_logger().info('Started, publishing to /chatter.')
+    rclpy.spin(node)
+
+
+if __name__ == '__main__':
+    main()
+"""
+
+
+def _mutant(source: str, rel: str, line: int, mutated: str | None, insert: bool = False) -> mut.Mutant:
+    """A mutant of ``source`` replacing line ``line`` with ``mutated`` (None: deleting it), or inserting it there."""
+    lines = source.splitlines()
+    original = "" if insert else lines[line - 1]
+    if insert:
+        lines.insert(line - 1, mutated)
+    elif mutated is None:
+        del lines[line - 1]
+    else:
+        lines[line - 1] = mutated
+    return mut.Mutant(rel, line, original, mutated or "", "\n".join(lines) + "\n")
+
+
+DOCSTRING = mut.Rule(id="docstring-pass", reason="a docstring replaced by pass: documentation only", file="*.py",
+                     original=r"""^\s*("{3}|'{3}).*("{3}|'{3})\s*$""", mutated=r"^\s*pass\s*$")
+MAIN_BLOCK = mut.Rule(id="main-block", reason="ros2 run calls main() through the entry point", file=["*.py"],
+                      block=r"^if __name__ == .__main__.:")
+LOG_TEXT = mut.Rule(id="log-text", reason="the text of a log line the contract does not name",
+                    original=r"get_logger\(\)\.(info|debug)\(", strings_only=True)
+PACKAGE_TEXT = mut.Rule(id="package-metadata", reason="free text no program reads", file="*/package.xml",
+                        original=r"^\s*<(description|maintainer|license|url)\b", set_aside=True)
+OUTSIDE_LOOPS = mut.Rule(id="break-outside-loop", reason="bash ignores a break outside every loop", file="*.sh",
+                         original=r"^\s*$", mutated=r"^\s*(break|continue);?\s*$", not_block=r"^\s*(for|while|until)\b")
+
+
+def test_rules_match_kinds_of_mutant_mechanically() -> None:
+    assert DOCSTRING.matches(_mutant(NODE_SOURCE, PY, 1, "pass"))
+    assert DOCSTRING.matches(_mutant(NODE_SOURCE, PY, 7, "    pass"))
+    assert not DOCSTRING.matches(_mutant(NODE_SOURCE, PY, 8, "    pass"))  # rclpy.init: not a docstring
+    assert not DOCSTRING.matches(_mutant(NODE_SOURCE, "src/p/setup.cfg", 1, "pass"))  # not a .py file
+    # the __main__ block: its header and the lines it opens, not main() itself
+    assert MAIN_BLOCK.matches(_mutant(NODE_SOURCE, PY, 14, "if __name__ <= '__main__':"))
+    assert MAIN_BLOCK.matches(_mutant(NODE_SOURCE, PY, 15, "    pass"))
+    assert not MAIN_BLOCK.matches(_mutant(NODE_SOURCE, PY, 11, "    pass"))
+    # a change inside a log call's text only; not its level, not the call
+    assert LOG_TEXT.matches(_mutant(NODE_SOURCE, PY, 10, "    node.get_logger().info('Started, publishing to /chattr.')"))
+    assert not LOG_TEXT.matches(_mutant(NODE_SOURCE, PY, 10, "    node.get_logger().debug('Started, publishing to /chatter.')"))
+    assert not LOG_TEXT.matches(_mutant(NODE_SOURCE, PY, 10, "    pass"))
+    assert not LOG_TEXT.matches(_mutant(NODE_SOURCE, PY, 9, "    node = rclpy.create_node('listener')"))
+    # universalmutator inserts `break;` with the indentation of the line above: inside a loop it is not a no-op
+    script = "#!/usr/bin/env bash\nros2 daemon start\nfor i in 1 2 3; do\n  ros2 node list && break\n  sleep 1\ndone\necho done\n"
+    assert OUTSIDE_LOOPS.matches(_mutant(script, "cli/a.sh", 3, "break;", insert=True))
+    assert not OUTSIDE_LOOPS.matches(_mutant(script, "cli/a.sh", 6, "  break;", insert=True))
+    assert OUTSIDE_LOOPS.matches(_mutant(script, "cli/a.sh", 7, "break;", insert=True))
+    # a record without content is judged on the original file given
+    bare = mut.Mutant(PY, 15, "    main()", "    pass", "")
+    assert not MAIN_BLOCK.matches(bare) and MAIN_BLOCK.matches(bare, {PY: NODE_SOURCE})
     # set aside before sampling: never graded
-    config = mut.MutationConfig(survivors=[entry])
-    mutants = [mut.Mutant("src/p/package.xml", 3, line, "  <description>A nod</description>", ""),
-               mut.Mutant("src/p/package.xml", 4, "  <license>MIT</license>", "  <license>MI</license>", "")]
-    kept, aside = mut.set_aside(mutants, config)
-    assert [m.line for m in kept] == [4] and [m.line for m in aside] == [3]
-    with pytest.raises(ValueError, match="every_mutant"):
-        mut.TriageEntry(file="x.py", line="a = 1", mutant="a = 2", every_mutant=True, reason="not both of them")
+    xml = "<package>\n  <description>A node</description>\n  <license>MIT</license>\n  <depend>rclpy</depend>\n</package>\n"
+    mutants = [_mutant(xml, "src/p/package.xml", 2, "  <description>A nod</description>"),
+               _mutant(xml, "src/p/package.xml", 3, "  <license>MI</license>"),
+               _mutant(xml, "src/p/package.xml", 4, "  <depend>rclp</depend>")]
+    kept, aside = mut.set_aside(mutants, mut.MutationConfig(rules=[PACKAGE_TEXT]))
+    assert [m.line for m in kept] == [4] and [m.line for m in aside] == [2, 3]
+    with pytest.raises(ValueError, match="matcher besides `file`"):
+        mut.Rule(id="everything", reason="every mutant of the file", file="*.py")
+    with pytest.raises(ValueError, match="not a regular expression"):
+        mut.Rule(id="bad", reason="a broken expression", original="(")
+
+
+def test_entries_name_one_mutant_by_identity_and_rules_come_first(tmp_path: Path) -> None:
+    guard = _mutant(NODE_SOURCE, PY, 14, "if __name__ <= '__main__':")
+    spin = _mutant(NODE_SOURCE, PY, 11, "    pass")
+    by_key = mut.TriageEntry(file=PY, key=spin.key, original="rclpy.spin(node)", mutated="pass",
+                             reason="an entry by the mutant's key")
+    by_line = mut.TriageEntry(file=PY, line=11, original="rclpy.spin(node)", mutated="pass",
+                              reason="an entry by line number, original and mutated line")
+    assert by_key.matches(spin) and by_line.matches(spin)
+    moved = mut.Mutant(PY, 12, spin.original, spin.mutated, "")
+    assert by_key.matches(moved) and not by_line.matches(moved)  # a key survives lines added above
+    assert not by_key.matches(_mutant(NODE_SOURCE, PY, 11, "    rclpy.spin(None)"))
+    # never by line text alone; a key must be that of the lines shown with it
+    with pytest.raises(ValueError, match="never by line text alone"):
+        mut.TriageEntry(file=PY, line="rclpy.spin(node)", mutant="pass", reason="the old text form")
+    with pytest.raises(ValueError, match="a rule"):
+        mut.TriageEntry(file=PY, line="<description>x</description>", every_mutant=True, reason="a whole line")
+    with pytest.raises(ValueError, match="is not the key of"):
+        mut.TriageEntry(file=PY, key=guard.key, original="rclpy.spin(node)", mutated="pass", reason="a wrong key")
+    config = mut.MutationConfig(rules=[MAIN_BLOCK], survivors=[
+        by_key, mut.TriageEntry(file=PY, key=guard.key, reason="the guard, also covered by the rule")])
+    assert config.triage(guard) == (MAIN_BLOCK.reason, "rule:main-block")
+    assert config.triage(spin) == (by_key.reason, "entry")
+    graded = [mut.Graded(guard, mut.SURVIVED, []), mut.Graded(spin, mut.SURVIVED, []),
+              mut.Graded(_mutant(NODE_SOURCE, PY, 15, "    pass"), mut.KILLED, ["spins"])]
+    stale = mut.apply_triage(graded, config, [guard, spin])
+    assert [g.triaged_by for g in graded] == ["rule:main-block", "entry", ""]
+    assert graded[2].rule == "main-block"  # a killed mutant a rule matches is shown to the author
+    assert stale == []
+    found = mut.LessonMutation("demo", 3, graded, stale, False)
+    assert (found.triaged, found.by_rule, found.score) == (2, 1, 1.0)
+    assert found.rules_on_killed() == [f"main-block: {PY}:15 ({graded[2].mutant.key})"]
+    lonely = mut.TriageEntry(file=PY, line=3, original="import rclpy", mutated="pass", reason="matches nothing now")
+    assert mut.apply_triage(graded, mut.MutationConfig(survivors=[lonely]), [guard, spin]) == [lonely]
+
+
+def _demo_lesson(tmp_path: Path, contract: str, triage: str):
+    from types import SimpleNamespace
+
+    folder = tmp_path / "chapters" / "13-demo"
+    folder.mkdir(parents=True)
+    (folder / "contract.yaml").write_text(contract, encoding="utf-8")
+    (folder / "mutation.yaml").write_text(triage, encoding="utf-8")
+    (folder / "lesson.yaml").write_text("id: demo\n", encoding="utf-8")
+    reference = tmp_path / "reference"
+    (reference / "src" / "p" / "p").mkdir(parents=True)
+    (reference / PY).write_text(NODE_SOURCE, encoding="utf-8")
+    lesson = SimpleNamespace(id="demo", folder=folder, grader="print_forever_node", packages=["p"], folders=[],
+                             workspace_paths=["src/p"])
+    return lesson, reference
+
+
+CONTRACT = """\
+lesson: demo
+requirements:
+  - id: logs-start
+    says: "it logs 'Started' with node.get_logger().info when it starts"
+    from: contract
+    checks: [log]
+  - id: main-spins
+    says: "main() calls rclpy.init() and spins the node (rclpy.spin)"
+    from: instructions
+    checks: [spins]
+"""
+
+
+def test_a_rule_may_never_cover_a_line_that_implements_a_contract_requirement(tmp_path: Path) -> None:
+    triage = """\
+rules:
+  - id: docstring-pass
+    reason: "a docstring replaced by pass: documentation only"
+    original: '^\\s*("{3}|''{3}).*("{3}|''{3})\\s*$'
+    mutated: '^\\s*pass\\s*$'
+  - id: log-text
+    reason: "the text of a log line the contract does not name"
+    original: 'get_logger\\(\\)\\.info\\('
+    strings_only: true
+  - id: main-block
+    reason: "ros2 run calls main() through the console_scripts entry point"
+    block: "^if __name__ == .__main__.:"
+"""
+    lesson, reference = _demo_lesson(tmp_path, CONTRACT, triage)
+    problems = mut.rule_conflicts(lesson, reference=reference)
+    triage_file = lesson.folder / "mutation.yaml"
+    contract_file = lesson.folder / "contract.yaml"
+    # the log line implements logs-start (it names get_logger().info); main() under the guard contains `main()`
+    assert problems == [
+        f"{triage_file}:6: rule log-text covers {PY}:10 `node.get_logger().info('Started, publishing to /chatter.')`, "
+        f"which implements requirement logs-start ({contract_file}:3: names `Started`)",
+        f"{triage_file}:10: rule main-block covers {PY}:15 `main()`, which implements requirement main-spins "
+        f"({contract_file}:7: names `main()`)"], problems
+    # the contract names main-spins' lines itself: main()'s own lines, not the call under the guard
+    named = CONTRACT + """\
+    code:
+      - file: "src/*/node.py"
+        line: '^def main\\(|rclpy\\.(init|spin)\\('
+"""
+    (lesson.folder / "contract.yaml").write_text(named, encoding="utf-8")
+    assert [p.split(": rule ")[1].split()[0] for p in mut.rule_conflicts(lesson, reference=reference)] == ["log-text"]
+    assert any("rule log-text covers" in p for p in mut.triage_problems(lesson, reference=reference))
+
+
+def test_the_held_out_sample_is_disjoint_from_the_first_and_seeded() -> None:
+    mutants = [mut.Mutant("f.py", i, f"x = {i}", f"x = {i + 1}", f"x = {i + 1}\\n") for i in range(80)]
+    first = mut.sample_mutants(mutants, 30, 1)
+    held = mut.held_out_sample(mutants, first, 30, 2)
+    assert len(held) == 30 and not {m.key for m in held} & {m.key for m in first}
+    assert held == mut.held_out_sample(mutants, first, 30, 2) and held != mut.held_out_sample(mutants, first, 30, 3)
+    # the first sample as its run recorded it is left out too (the mutants may have changed since)
+    recorded = {m.key for m in held[:5]}
+    again = mut.held_out_sample(mutants, first, 30, 2, recorded)
+    assert not {m.key for m in again} & (recorded | {m.key for m in first})
+    # fewer left than asked: every one of them
+    assert len(mut.held_out_sample(mutants[:40], mut.sample_mutants(mutants[:40], 30, 1), 30, 2)) == 10
+
+
+def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -> None:
+    """write_score then write_held_out: both figures in mutation-score.json, outcomes by key, the doc's cell and
+    dev validate's line say the held-out score; a new first sample drops the held-out one."""
+    import importlib.util
+    from types import SimpleNamespace
+
+    lesson = SimpleNamespace(id="demo-lesson", folder=tmp_path, grader="print_forever_node",
+                             packages=["python_package_with_a_node"], folders=[])
+    (tmp_path / "lesson.yaml").write_text("id: demo-lesson\\n")
+    mutants = [mut.Mutant("f.py", i, f"x = {i}", f"x = {i + 1}", "") for i in range(60)]
+
+    def run(part: list[mut.Mutant], survived: int, held_out: bool) -> mut.LessonMutation:
+        graded = [mut.Graded(m, mut.SURVIVED if i < survived else mut.KILLED, [] if i < survived else ["rate"])
+                  for i, m in enumerate(part)]
+        return mut.LessonMutation("demo-lesson", 60, graded, [], True, sample=30, seed=2 if held_out else 1,
+                                  held_out=held_out, pool=30)
+
+    assert mut.write_held_out(lesson, run(mutants[30:], 3, True)) is None  # no first sample recorded yet
+    mut.write_score(lesson, run(mutants[:30], 0, False))
+    assert mut.recorded_first_sample(lesson) == {m.key for m in mutants[:30]}
+    mut.write_score(lesson, run(mutants[30:], 3, True))
+    row = mut.recorded_score(lesson)
+    assert (row.tuned, row.counted) == (1.0, 30) and (row.held_out.tuned, row.held_out.counted) == (0.9, 30)
+    assert len(row.held_out.data["survivors"]) == 3 and row.held_out.data["seed"] == 2
+    outcomes = json.loads((tmp_path / mut.OUTCOMES_FILE).read_text())
+    assert {m["key"] for m in outcomes["held_out"]["mutants"]} == {m.key for m in mutants[30:]}
+    assert "; held-out 90 % of 30" in mut.score_text(lesson)
+    assert "held-out sample 90 % (27 of 30 counted, 90 % raw, 3 survivor(s) no rule covers)" in mut.describe_score(lesson)
+    spec = importlib.util.spec_from_file_location("grader_strength", ROOT / "benchmarks" / "grader_strength.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module._held_out_cell(row) == ("90 % of 30 counted (raw 90 %; 30 graded of the 30 the first sample left, "
+                                          "seed 2; 3 uncovered)")
+    small = mut.RecordedScore({"graded": 12, "pool": 12, "seed": 2, "survivors": [], "date": "2026-11-20"}, 12,
+                              1.0, 1.0, "stale: graded on 2026-11-20 under grader fingerprint 0, now 1")
+    assert module._held_out_cell(SimpleNamespace(held_out=small, stale="")) == (
+        "100 % of 12 counted (raw 100 %; 12 graded of the 12 the first sample left, seed 2; 0 uncovered) "
+        "(too small to judge: 12 < 20) **stale** (2026-11-20)")
+    assert module._held_out_cell(SimpleNamespace(held_out=None, stale="")) == "not drawn"
+    # a re-triage keeps the held-out sample as graded; a new first sample drops it
+    mut.write_score(lesson, run(mutants[:30], 0, False), keep_held_out=True)
+    assert mut.recorded_score(lesson).held_out is not None
+    mut.write_score(lesson, run(mutants[:30], 0, False))
+    assert mut.recorded_score(lesson).held_out is None
+    assert "held_out" not in json.loads((tmp_path / mut.OUTCOMES_FILE).read_text())
 
 
 @pytest.mark.parametrize("triage,words", [
@@ -192,7 +418,7 @@ def test_dev_validate_shows_the_lessons_last_mutation_score(tmp_path: Path) -> N
     assert line.startswith("demo-lesson: grader strength 92 % after triage, 69 % raw (11 of 12 counted mutants killed; "
                            "20 of 57 mutants")
     assert "1 survivor(s) not triaged" in line and "12 counted mutants are too few to judge by" in line
-    assert "stale" not in line
+    assert "stale" not in line and "no held-out sample" in line
     assert mut.score_text(lesson) == "raw 69 %, triaged 92 % of 12 counted (too small)"
     record["fingerprint"] = "0123456789abcdef"
     (tmp_path / mut.SCORE_FILE).write_text(json.dumps(record))
@@ -323,5 +549,7 @@ def test_every_lessons_mutation_yaml_is_valid() -> None:
         config = mut.load_config(lesson)
         for entry in config.survivors:
             assert (ROOT / "solutions" / entry.file).is_file(), f"{lesson_id}: {entry.file}"
+        # a rule never covers a line that implements a requirement of the lesson's contract (issue 37)
+        assert not mut.rule_conflicts(lesson, config), "\n".join(mut.rule_conflicts(lesson, config))
         checked += 1
     assert checked >= 20

@@ -12,7 +12,8 @@ hangs, forks or floods its output is held like a hostile submission.
   content) hash: a second run grades only mutants it has not seen;
 * ``batch/<lesson>-<hash>/``: the batch's own output (``results.jsonl``); a run
   stopped by Ctrl+C resumes from it;
-* ``mutation.json``: every lesson's counts, score and mutants;
+* ``mutation.json``: every lesson's counts, score and mutants (``lessons``: the first sample;
+  ``held_out``: the held-out samples, :func:`ros2course.grade.mutate.held_out_sample`);
 * ``survivors/<lesson>/<key>.diff``: each survivor's unified diff.
 """
 
@@ -69,7 +70,8 @@ def _student(mutant: mut.Mutant) -> str:
 
 
 def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: int = 1, jobs: int = 1,
-                  timeout: float = 300.0, console: Console | None = None) -> mut.LessonMutation:
+                  timeout: float = 300.0, console: Console | None = None, held_out: int | None = None,
+                  held_out_seed: int | None = None) -> mut.LessonMutation:
     """Generate, grade (what the cache does not know) and classify one lesson's mutants.
 
     Args:
@@ -80,6 +82,10 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         jobs: mutants graded at once.
         timeout: wall-clock seconds per mutant (the batch's per-submission limit).
         console: progress and the batch's progress bar (None: quiet).
+        held_out: instead of the first sample, grade a held-out one of this many mutants
+            (:func:`ros2course.grade.mutate.held_out_sample`): drawn with ``held_out_seed`` (default
+            ``seed + 1``) from the mutants neither the first sample (``sample``, ``seed``) nor the lesson's
+            recorded first run took, triaged with ``mutation.yaml`` as it is.
 
     Raises:
         MissingRequirement: universalmutator, or what the lesson requires, is not installed.
@@ -96,6 +102,14 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         every = mut.generate_mutants(lesson, reference, config)
         candidates, aside = mut.set_aside(every, config)
         picked = mut.sample_mutants(candidates, sample, seed)
+        pool = len(candidates)
+        if held_out is not None:
+            recorded = mut.recorded_first_sample(lesson)
+            first = picked
+            picked = mut.held_out_sample(candidates, first, held_out,
+                                         seed + 1 if held_out_seed is None else held_out_seed, recorded)
+            taken = {m.key for m in first} | recorded
+            pool = sum(m.key not in taken for m in candidates)
         grader, course = mut.grader_hash(lesson), mut.course_hash(reference, lesson)
         cache_path = out / CACHE_FILE
         cache = _read_cache(cache_path)
@@ -104,9 +118,12 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         graded_now: dict[str, dict[str, Any]] = {}  # outcomes of this run that are cached
         if console is not None:
             console.print(f"{lesson.id}: {len(every)} mutants generated"
-                          + (f" ({len(aside)} of lines triaged whole, set aside)" if aside else "")
+                          + (f" ({len(aside)} of rules marked set_aside, set aside)" if aside else "")
                           + f", {len(picked)} picked"
-                          f"{f' (--sample {sample} --seed {seed})' if len(picked) < len(candidates) else ''}, "
+                          + (f" for the held-out sample, from the {pool} the first sample left"
+                             if held_out is not None else
+                             f"{f' (--sample {sample} --seed {seed})' if len(picked) < len(candidates) else ''}")
+                          + ", "
                           f"{len(picked) - len(todo)} known from the cache, {len(todo)} to grade")
         if todo:
             submissions = root / "submissions"
@@ -150,24 +167,31 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         originals = {m.file: (reference / m.file).read_text(encoding="utf-8") for m in picked}
         diffs = {g.mutant.key: g.mutant.diff(originals[g.mutant.file])
                  for g in graded if g.outcome == mut.SURVIVED and not g.triaged}
-        folder = out / "survivors" / lesson.id
+        folder = out / "survivors" / (lesson.id + ("-held-out" if held_out is not None else ""))
         shutil.rmtree(folder, ignore_errors=True)
         for key, diff in diffs.items():
             folder.mkdir(parents=True, exist_ok=True)
             (folder / f"{key}.diff").write_text(diff, encoding="utf-8")
         return mut.LessonMutation(lesson.id, len(every), graded, stale, len(picked) < len(candidates),
-                                  time.monotonic() - begin, diffs, set_aside=len(aside))
+                                  time.monotonic() - begin, diffs, set_aside=len(aside), sample=sample,
+                                  seed=seed if held_out is None else (seed + 1 if held_out_seed is None
+                                                                      else held_out_seed),
+                                  held_out=held_out is not None, pool=pool)
     finally:
         shutil.rmtree(root, ignore_errors=True)
 
 
 def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, seed: int = 1, jobs: int = 1,
-                   timeout: float = 300.0, console: Console | None = None) -> list[mut.LessonMutation]:
+                   timeout: float = 300.0, console: Console | None = None, held_out: int | None = None,
+                   held_out_seed: int | None = None) -> list[mut.LessonMutation]:
     """:func:`mutate_lesson` for each lesson, then ``OUT/mutation.json`` (written even when one lesson fails).
+
+    With ``held_out``, each lesson's held-out sample instead of its first one (:func:`mutate_lesson`), recorded
+    beside the first (:func:`ros2course.grade.mutate.write_held_out`); the lesson must have a recorded first run.
 
     Raises:
         UnknownLesson: a lesson id is not in the catalog (before anything is graded).
-        CourseError: bad numbers; see :func:`mutate_lesson`.
+        CourseError: bad numbers; a held-out sample of a lesson with no recorded first run; see :func:`mutate_lesson`.
     """
     if not lesson_ids:
         raise CourseError("no lesson given", "e.g. ros2course dev mutate print-forever-node --sample 5")
@@ -175,19 +199,30 @@ def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, 
         raise CourseError(f"--jobs must be at least 1 (got {jobs})", "e.g. --jobs 2")
     if sample is not None and sample < 1:
         raise CourseError(f"--sample must be at least 1 (got {sample})", "e.g. --sample 30")
+    if held_out is not None and held_out < 1:
+        raise CourseError(f"--held-out must be at least 1 (got {held_out})", "e.g. --held-out 30")
     catalog = load_catalog()
     lessons = [catalog.get(i) for i in lesson_ids]
+    if held_out is not None:
+        missing = [lesson.id for lesson in lessons if not mut.recorded_first_sample(lesson)]
+        if missing:
+            raise CourseError(f"no recorded first sample for {', '.join(missing)}: a held-out sample is drawn after it",
+                              f"grade the first sample first: ros2course dev mutate {' '.join(missing)} "
+                              f"--sample {sample or 30} --seed {seed}")
     out = out.absolute()
     out.mkdir(parents=True, exist_ok=True)
     found: list[mut.LessonMutation] = []
     try:
         for lesson in lessons:
-            found.append(mutate_lesson(lesson, out, sample, seed, jobs, timeout, console))
+            found.append(mutate_lesson(lesson, out, sample, seed, jobs, timeout, console, held_out, held_out_seed))
             mut.write_score(lesson, found[-1])
     finally:
-        previous = _read_cache(out / RESULT_FILE).get("lessons", {})
-        merged = {**(previous if isinstance(previous, dict) else {}), **{f.lesson: f.to_dict() for f in found}}
-        atomic_write_text(out / RESULT_FILE, json.dumps({"seed": seed, "sample": sample, "lessons": merged},
+        before = _read_cache(out / RESULT_FILE)
+        section = "held_out" if held_out is not None else "lessons"
+        previous = {name: before.get(name, {}) if isinstance(before.get(name, {}), dict) else {}
+                    for name in ("lessons", "held_out")}
+        previous[section] = {**previous[section], **{f.lesson: f.to_dict() for f in found}}
+        atomic_write_text(out / RESULT_FILE, json.dumps({"seed": seed, "sample": sample, **previous},
                                                         indent=2) + "\n")
     return found
 
@@ -202,14 +237,15 @@ def render(found: list[mut.LessonMutation], console: Console, diffs: bool = True
         table.add_column(column, justify="right", no_wrap=True)
     for f in found:
         score = "n/a" if f.score is None else f"{100 * f.score:.0f}%"
-        table.add_row(f.lesson, f"{f.generated}" + (f" (-{f.set_aside})" if f.set_aside else ""),
+        table.add_row(f.lesson + (" (held-out)" if f.held_out else ""), f"{f.generated}" + (f" (-{f.set_aside})" if f.set_aside else ""),
                       f"{len(f.graded)}{'*' if f.sampled else ''}",
                       str(f.count(mut.KILLED)), str(f.count(mut.KILLED_BY_BUILD)), str(f.count(mut.SURVIVED)),
                       str(f.triaged), f"{f.count(mut.TIMED_OUT)}+{f.count(mut.GRADER_ERROR)}", score,
                       f"{f.seconds:.0f}")
     console.print(table)
-    console.print("build: killed by the build (no check ran); *: a seeded sample; (-N): mutants of lines "
-                  "mutation.yaml triages whole, set aside; score: killed / (graded - build - triaged)")
+    console.print("build: killed by the build (no check ran); *: a seeded sample; (-N): mutants of the rules "
+                  "marked set_aside, never graded; score: killed / (graded - build - triaged); held-out: a second "
+                  "sample disjoint from the first, triaged with mutation.yaml as it is")
     for f in found:
         killers: dict[str, int] = {}
         for g in f.graded:
@@ -227,9 +263,11 @@ def render(found: list[mut.LessonMutation], console: Console, diffs: bool = True
             for key, diff in f.diffs.items():
                 console.print(f"[yellow]survived[/] {f.lesson} {key}:")
                 console.print(diff.rstrip("\n"), markup=False, highlight=False, soft_wrap=True)
+        for hit in f.rules_on_killed():
+            console.print(f"{f.lesson}: a rule matches a killed mutant (is its kind equivalent?): {hit}", markup=False)
         for entry in f.stale:
-            console.print(f"[yellow]stale[/] {f.lesson}: mutation.yaml entry matches no mutant: {entry.file}: "
-                          f"{entry.key or repr(entry.line) + ' -> ' + repr(entry.mutant)}")
+            what = f"rule {entry.id}" if isinstance(entry, mut.Rule) else f"entry {entry.describe()}"
+            console.print(f"[yellow]stale[/] {f.lesson}: mutation.yaml {what} matches no mutant")
 
 
 def as_dicts(found: list[mut.LessonMutation]) -> list[dict[str, Any]]:

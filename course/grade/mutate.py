@@ -1,4 +1,4 @@
-"""Mutation analysis of a lesson's grader (issue 24): mutants of the reference, triage, score.
+r"""Mutation analysis of a lesson's grader (issue 24): mutants of the reference, triage, score.
 
 A *mutant* is the lesson's reference workspace with one of its files replaced by
 a copy carrying one small change, made by a maintained mutation tool,
@@ -20,23 +20,48 @@ Each mutant is graded by the lesson's grader (through the batch engine,
 * ``timed out`` / ``grader error``: neither (reported, never counted as killed).
 
 ``chapters/<lesson>/mutation.yaml``, beside ``lesson.yaml``, is the author's
-triage of survivors judged equivalent or outside the lesson's contract::
+triage of survivors judged equivalent or outside the lesson's contract (issue 37:
+triage by rule, decided before it is tested)::
 
     # optional: which reference files are mutated (globs, workspace-relative);
     # default: the lesson's own files (:func:`lesson_files`)
     files: [src/python_package_with_a_node/python_package_with_a_node/print_forever_node.py]
-    survivors:
-      - file: src/python_package_with_a_node/python_package_with_a_node/print_forever_node.py
-        line: "def main(args=None):"          # the original line (stripped)
-        mutant: "def main(args=None):  pass"  # the mutated line (stripped); or `key: <mutant key>`
+    rules:                                  # kinds of survivor, applied mechanically (:class:`Rule`)
+      - id: docstring-pass
+        reason: "a docstring replaced by `pass`: documentation only, no behaviour changes"
+        file: "*.py"                        # globs (default: every file)
+        original: '^\s*("{3}|''{3}).*("{3}|''{3})\s*$'   # regex searched in the original line
+        mutated: '^\s*pass\s*$'              # regex searched in the mutated line
+      - id: main-block
         reason: "..."
-      - file: src/python_package_with_a_node/package.xml
-        line: "<description>Prints forever</description>"
-        every_mutant: true                    # any change of this line (free text no program reads)
+        block: "^if __name__ == .__main__.:"  # the line or the indented block it opens
+      - id: package-metadata
+        reason: "..."
+        file: "*/package.xml"
+        original: '<(description|maintainer|license|url)\b'
+        set_aside: true                     # never graded: free text no program reads
+    survivors:                              # one mutant each, for what no rule covers (:class:`TriageEntry`)
+      - file: src/python_package_with_a_node/setup.py
+        key: 3f2a9c0d1e4b                   # its identity (Mutant.key); or `line: 12` + original + mutated
+        original: "zip_safe=True,"          # for the reader: checked against the key
+        mutated: "zip_safe=False,"
         reason: "..."
 
+Rules are applied before entries. An entry names one mutant by its identity, never by line text
+alone. A rule may never cover a line that implements a requirement of the lesson's contract
+(``contract.yaml``; :func:`rule_conflicts`, with :func:`ros2course.lesson.contract.implements`
+saying which lines those are), so the two tables check each other; :func:`triage_problems`
+reports such a rule, an entry or rule matching no mutant, and a record made under another
+grader fingerprint, each with its file and line.
+
 Score = killed / (generated - killed by build - triaged), over the graded mutants
-(a sample when ``--sample`` is given). An entry matching no current mutant is *stale*.
+(a sample when ``--sample`` is given): the *tuned* score, since the triage was written
+looking at that sample. A *held-out* sample (:func:`held_out_sample`, ``mutate_lessons(...,
+held_out=N)``) is drawn afterwards with another seed from the mutants the first sample did
+not take, graded with the rules and entries as they are, never tuned: its uncovered survivors
+count against it, and are listed for the author (strengthen the grader, or add a rule that
+applies from the next held-out sample on). Both are recorded in ``mutation-score.json``
+(``held_out``) and ``mutation-outcomes.json``.
 """
 
 from __future__ import annotations
@@ -92,29 +117,186 @@ _SKIP_PARTS = {"__pycache__", "build", "install", "log", ".git"}
 _SKIP_SUFFIXES = {".pyc", ".png", ".jpg", ".gif", ".zip", ".gz", ".so", ".a", ".o", ".mcap", ".db3"}
 
 
+#: A rule's or requirement's id: kebab-case.
+_RULE_ID = r"^[a-z0-9]+(-[a-z0-9]+)*$"
+#: Quoted strings of a line ('...', "...", with backslash escapes): what :attr:`Rule.strings_only` compares around.
+_STRING = re.compile(r'"(?:[^"\\\n]|\\.)*"|\'(?:[^\'\\\n]|\\.)*\'')
+
+
+def _regex(value: str | None, name: str) -> str | None:
+    if value is not None:
+        try:
+            re.compile(value)
+        except re.error as exc:
+            raise ValueError(f"`{name}` is not a regular expression: {exc}") from exc
+    return value
+
+
+def original_lines(mutant: Mutant, originals: dict[str, str] | None = None) -> list[str]:
+    """The original file's lines (no newlines) of ``mutant``: rebuilt from its content (a mutant changes
+    one line), or read from ``originals`` (``{file: text}``) for a mutant known only by its record."""
+    if originals and mutant.file in originals:
+        return originals[mutant.file].splitlines()
+    if not mutant.content or mutant.line < 1:
+        return []
+    lines = mutant.content.splitlines()
+    above = lines[:mutant.line - 1]
+    below = lines[mutant.line:] if mutant.mutated != "" else lines[mutant.line - 1:]
+    return [*above, *mutant.original.splitlines(), *below]
+
+
+def _indent(text: str) -> int:
+    return len(text) - len(text.lstrip())
+
+
+def in_block(lines: list[str], number: int, header: str, own: bool = True) -> bool:
+    """Whether line ``number`` (1-based) of ``lines`` lies in the indented block of a line matching ``header``
+    (a regex; an enclosing line of smaller indentation, as Python and indented scripts nest), or (``own``)
+    matches it itself. A blank line belongs to the block of the line above it."""
+    if not 1 <= number <= len(lines):
+        return False
+    pattern = re.compile(header)
+    if own and pattern.search(lines[number - 1]):
+        return True
+    level = _indent(lines[number - 1]) if lines[number - 1].strip() else None
+    for text in reversed(lines[:number - 1]):
+        if not text.strip():
+            continue
+        if level is None:  # a blank line: its block is the next non-blank line's above it
+            level = _indent(text) + 1
+        if _indent(text) < level:
+            if pattern.search(text):
+                return True
+            level = _indent(text)
+            if level == 0:
+                return False
+    return False
+
+
+class Rule(BaseModel):
+    r"""A kind of survivor the author judged equivalent or outside the lesson's contract, decided before it is
+    tested and applied mechanically: every mutant it matches is triaged with its reason (issue 37).
+
+    A mutant matches when every matcher given holds (at least one besides ``file``):
+
+    * ``file``: globs on the workspace-relative path (default: every file);
+    * ``original`` / ``mutated``: regular expressions searched in the original / mutated line;
+    * ``block``: a regular expression; the changed line matches it or lies in the indented block of a line
+      that does (``"^if __name__ == .__main__.:"``: the ``__main__`` block);
+    * ``strings_only``: the change is inside quoted strings only (the line outside them is the same);
+    * ``not_block``: a regular expression; the changed line is *not* in the indented block of a line matching it
+      (``^\s*(for|while|until)\b``: outside every loop of a script, where a ``break`` is a no-op). Blocks are
+      found by indentation (:func:`in_block`), as the course's scripts are written.
+
+    ``set_aside``: its mutants are set aside before sampling, never graded (free text no program reads),
+    so a sample is spent on mutants that count. A rule may never cover a line that implements a requirement
+    of the lesson's contract (:func:`rule_conflicts`).
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    id: str = Field(pattern=_RULE_ID)
+    reason: str = Field(min_length=10)
+    file: list[str] = Field(default_factory=lambda: ["*"])
+    original: str | None = None
+    mutated: str | None = None
+    block: str | None = None
+    strings_only: bool = False
+    not_block: str | None = None
+    set_aside: bool = False
+
+    @model_validator(mode="before")
+    @classmethod
+    def _one_file(cls, data: Any) -> Any:
+        if isinstance(data, dict) and isinstance(data.get("file"), str):
+            data = {**data, "file": [data["file"]]}
+        return data
+
+    @model_validator(mode="after")
+    def _matches_something(self) -> Rule:
+        for name in ("original", "mutated", "block", "not_block"):
+            _regex(getattr(self, name), name)
+        if self.original is None and self.mutated is None and self.block is None and not self.strings_only:
+            raise ValueError("a rule needs a matcher besides `file`: `original`, `mutated`, `block` or "
+                             "`strings_only` (a whole file is left out with `files:`)")
+        return self
+
+    def _file(self, rel: str) -> bool:
+        return any(fnmatch.fnmatch(rel, glob) for glob in self.file)
+
+    def covers_line(self, rel: str, lines: list[str], number: int) -> bool:
+        """Whether some mutant of line ``number`` of ``rel`` could match: the matchers on the original
+        (``file``, ``original``, ``block``, ``not_block``); the mutated line is not known."""
+        text = lines[number - 1] if 1 <= number <= len(lines) else ""
+        return (self._file(rel) and (self.original is None or re.search(self.original, text) is not None)
+                and (self.block is None or in_block(lines, number, self.block))
+                and (self.not_block is None or not in_block(lines, number, self.not_block, own=False)))
+
+    def matches(self, mutant: Mutant, originals: dict[str, str] | None = None) -> bool:
+        """Whether this rule triages ``mutant`` (``originals``: ``{file: text}`` when the mutant has no content)."""
+        if not self._file(mutant.file):
+            return False
+        if self.original is not None and re.search(self.original, mutant.original) is None:
+            return False
+        if self.mutated is not None and re.search(self.mutated, mutant.mutated) is None:
+            return False
+        if self.strings_only and (mutant.original == mutant.mutated or "\n" in mutant.original + mutant.mutated
+                                  or _STRING.sub('""', mutant.original) != _STRING.sub('""', mutant.mutated)):
+            return False
+        if self.block is not None or self.not_block is not None:
+            lines = original_lines(mutant, originals)[:mutant.line - 1]
+            if len(lines) < mutant.line - 1 or (not lines and mutant.line > 1):
+                return False  # the file is not known: no block can be judged
+            # the changed line as it sits among the lines above: the original one, or for a line universalmutator
+            # inserts (no original line) the inserted one, whose indentation says which block it lands in
+            lines.append(mutant.original if mutant.original.strip() else mutant.mutated)
+            if self.block is not None and not in_block(lines, mutant.line, self.block):
+                return False
+            if self.not_block is not None and in_block(lines, mutant.line, self.not_block, own=False):
+                return False
+        return True
+
+
+#: How many mutants with the same file, original and mutated line an entry's key is checked against.
+_MAX_LINE_INDEX = 64
+
+
 class TriageEntry(BaseModel):
-    """One survivor the author judged equivalent or outside the lesson's contract."""
+    """One survivor no rule covers, judged equivalent or outside the lesson's contract, named by its identity:
+    ``key`` (:attr:`Mutant.key`, printed by ``dev mutate``; ``original`` and ``mutated`` may go with it for the
+    reader, and must be the lines the key was made of), or ``line`` (the number) with ``original`` and
+    ``mutated``. Never by line text alone (issue 37): the text of a line is not one mutant."""
 
     model_config = ConfigDict(extra="forbid")
 
     file: str = Field(min_length=1)
-    line: str | None = None
-    mutant: str | None = None
-    #: With ``line``: every mutant of that line (free text such as a package.xml description, which no
-    #: program reads: any change is outside the contract, whatever the sample draws).
-    every_mutant: bool = False
-    key: str | None = None
+    key: str | None = Field(default=None, pattern=r"^[0-9a-f]{12}$")
+    line: int | None = Field(default=None, ge=1)
+    original: str | None = None
+    mutated: str | None = None
     reason: str = Field(min_length=10)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _not_by_text(cls, data: Any) -> Any:
+        if isinstance(data, dict):
+            if "every_mutant" in data:
+                raise ValueError("'every_mutant' is gone: every mutant of a kind of line is a rule (`rules:`, "
+                                 "with an id, a reason and matchers), not an entry")
+            if "mutant" in data or isinstance(data.get("line"), str):
+                raise ValueError("an entry names one mutant by its identity: `key` (dev mutate prints it), or "
+                                 "`line` (its number) with `original` and `mutated`; never by line text alone")
+        return data
 
     @model_validator(mode="after")
     def _identifies(self) -> TriageEntry:
-        if self.every_mutant:
-            if self.line is None or self.mutant is not None or self.key is not None:
-                raise ValueError("'every_mutant: true' goes with 'line' (the original line) alone, "
-                                 "without 'mutant' or 'key'")
-        elif self.key is None and (self.line is None or self.mutant is None):
-            raise ValueError("an entry names its mutant by 'line' and 'mutant' (the original and mutated lines, "
-                             "stripped), by 'key', or every mutant of a line by 'line' and 'every_mutant: true'")
+        if self.key is None and (self.line is None or self.original is None or self.mutated is None):
+            raise ValueError("an entry names its mutant by `key`, or by `line` (number), `original` and `mutated`")
+        if self.key is not None and self.original is not None and self.mutated is not None:
+            keys = {Mutant(self.file, 0, self.original, self.mutated, "", 0, i).key for i in range(_MAX_LINE_INDEX)}
+            if self.key not in keys:
+                raise ValueError(f"key {self.key} is not the key of `original` -> `mutated` in {self.file}: "
+                                 "copy both from the mutant's record (mutation-outcomes.json)")
         return self
 
     def matches(self, mutant: Mutant) -> bool:
@@ -123,18 +305,41 @@ class TriageEntry(BaseModel):
             return False
         if self.key is not None:
             return self.key == mutant.key
-        if self.line.strip() != mutant.original.strip():
-            return False
-        return self.every_mutant or self.mutant.strip() == mutant.mutated.strip()
+        return (self.line == mutant.line and self.original.strip() == mutant.original.strip()
+                and self.mutated.strip() == mutant.mutated.strip())
+
+    def describe(self) -> str:
+        """``file key`` or ``file:line 'original' -> 'mutated'``."""
+        if self.key is not None:
+            return f"{self.file} {self.key}"
+        return f"{self.file}:{self.line} {self.original.strip()!r} -> {self.mutated.strip()!r}"
 
 
 class MutationConfig(BaseModel):
-    """A lesson's ``mutation.yaml``: which files to mutate, and the triaged survivors."""
+    """A lesson's ``mutation.yaml``: which files to mutate, the rules, and the triaged survivors."""
 
     model_config = ConfigDict(extra="forbid")
 
     files: list[str] | None = None
+    rules: list[Rule] = Field(default_factory=list)
     survivors: list[TriageEntry] = Field(default_factory=list)
+
+    @model_validator(mode="after")
+    def _unique_rules(self) -> MutationConfig:
+        ids = [r.id for r in self.rules]
+        twice = sorted({i for i in ids if ids.count(i) > 1})
+        if twice:
+            raise ValueError(f"rule id(s) given twice: {', '.join(twice)}")
+        return self
+
+    def triage(self, mutant: Mutant, originals: dict[str, str] | None = None) -> tuple[str, str] | None:
+        """``(reason, by)`` of the first rule (``by``: ``rule:<id>``), else the first entry (``entry``), that
+        matches ``mutant``; None when none does. Rules come first."""
+        rule = next((r for r in self.rules if r.matches(mutant, originals)), None)
+        if rule is not None:
+            return rule.reason, f"rule:{rule.id}"
+        entry = next((e for e in self.survivors if e.matches(mutant)), None)
+        return (entry.reason, "entry") if entry is not None else None
 
 
 def triage_path(lesson: Lesson) -> Path:
@@ -159,14 +364,15 @@ def load_config(lesson: Lesson) -> MutationConfig:
     if data is None:
         return MutationConfig()
     if not isinstance(data, dict):
-        raise LessonFormatError(f"{path}: (top level): expected a mapping with 'survivors' (and 'files'), "
+        raise LessonFormatError(f"{path}: (top level): expected a mapping with 'rules', 'survivors' (and 'files'), "
                                 f"got {type(data).__name__}", "see course/grade/mutate.py for the format")
     try:
         return MutationConfig.model_validate(data)
     except ValidationError as exc:
         raise LessonFormatError(format_validation_error(path, exc),
-                                "each survivor has file, line + mutant (or key) and a reason of a sentence; "
-                                "see course/grade/mutate.py (TriageEntry)") from exc
+                                "a rule has an id, a reason of a sentence and matchers; a survivor has file, key "
+                                "(or line number + original + mutated) and a reason; see course/grade/mutate.py "
+                                "(Rule, TriageEntry)") from exc
 
 
 @dataclasses.dataclass
@@ -461,6 +667,22 @@ def sample_mutants(mutants: list[Mutant], count: int | None, seed: int) -> list[
     return [m for i, m in enumerate(mutants) if i in picked]
 
 
+def held_out_sample(candidates: list[Mutant], first: list[Mutant], count: int, seed: int,
+                    recorded: set[str] | frozenset[str] = frozenset()) -> list[Mutant]:
+    """The held-out sample: ``count`` mutants picked with ``random.Random(seed)`` (:func:`sample_mutants`, the
+    first sample's scheme with another seed) from ``candidates`` minus the first sample (``first``, and the
+    keys of ``recorded``: the first sample as its run recorded it), so the two are disjoint; every one left
+    when fewer than ``count`` are.
+
+    Raises:
+        CourseError: ``count`` below 1.
+    """
+    if count < 1:
+        raise CourseError(f"--held-out must be at least 1 (got {count})", "e.g. --held-out 30")
+    taken = {m.key for m in first} | set(recorded)
+    return sample_mutants([m for m in candidates if m.key not in taken], count, seed)
+
+
 def classify(result: LessonResult) -> tuple[str, list[str]]:
     """``(outcome, lost checks)`` of a mutant's grading (see the module docstring for the outcomes)."""
     if result.status == Status.GRADER_ERROR:
@@ -521,40 +743,52 @@ class Graded:
     max_score: float = 0.0
     message: str = ""
     cached: bool = False
-    triaged: str = ""  #: the triage reason when ``mutation.yaml`` lists this survivor
+    triaged: str = ""  #: the triage reason when ``mutation.yaml`` covers this survivor
+    triaged_by: str = ""  #: ``rule:<id>`` or ``entry``, with ``triaged``
+    rule: str = ""  #: the id of the rule matching it, whatever its outcome (a killed mutant a rule matches)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: the mutant's fields, outcome, lost checks, score, message, cached, triage reason."""
         return {**self.mutant.to_dict(), "outcome": self.outcome, "lost": self.lost, "score": self.score,
                 "max_score": self.max_score, "message": self.message, "cached": self.cached,
-                "triaged": self.triaged}
+                "triaged": self.triaged, "triaged_by": self.triaged_by}
 
 
 def set_aside(mutants: list[Mutant], config: MutationConfig) -> tuple[list[Mutant], list[Mutant]]:
-    """``(to grade, set aside)``: the mutants of lines ``mutation.yaml`` triages whole (``every_mutant``)
-    are set aside before sampling. Whatever they change, the author judged it outside the contract (a
-    script's ``#!`` line the checker never reads, a package.xml description), so grading them would
-    only spend the sample (inspect-topics: 18 of its first 30 were such)."""
-    whole = [e for e in config.survivors if e.every_mutant]
-    aside = [m for m in mutants if any(e.matches(m) for e in whole)]
+    """``(to grade, set aside)``: the mutants of the rules marked ``set_aside`` are set aside before sampling.
+    Whatever they change, the author judged it outside the contract (a script's ``#!`` line the checker
+    never reads, a package.xml description), so grading them would only spend the sample (inspect-topics:
+    18 of its first 30 were such)."""
+    whole = [r for r in config.rules if r.set_aside]
+    aside = [m for m in mutants if any(r.matches(m) for r in whole)]
     keys = {m.key for m in aside}
     return [m for m in mutants if m.key not in keys], aside
 
 
-def apply_triage(graded: list[Graded], config: MutationConfig, every: list[Mutant]) -> list[TriageEntry]:
-    """Mark triaged survivors (``Graded.triaged``); return the *stale* entries (matching no current mutant).
+def apply_triage(graded: list[Graded], config: MutationConfig, every: list[Mutant],
+                 originals: dict[str, str] | None = None) -> list[TriageEntry | Rule]:
+    """Mark triaged survivors (``Graded.triaged``, rules first, then entries) and the rule matching each
+    graded mutant (``Graded.rule``: a rule matching a killed mutant is shown); return the *stale* entries
+    and rules (matching no current mutant; none when ``every`` is empty: nothing to judge by).
 
     Args:
-        graded: the graded mutants (only survivors get marked).
+        graded: the graded mutants (only survivors get triaged).
         config: the lesson's ``mutation.yaml``.
         every: every mutant generated now (not only the sample): an entry is stale only when it matches none.
+        originals: ``{file: original text}`` for mutants known only by their record (no content).
     """
     for item in graded:
+        item.triaged = item.triaged_by = item.rule = ""
+        rule = next((r for r in config.rules if r.matches(item.mutant, originals)), None)
+        item.rule = rule.id if rule is not None else ""
         if item.outcome == SURVIVED:
-            entry = next((e for e in config.survivors if e.matches(item.mutant)), None)
-            if entry is not None:
-                item.triaged = entry.reason
-    return [e for e in config.survivors if not any(e.matches(m) for m in every)]
+            found = config.triage(item.mutant, originals)
+            if found is not None:
+                item.triaged, item.triaged_by = found
+    if not every:
+        return []
+    return [*(r for r in config.rules if not any(r.matches(m) for m in every)),
+            *(e for e in config.survivors if not any(e.matches(m) for m in every))]
 
 
 @dataclasses.dataclass
@@ -564,21 +798,28 @@ class LessonMutation:
     Attributes:
         generated: mutants universalmutator made of the lesson's files.
         graded: the graded ones (all, or the ``--sample``), with outcomes.
-        stale: ``mutation.yaml`` entries matching no generated mutant.
+        stale: ``mutation.yaml`` entries and rules matching no generated mutant.
         sampled: True when ``graded`` is a sample.
         seconds: wall time of the lesson (generation, grading, classification), seconds.
-        set_aside: generated mutants of lines ``mutation.yaml`` triages whole (``every_mutant``):
-            never sampled nor graded (:func:`set_aside`), so a sample is spent on mutants that count.
+        set_aside: generated mutants of the rules marked ``set_aside``: never sampled nor graded
+            (:func:`set_aside`), so a sample is spent on mutants that count.
+        sample, seed: the sample's size asked for (None: all) and its seed.
+        held_out: this is a held-out sample (:func:`held_out_sample`), not the first (tuned) one.
+        pool: the mutants the sample was drawn from (the first sample's left out for a held-out one).
     """
 
     lesson: str
     generated: int
     graded: list[Graded]
-    stale: list[TriageEntry]
+    stale: list[TriageEntry | Rule]
     sampled: bool
     seconds: float = 0.0
     diffs: dict[str, str] = dataclasses.field(default_factory=dict)  #: survivor key -> unified diff
     set_aside: int = 0
+    sample: int | None = None
+    seed: int = 1
+    held_out: bool = False
+    pool: int = 0
 
     def count(self, outcome: str) -> int:
         """How many graded mutants ended with ``outcome`` (one of :data:`OUTCOMES`)."""
@@ -595,13 +836,38 @@ class LessonMutation:
         denominator = len(self.graded) - self.count(KILLED_BY_BUILD) - self.triaged
         return self.count(KILLED) / denominator if denominator > 0 else None
 
+    @property
+    def by_rule(self) -> int:
+        """How many survivors a rule triages (the rest of :attr:`triaged`, entries)."""
+        return sum(g.triaged_by.startswith("rule:") for g in self.graded)
+
+    @property
+    def raw(self) -> float | None:
+        """killed / (graded - killed by build), before any triage, or None when nothing was judged."""
+        judged = len(self.graded) - self.count(KILLED_BY_BUILD)
+        return self.count(KILLED) / judged if judged > 0 else None
+
+    def uncovered(self) -> list[str]:
+        """The survivors no rule nor entry covers, as ``file:line (key)``, sorted."""
+        return sorted(f"{g.mutant.file}:{g.mutant.line} ({g.mutant.key})" for g in self.graded
+                      if g.outcome == SURVIVED and not g.triaged)
+
+    def rules_on_killed(self) -> list[str]:
+        """Graded mutants a rule matches that the grader killed (``rule: file:line (key)``): evidence that the
+        kind is not equivalent after all, for the author to look at."""
+        return sorted(f"{g.rule}: {g.mutant.file}:{g.mutant.line} ({g.mutant.key})" for g in self.graded
+                      if g.rule and g.outcome == KILLED)
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready summary (counts, score, stale entries) and every graded mutant (``mutation.json``)."""
         return {"lesson": self.lesson, "generated": self.generated, "graded": len(self.graded),
                 "sampled": self.sampled, "killed": self.count(KILLED), "killed_by_build": self.count(KILLED_BY_BUILD),
-                "survived": self.count(SURVIVED), "triaged": self.triaged, "timed_out": self.count(TIMED_OUT),
-                "grader_error": self.count(GRADER_ERROR), "score": self.score, "seconds": round(self.seconds, 1),
-                "set_aside": self.set_aside,
+                "survived": self.count(SURVIVED), "triaged": self.triaged, "triaged_by_rule": self.by_rule,
+                "timed_out": self.count(TIMED_OUT),
+                "grader_error": self.count(GRADER_ERROR), "score": self.score, "raw": self.raw,
+                "seconds": round(self.seconds, 1), "set_aside": self.set_aside, "sample": self.sample,
+                "seed": self.seed, "held_out": self.held_out, "pool": self.pool,
+                "rules_on_killed": self.rules_on_killed(),
                 "stale": [e.model_dump(exclude_none=True) for e in self.stale],
                 "mutants": [g.to_dict() for g in self.graded]}
 
@@ -612,7 +878,30 @@ def course_version() -> str:
     return load_manifest(root).version if (root / MANIFEST).is_file() else ""
 
 
-def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] | None = None) -> Path | None:
+def _outcome_rows(found: LessonMutation) -> list[dict[str, Any]]:
+    return [{"key": g.mutant.key, "file": g.mutant.file, "line": g.mutant.line,
+             "original": g.mutant.original.strip(), "mutant": g.mutant.mutated.strip(),
+             "outcome": g.outcome, "lost": g.lost, **({"triaged": g.triaged, "triaged_by": g.triaged_by}
+                                                      if g.triaged else {}),
+             **({"rule": g.rule} if g.rule and not g.triaged else {})}
+            for g in sorted(found.graded, key=lambda g: (g.mutant.file, g.mutant.line, g.mutant.key))]
+
+
+def _summary(found: LessonMutation) -> dict[str, Any]:
+    return {key: value for key, value in found.to_dict().items()
+            if key not in ("mutants", "stale", "lesson", "held_out", "raw")}
+
+
+def _read_json(path: Path) -> dict[str, Any]:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return data if isinstance(data, dict) else {}
+
+
+def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] | None = None,
+                keep_held_out: bool = False) -> Path | None:
     """Record ``found``'s counts and score in ``chapters/<lesson>/mutation-score.json``; its path, or None.
 
     The file lives with the lesson, like its ``mutation.yaml``, so that ``dev validate``
@@ -622,24 +911,63 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
     the run the outcomes come from when it is not now (a re-triage of an old run keeps
     its date and its grader fingerprint). None when the lesson folder is read-only (an
     installed course): the run's ``mutation.json`` still has it all.
+
+    A held-out run (``found.held_out``) goes to the ``held_out`` section of both files, beside the
+    first sample's figures (:func:`write_held_out`). A new first sample drops the recorded held-out
+    one (it must be drawn after the first, from what the first left); ``keep_held_out`` keeps it (a
+    re-triage of the first sample: the held-out one stays as it was graded, never re-triaged).
     """
+    if found.held_out:
+        return write_held_out(lesson, found, measured)
     from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
 
     measured = measured or {"date": dt.date.today().isoformat(), "fingerprint": grader_fingerprint(lesson)}
     fingerprint = measured["fingerprint"]
-    data = {key: value for key, value in found.to_dict().items() if key not in ("mutants", "stale", "lesson")}
+    data = _summary(found)
     data.update(date=measured["date"], course_version=course_version(), fingerprint=fingerprint,
-                survivors=sorted(f"{g.mutant.file}:{g.mutant.line} ({g.mutant.key})" for g in found.graded
-                                 if g.outcome == SURVIVED and not g.triaged))
+                survivors=found.uncovered())
     # every mutant's outcome, committed with the lesson: the figure can be checked and re-derived (issue 37)
-    outcomes = {"fingerprint": fingerprint, "date": data["date"],
-                "mutants": [{"key": g.mutant.key, "file": g.mutant.file, "line": g.mutant.line,
-                             "original": g.mutant.original.strip(), "mutant": g.mutant.mutated.strip(),
-                             "outcome": g.outcome, "lost": g.lost, **({"triaged": g.triaged} if g.triaged else {})}
-                            for g in sorted(found.graded, key=lambda g: (g.mutant.file, g.mutant.line, g.mutant.key))]}
+    outcomes = {"fingerprint": fingerprint, "date": data["date"], "mutants": _outcome_rows(found)}
+    if keep_held_out:
+        if "held_out" in (before := _read_json(lesson.folder / SCORE_FILE)):
+            data["held_out"] = before["held_out"]
+        if "held_out" in (before := _read_json(lesson.folder / OUTCOMES_FILE)):
+            outcomes["held_out"] = before["held_out"]
     path = lesson.folder / SCORE_FILE
     try:
         atomic_write_text(path, json.dumps(data, indent=1) + "\n")
+        atomic_write_text(lesson.folder / OUTCOMES_FILE, json.dumps(outcomes, indent=0) + "\n")
+    except OSError:
+        return None
+    return path
+
+
+def recorded_first_sample(lesson: Lesson) -> set[str]:
+    """The keys of the mutants the lesson's recorded first sample graded (``mutation-outcomes.json``)."""
+    rows = _read_json(lesson.folder / OUTCOMES_FILE).get("mutants", [])
+    return {row["key"] for row in rows if isinstance(row, dict) and "key" in row}
+
+
+def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, str] | None = None) -> Path | None:
+    """Record a held-out run (:func:`held_out_sample`) as the ``held_out`` section of the lesson's
+    ``mutation-score.json`` (its counts, score, raw rate, uncovered survivors, seed, date, fingerprint) and
+    ``mutation-outcomes.json`` (every mutant's outcome, by key); the first sample's figures stay. None when
+    the lesson has no recorded first sample (a held-out sample is drawn after it) or its folder is read-only.
+    """
+    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+
+    score, outcomes = _read_json(lesson.folder / SCORE_FILE), _read_json(lesson.folder / OUTCOMES_FILE)
+    if not score or not outcomes:
+        return None
+    measured = measured or {"date": dt.date.today().isoformat(), "fingerprint": grader_fingerprint(lesson)}
+    section = _summary(found)
+    section.update(date=measured["date"], fingerprint=measured["fingerprint"], survivors=found.uncovered())
+    score["held_out"] = section
+    outcomes["held_out"] = {"fingerprint": measured["fingerprint"], "date": measured["date"], "seed": found.seed,
+                            "mutants": _outcome_rows(found)}
+    path = lesson.folder / SCORE_FILE
+    try:
+        atomic_write_text(path, json.dumps(score, indent=1) + "\n")
         atomic_write_text(lesson.folder / OUTCOMES_FILE, json.dumps(outcomes, indent=0) + "\n")
     except OSError:
         return None
@@ -659,6 +987,7 @@ class RecordedScore:
         tuned: killed / counted (triage applied), None when nothing counts.
         raw: killed / (graded - killed by build), before any triage, None when nothing was graded.
         stale: "" when measured under the lesson's current grader fingerprint, else why not, with the run's date.
+        held_out: the held-out sample's figures (its ``tuned`` is the held-out score), None when none was drawn.
     """
 
     data: dict
@@ -666,6 +995,7 @@ class RecordedScore:
     tuned: float | None
     raw: float | None
     stale: str
+    held_out: RecordedScore | None = None
 
     @property
     def too_small(self) -> bool:
@@ -673,24 +1003,33 @@ class RecordedScore:
         return self.counted < MIN_COUNTED
 
 
-def recorded_score(lesson: Lesson) -> RecordedScore | None:
-    """The lesson's recorded mutation run (:func:`write_score`), or None when there is none or it is unreadable."""
-    try:
-        data = json.loads((lesson.folder / SCORE_FILE).read_text(encoding="utf-8"))
-        graded, by_build, triaged, killed = (int(data[k]) for k in ("graded", "killed_by_build", "triaged", "killed"))
-    except (OSError, ValueError, KeyError, TypeError):
-        return None
-    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
-
-    counted = graded - by_build - triaged
-    judged = graded - by_build
-    recorded, now = data.get("fingerprint"), grader_fingerprint(lesson)
-    when = data.get("date", "?")
+def _figures(data: dict, now: str) -> RecordedScore:
+    """Raises ValueError, KeyError or TypeError on a malformed record."""
+    graded, by_build, triaged, killed = (int(data[k]) for k in ("graded", "killed_by_build", "triaged", "killed"))
+    counted, judged = graded - by_build - triaged, graded - by_build
+    recorded, when = data.get("fingerprint"), data.get("date", "?")
     stale = ("" if recorded == now else
              f"stale: graded on {when}, before grader fingerprints were recorded" if not recorded else
              f"stale: graded on {when} under grader fingerprint {recorded}, now {now}")
     return RecordedScore(data, counted, killed / counted if counted > 0 else None,
                          killed / judged if judged > 0 else None, stale)
+
+
+def recorded_score(lesson: Lesson) -> RecordedScore | None:
+    """The lesson's recorded mutation run (:func:`write_score`), or None when there is none or it is unreadable."""
+    data = _read_json(lesson.folder / SCORE_FILE)
+    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+
+    now = grader_fingerprint(lesson) if data else ""
+    try:
+        row = _figures(data, now)
+    except (ValueError, KeyError, TypeError):
+        return None
+    try:
+        row.held_out = _figures(data["held_out"], now) if isinstance(data.get("held_out"), dict) else None
+    except (ValueError, KeyError, TypeError):
+        row.held_out = None
+    return row
 
 
 def _share(value: float | None) -> str:
@@ -699,13 +1038,17 @@ def _share(value: float | None) -> str:
 
 def score_text(lesson: Lesson) -> str:
     """The lesson's last mutation score in a few words (a table cell): the raw kill rate, the score after
-    triage and its counted denominator, ``too small`` below :data:`MIN_COUNTED`, ``stale`` when the grader
-    changed since (``"raw 62 %, triaged 100 % of 13 counted (too small); stale"``), or ``"not measured"``."""
+    triage and its counted denominator, ``too small`` below :data:`MIN_COUNTED`, the held-out sample's score
+    when one was drawn, ``stale`` when the grader changed since
+    (``"raw 62 %, triaged 100 % of 13 counted (too small); held-out 80 % of 25; stale"``), or ``"not measured"``."""
     row = recorded_score(lesson)
     if row is None:
         return "not measured"
+    held = row.held_out
+    held_text = ("" if held is None else f"; held-out {_share(held.tuned)} of {held.counted}"
+                 + (" (too small)" if held.too_small else "") + ("" if not held.stale or row.stale else " (stale)"))
     return (f"raw {_share(row.raw)}, triaged {_share(row.tuned)} of {row.counted} counted"
-            + (" (too small)" if row.too_small else "") + ("; stale" if row.stale else ""))
+            + (" (too small)" if row.too_small else "") + held_text + ("; stale" if row.stale else ""))
 
 
 def describe_score(lesson: Lesson) -> str:
@@ -720,7 +1063,153 @@ def describe_score(lesson: Lesson) -> str:
     small = f"; {row.counted} counted mutants are too few to judge by (< {MIN_COUNTED})" if row.too_small else ""
     stale = f"; {row.stale}: {how}" if row.stale else ""
     left = f"; {len(data.get('survivors', []))} survivor(s) not triaged" if data.get("survivors") else ""
+    held = row.held_out
+    if held is None:
+        held_text = "; no held-out sample"
+    else:
+        uncovered = len(held.data.get("survivors", []))
+        held_text = (f"; held-out sample {_share(held.tuned)} ({held.data['killed']} of {held.counted} counted, "
+                     f"{_share(held.raw)} raw, {uncovered} survivor(s) no rule covers"
+                     + (", too few to judge by" if held.too_small else "")
+                     + (f", {held.stale}" if held.stale and not row.stale else "") + ")")
     return (f"{lesson.id}: grader strength {_share(row.tuned)} after triage, {_share(row.raw)} raw "
             f"({data['killed']} of {row.counted} counted mutants killed; "
             f"{graded}, {data['triaged']} triaged, {data['killed_by_build']} killed by the build; "
-            f"dev mutate {data.get('date', '?')}{left}{small}{stale})")
+            f"dev mutate {data.get('date', '?')}{left}{small}{held_text}{stale})")
+
+
+def _item_lines(path: Path, section: str) -> list[int]:
+    """The line of each item of ``section`` (``rules`` or ``survivors``) in the YAML file ``path`` ([] unreadable)."""
+    try:
+        loader = yaml.SafeLoader(path.read_text(encoding="utf-8"))
+        try:
+            root = loader.get_single_node()
+        finally:
+            loader.dispose()
+    except (OSError, yaml.YAMLError):
+        return []
+    if not isinstance(root, yaml.MappingNode):
+        return []
+    for key, value in root.value:
+        if isinstance(key, yaml.ScalarNode) and key.value == section and isinstance(value, yaml.SequenceNode):
+            return [item.start_mark.line + 1 for item in value.value]
+    return []
+
+
+def reference_texts(lesson: Lesson, reference: Path | None = None,
+                    config: MutationConfig | None = None) -> dict[str, str]:
+    """``{workspace-relative file: text}`` of the files rules may cover: the lesson's files in ``reference`` (a
+    reference workspace; default: the course's ``solutions/``, which holds them at the same paths), narrowed by
+    ``files:`` when mutation.yaml gives it. A superset of what is mutated: the check it feeds is conservative."""
+    root = reference if reference is not None else content_root() / "solutions"
+    config = config if config is not None else load_config(lesson)
+    out: dict[str, str] = {}
+    for top in lesson.workspace_paths:
+        base = root / top
+        paths = [base] if base.is_file() else sorted(base.rglob("*")) if base.is_dir() else []
+        for path in paths:
+            rel = path.relative_to(root).as_posix()
+            if not path.is_file() or not _mutable(path.relative_to(root)) and not _mutable(path):
+                continue
+            if config.files is not None and not any(fnmatch.fnmatch(rel, glob) for glob in config.files):
+                continue
+            try:
+                out[rel] = path.read_text(encoding="utf-8")
+            except (OSError, UnicodeDecodeError):
+                continue
+    return out
+
+
+def rule_conflicts(lesson: Lesson, config: MutationConfig | None = None, reference: Path | None = None) -> list[str]:
+    """Each rule of the lesson's ``mutation.yaml`` that covers a line implementing a requirement of its
+    ``contract.yaml`` (:func:`ros2course.lesson.contract.implements`), as ``mutation.yaml:LINE: rule ID covers
+    FILE:N `text`, which implements requirement R (contract.yaml:M: names `term`)``; [] without a contract.
+
+    A rule covers a line when its matchers on the original (file, ``original``, ``block``, ``not_block``)
+    hold there (:meth:`Rule.covers_line`): some mutant of that line could be triaged by it. Issue 37: a rule
+    is a kind of change outside the contract, so it may never reach what the contract asks for; the mutants of
+    such a line are triaged, if at all, one by one (``survivors:``), each with its own reason.
+    """
+    from ros2course.lesson.contract import contract_path, implements, load_contract, requirement_lines  # noqa: PLC0415
+
+    config = config if config is not None else load_config(lesson)
+    if not config.rules:
+        return []
+    path = contract_path(lesson.folder)
+    contract, _ = load_contract(path, lesson.id) if path.is_file() else (None, [])
+    if contract is None:
+        return []
+    rule_lines = _item_lines(triage_path(lesson), "rules")
+    req_lines = requirement_lines(path)
+    problems = []
+    for rel, text in reference_texts(lesson, reference, config).items():
+        lines = text.splitlines()
+        for number, line in enumerate(lines, 1):
+            for index, rule in enumerate(config.rules):
+                if not rule.covers_line(rel, lines, number):
+                    continue
+                for requirement in contract.requirements:
+                    why = implements(requirement, rel, line)
+                    if why is not None:
+                        where = rule_lines[index] if index < len(rule_lines) else 1
+                        problems.append(f"{triage_path(lesson)}:{where}: rule {rule.id} covers {rel}:{number} "
+                                        f"`{line.strip()}`, which implements requirement {requirement.id} "
+                                        f"({path}:{req_lines.get(requirement.id, 1)}: {why})")
+    return problems
+
+
+def triage_problems(lesson: Lesson, every: list[Mutant] | None = None, reference: Path | None = None) -> list[str]:
+    """What ``dev validate`` reports about the lesson's mutation triage and records, each with file and line:
+
+    * a rule covering a line that implements a contract requirement (:func:`rule_conflicts`);
+    * with ``every`` (every mutant generated now): a rule or an entry of ``mutation.yaml`` that matches none;
+    * ``mutation-outcomes.json`` (or its ``held_out`` section) made under another grader fingerprint than the
+      lesson's current one, or than its ``mutation-score.json``.
+
+    A malformed ``mutation.yaml`` is one problem (its message names the field).
+    """
+    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+
+    try:
+        config = load_config(lesson)
+    except LessonFormatError as exc:
+        return [str(exc)]
+    problems = rule_conflicts(lesson, config, reference)
+    if every is not None:
+        for section, items in (("rules", config.rules), ("survivors", config.survivors)):
+            lines = _item_lines(triage_path(lesson), section)
+            for index, item in enumerate(items):
+                if not any(item.matches(m) for m in every):
+                    what = f"rule {item.id}" if isinstance(item, Rule) else f"entry {item.describe()}"
+                    problems.append(f"{triage_path(lesson)}:{lines[index] if index < len(lines) else 1}: "
+                                    f"{what} matches no mutant of the reference")
+    outcomes_path, score_path = lesson.folder / OUTCOMES_FILE, lesson.folder / SCORE_FILE
+    outcomes, score = _read_json(outcomes_path), _read_json(score_path)
+    if outcomes or score:
+        now = grader_fingerprint(lesson)
+        for part, record, path in (("", outcomes, outcomes_path), ("held_out", outcomes.get("held_out"), outcomes_path),
+                                   ("", score, score_path), ("held_out", score.get("held_out"), score_path)):
+            if not isinstance(record, dict) or not record:
+                continue
+            where = f"{path}:{_json_line(path, part)}: " + (f"{part}: " if part else "")
+            recorded = record.get("fingerprint")
+            if recorded != now:
+                problems.append(f"{where}recorded under grader fingerprint {recorded or '(none)'} on "
+                                f"{record.get('date', '?')}, the lesson's is {now} now: measure it again")
+        if outcomes and score and outcomes.get("fingerprint") != score.get("fingerprint"):
+            problems.append(f"{outcomes_path}:1: its fingerprint {outcomes.get('fingerprint')} is not that of "
+                            f"{score_path.name} ({score.get('fingerprint')}): the two come from different runs")
+    return problems
+
+
+def _json_line(path: Path, key: str) -> int:
+    """The line of ``"key":`` in a JSON file (1 when absent or ``key`` is empty)."""
+    if not key:
+        return 1
+    try:
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            if line.lstrip().startswith(f'"{key}":'):
+                return number
+    except OSError:
+        pass
+    return 1

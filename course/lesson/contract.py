@@ -15,6 +15,25 @@ graded::
         says: "..."
         from: contract
         not_graded: "the graph carries no remote history depth ..."
+      - id: node-name
+        says: "the node is named print_forever (super().__init__('print_forever'))"
+        from: contract
+        checks: [node_name]
+        code:                              # optional: the reference lines that implement it
+          - file: "src/*/print_forever_node.py"   # a glob on the workspace-relative path
+            line: "super\\(\\).__init__\\("         # a regular expression searched in each line
+
+Which lines of the reference implement a requirement (:func:`implements`) is what keeps
+the mutation analysis's triage rules honest (issue 37: a rule of ``mutation.yaml`` may
+never cover a line that implements a requirement, :func:`ros2course.grade.mutate.rule_conflicts`).
+A requirement with ``code:`` names its lines itself. Without it they are derived
+mechanically from what it ``says``: every *code-like term* in the sentence (:func:`says_terms`:
+a quoted or backticked span, or a word holding a character prose does not use, ``_ . ( ) / : < > = [ ] { } $``
+as in ``self.get_logger().info``, ``package.xml``, ``0.5``, ``<depend>``) marks each reference line that
+contains it. The derivation over-approximates (a ``main()`` call under ``if __name__ == '__main__':``
+contains ``main()``): the safe direction, since a rule it stops is either narrowed or the requirement
+names its lines exactly with ``code:``, a statement reviewed in the contract table. A line that is only a
+comment or only a string literal (a docstring) implements nothing (:func:`inert_line`).
 
 :func:`load_contract` reports every problem as ``path:line: message`` (the line from
 the YAML node's mark): a requirement with neither or both of ``checks`` and
@@ -27,6 +46,8 @@ are passed in (this layer does not import graders: ``ros2course.grade.coverage``
 from __future__ import annotations
 
 import dataclasses
+import fnmatch
+import re
 from collections.abc import Collection, Sequence
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -54,6 +75,27 @@ class ContractProblem:
         return f"{self.path}:{self.line}: {self.message}"
 
 
+class CodeMarker(BaseModel):
+    """Reference lines that implement a requirement: ``line`` (a regular expression) in the files ``file`` (a glob)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    file: Annotated[str, Field(min_length=1)]
+    line: Annotated[str, Field(min_length=1)]
+
+    @model_validator(mode="after")
+    def _compiles(self) -> CodeMarker:
+        try:
+            re.compile(self.line)
+        except re.error as exc:
+            raise ValueError(f"`line` is not a regular expression: {exc}") from exc
+        return self
+
+    def marks(self, rel: str, text: str) -> bool:
+        """Whether line ``text`` of the workspace file ``rel`` is one of these lines."""
+        return fnmatch.fnmatch(rel, self.file) and re.search(self.line, text) is not None
+
+
 class Requirement(BaseModel):
     """One requirement the lesson states, and the checks that fail when it is broken (or why none does).
 
@@ -63,6 +105,7 @@ class Requirement(BaseModel):
         source: where it is stated (``from:`` in YAML): instructions, contract or hint.
         checks: ids of the grader's checks that fail when it is broken; None with ``not_graded``.
         not_graded: why no check judges it (a sentence an instructor would accept); None with ``checks``.
+        code: the reference lines that implement it (None: derived from ``says``, :func:`implements`).
     """
 
     model_config = ConfigDict(extra="forbid")
@@ -72,6 +115,7 @@ class Requirement(BaseModel):
     source: Literal["instructions", "contract", "hint"] = Field(alias="from")
     checks: list[Annotated[str, Field(min_length=1)]] | None = None
     not_graded: str | None = None
+    code: list[CodeMarker] | None = None
 
     @model_validator(mode="after")
     def _checks_or_not_graded(self) -> Requirement:
@@ -223,6 +267,108 @@ def load_contract(path: Path, lesson_id: str, check_ids: Collection[str] | None 
                             f"requirements.{index}.checks: {check!r} is not a check of the lesson's grader"))
     problems.sort(key=lambda p: p.line)
     return (contract if not problems else None), problems
+
+
+#: Characters that make a word of a requirement's sentence code (:func:`says_terms`).
+_CODE_CHARS = set("_.()/:<>=[]{}$")
+_QUOTED = re.compile(r"""(?:^|(?<=[\s(\[=]))(`[^`\n]+`|'[^'\n]+'|"[^"\n]+")(?=$|[\s),.;:\]])""")
+#: Comment line starts, per file suffix (and CMakeLists.txt): such a line implements nothing.
+_COMMENTS = {".py": ("#",), ".sh": ("#",), ".bash": ("#",), ".cmake": ("#",), ".txt": ("#",), ".yaml": ("#",),
+             ".yml": ("#",), ".cfg": ("#", ";"), ".toml": ("#",), ".msg": ("#",), ".srv": ("#",),
+             ".action": ("#",), ".cpp": ("//", "/*", "*"), ".hpp": ("//", "/*", "*"), ".h": ("//", "/*", "*"),
+             ".c": ("//", "/*", "*"), ".cc": ("//", "/*", "*"), ".xml": ("<!--",)}
+
+
+def says_terms(says: str) -> list[str]:
+    """The code-like terms of a requirement's sentence, in order, each once: quoted or backticked spans
+    (without their quotes), and words holding one of ``_ . ( ) / : < > = [ ] { } $`` (surrounding
+    punctuation of the sentence stripped), at least 3 characters long.
+
+    ``"the node is named print_forever (super().__init__('print_forever'))"`` gives ``print_forever``,
+    ``super().__init__('print_forever')``.
+    """
+    found: list[str] = []
+    for match in _QUOTED.finditer(says):
+        found.append(match.group(1)[1:-1].strip())
+    for word in says.split():
+        before = None
+        while word != before:  # the sentence's punctuation around the word, until nothing changes
+            before = word
+            word = word.strip(",;`'\"")
+            word = word.rstrip(".:") if not word.endswith("...") else word
+            if word.startswith("(") and word.endswith(")") and word[1:-1].count("(") == word[1:-1].count(")"):
+                word = word[1:-1]
+            elif word.startswith("(") and word.count("(") > word.count(")"):
+                word = word[1:]
+            elif word.endswith(")") and word.count(")") > word.count("("):
+                word = word[:-1]
+        if len(word) >= 3 and any(c in _CODE_CHARS for c in word) and any(c.isalnum() for c in word):
+            found.append(word)
+    return [t for t in dict.fromkeys(found) if len(t) >= 3]
+
+
+def inert_line(rel: str, text: str) -> bool:
+    """Whether a line implements nothing: blank, only a comment, or (Python) only a string literal (a
+    docstring line, or a line inside a triple-quoted docstring is not told apart: only whole-line literals)."""
+    stripped = text.strip()
+    if not stripped:
+        return True
+    path = Path(rel)
+    starts = _COMMENTS.get(path.suffix.lower(), ("#",) if path.name == "CMakeLists.txt" else ())
+    if any(stripped.startswith(s) for s in starts) and not stripped.startswith("#!"):
+        return True
+    if path.suffix == ".py":
+        import ast  # noqa: PLC0415 - only for Python lines
+
+        try:
+            node = ast.parse(stripped, mode="eval").body
+        except (SyntaxError, ValueError):
+            return False
+        return isinstance(node, ast.Constant) and isinstance(node.value, str)
+    return False
+
+
+def implements(requirement: Requirement, rel: str, text: str) -> str | None:
+    """What makes line ``text`` of the workspace file ``rel`` implement ``requirement``, or None.
+
+    With ``code:``, the marker that marks the line (``code: <glob> /<regex>/``); otherwise the first
+    code-like term of ``says`` (:func:`says_terms`) the line contains as a whole (``names `main()```; a call
+    ``f()`` also with arguments, ``f(``). A line that
+    is only a comment or a string literal implements nothing (:func:`inert_line`).
+    """
+    if inert_line(rel, text):
+        return None
+    if requirement.code is not None:
+        marker = next((m for m in requirement.code if m.marks(rel, text)), None)
+        return None if marker is None else f"code: {marker.file} /{marker.line}/"
+    term = next((t for t in says_terms(requirement.says) if _term_in(t, text)), None)
+    return None if term is None else f"names `{term}`"
+
+
+def _term_in(term: str, text: str) -> bool:
+    """Whether ``text`` holds ``term`` as a whole (``0.1`` is not in ``0.0.1``, ``spin`` not in ``spin_once``); a
+    call ``f()`` is also found with arguments (``rclpy.init()`` in ``rclpy.init(args=args)``)."""
+    forms = [term] + ([term[:-1]] if term.endswith("()") else [])
+    for form in forms:
+        before = r"(?<![\w.])" if re.match(r"[\w.]", form) else ""
+        after = r"(?!\w)" if re.search(r"\w$", form) else ""
+        if re.search(before + re.escape(form) + after, text):
+            return True
+    return False
+
+
+def requirement_lines(path: Path) -> dict[str, int]:
+    """``{requirement id: line of its item in contract.yaml}`` (for messages); {} when unreadable."""
+    try:
+        root, data = _compose(path, path.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError):
+        return {}
+    out: dict[str, int] = {}
+    items = data.get("requirements") if isinstance(data, dict) else None
+    for index, item in enumerate(items if isinstance(items, list) else []):
+        if isinstance(item, dict) and isinstance(item.get("id"), str):
+            out[item["id"]] = _line_of(root, ["requirements", index])
+    return out
 
 
 def contract_path(folder: Path) -> Path:
