@@ -36,7 +36,6 @@ import contextlib
 import dataclasses
 import datetime
 import hashlib
-import importlib.metadata
 import json
 import os
 import shutil
@@ -68,6 +67,8 @@ def folder() -> Path:
 
 def wheel_versions() -> list[tuple[str, str]]:
     """``[(name, version)]`` of the installed ROS 2 wheels (``ros-jazzy-*``), sorted; empty with a system ROS."""
+    import importlib.metadata  # noqa: PLC0415 - only a build reads it; every check imports this module
+
     found = {(dist.metadata["Name"] or "").lower(): dist.version for dist in importlib.metadata.distributions()}
     return sorted((name, version) for name, version in found.items() if name.startswith("ros-jazzy-"))
 

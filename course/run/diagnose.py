@@ -61,7 +61,6 @@ from __future__ import annotations
 import collections
 import dataclasses
 import difflib
-import importlib.metadata
 import logging
 import re
 import time
@@ -350,6 +349,8 @@ def missing_entry_point(program: Path) -> Diagnosis | None:
         dist_name = found.group(1).split("==")[0]
         prefix = program.parent.parent.parent
         sites = sorted(str(p) for p in prefix.glob("lib/python3*/site-packages") if p.is_dir())
+        import importlib.metadata  # noqa: PLC0415 - only a failed start needs it (12 ms every check paid before its node ran)
+
         dist = next(iter(importlib.metadata.distributions(name=dist_name, path=sites)), None)
         if dist is None:
             return Diagnosis("process", f"{clean(program.name)} loads package {clean(dist_name)}, but no metadata "
