@@ -83,8 +83,12 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
     with s.phase("observe"):
         window = probe.observe(SAMPLES, PERIOD, START_TIMEOUT, abort=node.ended)
     messages = probe.messages()[:SAMPLES]
-    if not messages:
-        raise Unmet(f"no message on {target} in {window:.1f} s; {kit.process_state(node.proc)}")
+    if not messages:  # judged: nothing arrived is what the contents check observed (ids and rate then cannot be)
+        observed = f"no message on {target} in {window:.1f} s; {kit.process_state(node.proc)}"
+        s.record("pub_contents", False, observed + where,
+                 f"quote: {QUOTE!r}, philosopher_name: {PHILOSOPHER!r} in every message, received by a reliable "
+                 "subscription (a BEST_EFFORT publisher reaches none)")
+        raise Unmet(observed)
 
     wrong_quote = [m for m in messages if m.quote != QUOTE]
     wrong_name = [m for m in messages if m.philosopher_name != PHILOSOPHER]

@@ -138,6 +138,65 @@ def test_judge_fixture_asserts_the_diagnosis():
     assert not judge_fixture(fixture.fails, _result(), None, elsewhere)[0]
 
 
+def _chained() -> LessonResult:
+    """``node_name`` lost; ``rate`` needs it (not checked); ``log`` lost too; ``build`` passed."""
+    return LessonResult("print-forever-node", 1.0, 10.0, Status.FAILED, [
+        CheckResult("build", "It builds", 1.0, 1.0, True, "built", "", ""),
+        CheckResult("node_name", "The node is named", 0.0, 3.0, False, "found /print_node", "/print_forever_node",
+                    "name it print_forever_node"),
+        CheckResult("rate", "It prints at 2 Hz", 0.0, 4.0, False, "not checked: 'The node is named' failed",
+                    "(depends on the failed check above)", "use a 0.5 s timer", skipped=True),
+        CheckResult("log", "It logs", 0.0, 2.0, False, "nothing logged", "a log line", "log it")])
+
+
+def test_judge_fixture_fails_names_only_judged_checks():
+    """A check not checked (a check it needs failed) proves nothing about itself: it goes under ``skips``."""
+    ok, expected = judge_fixture(["node_name", "rate"], _chained())
+    assert not ok
+    assert "rate was not checked (a check it needs failed): list it under skips:" in expected
+    ok, expected = judge_fixture(["node_name"], _chained(), skips=["rate"])
+    assert ok, expected
+    assert "not checked: rate" in expected
+    assert judge_fixture(["node_name", "log"], _chained(), skips=["rate"])[0]
+
+
+def test_judge_fixture_skips_must_be_not_checked():
+    """Each check in ``skips`` must be present and not checked: a judged one (lost or passed) is not ok."""
+    ok, expected = judge_fixture(["node_name"], _chained(), skips=["rate", "log"])
+    assert not ok and "log was judged, not skipped: list it under fails:" in expected
+    ok, expected = judge_fixture(["node_name"], _chained(), skips=["build"])
+    assert not ok and "build was judged, not skipped: it kept its points" in expected
+    ok, expected = judge_fixture(["node_name"], _chained(), skips=["nope"])
+    assert not ok and "unknown check ids: nope" in expected
+    broken = LessonResult("print-forever-node", 0.0, 10.0, Status.NOT_GRADABLE, [], "colcon build failed")
+    assert judge_fixture(["build"], broken)[0]
+    ok, expected = judge_fixture(["build"], broken, skips=["rate"])
+    assert not ok and "never judged" in expected
+
+
+def test_judge_fixture_keeps_says_with_skips():
+    """``says:`` still applies beside ``skips`` (a not-checked check's feedback is its hint)."""
+    assert judge_fixture(["node_name"], _chained(), {"node_name": ["print_node"]}, skips=["rate"])[0]
+    ok, expected = judge_fixture(["node_name"], _chained(), {"node_name": ["talker"]}, skips=["rate"])
+    assert not ok and "missing: node_name says 'talker'" in expected
+
+
+def test_extra_lost_checks_are_a_note_not_a_failure():
+    """Checks lost or not checked that the fixture names in neither list are reported by ``dev validate``."""
+    from ros2course.grade.validate import Outcome, fixture_note  # noqa: PLC0415
+
+    result = _chained()
+    assert fixture_note(["node_name"], [], result) == "also lost: log; also not checked: rate"
+    assert fixture_note(["node_name"], ["rate"], result) == "also lost: log"
+    assert fixture_note(["node_name", "log"], ["rate"], result) == ""
+    assert judge_fixture(["node_name"], result, skips=["rate"])[0]  # log lost too: still ok
+    outcome = Outcome("print-forever-node", "wrong_name", True, "loses the points of node_name", "failed 1/10",
+                      2.5, result, note=fixture_note(["node_name"], ["rate"], result))
+    assert outcome.line() == "wrong_name: failed 1/10 (2.5 s); also lost: log"
+    assert outcome.to_dict()["note"] == "also lost: log"
+    assert "note" not in Outcome("l", "reference", True, "full marks", "passed", 1.0).to_dict()
+
+
 # --- real graphs ----------------------------------------------------------------------------
 
 @pytest.fixture

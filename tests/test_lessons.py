@@ -118,8 +118,13 @@ def test_every_fixture_file_loads_and_names_declared_checks(lesson_id):
         assert fixture.description.strip(), fixture.name
         assert set(fixture.fails) <= declared, (
             f"{fixture.name}: unknown check ids {set(fixture.fails) - declared}; declared: {sorted(declared)}")
+        assert set(fixture.skips) <= declared, (
+            f"{fixture.name}: unknown skipped check ids {set(fixture.skips) - declared}; declared: {sorted(declared)}")
+        assert not set(fixture.fails) & set(fixture.skips), f"{fixture.name}: a check both in fails and skips"
+        assert len(set(fixture.skips)) == len(fixture.skips), f"{fixture.name}: a check twice in skips"
         if fixture.expect == "full_marks":
             assert fixture.fails == [], f"{fixture.name} expects full marks but names failing checks"
+            assert fixture.skips == [], f"{fixture.name} expects full marks but names skipped checks"
         else:
             assert fixture.fails, fixture.name
         assert fixture.edits or fixture.commands is not None, f"{fixture.name} changes nothing"
@@ -279,6 +284,22 @@ def test_fixture_schema_rejects_a_failing_fixture_without_fails(tmp_path, monkey
     assert "fails" in info.value.message
     shutil.rmtree(folder)
     assert load_fixtures("print-forever-node") == []
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("description: d\nexpect: full_marks\nskips: [rate]\nedits: []\n", ["full marks", "skips"]),
+    ("description: d\nfails: [rate]\nskips: [rate, log]\nedits: []\n", ["rate", "both", "fails", "skips"]),
+])
+def test_fixture_schema_rejects_misplaced_skips(tmp_path, monkeypatch, text, words):
+    """``skips:`` (checks a fixture leaves not checked) is not for a full-marks fixture, nor for a check
+    in ``fails:``."""
+    folder = tmp_path / "tests" / "fixtures" / "print-forever-node"
+    folder.mkdir(parents=True)
+    (folder / "bad.yaml").write_text(text)
+    monkeypatch.setenv("ROS2COURSE_CONTENT", str(tmp_path))
+    with pytest.raises(LessonFormatError) as info:
+        load_fixtures("print-forever-node")
+    assert all(word in info.value.message for word in words), info.value.message
 
 
 # --- starters that build on an earlier lesson's (starter_includes) ----------------

@@ -142,3 +142,32 @@ def test_a_case_with_the_references_sources_is_graded_in_the_references_build(tm
     own = validate.Case(lesson, "own_build", built_by_its_commands, (), lambda r: (True, ""))
     assert validate.grade_in_built(lesson, own, built, reference_src) is None
     assert len(seen) == 1
+
+
+def test_a_fixture_case_judges_its_skips_and_notes_what_else_it_lost(monkeypatch) -> None:
+    """``dev validate``'s fixture cases pass the fixture's ``skips`` to the judge, and note the checks
+    it names nowhere."""
+    import io  # noqa: PLC0415
+
+    from rich.console import Console  # noqa: PLC0415
+
+    from ros2course.grade import validate  # noqa: PLC0415
+    from ros2course.grade.results import CheckResult, LessonResult  # noqa: PLC0415
+
+    fixture = validate.Fixture.model_validate({"description": "d", "fails": ["a"], "skips": ["b"],
+                                               "edits": [{"delete": "src/nothing"}]})
+    fixture.name = "wrong_a"
+    monkeypatch.setattr(validate, "load_fixtures", lambda lesson_id: [fixture])
+    reference, starter, case = validate.lesson_cases(load_catalog().get("print-forever-node"), None)
+    assert reference.note is None and starter.note is None
+    result = LessonResult("print-forever-node", 1.0, 10.0, "failed", [
+        CheckResult("a", "A", 0, 4, False, "wrong", "", ""),
+        CheckResult("b", "B", 0, 3, False, "not checked: 'A' failed", "", "", skipped=True),
+        CheckResult("c", "C", 1, 3, False, "half", "", "")])
+    ok, expected = case.judge(result)
+    assert ok and "not checked: b" in expected
+    assert case.note(result) == "also lost: c"
+    out = io.StringIO()
+    validate.render_outcomes([validate.Outcome("print-forever-node", case.name, ok, expected, "failed 1/10", 1.0,
+                                               result, note=case.note(result))], Console(file=out, width=300))
+    assert "failed 1/10; also lost: c" in out.getvalue()

@@ -17,6 +17,17 @@ shows exactly the bug and nothing else::
       - file: src/python_package_with_a_node/python_package_with_a_node/print_forever_node.py
         replace: "timer_period: float = 0.5"
         with: "timer_period: float = 1.0"
+
+``fails:`` names only checks that were judged and lost points. A check that
+was not judged because a check it needs failed (shown as "not checked") goes
+under ``skips:``, and must be not checked::
+
+    description: the node is named print_node instead of print_forever_node
+    fails: [node_name]
+    skips: [rate]
+
+Any other check the fixture lost, or that was not checked, is reported on
+its line of ``dev validate`` ("also lost: ..."), not a failure.
 """
 
 from __future__ import annotations
@@ -49,7 +60,7 @@ from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
 from ros2course.grade.child import grade_in_child
 from ros2course.grade.coverage import lesson_coverage
 from ros2course.grade.engine import grade_lesson, load_grader
-from ros2course.grade.mutate import describe_score, score_text
+from ros2course.grade.mutate import describe_score, score_text, triage_problems
 from ros2course.grade.results import LessonResult, Status
 from ros2course.grade.strength import steadiness_text
 from ros2course.lesson.catalog import (
@@ -111,7 +122,10 @@ class Fixture(BaseModel):
 
     description: str
     expect: Literal["fail", "full_marks"] = "fail"
+    #: checks that must be judged and lose points (the bug's own checks).
     fails: list[str] = Field(default_factory=list)
+    #: checks that must be "not checked": not judged because a check they need failed.
+    skips: list[str] = Field(default_factory=list)
     edits: list[Edit] = Field(default_factory=list)
     #: shell commands run in the workspace after the edits (default: the lesson's reference commands).
     commands: list[str] | None = None
@@ -127,6 +141,12 @@ class Fixture(BaseModel):
     def _fails_named(self) -> Fixture:
         if self.expect == "fail" and not self.fails:
             raise ValueError("a failing fixture names the check(s) its bug must fail in 'fails'")
+        if self.expect == "full_marks" and self.skips:
+            raise ValueError("a fixture that expects full marks cannot name checks in 'skips' (every check is judged)")
+        both = [c for c in self.skips if c in self.fails]
+        if both:
+            raise ValueError(f"{', '.join(both)} cannot be in both 'fails' (judged and lost) and 'skips' "
+                             "(not checked): keep each check in one list")
         return self
 
 
@@ -224,6 +244,9 @@ class Outcome:
     result: LessonResult | None = None
     #: ``path:line: message`` lines of the case (the ``contract.yaml`` case: :func:`contract_outcome`).
     problems: list[str] = dataclasses.field(default_factory=list)
+    #: what else the case showed, not a failure: a fixture's checks lost beyond those it names
+    #: (:func:`fixture_note`, e.g. "also lost: rate, counts_from_zero"); "" when nothing.
+    note: str = ""
 
     def to_dict(self) -> dict[str, Any]:
         found = {"lesson": self.lesson, "case": self.case, "ok": self.ok, "expected": self.expected,
@@ -231,7 +254,13 @@ class Outcome:
                  "result": self.result.to_json() if self.result else None}
         if self.problems:
             found["problems"] = list(self.problems)
+        if self.note:
+            found["note"] = self.note
         return found
+
+    def line(self) -> str:
+        """The case's progress line (after its mark): what it got, its time and its note."""
+        return f"{self.case}: {self.got} ({self.seconds:.1f} s)" + (f"; {self.note}" if self.note else "")
 
 
 #: The case name of a lesson's contract coverage (issue 37); no fixture is named so (a fixture's name has no dot).
@@ -318,6 +347,7 @@ class Case:
         alone: the case expects full marks (the reference, a fixture with ``expect: full_marks``):
             with ``--jobs``, it is graded with nothing of the validation beside it, since a timing
             check must hold under a normal load, not beside gradings of its own making.
+        note: ``note(result)`` -> what else the result showed, not a failure (:attr:`Outcome.note`); None: nothing.
     """
 
     lesson: Lesson
@@ -326,6 +356,7 @@ class Case:
     underlays: tuple[Path, ...]
     judge: Callable[[LessonResult], tuple[bool, str]]
     alone: bool = False
+    note: Callable[[LessonResult], str] | None = None
 
 
 def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
@@ -370,10 +401,14 @@ def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
         def judged(result: LessonResult, fixture: Fixture = fixture) -> tuple[bool, str]:
             if fixture.expect == "full_marks":
                 return full_marks(result)
-            return judge_fixture(fixture.fails, result, fixture.says, fixture.diagnosis)
+            return judge_fixture(fixture.fails, result, fixture.says, fixture.diagnosis, skips=fixture.skips)
+
+        def noted(result: LessonResult, fixture: Fixture = fixture) -> str:
+            return fixture_note(fixture.fails, fixture.skips, result)
 
         cases.append(Case(lesson, fixture.name, wrong, underlays if uses_underlay else (), judged,
-                          alone=fixture.expect == "full_marks"))
+                          alone=fixture.expect == "full_marks",
+                          note=noted if fixture.expect == "fail" else None))
     return cases
 
 
@@ -489,7 +524,8 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None, jobs: int = 1) -> li
     for case in cases:
         result, seconds = graded[case.name]
         ok, expected = case.judge(result)
-        outcomes.append(Outcome(lesson.id, case.name, ok, expected, _describe(result), seconds, result))
+        outcomes.append(Outcome(lesson.id, case.name, ok, expected, _describe(result), seconds, result,
+                                note=case.note(result) if case.note is not None else ""))
     return outcomes
 
 
@@ -498,29 +534,50 @@ BUILD_CHECK = "build"
 
 
 def judge_fixture(fails: list[str], result: LessonResult, says: dict[str, list[str]] | None = None,
-                  diagnosis: list[ExpectedDiagnosis] | None = None) -> tuple[bool, str]:
+                  diagnosis: list[ExpectedDiagnosis] | None = None, *,
+                  skips: list[str] | None = None) -> tuple[bool, str]:
     """Whether a wrong solution failed for its stated reason: ``(ok, expected text)``.
 
     It must lose the points of every check in ``fails`` (ids the grader
-    declares). A submission that is not gradable at all has no checks: that is
+    declares), each of them judged: a check that was not judged because a
+    check it needs failed ("not checked", :attr:`CheckResult.skipped`) proves
+    nothing about itself, and belongs in ``skips``, whose every check must be
+    not checked. A submission that is not gradable at all has no checks: that is
     its stated reason only when ``fails`` names the build (a fixture whose bug
     is a runtime behaviour must build, or it proves nothing about that check).
     ``says`` maps check ids to words their feedback must contain; each of
     ``diagnosis`` must be matched by a finding of that kind, mentioning every
-    one of its words, on a failed check (the one it names, if any).
+    one of its words, on a failed check (the one it names, if any). Other checks
+    lost are not judged here (:func:`fixture_note` reports them).
     """
+    skips = list(skips or [])
     expected = "loses the points of " + ", ".join(fails)
+    if skips:
+        expected += "; not checked: " + ", ".join(skips)
     if not result.checks:
-        if set(fails) == {BUILD_CHECK} and result.status == Status.NOT_GRADABLE:
+        if set(fails) == {BUILD_CHECK} and result.status == Status.NOT_GRADABLE and not skips:
             return True, expected
-        runtime = [c for c in fails if c != BUILD_CHECK]
+        runtime = [c for c in fails + skips if c != BUILD_CHECK]
         return False, expected + (f" (but it was {result.status} before any check ran, so {', '.join(runtime)} "
                                   "were never judged: the fixture must build)" if runtime else "")
     by_id = {c.id: c for c in result.checks}
-    unknown = [c for c in fails if c not in by_id]
-    lost = [c for c in fails if c in by_id and by_id[c].points < by_id[c].max_points]
+    unknown = [c for c in fails + skips if c not in by_id]
+    lost = [c for c in fails if c in by_id and not by_id[c].skipped and by_id[c].points < by_id[c].max_points]
     if unknown:
         expected += f" (unknown check ids: {', '.join(unknown)})"
+    wrong_list = []
+    for check_id in fails:
+        check = by_id.get(check_id)
+        if check is not None and check.skipped:
+            wrong_list.append(f"{check_id} was not checked (a check it needs failed): list it under skips:")
+    for check_id in skips:
+        check = by_id.get(check_id)
+        if check is not None and not check.skipped:
+            wrong_list.append(f"{check_id} was judged, not skipped: "
+                              + ("list it under fails:" if check.points < check.max_points
+                                 else "it kept its points"))
+    if wrong_list:
+        expected += f" ({'; '.join(wrong_list)})"
     unsaid = []
     for check_id, words in (says or {}).items():
         check = by_id.get(check_id)
@@ -538,7 +595,23 @@ def judge_fixture(fails: list[str], result: LessonResult, says: dict[str, list[s
         expected += "; diagnosed: " + ", ".join(d.kind for d in diagnosis)
     if unsaid:
         expected += f" (missing: {'; '.join(unsaid)})"
-    return not unknown and not unsaid and result.score < result.max_score and len(lost) == len(fails), expected
+    ok = not unknown and not wrong_list and not unsaid and result.score < result.max_score and len(lost) == len(fails)
+    return ok, expected
+
+
+def fixture_note(fails: list[str], skips: list[str], result: LessonResult) -> str:
+    """What a wrong solution lost beyond the checks its fixture names (a note, not a failure):
+    ``"also lost: a, b; also not checked: c"``, or "" when nothing.
+
+    A judged check that lost points is "lost"; a check not judged because a check it needs
+    failed is "not checked"; each only when neither ``fails`` nor ``skips`` names it.
+    """
+    named = set(fails) | set(skips)
+    lost = [c.id for c in result.checks if not c.passed and not c.skipped and c.id not in named]
+    unchecked = [c.id for c in result.checks if c.skipped and c.id not in named]
+    parts = ([f"also lost: {', '.join(lost)}"] if lost else []) + \
+        ([f"also not checked: {', '.join(unchecked)}"] if unchecked else [])
+    return "; ".join(parts)
 
 
 def _folders(packages: list[str]) -> set[str]:
@@ -581,7 +654,7 @@ def validate_course(lesson_ids: list[str] | None = None, progress: Console | Non
             outcomes.append(outcome)
             if progress is not None:
                 mark = "[green]ok[/]" if outcome.ok else "[red]WRONG[/]"
-                progress.print(f"  {mark} {outcome.case}: {outcome.got} ({outcome.seconds:.1f} s)")
+                progress.print(f"  {mark} {escape(outcome.line())}")
     return outcomes
 
 
@@ -629,7 +702,8 @@ def render_outcomes(outcomes: list[Outcome], console: Console) -> None:
     for column in ("lesson", "case", "", "expected", "got"):
         table.add_column(column, overflow="fold")
     for o in outcomes:
-        table.add_row(o.lesson, o.case, "[green]ok[/]" if o.ok else "[red]WRONG[/]", o.expected, o.got)
+        table.add_row(o.lesson, o.case, "[green]ok[/]" if o.ok else "[red]WRONG[/]", escape(o.expected),
+                      escape(o.got + (f"; {o.note}" if o.note else "")))
     console.print(table)
     for o in outcomes:  # what each failed check of a WRONG case observed: a flaky check is diagnosed from this
         for problem in o.problems:  # a contract.yaml's problems, path:line: message
@@ -645,4 +719,8 @@ def render_outcomes(outcomes: list[Outcome], console: Console) -> None:
     for lesson_id in dict.fromkeys(o.lesson for o in outcomes):
         if lesson_id in catalog.ids():
             console.print(describe_score(catalog.get(lesson_id)), markup=False)
+            # rules covering a contract requirement's line, records of another grader fingerprint (issue 37);
+            # a rule or entry matching no mutant is reported by `dev mutate`, which generates them
+            for problem in triage_problems(catalog.get(lesson_id)):
+                console.print(f"  {lesson_id}: mutation triage: {problem}", markup=False, soft_wrap=True)
 
