@@ -94,7 +94,7 @@ def test_grader_strength_lists_a_lesson_with_nothing_to_mutate(tmp_path: Path) -
     _bench("grader_strength.py", "workspace-setup", "--doc", str(doc), "--out", str(tmp_path / "out"))
     text = doc.read_text(encoding="utf-8")
     assert speedup in text  # measured only by --speedup: a run without it keeps the last figure
-    assert "`ros2course dev mutate --sample 30 --seed 1 --jobs 2`" in text
+    assert "`ros2course dev mutate --sample 30 --seed 1`" in text
     assert "Nothing to mutate: workspace-setup, its reference is commands only (`colcon build`): no file to mutate" \
         in text, text[-1500:]
     assert "| print-forever-node |" in text  # the other lessons keep the rows of their last run

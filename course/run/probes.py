@@ -176,6 +176,27 @@ def stop_spinning(executor: Any, thread: threading.Thread, timeout: float = 5.0)
     return not thread.is_alive()
 
 
+#: Held while rclpy is first imported (:func:`import_rclpy`): two threads importing it at once can deadlock
+#: on importlib's module locks (CPython raises ``_DeadlockError``; seen when two parts of a check opened
+#: their graphs together, kit.parts.at_once).
+_IMPORTING = threading.Lock()
+
+
+def import_rclpy() -> None:
+    """Import what a :class:`RosSession` uses of rclpy, one thread at a time.
+
+    Call it on the main thread before starting threads that may open a graph
+    (:func:`ros2course.kit.parts.at_once` does); :meth:`RosSession.node` calls it too.
+    """
+    with _IMPORTING:
+        import rclpy  # noqa: F401, PLC0415 - rclpy only when grading
+        import rclpy.executors  # noqa: F401, PLC0415
+        import rclpy.node  # noqa: F401, PLC0415
+        import rclpy.parameter  # noqa: F401, PLC0415
+        import rclpy.qos  # noqa: F401, PLC0415
+        import rclpy.signals  # noqa: F401, PLC0415
+
+
 class RosSession:
     """One check's private ROS graph.
 
@@ -275,6 +296,7 @@ class RosSession:
                 return self._node
             if self.domain_id < 0 or self._closed:
                 raise RuntimeError("RosSession used outside its 'with' block")
+            import_rclpy()
             import rclpy  # noqa: PLC0415 - rclpy only when grading
             from rclpy.executors import MultiThreadedExecutor  # noqa: PLC0415 - rclpy only when grading
             from rclpy.parameter import Parameter  # noqa: PLC0415 - rclpy only when grading
