@@ -13,7 +13,7 @@ import os
 import re
 import signal
 import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
 from ros2course.grade.session import GradingSession
@@ -43,6 +43,7 @@ class ProgramRun:
         interrupted: Ctrl+C (SIGINT) was sent to it (:func:`interrupt_after`); False when it ended by itself first.
         left_running: processes it started that were still running when it exited (``ros2`` daemons
             excepted: they are meant to outlive the command that spawned them), ``"<pid> <command>"``.
+        interrupted_at: seconds after it started when Ctrl+C was pressed (None: never pressed).
     """
 
     returncode: int | None
@@ -53,6 +54,7 @@ class ProgramRun:
     traceback: str
     interrupted: bool = False
     left_running: tuple[str, ...] = ()
+    interrupted_at: float | None = None
 
     def ending(self) -> str:
         """How it ended, in words: ``exit code 1``, ``ended by SIGINT``, ``killed by SIGSEGV (segmentation ...)``.
@@ -145,7 +147,7 @@ def run_program(s: GradingSession, argv: list[str], label: str, *, timeout: floa
 
 def interrupt_after(s: GradingSession, argv: list[str], label: str, seconds: float, *,
                     exit_timeout: float = 3.0, env: dict[str, str] | None = None, cwd: Path | None = None,
-                    wait_for: str | None = None, first_timeout: float = 10.0) -> ProgramRun:
+                    wait_for: str | Callable[[], bool] | None = None, first_timeout: float = 10.0) -> ProgramRun:
     """Run ``argv`` for ``seconds``, press Ctrl+C (SIGINT to its group), wait ``exit_timeout`` s for it to end.
 
     For scripts that run until stopped (the tutorial's ``minimalist_script.py``,
@@ -156,9 +158,12 @@ def interrupt_after(s: GradingSession, argv: list[str], label: str, seconds: flo
     Args:
         seconds: how long it runs before Ctrl+C.
         wait_for: when given, the ``seconds`` count from the moment this text first
-            appears on its stdout (waiting at most ``first_timeout`` s for it; if it
-            never comes, Ctrl+C comes then). A count of lines over the window then does
-            not depend on the interpreter's start-up time on a loaded machine.
+            appears on its stdout, or this predicate first returns True (e.g. "every node
+            the script starts is in the graph"), waiting at most ``first_timeout`` s for
+            it; if it never comes, Ctrl+C comes then. A count of lines over the window
+            then does not depend on the interpreter's start-up time on a loaded machine,
+            and Ctrl+C never lands in a Python node still importing rclpy (a
+            KeyboardInterrupt there is a traceback no ``try`` in ``main`` can catch).
 
     Raises:
         OSError: the program cannot be started (e.g. not executable).
@@ -169,17 +174,21 @@ def interrupt_after(s: GradingSession, argv: list[str], label: str, seconds: flo
     with s.phase("run"):
         window = seconds
         if wait_for is not None:
-            wait_until(lambda: proc.poll() is not None or wait_for in proc.stdout(), first_timeout)
-            window = seconds if wait_for in proc.stdout() else 0.0
+            ready = wait_for if callable(wait_for) else lambda: wait_for in proc.stdout()
+            wait_until(lambda: proc.poll() is not None or ready(), first_timeout)
+            window = seconds if ready() else 0.0
         ended_early = wait_until(lambda: proc.poll() is not None, window, interval=0.02)
+        interrupted_at = None
         if not ended_early:
+            interrupted_at = time.monotonic() - begin
             with contextlib.suppress(ProcessLookupError, PermissionError):
                 os.killpg(proc.pid, signal.SIGINT)
         exited = ended_early or wait_until(lambda: proc.poll() is not None, exit_timeout, interval=0.01)
     elapsed = time.monotonic() - begin
     report = proc.stop(sigint_timeout=0.1, sigterm_timeout=1.0)
     return ProgramRun(report.returncode, proc.stdout(), proc.stderr(), not exited, elapsed, report.traceback,
-                      interrupted=not ended_early, left_running=_children(report.left_running))
+                      interrupted=not ended_early, left_running=_children(report.left_running),
+                      interrupted_at=interrupted_at)
 
 
 #: The command line of a ``ros2`` daemon (ros2cli.daemon.daemonize), which outlives the command that spawned it.

@@ -66,7 +66,8 @@ def script(s: GradingSession, check_id: str, relative: str) -> Path:
 
 def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=None,
                interrupt_after_s: float | None = None, exit_timeout: float = 5.0,
-               args: Iterable[str] = (), daemon_sees: Iterable[str] = ()) -> ProgramRun:
+               args: Iterable[str] = (), daemon_sees: Iterable[str] = (),
+               wait_for: Callable[[], bool] | None = None, first_timeout: float = 10.0) -> ProgramRun:
     """Run ``bash path`` in the check's ROS graph and return what it did; it is stopped at ``timeout`` seconds.
 
     Args:
@@ -75,6 +76,9 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
         graph: the :class:`~ros2course.run.probes.RosSession` whose domain it joins (default ``s.graph``: the part's own graph, else ``s.ros``).
         interrupt_after_s: for scripts that run until stopped (``ros2 run``, ``ros2 launch``): press
             Ctrl+C (SIGINT to its process group) after this many seconds, then wait ``exit_timeout``.
+        wait_for: with ``interrupt_after_s``: the seconds count from the moment this predicate first
+            holds (e.g. every node the script starts is in the graph), waited for at most
+            ``first_timeout`` s (:func:`~ros2course.kit.programs.interrupt_after`).
         args: extra arguments after the script path.
         daemon_sees: names (nodes as ``/name``, topics, services) the grader started: when given, a
             ``ros2`` daemon is started in the check's domain first and the script runs once that daemon
@@ -100,7 +104,7 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
         # ros2course's own disposition (LearnerProcess: a bash that starts with it ignored can
         # neither die of Ctrl+C nor trap it, bash(1) SIGNALS, so a script without `trap` would look right).
         return interrupt_after(s, argv, label, interrupt_after_s, exit_timeout=exit_timeout, env=env,
-                               cwd=s.workspace_root)
+                               cwd=s.workspace_root, wait_for=wait_for, first_timeout=first_timeout)
     return run_program(s, argv, label, timeout=timeout, env=env, cwd=s.workspace_root)
 
 
