@@ -330,8 +330,6 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
           ) -> None:
     """Build the lesson's packages, run your nodes, grade them. Exit 0 only on full marks."""
     _ros()
-    from ros2course.report.table import render_result, result_json  # noqa: PLC0415 - start time, see the imports
-
     ws = _workspace(workspace)
     if all_passed:
         if lesson_id:
@@ -344,6 +342,9 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
     progress = ws.load_progress() if ws.initialised else None
     lesson = _lesson_for(lesson_id, ws, progress)
     result = _grade(ws, lesson, quiet=as_json)
+    # after grading: rich's tables are not needed before the learner's nodes start (issue 36)
+    from ros2course.report.table import render_result, result_json  # noqa: PLC0415 - start time, see the imports
+
     if as_json:
         sys.stdout.write(result_json(result))
         sys.stdout.flush()
@@ -358,9 +359,11 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
     """Grade ``lesson`` in ``ws`` (building SmartArmStack first where its packages need it) and record the attempt."""
     from ros2course.grade.engine import grade_lesson  # noqa: PLC0415 - start time, see the imports
 
-    err = stderr_console()
     _ensure_components(ws, lesson.packages)
-    status = err.status(f"grading {lesson.id} in {ws.root} ...") if not quiet and err.is_terminal else None
+    status = None
+    if not quiet:  # --json: no console made before the nodes start (rich's import, issue 36)
+        err = stderr_console()
+        status = err.status(f"grading {lesson.id} in {ws.root} ...") if err.is_terminal else None
     with status or contextlib.nullcontext():
         progress = (lambda line: status.update(f"{lesson.id}: {line}")) if status is not None else None
         result = grade_lesson(lesson, ws.root, progress=progress)
@@ -371,11 +374,10 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
 
 def _ensure_components(ws: Workspace, packages: list[str]) -> None:
     """Build the optional components ``packages`` need first (the sas lesson's SmartArmStack: minutes, once)."""
-    err = stderr_console()
     from ros2course.ros.doctor import ensure_components_for  # noqa: PLC0415 - start time, see the imports
 
     ensure_components_for(ws.root, packages,
-                          progress=lambda line: err.print(f"SmartArmStack (sas): {line}", markup=False))
+                          progress=lambda line: stderr_console().print(f"SmartArmStack (sas): {line}", markup=False))
 
 
 def _exit_status(result) -> ExitStatus:

@@ -1,7 +1,8 @@
 """Building a lesson's packages with colcon, and the workspace's overlay environment.
 
-* Packages are found with ``catkin_pkg`` (the library colcon-ros itself uses to
-  read ``package.xml``), built with ``colcon build --packages-up-to``.
+* Packages are found as colcon finds them, their ``package.xml`` read with
+  ``catkin_pkg`` (the library colcon-ros itself uses; :mod:`ros2course.ros.packages`,
+  which keeps what it read by content), built with ``colcon build --packages-up-to``.
 * The engine records, per package it builds, what it built by content (every
   source file's bytes and mode; :mod:`ros2course.build.sources`) in
   ``build/.ros2course-builds.json``. A warm ``check`` skips colcon (a second or
@@ -38,7 +39,7 @@ from ros2course.files import atomic_write_text
 from ros2course.ros.colcon_log import BuildProgress
 from ros2course.ros.compiler_cache import with_compiler_cache
 from ros2course.build.sources import PackageRecord, PackageSources, rebuild_reason, scan_package
-from ros2course.ros.packages import dependency_closure, find_packages
+from ros2course.ros.packages import IGNORE_MARKERS, Manifest, dependency_closure, find_packages
 
 #: The engine's record of what it built (:class:`BuildRecords`), beside colcon's own state in ``build/``.
 RECORDS = ".ros2course-builds.json"
@@ -89,7 +90,7 @@ def _clean(workspace_root: Path, names: list[str]) -> None:
                 shutil.rmtree(folder, ignore_errors=True)
 
 
-def stale_install(workspace_root: Path, closure: list[str], found: dict[str, tuple[Path, object]]) -> list[str]:
+def stale_install(workspace_root: Path, closure: list[str], found: dict[str, tuple[Path, Manifest]]) -> list[str]:
     """Find and remove, before a build, what colcon would trip over or build wrongly on top of.
 
     * ``install/`` made with ``--merge-install`` (colcon refuses an isolated build into it):
@@ -135,8 +136,8 @@ def stale_install(workspace_root: Path, closure: list[str], found: dict[str, tup
     return repairs
 
 
-def _build_type(package: object) -> str:
-    """The ``<export><build_type>`` of a catkin_pkg Package (``ament_cmake`` when absent, as colcon-ros assumes)."""
+def _build_type(package: Manifest) -> str:
+    """The ``<export><build_type>`` of a package (``ament_cmake`` when absent, as colcon-ros assumes)."""
     for export in getattr(package, "exports", []):
         if export.tagname == "build_type" and export.content:
             return export.content.strip()
@@ -229,7 +230,7 @@ class BuildRecords:
         atomic_write_text(self.path, json.dumps(data, sort_keys=True, separators=(",", ":")))
 
 
-def orphan_installs(workspace_root: Path, found: dict[str, tuple[Path, object]]) -> list[str]:
+def orphan_installs(workspace_root: Path, found: dict[str, tuple[Path, Manifest]]) -> list[str]:
     """Packages colcon installed in ``install/`` that ``src/`` no longer holds (renamed or removed).
 
     A package prefix is recognised by colcon's own marker, ``install/<pkg>/share/colcon-core/packages/<pkg>``
@@ -247,7 +248,7 @@ def orphan_installs(workspace_root: Path, found: dict[str, tuple[Path, object]])
     return out
 
 
-def _dependents(cleaned: set[str], closure: list[str], found: dict[str, tuple[Path, object]]) -> list[str]:
+def _dependents(cleaned: set[str], closure: list[str], found: dict[str, tuple[Path, Manifest]]) -> list[str]:
     """The CMake packages of ``closure`` that depend on a ``cleaned`` one, recursively: they compiled against
     its installed headers, which a clean rebuild installs again with the sources' (possibly older) times."""
     users: dict[str, set[str]] = {}  # package -> the packages of closure that depend on it (reverse map)
@@ -364,7 +365,7 @@ def _up_to_date(record: PackageRecord | None, sources: PackageSources) -> bool:
             and record.folder == sources.folder)
 
 
-def _rebuild_from_clean(workspace_root: Path, closure: list[str], found: dict[str, tuple[Path, object]],
+def _rebuild_from_clean(workspace_root: Path, closure: list[str], found: dict[str, tuple[Path, Manifest]],
                         records: BuildRecords, sources: dict[str, PackageSources]) -> list[str]:
     """Remove colcon's build of every package an incremental build would get wrong (:func:`rebuild_reason`),
     and of the CMake packages built against it; one sentence for the learner, or none."""
@@ -419,7 +420,6 @@ def _colcon(workspace_root: Path, packages: list[str], closure: list[str], env: 
     return outcome
 
 
-_IGNORE_MARKERS = ("COLCON_IGNORE", "AMENT_IGNORE", "CATKIN_IGNORE")  # catkin_pkg's DEFAULT_IGNORE_MARKERS
 
 
 def ignore_marker(src: Path, package: str) -> Path | None:
@@ -429,7 +429,7 @@ def ignore_marker(src: Path, package: str) -> Path | None:
         if match is None or match[1] != package:
             continue
         for folder in [manifest.parent, *manifest.parent.parents]:
-            for name in _IGNORE_MARKERS:
+            for name in sorted(IGNORE_MARKERS):
                 if (folder / name).exists():
                     return folder / name
             if folder == src:
