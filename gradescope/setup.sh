@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Gradescope autograder setup (runs once, as root, when Gradescope builds the image).
 # Gradescope unpacks the autograder zip into /autograder/source: zip this whole repository
-# (see README "Grading a class"), with gradescope/lesson naming the lesson(s) to grade.
+# (see docs/instructors.md "On Gradescope"), with gradescope/lesson naming the lesson(s) to grade.
 set -euo pipefail
 export DEBIAN_FRONTEND=noninteractive
 apt-get update -q
