@@ -54,6 +54,9 @@ CHECKS = [
     Check("waits_for_transform", f"With no {PARENT} -> {CHILD} yet, it keeps running and warns", 2,
           "catch tf2_ros.TransformException around lookup_transform and log a warning: a frame nobody broadcasts "
           "yet is normal at start-up", **LISTENER),
+    Check("warning_says_so", f"Its warning says what is missing (names {PARENT}, {CHILD} or the transform)", 1,
+          f"e.g. self.get_logger().warning(f'{PARENT} -> {CHILD} not available yet: {{exc}}'): tf2's exception "
+          "text names the missing frame", part="listener", needs=("waits_for_transform",)),
     Check("logs_transform", f"It logs (INFO) where {CHILD} is in {PARENT} once the transform exists", 3,
           f"t = self.buffer.lookup_transform('{PARENT}', '{CHILD}', rclpy.time.Time()); log "
           "t.transform.translation's x, y, z with three decimals with self.get_logger().info(...) (the warning is "
@@ -159,6 +162,12 @@ def _grade_listener(s: GradingSession) -> None:
               else f"it ended: {kit.process_state(node.proc)}; ")
              + (f"it warned: {warnings[0].msg[:120]!r}" if warnings else "no WARN record from it"),
              f"it keeps running and logs a WARN record while {PARENT} -> {CHILD} does not exist")
+    # "logs a warning saying so" (lesson.yaml): the text names the transform or one of its frames (tf2's own
+    # exception text, which most learners append, names the missing frame)
+    saying_so = [w for w in warnings if any(word in w.msg.lower() for word in (PARENT, CHILD, "transform"))]
+    s.record("warning_says_so", bool(saying_so),
+             f"it warned: {(saying_so or warnings)[0].msg[:120]!r}" if warnings else "no WARN record from it",
+             f"a warning that names {PARENT}, {CHILD} or the transform")
     if not alive:
         return
     try:
