@@ -38,7 +38,7 @@ from rich.table import Table
 
 from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.grade.results import Status
-from ros2course.grade.validate import build_underlay, lesson_cases, reference_workspace, run_commands
+from ros2course.dev.validate import build_underlay, lesson_cases, reference_workspace, run_commands
 from ros2course.lesson.catalog import load_catalog
 from ros2course.ros import env as env_mod
 from ros2course.run.recording import FILE_NAME as RECORDING_FILE

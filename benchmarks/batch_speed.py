@@ -30,7 +30,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from ros2course.batch.runner import run_batch  # noqa: E402
-from ros2course.grade.validate import (  # noqa: E402
+from ros2course.dev.validate import (  # noqa: E402
     apply_edits,
     load_fixtures,
     reference_workspace,

@@ -52,7 +52,7 @@ from ros2course.build import colcon as build_mod
 from ros2course.errors import CourseError
 from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.grade.results import LessonResult, Status
-from ros2course.grade.validate import reference_workspace
+from ros2course.dev.validate import reference_workspace
 from ros2course.lesson.catalog import Lesson, load_catalog
 from ros2course.ros import env as env_mod
 from ros2course.run.process import kill_marked

@@ -36,7 +36,7 @@ from rich.table import Table
 from ros2course.errors import MissingRequirement
 from ros2course.grade.engine import grade_lesson
 from ros2course.grade.results import Status
-from ros2course.grade.validate import reference_workspace, run_commands
+from ros2course.dev.validate import reference_workspace, run_commands
 from ros2course.lesson.catalog import load_catalog
 from ros2course.lesson.starter import copy_starter
 from ros2course.ros import env as env_mod

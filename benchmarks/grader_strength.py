@@ -1,7 +1,7 @@
 """Grader strength per lesson: ``ros2course dev mutate --sample 30 --seed 1``, written to docs/grader-strength.md.
 
 For each lesson (default: every lesson of the course) it runs the mutation
-analysis of :mod:`ros2course.batch.mutate` on a seeded sample of the lesson's
+analysis of :mod:`ros2course.dev.mutate` on a seeded sample of the lesson's
 mutants (universalmutator), graded through the batch engine, and writes one
 table row per lesson: mutants generated, graded (sampled or all), killed by the
 build, killed, survived, triaged (``chapters/<lesson>/mutation.yaml``), score
@@ -15,7 +15,7 @@ in ``--out`` (a second run grades only new mutants)::
     python benchmarks/grader_strength.py LESSON... --held-out 30 [--held-out-seed 2]   # the held-out sample
 
 ``--held-out N`` grades, for each lesson already measured, a second seeded sample of N mutants disjoint
-from its first (:func:`ros2course.grade.mutate.held_out_sample`), triaged with ``mutation.yaml`` as it is
+from its first (:func:`ros2course.dev.mutants.held_out_sample`), triaged with ``mutation.yaml`` as it is
 (rules and entries; nothing is added), and records it beside the first (``held_out`` in
 ``mutation-score.json`` and ``mutation-outcomes.json``); the doc shows both scores.
 
@@ -39,13 +39,13 @@ sys.path.insert(0, str(ROOT))
 
 from rich.console import Console  # noqa: E402
 
-from ros2course.batch.mutate import mutate_lessons, render  # noqa: E402
-from ros2course.batch.parity import case_workspace  # noqa: E402
-from ros2course.grade import mutate as mut  # noqa: E402
-from ros2course.grade.mutate import SCORE_FILE, lesson_files  # noqa: E402
-from ros2course.grade.repeat import render_steadiness, repeat_lessons  # noqa: E402
-from ros2course.grade.strength import steadiness_text, write_steadiness  # noqa: E402
-from ros2course.grade.validate import with_lessons_table  # noqa: E402
+from ros2course.dev.mutate import mutate_lessons, render  # noqa: E402
+from ros2course.dev.parity import case_workspace  # noqa: E402
+from ros2course.dev import mutants as mut  # noqa: E402
+from ros2course.dev.mutants import SCORE_FILE, lesson_files  # noqa: E402
+from ros2course.dev.repeat import render_steadiness, repeat_lessons  # noqa: E402
+from ros2course.dev.strength import steadiness_text, write_steadiness  # noqa: E402
+from ros2course.dev.validate import with_lessons_table  # noqa: E402
 from ros2course.lesson.catalog import load_catalog  # noqa: E402
 from ros2course.ros import env as env_mod  # noqa: E402
 
@@ -66,7 +66,7 @@ def _row(f, sample: int) -> str:
 
 
 def _held_out_cell(row) -> str:
-    """The held-out sample's figures (:attr:`ros2course.grade.mutate.RecordedScore.held_out`) in a cell."""
+    """The held-out sample's figures (:attr:`ros2course.dev.mutants.RecordedScore.held_out`) in a cell."""
     held = row.held_out
     if held is None:
         return "not drawn"
@@ -82,7 +82,7 @@ def _held_out_cell(row) -> str:
 
 
 def _recorded_row(lesson_id: str, data: dict) -> str:
-    """A table row from the lesson's ``mutation-score.json`` (:func:`ros2course.grade.mutate.recorded_score`):
+    """A table row from the lesson's ``mutation-score.json`` (:func:`ros2course.dev.mutants.recorded_score`):
     the raw kill rate beside the tuned score (first sample, after triage) and its counted denominator, the
     held-out sample's score, and whether the row was measured under the lesson's current grader fingerprint."""
     lesson = load_catalog().get(lesson_id)
@@ -119,7 +119,7 @@ def _survivor_line(lesson_id: str, where: str, section: str) -> str:
 
 
 def recorded_scores(lesson_ids: list[str]) -> dict[str, dict]:
-    """``{lesson id: its mutation-score.json}`` for the lessons that have one (:func:`ros2course.grade.mutate.write_score`)."""
+    """``{lesson id: its mutation-score.json}`` for the lessons that have one (:func:`ros2course.dev.mutants.write_score`)."""
     catalog = load_catalog()
     found = {}
     for lesson_id in lesson_ids:
@@ -133,7 +133,7 @@ def recorded_scores(lesson_ids: list[str]) -> dict[str, dict]:
 
 def nothing_to_mutate(lesson_id: str) -> str | None:
     """Why the lesson has no mutant (its reference is commands only, e.g. workspace-setup's ``colcon
-    build``), or None when it has files to mutate (:func:`ros2course.grade.mutate.lesson_files`)."""
+    build``), or None when it has files to mutate (:func:`ros2course.dev.mutants.lesson_files`)."""
     lesson = load_catalog().get(lesson_id)
     root = Path(tempfile.mkdtemp(prefix="ros2course-strength-"))
     try:
@@ -169,7 +169,7 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "files come from universalmutator (its Python rules, checked by its own Python handler, for `.py`; "
         "its universal rules for package.xml, scripts and CMake; a package.xml mutant that is no longer XML is "
         "dropped as invalid, as the Python handler drops a `.py` one that does not compile, and a changed comment "
-        "line or XML with the same elements as equivalent: `ros2course.grade.mutate.invalid_mutant`, "
+        "line or XML with the same elements as equivalent: `ros2course.dev.mutants.invalid_mutant`, "
         "`equivalent_mutant`); each is graded by the "
         "lesson's grader through the batch engine (`ros2course grade`'s isolation and limits).",
         "",
@@ -195,7 +195,7 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "of survivor decided before they are tested and applied mechanically (a docstring replaced by `pass`, "
         "the `if __name__ == '__main__':` block of a console_scripts node, package.xml free text), each with a "
         "reason; a rule may never cover a line that implements a requirement of the lesson's `contract.yaml` "
-        "(`ros2course.grade.mutate.rule_conflicts`); then per-mutant **entries** for what no rule covers, each "
+        "(`ros2course.dev.mutants.rule_conflicts`); then per-mutant **entries** for what no rule covers, each "
         "naming one mutant by its identity (its key), never by line text alone. `triaged (by rule)` counts both, "
         "and in brackets those a rule covers. A rule marked `set_aside` (free text no program reads) takes its "
         "mutants out before sampling, never graded, so the sample is spent on mutants that count. Survivors' "
@@ -283,7 +283,7 @@ def retriage(lesson_ids: list[str], out: Path) -> list:
 
 
 def update_readme(readme: Path = ROOT / "README.md") -> None:
-    """Rewrite the README's lesson table (:func:`ros2course.grade.validate.with_lessons_table`)."""
+    """Rewrite the README's lesson table (:func:`ros2course.dev.validate.with_lessons_table`)."""
     readme.write_text(with_lessons_table(readme.read_text(encoding="utf-8")), encoding="utf-8")
 
 

@@ -429,7 +429,7 @@ def _check_all(ws: Workspace, as_json: bool) -> None:
 @_handle_errors
 def watch(workspace: WorkspaceOpt = None) -> None:
     """Re-check the current lesson whenever you save one of its files (keys: h n l c q)."""
-    from ros2course.grade.watch import Watcher  # noqa: PLC0415 - start time, see the imports
+    from ros2course.watch import Watcher  # noqa: PLC0415 - start time, see the imports
 
     ws = _workspace(workspace)
     _require_initialised(ws)
@@ -617,7 +617,7 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
     """Grade every lesson's reference (full marks), starter (not full) and wrong solutions (named checks fail)."""
     _choose_course(None, course)
     _ros()
-    from ros2course.grade.validate import render_outcomes, validate_course  # noqa: PLC0415 - start time, see the imports
+    from ros2course.dev.validate import render_outcomes, validate_course  # noqa: PLC0415 - start time, see the imports
 
     if sample < 0:
         raise CourseError(f"--sample must be 0 or more (got {sample})", "e.g. --sample 2")
@@ -626,7 +626,7 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
     if repeat:
         if batch:
             raise CourseError("--repeat and --batch do not go together", "run them one after the other")
-        from ros2course.grade.repeat import render_steadiness, repeat_lessons  # noqa: PLC0415 - start time
+        from ros2course.dev.repeat import render_steadiness, repeat_lessons  # noqa: PLC0415 - start time
 
         rows = repeat_lessons(lesson_ids or None, repeat, load, case or None, progress=stderr_console())
         if as_json:
@@ -639,7 +639,7 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
             raise typer.Exit(int(ExitStatus.VALIDATION_FAILED))
         return
     if batch:
-        from ros2course.batch.parity import validate_with_batch  # noqa: PLC0415 - start time, see the imports
+        from ros2course.dev.parity import validate_with_batch  # noqa: PLC0415 - start time, see the imports
 
         outcomes = validate_with_batch(lesson_ids or None, sample=sample, jobs=jobs, progress=stderr_console())
     else:
@@ -663,7 +663,7 @@ def contract_coverage(write: Annotated[bool, typer.Option("--write", help="Write
                       ) -> None:
     """Every lesson's contract.yaml (issue 37) as docs/contract-coverage.md: requirements, their checks, what is not graded."""
     _choose_course(None, course)
-    from ros2course.grade.coverage import coverage_doc_path, coverage_document  # noqa: PLC0415 - start time, see the imports
+    from ros2course.dev.coverage import coverage_doc_path, coverage_document  # noqa: PLC0415 - start time, see the imports
 
     text, problems = coverage_document()
     err = stderr_console()
@@ -693,7 +693,7 @@ def new_lesson(lesson_id: Annotated[str, typer.Argument(metavar="ID", help="The 
                title: Annotated[Optional[str], typer.Option("--title", help="The lesson's one-line title.")] = None,
                ) -> None:
     """Scaffold a lesson (lesson.yaml, starter, grader, reference, one wrong solution) that `dev validate` passes."""
-    from ros2course.lesson.scaffold import new_lesson as scaffold  # noqa: PLC0415 - start time, see the imports
+    from ros2course.dev.scaffold import new_lesson as scaffold  # noqa: PLC0415 - start time, see the imports
 
     written = scaffold(course, lesson_id, title)
     out = stdout_console()
@@ -721,7 +721,7 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
     """Grade mutants of each lesson's reference (universalmutator) with its grader: killed, survived, score."""
     _choose_course(None, course)
     _ros()
-    from ros2course.batch.mutate import as_dicts, mutate_lessons, render  # noqa: PLC0415 - start time, see the imports
+    from ros2course.dev.mutate import as_dicts, mutate_lessons, render  # noqa: PLC0415 - start time, see the imports
 
     if timeout <= 0:
         raise CourseError(f"--timeout must be positive (got {timeout:g})", "e.g. --timeout 300")

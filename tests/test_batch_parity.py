@@ -112,7 +112,7 @@ def test_a_forgotten_depend_on_an_earlier_lessons_package_loses_the_same_points_
     """A fresh hand-in whose package.xml forgets the library (use-python-library's missing-library-depend) builds the
     library all the same, as a learner's workspace has it from lesson 14: `grade` loses only depends_library, as
     `check` does, although the worker cannot read solutions/ to learn what the lesson depends on."""
-    from ros2course.batch.parity import case_workspace  # noqa: PLC0415
+    from ros2course.dev.parity import case_workspace  # noqa: PLC0415
     from ros2course.batch.runner import run_batch  # noqa: PLC0415
 
     lesson = load_catalog().get("use-python-library")
@@ -130,7 +130,7 @@ def test_gradescope_autograder_gives_the_references_full_marks(tmp_path: Path) -
     lessons that used to differ: an interface the lesson teaches, a probe's trace, a CMake build and g++."""
     from ros2course.batch.gradescope import run_gradescope  # noqa: PLC0415
     from ros2course.build.reference import reference_workspace  # noqa: PLC0415
-    from ros2course.grade.validate import run_commands  # noqa: PLC0415
+    from ros2course.dev.validate import run_commands  # noqa: PLC0415
 
     lessons = ["python-asyncio", "inspect-services", "cpp-demystified"]
     upload = tmp_path / "autograder" / "submission"
@@ -185,9 +185,9 @@ def test_reference_interfaces_are_built_once_and_shared(tmp_path: Path, monkeypa
 def test_the_batch_sample_is_the_wrong_solutions_check_graded_fastest() -> None:
     """``dev validate --batch --sample K`` hands in the K graded fixtures ``check`` took least time on;
     a not-gradable one (no checks to compare) is not picked; without timings the names are spread."""
-    from ros2course.batch.parity import sample_fixtures
+    from ros2course.dev.parity import sample_fixtures
     from ros2course.grade.results import LessonResult
-    from ros2course.grade.validate import Outcome
+    from ros2course.dev.validate import Outcome
 
     lesson = load_catalog().get("inspect-topics")
 

@@ -21,7 +21,7 @@ import pytest
 from ros2course.batch.job import BATCH_MARKER_VAR
 from ros2course.batch.runner import run_batch
 from ros2course.grade.engine import grade_lesson
-from ros2course.grade.validate import (
+from ros2course.dev.validate import (
     apply_edits,
     load_fixtures,
     reference_workspace,

@@ -23,7 +23,7 @@ import psutil
 import pytest
 
 from ros2course.grade.engine import grade_lesson
-from ros2course.grade.validate import reference_workspace
+from ros2course.dev.validate import reference_workspace
 from ros2course.lesson.catalog import load_catalog
 from ros2course.run.process import MARKER_VAR, SHM_DIR, _shm_files_in_use
 from ros2course.kit.scripts import daemon_port

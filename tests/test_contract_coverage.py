@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 
-from ros2course.grade.coverage import COVERAGE_DOC, coverage_document, lesson_coverage
+from ros2course.dev.coverage import COVERAGE_DOC, coverage_document, lesson_coverage
 from ros2course.lesson.catalog import content_root, load_catalog
 from ros2course.lesson.contract import CONTRACT_FILE, load_contract
 

@@ -19,7 +19,7 @@ from ros2course.grade.engine import load_grader
 from ros2course.lesson import bundled_course
 from ros2course.lesson.catalog import Catalog
 from ros2course.lesson.courses import find_course, installed_courses, load_manifest
-from ros2course.lesson.scaffold import new_lesson
+from ros2course.dev.scaffold import new_lesson
 
 ROOT = Path(__file__).resolve().parent.parent
 LAB_COURSE = ROOT / "tests" / "data" / "lab_course"

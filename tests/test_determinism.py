@@ -19,7 +19,7 @@ import pytest
 
 from ros2course.grade.engine import grade_lesson
 from ros2course.grade.results import Status
-from ros2course.grade.validate import reference_workspace
+from ros2course.dev.validate import reference_workspace
 from ros2course.lesson.catalog import load_catalog
 
 #: Gradings per lesson. 6 in the suite (CI time); 20 at two at once is the goal measured with

@@ -20,7 +20,7 @@ import pytest
 from rich.console import Console
 
 from ros2course.grade.results import CheckResult, LessonResult, Status
-from ros2course.grade.validate import ExpectedDiagnosis, Fixture, judge_fixture
+from ros2course.dev.validate import ExpectedDiagnosis, Fixture, judge_fixture
 from ros2course.lesson.catalog import LessonGraph, load_catalog
 from ros2course.report.table import render_result
 from ros2course.run.diagnose import Diagnosis, clean, edit_distance, how_near, near_names
@@ -183,7 +183,7 @@ def test_judge_fixture_keeps_says_with_skips():
 
 def test_extra_lost_checks_are_a_note_not_a_failure():
     """Checks lost or not checked that the fixture names in neither list are reported by ``dev validate``."""
-    from ros2course.grade.validate import Outcome, fixture_note  # noqa: PLC0415
+    from ros2course.dev.validate import Outcome, fixture_note  # noqa: PLC0415
 
     result = _chained()
     assert fixture_note(["node_name"], [], result) == "also lost: log; also not checked: rate"

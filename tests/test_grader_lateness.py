@@ -16,7 +16,7 @@ import pytest
 
 from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.grade.results import Status
-from ros2course.grade.validate import reference_workspace
+from ros2course.dev.validate import reference_workspace
 from ros2course.kit import wait_until
 from ros2course.lesson.catalog import load_catalog
 

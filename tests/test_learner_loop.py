@@ -15,7 +15,7 @@ import pexpect
 import psutil
 import pytest
 
-from ros2course.grade.watch import MARKER_VAR
+from ros2course.watch import MARKER_VAR
 
 
 def _run(ws: Path, *args: str) -> subprocess.CompletedProcess:

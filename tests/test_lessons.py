@@ -1,7 +1,7 @@
 """Schema-level tests of the course content: lessons, graders, fixtures, starters.
 
 No ROS node is started here: fixtures are applied to a copy of the reference
-solution with :func:`ros2course.grade.validate.apply_edits`, never graded.
+solution with :func:`ros2course.dev.validate.apply_edits`, never graded.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import yaml
 from ros2course.errors import LessonFormatError
 from ros2course.grade.checks import Check
 from ros2course.grade.engine import load_grader
-from ros2course.grade.validate import (
+from ros2course.dev.validate import (
     apply_edits,
     fixtures_dir,
     load_fixtures,
@@ -167,7 +167,7 @@ def test_fixture_edits_apply_exactly_once_to_the_reference(lesson_id, fixture_na
 
 def test_apply_edits_rejects_a_replace_that_is_not_unique(tmp_path):
     """The guard the previous test relies on: a replace text found 0 or 2 times is an error."""
-    from ros2course.grade.validate import Edit
+    from ros2course.dev.validate import Edit
 
     (tmp_path / "f.txt").write_text("a a\n")
     with pytest.raises(LessonFormatError, match="2 times"):
@@ -407,7 +407,7 @@ def test_a_lesson_beyond_the_tutorial_names_its_source_instead_of_chapters(tmp_p
 
 def test_the_readme_lesson_table_is_current() -> None:
     """README.md's lesson table (checks, wrong solutions, grader strength) matches the course (issue 24)."""
-    from ros2course.grade.validate import with_lessons_table
+    from ros2course.dev.validate import with_lessons_table
 
     readme = (Path(__file__).resolve().parent.parent / "README.md").read_text(encoding="utf-8")
     assert with_lessons_table(readme) == readme, (
@@ -416,7 +416,7 @@ def test_the_readme_lesson_table_is_current() -> None:
 
 def test_a_readme_without_the_table_markers_is_a_one_line_error() -> None:
     from ros2course.errors import CourseError
-    from ros2course.grade.validate import with_lessons_table
+    from ros2course.dev.validate import with_lessons_table
 
     with pytest.raises(CourseError, match="no generated lesson table"):
         with_lessons_table("# a course\n")

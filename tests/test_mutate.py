@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from ros2course.grade import mutate as mut
+from ros2course.dev import mutants as mut
 from ros2course.grade.results import CheckResult, LessonResult, Status
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -65,7 +65,7 @@ def test_classify() -> None:
 
 def test_grader_errors_and_timeouts_are_graded_again(tmp_path: Path) -> None:
     """A resumed mutation batch regrades the mutants whose last outcome was a grader error or a timeout."""
-    from ros2course.batch import mutate as batch_mutate
+    from ros2course.dev import mutate as batch_mutate
     from ros2course.report.gradebook import append_record, read_results
 
     results = tmp_path / "results.jsonl"
@@ -90,7 +90,7 @@ def test_sample_is_seeded_and_keys_ignore_line_numbers() -> None:
 
 def test_the_lessons_own_files_are_mutated(tmp_path: Path) -> None:
     """By default the files the learner completes or writes, not the ones the starter gives whole."""
-    from ros2course.batch.parity import case_workspace
+    from ros2course.dev.parity import case_workspace
     from ros2course.lesson.catalog import load_catalog
 
     lesson = load_catalog().get(LESSON)

@@ -6,7 +6,7 @@ import json
 
 import pytest
 
-from ros2course.grade.repeat import Steadiness, unsteady
+from ros2course.dev.repeat import Steadiness, unsteady
 from ros2course.grade.results import CheckResult, LessonResult, Status
 
 
@@ -69,8 +69,8 @@ def test_a_reference_s_repeat_run_is_recorded_and_shown(tmp_path) -> None:
     doc and the README's table show it (issue 24)."""
     import types
 
-    from ros2course.grade.repeat import Flake
-    from ros2course.grade.strength import STEADINESS_FILE, steadiness_text, write_steadiness
+    from ros2course.dev.repeat import Flake
+    from ros2course.dev.strength import STEADINESS_FILE, steadiness_text, write_steadiness
 
     lesson = types.SimpleNamespace(folder=tmp_path, grader="inspect_services", packages=["package_with_interfaces"],
                                    folders=["cli"])

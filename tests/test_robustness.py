@@ -19,7 +19,7 @@ import pytest
 
 from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.grade.results import LessonResult, Status
-from ros2course.grade.validate import Edit, apply_edits, reference_workspace
+from ros2course.dev.validate import Edit, apply_edits, reference_workspace
 from ros2course.lesson.catalog import load_catalog
 from ros2course.run.process import DEFAULT_OUTPUT_CAP, MARKER_VAR
 

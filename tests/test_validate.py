@@ -39,7 +39,7 @@ def test_dev_validate(lesson_id, cli):
 def test_a_fixture_that_does_not_build_fails_only_for_the_build() -> None:
     """A not-gradable result (no checks ran) proves a fixture's bug only when the fixture names the build."""
     from ros2course.grade.results import CheckResult, LessonResult
-    from ros2course.grade.validate import judge_fixture
+    from ros2course.dev.validate import judge_fixture
 
     broken = LessonResult("l", 0.0, 10.0, "not gradable", [], "colcon build failed")
     assert judge_fixture(["build"], broken)[0]
@@ -63,7 +63,7 @@ def test_a_wrong_case_shows_what_its_failed_checks_observed() -> None:
     from rich.console import Console  # noqa: PLC0415
 
     from ros2course.grade.results import CheckResult, LessonResult  # noqa: PLC0415
-    from ros2course.grade.validate import Outcome, render_outcomes  # noqa: PLC0415
+    from ros2course.dev.validate import Outcome, render_outcomes  # noqa: PLC0415
 
     result = LessonResult("lifecycle-node", 21.0, 25.0, "failed", [
         CheckResult("activate", "a", 2, 2, True, "activated", "", ""),
@@ -80,7 +80,7 @@ def test_a_wrong_case_shows_what_its_failed_checks_observed() -> None:
 def test_a_fixture_can_require_the_words_its_feedback_must_contain() -> None:
     """``says:`` in a fixture: losing the right check is not enough, the learner must be told what they did."""
     from ros2course.grade.results import CheckResult, LessonResult
-    from ros2course.grade.validate import judge_fixture
+    from ros2course.dev.validate import judge_fixture
 
     graded = LessonResult("l", 1.0, 3.0, "failed", [
         CheckResult("build", "b", 1, 1, True, "", "", ""),
@@ -96,7 +96,7 @@ def test_a_case_with_the_references_sources_is_graded_in_the_references_build(tm
     import shutil
     from pathlib import Path
 
-    from ros2course.grade import validate
+    from ros2course.dev import validate
 
     pristine = tmp_path / "pristine"
     (pristine / "src" / "pkg").mkdir(parents=True)
@@ -151,7 +151,7 @@ def test_a_fixture_case_judges_its_skips_and_notes_what_else_it_lost(monkeypatch
 
     from rich.console import Console  # noqa: PLC0415
 
-    from ros2course.grade import validate  # noqa: PLC0415
+    from ros2course.dev import validate  # noqa: PLC0415
     from ros2course.grade.results import CheckResult, LessonResult  # noqa: PLC0415
 
     fixture = validate.Fixture.model_validate({"description": "d", "fails": ["a"], "skips": ["b"],

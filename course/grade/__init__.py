@@ -1,1 +1,1 @@
-"""The grading engine, its result model and the course validation."""
+"""The grading engine: sessions, checks, verdicts, a lesson regraded, a grader fingerprint."""

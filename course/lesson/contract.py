@@ -25,7 +25,7 @@ graded::
 
 Which lines of the reference implement a requirement (:func:`implements`) is what keeps
 the mutation analysis's triage rules honest (issue 37: a rule of ``mutation.yaml`` may
-never cover a line that implements a requirement, :func:`ros2course.grade.mutate.rule_conflicts`).
+never cover a line that implements a requirement, :func:`ros2course.dev.mutants.rule_conflicts`).
 A requirement with ``code:`` names its lines itself. Without it they are derived
 mechanically from what it ``says``: every *code-like term* in the sentence (:func:`says_terms`:
 a quoted or backticked span, or a word holding a character prose does not use, ``_ . ( ) / : < > = [ ] { } $``
@@ -39,7 +39,7 @@ comment or only a string literal (a docstring) implements nothing (:func:`inert_
 the YAML node's mark): a requirement with neither or both of ``checks`` and
 ``not_graded``, a check id the grader does not declare, a duplicate requirement id,
 an unknown key, a ``lesson:`` that is not the folder's lesson. The grader's check ids
-are passed in (this layer does not import graders: ``ros2course.grade.coverage`` does).
+are passed in (this layer does not import graders: ``ros2course.dev.coverage`` does).
 :func:`coverage_markdown` renders ``docs/contract-coverage.md`` from the contracts.
 """
 

@@ -10,7 +10,7 @@ scripts, CMake, package.xml and anything else). This module never invents a
 mutation of its own.
 
 Each mutant is graded by the lesson's grader (through the batch engine,
-:mod:`ros2course.batch.mutate`) and classified (:func:`classify`):
+:mod:`ros2course.dev.mutate`) and classified (:func:`classify`):
 
 * ``killed``: graded, lost points (the checks it lost are named);
 * ``killed by build``: the workspace does not build, so no check ran (C++ mutants that do not
@@ -365,13 +365,13 @@ def load_config(lesson: Lesson) -> MutationConfig:
         return MutationConfig()
     if not isinstance(data, dict):
         raise LessonFormatError(f"{path}: (top level): expected a mapping with 'rules', 'survivors' (and 'files'), "
-                                f"got {type(data).__name__}", "see course/grade/mutate.py for the format")
+                                f"got {type(data).__name__}", "see course/dev/mutants.py for the format")
     try:
         return MutationConfig.model_validate(data)
     except ValidationError as exc:
         raise LessonFormatError(format_validation_error(path, exc),
                                 "a rule has an id, a reason of a sentence and matchers; a survivor has file, key "
-                                "(or line number + original + mutated) and a reason; see course/grade/mutate.py "
+                                "(or line number + original + mutated) and a reason; see course/dev/mutants.py "
                                 "(Rule, TriageEntry)") from exc
 
 

@@ -1,8 +1,8 @@
 """A lesson's recorded steadiness: the last ``dev validate --repeat`` of its reference (issue 24).
 
 Kept with the lesson, beside its mutation score (``mutation-score.json``,
-:func:`ros2course.grade.mutate.write_score`): docs/grader-strength.md and the README's
-lesson table show both (:func:`ros2course.grade.validate.lessons_markdown`).
+:func:`ros2course.dev.mutants.write_score`): docs/grader-strength.md and the README's
+lesson table show both (:func:`ros2course.dev.validate.lessons_markdown`).
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.files import atomic_write_text
-from ros2course.grade.mutate import course_version
+from ros2course.dev.mutants import course_version
 from ros2course.lesson.catalog import Lesson
 
 #: The lesson's last repeat run of its reference, beside its ``mutation-score.json`` (:func:`write_steadiness`).
@@ -21,7 +21,7 @@ STEADINESS_FILE = "steadiness.json"
 
 
 def write_steadiness(lesson: Lesson, row: Any) -> Path | None:
-    """Record the reference's repeat run (a :class:`~ros2course.grade.repeat.Steadiness`) in
+    """Record the reference's repeat run (a :class:`~ros2course.dev.repeat.Steadiness`) in
     ``chapters/<lesson>/steadiness.json``; its path, or None.
 
     What docs/grader-strength.md and the README's lesson table show as the reference's

@@ -57,12 +57,12 @@ from ros2course.build.reference import (
 )
 from ros2course.build.sources import scan_package
 from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
-from ros2course.grade.child import grade_in_child
-from ros2course.grade.coverage import lesson_coverage
+from ros2course.dev.child import grade_in_child
+from ros2course.dev.coverage import lesson_coverage
 from ros2course.grade.engine import grade_lesson, load_grader
-from ros2course.grade.mutate import describe_score, score_text, triage_problems
+from ros2course.dev.mutants import describe_score, score_text, triage_problems
 from ros2course.grade.results import LessonResult, Status
-from ros2course.grade.strength import steadiness_text
+from ros2course.dev.strength import steadiness_text
 from ros2course.lesson.catalog import (
     Lesson,
     content_root,
@@ -169,7 +169,7 @@ def load_fixtures(lesson_id: str) -> list[Fixture]:
         except yaml.YAMLError as exc:
             raise LessonFormatError(f"{path}: not readable as YAML: {exc}", "fix the fixture's YAML") from exc
         except ValidationError as exc:
-            raise LessonFormatError(format_validation_error(path, exc), "see course/grade/validate.py (Fixture)") from exc
+            raise LessonFormatError(format_validation_error(path, exc), "see course/dev/validate.py (Fixture)") from exc
         fixture.name = path.stem
         out.append(fixture)
     return out
@@ -462,7 +462,7 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None, jobs: int = 1) -> li
 
     With ``jobs`` > 1 the cases that expect full marks (:attr:`Case.alone`) are graded first,
     one at a time, in this process; then the others (the starter, the wrong solutions) ``jobs``
-    at once, each in a child process (:func:`~ros2course.grade.child.grade_in_child`, as two
+    at once, each in a child process (:func:`~ros2course.dev.child.grade_in_child`, as two
     learners' checks on one machine). A wrong solution hanging until its deadline is most of a
     lesson's validation time and needs no CPU: the others are graded meanwhile. Each of the
     ``jobs`` slots keeps a built copy of the reference (the first case it grades builds it).
@@ -665,8 +665,8 @@ TABLE_BEGIN, TABLE_END = "<!-- lessons: begin (generated: python benchmarks/grad
 
 def lessons_markdown() -> str:
     """A Markdown table of the course's lessons, in order: id, title, checks and points of its grader,
-    wrong solutions (fixtures), grader strength (its last ``dev mutate``, :func:`~ros2course.grade.mutate.score_text`)
-    and the reference's steadiness (its last repeat run, :func:`~ros2course.grade.strength.steadiness_text`).
+    wrong solutions (fixtures), grader strength (its last ``dev mutate``, :func:`~ros2course.dev.mutants.score_text`)
+    and the reference's steadiness (its last repeat run, :func:`~ros2course.dev.strength.steadiness_text`).
 
     Raises:
         CourseError: a grader cannot be imported.  LessonFormatError: a fixture is malformed.

@@ -9,7 +9,7 @@ losing points in batch only, and nothing but a class's grades would show it.
 
 So the course proves parity: after ``dev validate`` has graded each lesson's
 reference and wrong solutions through ``check``
-(:func:`ros2course.grade.validate.validate_course`), :func:`batch_parity` hands the
+(:func:`ros2course.dev.validate.validate_course`), :func:`batch_parity` hands the
 reference and a sample of the wrong solutions in as one class (one student per
 lesson and case, each graded for its own lesson only), grades it with
 :func:`ros2course.batch.runner.run_batch` with the isolation this machine gives
@@ -26,7 +26,7 @@ from pathlib import Path
 from ros2course.batch.runner import run_batch
 from ros2course.build.reference import reference_workspace
 from ros2course.grade.results import LessonResult
-from ros2course.grade.validate import (
+from ros2course.dev.validate import (
     Outcome,
     apply_edits,
     load_fixtures,
@@ -114,7 +114,7 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
         progress: a rich Console for one line per case (None: quiet).
 
     Returns:
-        one :class:`~ros2course.grade.validate.Outcome` per case, named ``<case> (grade)``: ok when the batch's
+        one :class:`~ros2course.dev.validate.Outcome` per case, named ``<case> (grade)``: ok when the batch's
         status, score and failed checks equal ``check``'s (``expected`` is the check result, ``got`` the batch's).
 
     Raises:
@@ -156,10 +156,10 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
 
 
 def validate_with_batch(lesson_ids: list[str] | None, sample: int = 2, jobs: int = 1, progress=None) -> list[Outcome]:
-    """``dev validate --batch``: every case through ``check`` (:func:`ros2course.grade.validate.validate_course`),
+    """``dev validate --batch``: every case through ``check`` (:func:`ros2course.dev.validate.validate_course`),
     then the reference and ``sample`` fixtures of each lesson through ``grade`` in one batch
     (:func:`batch_parity`); the outcomes of both, the batch's last. ``jobs``: wrong solutions
-    graded at once by ``check`` (:func:`~ros2course.grade.validate.validate_lesson`); the batch
+    graded at once by ``check`` (:func:`~ros2course.dev.validate.validate_lesson`); the batch
     grades one submission at a time (a reference's full marks are judged with nothing beside it).
 
     Raises:

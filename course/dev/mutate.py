@@ -1,6 +1,6 @@
 """``ros2course dev mutate``: each mutant of a lesson's reference graded as a class through the batch engine.
 
-Mutants come from :mod:`ros2course.grade.mutate` (universalmutator). Each is laid
+Mutants come from :mod:`ros2course.dev.mutants` (universalmutator). Each is laid
 out as one submission (the reference workspace, one file replaced) in a scratch
 submissions folder and graded by :func:`ros2course.batch.runner.run_batch`: the
 same isolation, limits, parallelism and resume as a class, so a mutant that
@@ -13,7 +13,7 @@ hangs, forks or floods its output is held like a hostile submission.
 * ``batch/<lesson>-<hash>/``: the batch's own output (``results.jsonl``); a run
   stopped by Ctrl+C resumes from it;
 * ``mutation.json``: every lesson's counts, score and mutants (``lessons``: the first sample;
-  ``held_out``: the held-out samples, :func:`ros2course.grade.mutate.held_out_sample`);
+  ``held_out``: the held-out samples, :func:`ros2course.dev.mutants.held_out_sample`);
 * ``survivors/<lesson>/<key>.diff``: each survivor's unified diff.
 """
 
@@ -28,11 +28,11 @@ from typing import Any
 
 from rich.console import Console
 from rich.table import Table
-from ros2course.batch.parity import case_workspace
+from ros2course.dev.parity import case_workspace
 from ros2course.batch.runner import run_batch
 from ros2course.errors import CourseError
 from ros2course.files import atomic_write_text
-from ros2course.grade import mutate as mut
+from ros2course.dev import mutants as mut
 from ros2course.lesson.catalog import Lesson, load_catalog
 from ros2course.report.gradebook import read_results
 
@@ -83,7 +83,7 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         timeout: wall-clock seconds per mutant (the batch's per-submission limit).
         console: progress and the batch's progress bar (None: quiet).
         held_out: instead of the first sample, grade a held-out one of this many mutants
-            (:func:`ros2course.grade.mutate.held_out_sample`): drawn with ``held_out_seed`` (default
+            (:func:`ros2course.dev.mutants.held_out_sample`): drawn with ``held_out_seed`` (default
             ``seed + 1``) from the mutants neither the first sample (``sample``, ``seed``) nor the lesson's
             recorded first run took, triaged with ``mutation.yaml`` as it is.
 
@@ -187,7 +187,7 @@ def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, 
     """:func:`mutate_lesson` for each lesson, then ``OUT/mutation.json`` (written even when one lesson fails).
 
     With ``held_out``, each lesson's held-out sample instead of its first one (:func:`mutate_lesson`), recorded
-    beside the first (:func:`ros2course.grade.mutate.write_held_out`); the lesson must have a recorded first run.
+    beside the first (:func:`ros2course.dev.mutants.write_held_out`); the lesson must have a recorded first run.
 
     Raises:
         UnknownLesson: a lesson id is not in the catalog (before anything is graded).
@@ -271,5 +271,5 @@ def render(found: list[mut.LessonMutation], console: Console, diffs: bool = True
 
 
 def as_dicts(found: list[mut.LessonMutation]) -> list[dict[str, Any]]:
-    """Each lesson's :meth:`~ros2course.grade.mutate.LessonMutation.to_dict`."""
+    """Each lesson's :meth:`~ros2course.dev.mutants.LessonMutation.to_dict`."""
     return [f.to_dict() for f in found]

@@ -2,13 +2,13 @@
 
 A check that passes a right program nine times and fails it the tenth is a
 grader defect (issue 24): the learner trusts the score. This module grades
-each case of a lesson (:func:`ros2course.grade.validate.lesson_cases`) ``N``
+each case of a lesson (:func:`ros2course.dev.validate.lesson_cases`) ``N``
 times, ``K`` gradings at once (``K`` copies of the workspace, as ``K``
 learners on one lab machine, or ``watch`` in one terminal and ``check`` in
 another), and reports every check whose verdict changed between runs, with
 the observed text of a run that passed it and of one that failed it.
 
-Each grading runs in its own process (:func:`ros2course.grade.child.grade_in_child`), as
+Each grading runs in its own process (:func:`ros2course.dev.child.grade_in_child`), as
 ``ros2course check`` does: its own ROS domain, rclpy context and ``ros2``
 daemon, so the runs share nothing but the machine. A steady grader is one
 whose verdicts do not depend on what else runs; the fix for a flaky check is
@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.errors import CourseError
-from ros2course.grade.child import grade_in_child
+from ros2course.dev.child import grade_in_child
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import load_catalog
 
@@ -122,10 +122,10 @@ class Steadiness:
 
 
 def repeat_case(case, repeat: int, load: int, progress=None) -> Steadiness:
-    """Grade one :class:`~ros2course.grade.validate.Case` ``repeat`` times, ``load`` at once.
+    """Grade one :class:`~ros2course.dev.validate.Case` ``repeat`` times, ``load`` at once.
 
     Args:
-        case: from :func:`ros2course.grade.validate.lesson_cases`.
+        case: from :func:`ros2course.dev.validate.lesson_cases`.
         repeat: gradings in all (>= 2 to say anything).
         load: gradings at once, each on its own copy of the workspace (the copies are built by their
             first grading, later ones find the build up to date, as a learner's second ``check`` does).
@@ -170,7 +170,7 @@ def repeat_lessons(lesson_ids: list[str] | None, repeat: int, load: int = 1, cas
         CourseError: ``repeat`` < 2 or ``load`` < 1, or a case name no lesson has.
         ValidationFailed: a lesson's dependencies do not build.
     """
-    from ros2course.grade.validate import build_underlay, lesson_cases  # noqa: PLC0415 - validate imports the engine
+    from ros2course.dev.validate import build_underlay, lesson_cases  # noqa: PLC0415 - validate imports the engine
 
     if repeat < 2:
         raise CourseError(f"--repeat needs at least 2 runs (got {repeat})", "e.g. --repeat 20 --load 2")

@@ -1,8 +1,8 @@
 """Grade one workspace in a child process of its own, as ``ros2course check`` would.
 
-``dev validate --repeat --load K`` (:mod:`ros2course.grade.repeat`) and ``dev validate
---jobs K`` (:mod:`ros2course.grade.validate`) grade several workspaces at once. Each
-grading runs in its own ``python -m ros2course.grade.child`` process: its own ROS domain,
+``dev validate --repeat --load K`` (:mod:`ros2course.dev.repeat`) and ``dev validate
+--jobs K`` (:mod:`ros2course.dev.validate`) grade several workspaces at once. Each
+grading runs in its own ``python -m ros2course.dev.child`` process: its own ROS domain,
 rclpy context and ``ros2`` daemon, so the gradings share nothing but the machine (and
 nothing of the author's process, such as an rclpy context, leaks into the next one).
 The child grades the lesson of the course this process has chosen (``--course``): it is
@@ -40,7 +40,7 @@ def grade_in_child(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_
         The child's result; a ``grader error`` result (never an exception) when the child
         ran past ``timeout``, failed, or printed no result.
     """
-    argv = [sys.executable, "-m", "ros2course.grade.child", lesson_id, str(root), str(log_dir)]
+    argv = [sys.executable, "-m", "ros2course.dev.child", lesson_id, str(root), str(log_dir)]
     for underlay in underlays:
         argv += ["--underlay", str(underlay)]
     env = {**os.environ, "ROS2COURSE_CONTENT": str(content_root())}
@@ -63,7 +63,7 @@ def _main(argv: list[str]) -> int:
     from ros2course.grade.engine import grade_lesson  # noqa: PLC0415
     from ros2course.ros import env as env_mod  # noqa: PLC0415
 
-    parser = argparse.ArgumentParser(prog="python -m ros2course.grade.child")
+    parser = argparse.ArgumentParser(prog="python -m ros2course.dev.child")
     parser.add_argument("lesson")
     parser.add_argument("root", type=Path)
     parser.add_argument("log_dir", type=Path)
