@@ -338,8 +338,11 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
         _check_all(ws, as_json)
         return
     # read once, before the long check: a corrupt progress file is reported first (the attempt is recorded
-    # on a fresh read afterwards, so one that `watch` recorded meanwhile is kept)
-    progress = ws.load_progress() if ws.initialised else None
+    # on a fresh read afterwards, so one that `watch` recorded meanwhile is kept); read as `list` reads it,
+    # without pydantic unless the file needs it (lesson.index.progress_view: issue 36)
+    from ros2course.lesson.index import progress_view  # noqa: PLC0415 - start time, see the imports
+
+    progress = progress_view(ws) if ws.initialised else None
     lesson = _lesson_for(lesson_id, ws, progress)
     result = _grade(ws, lesson, quiet=as_json)
     # after grading: rich's tables are not needed before the learner's nodes start (issue 36)

@@ -7,6 +7,7 @@ interface build, and folders the submission's uid must write.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import shutil
@@ -38,7 +39,7 @@ def test_an_interface_package_the_lesson_teaches_is_still_built_for_the_batch() 
 
 
 def test_a_lesson_whose_interface_the_course_cannot_build_is_refused_up_front() -> None:
-    lesson = load_catalog().get("inspect-topics").model_copy(update={"interfaces": ["no_such_interfaces"]})
+    lesson = dataclasses.replace(load_catalog().get("inspect-topics"), interfaces=["no_such_interfaces"])
     with pytest.raises(CourseError) as info:
         trusted_interface_packages([lesson])
     assert "inspect-topics cannot be graded in batch" in info.value.message and "no_such_interfaces" in info.value.message

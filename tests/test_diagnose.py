@@ -9,6 +9,7 @@ process through :meth:`GradingSession.launch`.
 
 from __future__ import annotations
 
+import dataclasses
 import io
 import json
 import os
@@ -26,7 +27,7 @@ from ros2course.report.table import render_result
 from ros2course.run.diagnose import Diagnosis, clean, edit_distance, how_near, near_names
 
 STRING = "std_msgs/msg/String"
-CONTRACT = LessonGraph.model_validate({
+CONTRACT = LessonGraph.validate({
     "nodes": [{"name": "/talker"}],
     "topics": [{"name": "/amazing_quote", "type": STRING, "role": "publish"}],
 })
@@ -58,17 +59,17 @@ def test_clean_escapes_and_caps():
 
 def test_lesson_graph_validates_names_and_parts():
     with pytest.raises(ValueError):
-        LessonGraph.model_validate({"topics": [{"name": "amazing quote", "type": STRING}]})
+        LessonGraph.validate({"topics": [{"name": "amazing quote", "type": STRING}]})
     with pytest.raises(ValueError):
-        LessonGraph.model_validate({"topics": [{"name": "/x", "type": "String"}]})
-    graph = LessonGraph.model_validate({"nodes": [{"name": "/a", "part": "one"}, {"name": "/b", "part": "two"},
+        LessonGraph.validate({"topics": [{"name": "/x", "type": "String"}]})
+    graph = LessonGraph.validate({"nodes": [{"name": "/a", "part": "one"}, {"name": "/b", "part": "two"},
                                                   {"name": "/c"}]})
     assert [n.name for n in graph.for_part("one").nodes] == ["/a", "/c"]
 
 
 def test_topics_and_services_share_one_endpoint_model():
     """One endpoint model for both lists; each list's roles and default role, and its kind of type."""
-    graph = LessonGraph.model_validate({"topics": [{"name": "/t", "type": STRING}],
+    graph = LessonGraph.validate({"topics": [{"name": "/t", "type": STRING}],
                                         "services": [{"name": "/s", "type": "std_srvs/srv/Trigger"}]})
     assert type(graph.topics[0]) is type(graph.services[0])
     assert (graph.topics[0].role, graph.services[0].role) == ("publish", "serve")
@@ -77,7 +78,7 @@ def test_topics_and_services_share_one_endpoint_model():
                   {"services": [{"name": "/s", "type": "std_srvs/srv/Trigger", "role": "subscribe"}]},
                   {"topics": [{"name": "/t", "type": "std_srvs/srv/Trigger"}]}):
         with pytest.raises(ValueError):
-            LessonGraph.model_validate(wrong)
+            LessonGraph.validate(wrong)
 
 
 def test_declared_lessons_load():
@@ -327,7 +328,7 @@ def test_services(graph):
     from rcl_interfaces.srv import ListParameters  # noqa: PLC0415
 
     session, node = graph
-    contract = LessonGraph.model_validate({"services": [{"name": "/what_is_the_point",
+    contract = LessonGraph.validate({"services": [{"name": "/what_is_the_point",
                                                          "type": "rcl_interfaces/srv/ListParameters"}]})
     node("server").create_service(ListParameters, "/what_is_the_pont", lambda request, response: response)
     found = _settled(session, contract, lambda f: "near_name" in _kinds(f))
@@ -390,9 +391,9 @@ def test_engine_diagnoses_the_first_failed_check_of_a_part(tmp_path, monkeypatch
     from ros2course.ros import env as env_mod  # noqa: PLC0415
     from ros2course.run.probes import wait_until  # noqa: PLC0415
 
-    lesson = load_catalog().get("publisher-subscriber").model_copy(update={"graph": LessonGraph.model_validate({
+    lesson = dataclasses.replace(load_catalog().get("publisher-subscriber"), graph=LessonGraph.validate({
         "nodes": [{"name": "/amazing_quote_publisher_node", "part": "publisher"}],
-        "topics": [{"name": "/amazing_quote", "type": STRING, "part": "publisher"}]})})
+        "topics": [{"name": "/amazing_quote", "type": STRING, "part": "publisher"}]}))
     (tmp_path / "install").mkdir()
     (tmp_path / "install" / "setup.bash").write_text("", encoding="utf-8")
     script = tmp_path / "learner.py"
@@ -493,7 +494,7 @@ def _session(tmp_path, checks, graph: LessonGraph | None):
     from ros2course.grade.session import GradingSession  # noqa: PLC0415
     from ros2course.ros import env as env_mod  # noqa: PLC0415
 
-    lesson = load_catalog().get("publisher-subscriber").model_copy(update={"graph": graph})
+    lesson = dataclasses.replace(load_catalog().get("publisher-subscriber"), graph=graph)
     (tmp_path / "install").mkdir(exist_ok=True)
     (tmp_path / "install" / "setup.bash").write_text("", encoding="utf-8")
     env = dict(os.environ)
@@ -650,7 +651,7 @@ def test_a_node_that_never_spins_is_silent(tmp_path, spins):
     from ros2course.run.diagnose import SILENT_AFTER  # noqa: PLC0415
     from ros2course.run.probes import wait_until  # noqa: PLC0415
 
-    contract = LessonGraph.model_validate({"nodes": [{"name": "/talker"}],
+    contract = LessonGraph.validate({"nodes": [{"name": "/talker"}],
                                            "topics": [{"name": "/amazing_quote", "type": STRING}]})
     script = tmp_path / "talker.py"
     script.write_text(textwrap.dedent(TALKER), encoding="utf-8")

@@ -25,7 +25,7 @@ def cli():
     return run_cli_in_process
 
 QUOTE = "package_with_interfaces/msg/AmazingQuote"
-CONTRACT = LessonGraph.model_validate({
+CONTRACT = LessonGraph.validate({
     "nodes": [{"name": "/amazing_quote_publisher_node"}, {"name": "/amazing_quote_subscriber_node"}],
     "topics": [{"name": "/amazing_quote", "type": QUOTE},
                {"name": "/amazing_quote", "type": QUOTE, "role": "subscribe"}]})

@@ -173,3 +173,20 @@ def test_the_kept_catalog_is_keyed_by_content_not_file_times(tmp_path, monkeypat
     assert catalog_mod._cached_catalog(chapters, catalog_mod._catalog_key(chapters)) is None
     assert load(course).get("print-forever-node").title == title[::-1]  # full load, kept again as 0600
     assert cache_file.stat().st_mode & 0o777 == 0o600
+
+
+def test_a_warm_check_reads_its_lesson_and_progress_without_pydantic_or_yaml(learner_ws):
+    """What `check` reads before the learner's node starts: the kept catalog (plain dataclasses) and the
+    progress file as `list` reads it; neither pydantic nor PyYAML is imported (about 60 ms, issue 36)."""
+    probe = ("import sys; from pathlib import Path\n"
+             "from ros2course.lesson.catalog import load_catalog\n"
+             "from ros2course.lesson.index import progress_view\n"
+             "from ros2course.lesson.workspace import Workspace\n"
+             "lesson = load_catalog().get('print-forever-node'); view = progress_view(Workspace(Path('.')))\n"
+             "print('READ', lesson.packages, lesson.graph is not None, view.status(lesson.id))\n"
+             "print('LOADED', sorted(m for m in ('pydantic', 'yaml') if m in sys.modules))")
+    for _ in range(2):  # the first run keeps the catalog if none is kept yet
+        proc = subprocess.run([sys.executable, "-c", probe], cwd=learner_ws, capture_output=True, text=True,
+                              timeout=60, check=False)
+    assert "READ ['python_package_with_a_node'] True" in proc.stdout and "LOADED []" in proc.stdout, \
+        proc.stdout + proc.stderr

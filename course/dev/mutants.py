@@ -88,13 +88,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from ros2course.errors import CourseError, LessonFormatError, MissingRequirement
 from ros2course.files import atomic_write_text
 from ros2course.grade.results import LessonResult, Status
-from ros2course.lesson.catalog import (
-    Lesson,
-    content_root,
-    format_validation_error,
-    load_catalog,
-    yaml_error_text,
-)
+from ros2course.lesson.catalog import Lesson, content_root, load_catalog, yaml_error_text
+from ros2course.lesson.schema import format_validation_error
 from ros2course.lesson.courses import MANIFEST, load_manifest
 
 #: Name of the triage file beside ``lesson.yaml``.

@@ -63,12 +63,8 @@ from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.dev.mutants import describe_score, score_text, triage_problems
 from ros2course.grade.results import LessonResult, Status
 from ros2course.dev.strength import steadiness_text
-from ros2course.lesson.catalog import (
-    Lesson,
-    content_root,
-    format_validation_error,
-    load_catalog,
-)
+from ros2course.lesson.catalog import Lesson, content_root, load_catalog
+from ros2course.lesson.schema import format_validation_error
 from ros2course.lesson.courses import course_fixtures
 from ros2course.lesson.starter import copy_starter
 from ros2course.ros import env as env_mod

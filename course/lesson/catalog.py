@@ -1,14 +1,17 @@
 """Lessons: one ``chapters/NN-<id>/lesson.yaml`` each, validated when loaded.
 
-The schema is a pydantic model, so a malformed lesson is reported as
-``<file>: <field>: <what is wrong>`` (pydantic's error locations).
-The catalog's order is the folders' numeric prefix order, like rustlings'
-single manifest but one file per lesson.
+A :class:`Lesson` and its parts are plain dataclasses; the schema that validates
+a ``lesson.yaml`` (pydantic models, so a malformed lesson is reported as
+``<file>: <field>: <what is wrong>``) is :mod:`ros2course.lesson.schema`, imported
+only when lessons are validated: a warm ``check`` loads the kept catalog without
+pydantic or PyYAML (issue 36). The catalog's order is ``course.yaml``'s, else the
+folders' numeric prefix order, like rustlings' single manifest but one file per lesson.
 """
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import difflib
 import functools
 import hashlib
@@ -17,33 +20,22 @@ import pickle
 import re
 import sys
 from pathlib import Path
-from typing import Annotated, Literal
-
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator, model_validator
 
 from ros2course.errors import LessonFormatError, UnknownLesson
-from ros2course.lesson import ID_PATTERN as _ID, MANIFEST, content_root  # noqa: F401 - re-exported: callers import it from here
-from ros2course.ros.requirements import KNOWN_REQUIREMENTS
+from ros2course.lesson import MANIFEST, content_root  # noqa: F401 - re-exported: callers import it from here
 
 
 
-class ReferenceSolution(BaseModel):
+@dataclasses.dataclass
+class ReferenceSolution:
     """How ``dev validate`` prepares the reference workspace for this lesson."""
 
-    model_config = ConfigDict(extra="forbid", defer_build=True)  # schema built on first validation (see _cached_catalog)
-
     #: Shell commands run in the workspace before grading (what the learner types).
-    commands: list[str] = Field(default_factory=list)
+    commands: list[str] = dataclasses.field(default_factory=list)
 
 
-#: A fully qualified ROS name (``/amazing_quote``, ``/ns/node``): what the graph shows.
-_ROS_NAME = r"^(/[A-Za-z_][A-Za-z0-9_]*)+$"
-#: An interface type as the graph spells it (``package_with_interfaces/msg/AmazingQuote``).
-_TYPE_NAME = r"^[A-Za-z][A-Za-z0-9_]*/(msg|srv|action)/[A-Z][A-Za-z0-9]*$"
-
-
-class GraphNode(BaseModel):
+@dataclasses.dataclass
+class GraphNode:
     """A node the lesson's contract expects in the graph (``ros2 node list``).
 
     Attributes:
@@ -51,17 +43,12 @@ class GraphNode(BaseModel):
         part: the grader's part (:attr:`ros2course.grade.checks.Check.part`) whose graph holds it; "" for every part.
     """
 
-    model_config = ConfigDict(extra="forbid", defer_build=True)  # schema built on first validation (see _cached_catalog)
-
-    name: Annotated[str, Field(pattern=_ROS_NAME)]
+    name: str
     part: str = ""
 
 
-#: The roles an endpoint of the contract can have, per list of :class:`LessonGraph` (``ros2 node info``'s sections).
-_ROLES = {"topics": ("publish", "subscribe"), "services": ("serve", "call")}
-
-
-class GraphEndpoint(BaseModel):
+@dataclasses.dataclass
+class GraphEndpoint:
     """A topic or service end the learner's node is expected to have (``ros2 topic info -v``,
     ``ros2 service list -t``).
 
@@ -74,15 +61,14 @@ class GraphEndpoint(BaseModel):
         part: as :attr:`GraphNode.part`.
     """
 
-    model_config = ConfigDict(extra="forbid", defer_build=True)  # schema built on first validation (see _cached_catalog)
-
-    name: Annotated[str, Field(pattern=_ROS_NAME)]
-    type: Annotated[str, Field(pattern=_TYPE_NAME)]
-    role: Literal["publish", "subscribe", "serve", "call", ""] = ""
+    name: str
+    type: str
+    role: str = ""
     part: str = ""
 
 
-class LessonGraph(BaseModel):
+@dataclasses.dataclass
+class LessonGraph:
     """The graph a lesson's contract expects while its learner nodes run (``graph:`` in lesson.yaml).
 
     Optional. When a check that watched the graph fails, the engine compares
@@ -90,25 +76,20 @@ class LessonGraph(BaseModel):
     (:mod:`ros2course.run.diagnose`); it never changes a verdict.
     """
 
-    model_config = ConfigDict(extra="forbid", defer_build=True)  # schema built on first validation (see _cached_catalog)
+    nodes: list[GraphNode] = dataclasses.field(default_factory=list)
+    topics: list[GraphEndpoint] = dataclasses.field(default_factory=list)
+    services: list[GraphEndpoint] = dataclasses.field(default_factory=list)
 
-    nodes: list[GraphNode] = Field(default_factory=list)
-    topics: list[GraphEndpoint] = Field(default_factory=list)
-    services: list[GraphEndpoint] = Field(default_factory=list)
+    @classmethod
+    def validate(cls, data: dict) -> LessonGraph:
+        """A ``graph:`` mapping validated (:func:`ros2course.lesson.schema.validate_graph`).
 
-    @model_validator(mode="after")
-    def _roles_fit(self) -> LessonGraph:
-        """Each list's default role filled in; a topic's role is a topic role, a service's a service role."""
-        for field, roles in _ROLES.items():
-            kind = "msg" if field == "topics" else "srv"
-            for end in getattr(self, field):
-                if not end.role:
-                    end.role = roles[0]
-                if end.role not in roles:
-                    raise ValueError(f"{field[:-1]} {end.name}: role {end.role!r} is not one of {', '.join(roles)}")
-                if f"/{kind}/" not in end.type:
-                    raise ValueError(f"{field[:-1]} {end.name}: type {end.type} is not a {kind} type")
-        return self
+        Raises:
+            pydantic.ValidationError: a schema violation.
+        """
+        from ros2course.lesson.schema import validate_graph  # noqa: PLC0415 - pydantic only to validate
+
+        return validate_graph(data)
 
     def for_part(self, part: str) -> LessonGraph:
         """The entries that apply to a check of grader part ``part`` (its own and the part-less ones)."""
@@ -118,7 +99,8 @@ class LessonGraph(BaseModel):
         return LessonGraph(nodes=keep(self.nodes), topics=keep(self.topics), services=keep(self.services))
 
 
-class Lesson(BaseModel):
+@dataclasses.dataclass
+class Lesson:
     """One graded exercise, as declared in its ``lesson.yaml``.
 
     Attributes:
@@ -157,47 +139,28 @@ class Lesson(BaseModel):
             or None; the engine diagnoses failed checks against it.
     """
 
-    model_config = ConfigDict(extra="forbid", defer_build=True)  # schema built on first validation (see _cached_catalog)
-
-    id: Annotated[str, Field(pattern=_ID)]
-    title: Annotated[str, Field(min_length=3)]
+    id: str
+    title: str
+    instructions: str
+    hints: list[str]
+    grader: str
     beyond: str = ""
-    chapters: list[int] = Field(default_factory=list)
-    requires: list[str] = Field(default_factory=list)
-    packages: list[str] = Field(default_factory=list)
-    instructions: Annotated[str, Field(min_length=20)]
-    hints: list[Annotated[str, Field(min_length=5)]] = Field(min_length=3)
-    grader: Annotated[str, Field(pattern=r"^[a-z_][a-z0-9_]*$")]
+    chapters: list[int] = dataclasses.field(default_factory=list)
+    requires: list[str] = dataclasses.field(default_factory=list)
+    packages: list[str] = dataclasses.field(default_factory=list)
     starter: str = "starter"
-    starter_includes: list[Annotated[str, Field(pattern=_ID)]] = Field(default_factory=list)
-    reference: ReferenceSolution = Field(default_factory=ReferenceSolution)
-    interfaces: list[Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]*$")]] = Field(default_factory=list)
-    references: list[Annotated[str, Field(pattern=r"^[a-z][a-z0-9_]*$")]] = Field(default_factory=list)
-    folders: list[Annotated[str, Field(pattern=r"^[A-Za-z0-9_][A-Za-z0-9_./-]*$")]] = Field(default_factory=list)
-    starter_solutions: list[Annotated[str, Field(pattern=r"^src/[A-Za-z0-9_]+(/[A-Za-z0-9_][A-Za-z0-9_.-]*)*$")]] = (
-        Field(default_factory=list))
+    starter_includes: list[str] = dataclasses.field(default_factory=list)
+    reference: ReferenceSolution = dataclasses.field(default_factory=ReferenceSolution)
+    interfaces: list[str] = dataclasses.field(default_factory=list)
+    references: list[str] = dataclasses.field(default_factory=list)
+    folders: list[str] = dataclasses.field(default_factory=list)
+    starter_solutions: list[str] = dataclasses.field(default_factory=list)
     graph: LessonGraph | None = None
 
     #: The lesson's folder; set by the loader, not read from YAML.
-    folder: Path = Field(default=Path("."), exclude=True)
+    folder: Path = Path(".")
     #: Starter folders of ``starter_includes`` (oldest first); set by :class:`Catalog`.
-    included_starters: list[Path] = Field(default_factory=list, exclude=True)
-
-    @field_validator("chapters")
-    @classmethod
-    def _chapters_or_beyond(cls, chapters: list[int], info: ValidationInfo) -> list[int]:
-        if not chapters and not str(info.data.get("beyond") or "").strip():
-            raise ValueError("give at least 1 seed tutorial chapter, or `beyond:` naming where the subject of a "
-                             "lesson the tutorial has no chapter for is documented")
-        return chapters
-
-    @field_validator("requires")
-    @classmethod
-    def _known_requirements(cls, value: list[str]) -> list[str]:
-        unknown = [name for name in value if name not in KNOWN_REQUIREMENTS]
-        if unknown:
-            raise ValueError(f"unknown requirement(s) {unknown}; known: {list(KNOWN_REQUIREMENTS)}")
-        return value
+    included_starters: list[Path] = dataclasses.field(default_factory=list)
 
     @property
     def starter_dir(self) -> Path:
@@ -232,27 +195,20 @@ def yaml_error_text(exc: Exception) -> str:
     return f"{where}{problem}" + (f" ({context})" if context else "")
 
 
-def format_validation_error(path: Path, error: ValidationError) -> str:
-    """One line per problem: ``file: field: message``."""
-    lines = []
-    for item in error.errors():
-        field = ".".join(str(part) for part in item["loc"]) or "(top level)"
-        lines.append(f"{path}: {field}: {item['msg']}")
-    return "; ".join(lines)
-
-
-#: libyaml's safe loader where PyYAML was built with it (10x faster: ``list`` parses every lesson), else PyYAML's.
-SAFE_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-
-
 def load_lesson(path: Path) -> Lesson:
     """Load and validate one ``lesson.yaml``.
 
     Raises:
         LessonFormatError: unreadable YAML or a schema violation, naming file and field.
     """
+    import yaml  # noqa: PLC0415 - only when lessons are validated (the kept catalog needs neither yaml nor pydantic)
+    from pydantic import ValidationError  # noqa: PLC0415 - same
+
+    from ros2course.lesson.schema import format_validation_error, validate_lesson  # noqa: PLC0415 - same
+
+    loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)  # libyaml's where PyYAML has it (10x faster)
     try:
-        data = yaml.load(path.read_text(encoding="utf-8"), Loader=SAFE_LOADER)  # noqa: S506 - a safe loader
+        data = yaml.load(path.read_text(encoding="utf-8"), Loader=loader)  # noqa: S506 - a safe loader
     except OSError as exc:
         raise LessonFormatError(f"{path}: cannot be read: {exc.strerror}", "check the file exists and is readable") from exc
     except yaml.YAMLError as exc:
@@ -262,10 +218,10 @@ def load_lesson(path: Path) -> Lesson:
         raise LessonFormatError(f"{path}: (top level): expected a mapping of fields, got {type(data).__name__}",
                                 "a lesson file is a YAML mapping with id, title, instructions, hints, grader")
     try:
-        lesson = Lesson.model_validate(data)
+        lesson = validate_lesson(data)
     except ValidationError as exc:
         raise LessonFormatError(format_validation_error(path, exc),
-                                "see course/lesson/catalog.py (Lesson) for the lesson schema") from exc
+                                "see course/lesson/schema.py (LessonSchema) for the lesson schema") from exc
     lesson.folder = path.parent
     folder_id = re.sub(r"^\d+-", "", path.parent.name)
     if folder_id != lesson.id:
@@ -387,26 +343,25 @@ def _catalog_of(root: Path) -> Catalog:
 # --- the validated catalog, kept between processes ------------------------------------------------
 #
 # Every `check` loads the catalog before it starts the learner's nodes; validating 34 lesson.yaml files
-# builds pydantic's schemas (~50 ms of the CLI's start, issue 36). The validated Catalog is kept in the
-# user's cache folder, keyed by the *contents* of everything validation reads (never by file times: a
-# course copied with old times must not be graded on a stale lesson), and loaded without validation.
-# pickle rather than JSON because the lessons are pydantic models with Path fields: rebuilding them
-# from JSON would mean validating again. A cache file is trusted only when this user owns it and no one
-# else may write it (like ssh's own files); anything else, or any error, means a full load.
+# imports PyYAML and pydantic and builds pydantic's schemas (~100 ms of the CLI's start, issue 36). The
+# validated Catalog (plain dataclasses) is kept in the user's cache folder, keyed by the *contents* of
+# everything validation reads (never by file times: a course copied with old times must not be graded on a
+# stale lesson), and loaded without validation. pickle rather than JSON: the lessons hold Path fields and
+# nested values that JSON would need a second schema for. A cache file is trusted only when this user
+# owns it and no one else may write it (like ssh's own files); anything else, or any error, means a full load.
 
 #: Bumped when what the cache holds changes.
-_CACHE_FORMAT = 1
+_CACHE_FORMAT = 2
 
 
 def _catalog_key(chapters_dir: Path) -> str | None:
     """sha256 (hex) of what a full load reads: every ``lesson.yaml``, ``course.yaml``, the loader's code and
     versions; None when the folder cannot be read (the full load then reports why)."""
-    import pydantic  # noqa: PLC0415 - loaded already by the models above
-
-    digest = hashlib.sha256(f"{_CACHE_FORMAT}\0{sys.version}\0{pydantic.VERSION}\0{chapters_dir}\n".encode())
+    digest = hashlib.sha256(f"{_CACHE_FORMAT}\0{sys.version}\0{chapters_dir}\n".encode())
     here = Path(__file__).resolve().parent
     try:
-        for code in (here / "catalog.py", here / "courses.py", here.parent / "ros" / "requirements.py"):
+        for code in (here / "catalog.py", here / "schema.py", here / "courses.py", here.parent / "ros" / "requirements.py",
+                     _pydantic_version_file()):
             digest.update(code.read_bytes())
         with os.scandir(chapters_dir) as entries:
             names = sorted(entry.name for entry in entries)
@@ -419,6 +374,21 @@ def _catalog_key(chapters_dir: Path) -> str | None:
     except OSError:
         return None
     return digest.hexdigest()
+
+
+def _pydantic_version_file() -> Path:
+    """pydantic's ``version.py`` (its VERSION), found without importing pydantic (the validation it does is
+    part of what the kept catalog holds).
+
+    Raises:
+        OSError: pydantic is not installed where the import system would find it.
+    """
+    import importlib.util  # noqa: PLC0415 - imported by the interpreter's start already
+
+    spec = importlib.util.find_spec("pydantic")
+    if spec is None or spec.origin is None:
+        raise OSError("pydantic is not installed")
+    return Path(spec.origin).with_name("version.py")
 
 
 def _catalog_cache_path(chapters_dir: Path) -> Path:
