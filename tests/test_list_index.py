@@ -20,7 +20,7 @@ from ros2course.errors import ProgressError
 from ros2course.lesson.catalog import Catalog, content_root
 from ros2course.lesson.index import catalog_entries, progress_view
 from ros2course.lesson.progress import Progress
-from ros2course.lesson.workspace import Workspace
+from ros2course.lesson.workspace import Workspace, plain_progress, progress_text
 from tests.test_cli import assert_clean_error, copy_course
 
 
@@ -190,3 +190,43 @@ def test_a_warm_check_reads_its_lesson_and_progress_without_pydantic_or_yaml(lea
                               timeout=60, check=False)
     assert "READ ['python_package_with_a_node'] True" in proc.stdout and "LOADED []" in proc.stdout, \
         proc.stdout + proc.stderr
+
+
+@pytest.mark.parametrize("data", PROGRESS_FILES + [
+    {"version": 1, "current": "qos", "course": {"id": "ros2-tutorial", "version": "1.6.0", "path": "/c"},
+     "lessons": {"qos": {"attempts": 3, "best_score": 20, "max_score": 30.5, "last_status": "failed",
+                         "extra": "dropped"}}}])
+def test_the_plain_reading_is_what_the_validating_loader_writes(data):
+    """One file format, whoever writes it: what plain_progress makes of a file is, to the byte, what the
+    pydantic model writes for it; files it declines are the ones the model coerces."""
+    plain = plain_progress(data)
+    validated = Progress.model_validate(data).model_dump(mode="json")
+    if plain is None:
+        assert any(isinstance(v, (str, bool)) for r in data["lessons"].values() for k, v in r.items()
+                   if k in ("attempts", "best_score", "started"))
+    else:
+        assert progress_text(plain) == progress_text(validated)
+
+
+def test_a_check_records_its_attempt_without_pydantic(tmp_path):
+    """record_attempt on a file the plain reader accepts: the same file the validating path writes, and no
+    pydantic imported (about 90 ms of every check of an init-ed workspace, issue 36)."""
+    workspace = Workspace(tmp_path)
+    workspace.init()
+    data = PROGRESS_FILES[1]
+    workspace.progress_path.write_text(json.dumps(data), encoding="utf-8")
+    probe = ("import sys; from pathlib import Path; from ros2course.lesson.workspace import Workspace\n"
+             f"Workspace(Path({str(tmp_path)!r})).record_attempt('parameters', 'passed', 9, 9)\n"
+             "Workspace(Path({!r})).record_attempt('qos', 'failed', 3, 30)\n".format(str(tmp_path))
+             + "print('LOADED', 'pydantic' in sys.modules)")
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, timeout=60, check=False)
+    assert "LOADED False" in proc.stdout, proc.stdout + proc.stderr
+    expected = Progress.model_validate(data)
+    for lesson_id, status, score, most in (("parameters", "passed", 9, 9), ("qos", "failed", 3, 30)):
+        record = expected.lesson(lesson_id)
+        record.attempts += 1
+        record.last_status, record.max_score = status, float(most)
+        if record.best_score is None or score > record.best_score:
+            record.best_score = float(score)
+    assert workspace.progress_path.read_text(encoding="utf-8") == progress_text(expected.model_dump(mode="json"))
+    assert workspace.load_progress().status("parameters") == "done"

@@ -35,8 +35,8 @@ from pathlib import Path
 from typing import NamedTuple
 
 from ros2course.files import atomic_write_text, cache_dir
-from ros2course.lesson.status import PROGRESS_VERSION, lesson_status
-from ros2course.lesson.workspace import Workspace
+from ros2course.lesson.status import lesson_status
+from ros2course.lesson.workspace import Workspace, plain_progress
 
 #: Bumped when the index's layout changes (old files are then rebuilt).
 INDEX_FORMAT = 1
@@ -141,35 +141,16 @@ class ProgressView:
         return lesson_status(self.lessons.get(lesson_id), lesson_id, self.current)
 
 
-def _is_number(value: object) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-#: Each known field of a lesson's record and whether a value has the type ``LessonProgress`` declares.
-_RECORD_TYPES = {
-    "best_score": lambda v: v is None or _is_number(v),
-    "max_score": lambda v: v is None or _is_number(v),
-    "last_status": lambda v: v is None or isinstance(v, str),
-    "attempts": lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 0,
-    "hints_shown": lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 0,
-    "started": lambda v: isinstance(v, bool),
-}
-
-
 def _plain_progress(data: object) -> ProgressView | None:
-    """The view of a decoded progress file whose fields all have their declared types, else None."""
-    if not isinstance(data, dict) or data.get("version", PROGRESS_VERSION) != PROGRESS_VERSION:
+    """The view of a decoded progress file whose fields all have their declared types
+    (:func:`ros2course.lesson.workspace.plain_progress`), else None."""
+    plain = plain_progress(data)
+    if plain is None:
         return None
-    current, lessons = data.get("current"), data.get("lessons", {})
-    if not (current is None or isinstance(current, str)) or not isinstance(lessons, dict):
-        return None
-    view = ProgressView(current=current)
-    for lesson_id, record in lessons.items():
-        if not isinstance(record, dict) or not all(check(record[key]) for key, check in _RECORD_TYPES.items()
-                                                   if key in record):
-            return None
-        view.lessons[lesson_id] = RecordView(record.get("best_score"), record.get("max_score"),
-                                             record.get("started", False), record.get("attempts", 0))
+    view = ProgressView(current=plain["current"])
+    for lesson_id, record in plain["lessons"].items():
+        view.lessons[lesson_id] = RecordView(record["best_score"], record["max_score"], record["started"],
+                                             record["attempts"])
     return view
 
 

@@ -3,13 +3,17 @@
 The progress file's schema (pydantic models) lives in :mod:`ros2course.lesson.progress`
 and is imported only by the methods that read or write it with validation:
 ``list`` reads the file without pydantic (:mod:`ros2course.lesson.index`) for its
-start time (issue 13: under 0.25 s). Files are written atomically (temporary
+start time (issue 13: under 0.25 s), and ``check`` records its attempt without it
+(:func:`plain_progress`, :meth:`Workspace.record_attempt`; issue 36) whenever the
+file's fields already have their declared types; one writer format for both
+(:func:`progress_text`). Files are written atomically (temporary
 file, fsync, ``os.replace``), so a check killed half-way never corrupts them
 (rustlings keeps its state the same way).
 """
 
 from __future__ import annotations
 
+import contextlib
 import json
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -23,6 +27,62 @@ if TYPE_CHECKING:
 
 STATE_DIR = ".ros2course"
 PROGRESS_FILE = "progress.json"
+
+#: A lesson's record in the progress file: its fields in file order with their defaults (``LessonProgress``'s).
+RECORD_FIELDS: dict[str, object] = {"best_score": None, "max_score": None, "last_status": None, "attempts": 0,
+                                    "hints_shown": 0, "started": False}
+#: The record's fields that are floats in ``LessonProgress`` (written as floats whoever writes the file).
+_FLOAT_FIELDS = ("best_score", "max_score")
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+#: Each known field of a lesson's record and whether a value has the type ``LessonProgress`` declares.
+RECORD_TYPES = {
+    "best_score": lambda v: v is None or _is_number(v),
+    "max_score": lambda v: v is None or _is_number(v),
+    "last_status": lambda v: v is None or isinstance(v, str),
+    "attempts": lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 0,
+    "hints_shown": lambda v: isinstance(v, int) and not isinstance(v, bool) and v >= 0,
+    "started": lambda v: isinstance(v, bool),
+}
+
+
+def plain_progress(data: object) -> dict | None:
+    """A decoded progress file in the exact shape ``Progress`` writes (fields in order, defaults filled in,
+    scores as floats, unknown keys dropped), when every known field already has its declared type; else
+    None (the validating loader, :mod:`ros2course.lesson.progress`, then decides: it coerces or refuses).
+
+    Read without pydantic: ``list`` and ``check`` read and record progress this way (issues 13 and 36).
+    """
+    if not isinstance(data, dict) or data.get("version", PROGRESS_VERSION) != PROGRESS_VERSION:
+        return None
+    current, course, lessons = data.get("current"), data.get("course"), data.get("lessons", {})
+    if not (current is None or isinstance(current, str)) or not isinstance(lessons, dict):
+        return None
+    if course is not None and not (isinstance(course, dict) and isinstance(course.get("id"), str)
+                                   and isinstance(course.get("version"), str)
+                                   and (course.get("path") is None or isinstance(course.get("path"), str))):
+        return None
+    plain = {"version": PROGRESS_VERSION, "current": current,
+             "course": None if course is None else {k: course.get(k) for k in ("id", "version", "path")},
+             "lessons": {}}
+    for lesson_id, record in lessons.items():
+        if not isinstance(record, dict) or not all(check(record[key]) for key, check in RECORD_TYPES.items()
+                                                   if key in record):
+            return None
+        entry = {key: record.get(key, default) for key, default in RECORD_FIELDS.items()}
+        for key in _FLOAT_FIELDS:
+            entry[key] = None if entry[key] is None else float(entry[key])
+        plain["lessons"][lesson_id] = entry
+    return plain
+
+
+def progress_text(data: dict) -> str:
+    """The progress file's text for ``data`` (a progress as JSON values): one format whoever writes it."""
+    return json.dumps(data, indent=2, ensure_ascii=False) + "\n"
 
 
 class Workspace:
@@ -99,7 +159,7 @@ class Workspace:
         """Write the progress file atomically (no-op for a workspace never ``init``-ed)."""
         if not self.state_dir.is_dir():
             return
-        atomic_write_text(self.progress_path, progress.model_dump_json(indent=2) + "\n")
+        atomic_write_text(self.progress_path, progress_text(progress.model_dump(mode="json")))
 
     def record_attempt(self, lesson_id: str, status: str, score: float, max_score: float) -> None:
         """Count one graded attempt of ``lesson_id`` (points) and keep the best score; saves the file.
@@ -107,14 +167,22 @@ class Workspace:
         The file is re-read first, so an attempt recorded by another command
         meanwhile (``watch`` beside a ``check``) is not lost.
         """
-        progress = self.load_progress()
-        record = progress.lesson(lesson_id)
-        record.attempts += 1
-        record.last_status = status
-        record.max_score = max_score
-        if record.best_score is None or score > record.best_score:
-            record.best_score = score
-        self.save_progress(progress)
+        if not self.state_dir.is_dir():  # never init-ed: nothing to record (as save_progress)
+            return
+        plain = None
+        with contextlib.suppress(OSError, ValueError):
+            plain = plain_progress(json.loads(self.progress_path.read_text(encoding="utf-8")))
+        if plain is None:  # no file, or one only the validating loader can read (it raises what is wrong)
+            progress = self.load_progress()
+            plain = progress.model_dump(mode="json")
+        # as plain values: a check records its attempt without importing pydantic (~90 ms, issue 36)
+        record = plain["lessons"].setdefault(lesson_id, dict(RECORD_FIELDS))
+        record["attempts"] += 1
+        record["last_status"] = status
+        record["max_score"] = float(max_score)
+        if record["best_score"] is None or score > record["best_score"]:
+            record["best_score"] = float(score)
+        atomic_write_text(self.progress_path, progress_text(plain))
 
     def init(self) -> bool:
         """Create ``src/`` and the progress file; returns False if it already existed.
