@@ -5,7 +5,8 @@ Run from the repository root with the project's venv::
 
     python benchmarks/check_speed.py [--runs N] [--json]
 
-1. A fresh temporary workspace gets the lesson's reference solution.
+1. A fresh temporary workspace gets the lesson's reference solution and is ``init``-ed (a learner's
+   workspace: the CLI check records its attempt in progress.json).
 2. Cold: build/ install/ log/ are removed, then ``grade_lesson`` is timed end
    to end (colcon build included) and split into build / start / observe /
    stop+teardown / other (``other`` = wall time minus the engine's timed phases).
@@ -54,6 +55,7 @@ from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.grade.results import LessonResult, Status
 from ros2course.dev.validate import reference_workspace
 from ros2course.lesson.catalog import Lesson, load_catalog
+from ros2course.lesson.workspace import Workspace
 from ros2course.ros import env as env_mod
 from ros2course.run.process import kill_marked
 
@@ -439,6 +441,8 @@ def benchmark(runs: int, root: Path, progress: Console) -> dict[str, Any]:
     workspace = root / "ws"
     progress.print(f"workspace: {workspace}")
     reference_workspace(lesson, workspace)
+    # a learner's workspace: `ros2course init` ran (progress.json), so the CLI check records its attempt
+    Workspace(workspace).init()
 
     progress.print("cold run (colcon build included) ...")
     for name in ("build", "install", "log"):
