@@ -73,7 +73,7 @@ def _held_out_cell(row) -> str:
     data = held.data
     uncovered = len(data.get("survivors", []))
     text = (f"{_pct(held.tuned)} of {held.counted} counted (raw {_pct(held.raw)}; {data['graded']} graded of the "
-            f"{data.get('pool', '?')} the first sample left, seed {data.get('seed', '?')}; {uncovered} uncovered)")
+            f"{data.get('pool', '?')} no earlier sample took, seed {data.get('seed', '?')}; {uncovered} uncovered)")
     if held.too_small:
         text += f" (too small to judge: {held.counted} < {mut.MIN_COUNTED})"
     if held.stale and not row.stale:
@@ -182,7 +182,8 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         f"by build - triaged. Score after triage = killed / counted; a row with fewer than {mut.MIN_COUNTED} counted "
         "mutants is too small to judge a grader by, and says so. The score after triage is **tuned**: the triage "
         "was written looking at that (first) sample. The **held-out** score is not: a second seeded sample of "
-        "mutants the first did not take (`--held-out 30`, another seed), graded afterwards with "
+        "mutants that neither the first nor an earlier held-out sample took (`--held-out 30`, another seed: once "
+        "its survivors were looked at, a held-out sample is tuned too), graded afterwards with "
         "`mutation.yaml`'s rules and entries as they were, nothing added; its survivors no rule or entry covers "
         "count against it and are listed below for the author (strengthen the grader, or add a rule that "
         "applies from the next held-out sample on). **Fingerprint**: each run records its lesson's "
@@ -323,7 +324,7 @@ def main() -> int:
                              "(what tests/test_mutate.py compares with the committed doc)")
     parser.add_argument("--held-out", type=int, default=None, metavar="N",
                         help="grade each lesson's held-out sample of N mutants (disjoint from its recorded first "
-                             "sample, another seed), triaged with mutation.yaml as it is, and record it beside the first")
+                             "sample and earlier held-out ones, another seed), triaged with mutation.yaml as it is, and record it beside the first")
     parser.add_argument("--held-out-seed", type=int, default=None, metavar="S",
                         help="with --held-out: its seed (default: --seed + 1)")
     parser.add_argument("--readme", action="store_true",

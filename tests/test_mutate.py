@@ -366,12 +366,12 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
     spec = importlib.util.spec_from_file_location("grader_strength", ROOT / "benchmarks" / "grader_strength.py")
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
-    assert module._held_out_cell(row) == ("90 % of 30 counted (raw 90 %; 30 graded of the 30 the first sample left, "
+    assert module._held_out_cell(row) == ("90 % of 30 counted (raw 90 %; 30 graded of the 30 no earlier sample took, "
                                           "seed 2; 3 uncovered)")
     small = mut.RecordedScore({"graded": 12, "pool": 12, "seed": 2, "survivors": [], "date": "2026-11-20"}, 12,
                               1.0, 1.0, "stale: graded on 2026-11-20 under grader fingerprint 0, now 1")
     assert module._held_out_cell(SimpleNamespace(held_out=small, stale="")) == (
-        "100 % of 12 counted (raw 100 %; 12 graded of the 12 the first sample left, seed 2; 0 uncovered) "
+        "100 % of 12 counted (raw 100 %; 12 graded of the 12 no earlier sample took, seed 2; 0 uncovered) "
         "(too small to judge: 12 < 20) **stale** (2026-11-20)")
     assert module._held_out_cell(SimpleNamespace(held_out=None, stale="")) == "not drawn"
     # a re-triage keeps the held-out sample as graded; a new first sample drops it
@@ -553,3 +553,33 @@ def test_every_lessons_mutation_yaml_is_valid() -> None:
         assert not mut.rule_conflicts(lesson, config), "\n".join(mut.rule_conflicts(lesson, config))
         checked += 1
     assert checked >= 20
+
+
+def test_a_second_held_out_sample_leaves_out_every_mutant_an_earlier_one_showed(tmp_path: Path) -> None:
+    """Once its survivors were looked at (and rules written from them), a held-out sample is tuned: the next
+    held-out sample is drawn from the mutants neither the first sample nor any earlier held-out one took."""
+    from types import SimpleNamespace
+
+    lesson = SimpleNamespace(id="demo-lesson", folder=tmp_path, grader="print_forever_node",
+                             packages=["python_package_with_a_node"], folders=[])
+    (tmp_path / "lesson.yaml").write_text("id: demo-lesson\n")
+    mutants = [mut.Mutant("f.py", i, f"x = {i}", f"x = {i + 1}", "") for i in range(100)]
+
+    def run(part: list[mut.Mutant], seed: int, held_out: bool) -> mut.LessonMutation:
+        graded = [mut.Graded(m, mut.KILLED, ["rate"]) for m in part]
+        return mut.LessonMutation("demo-lesson", 100, graded, [], True, sample=30, seed=seed, held_out=held_out,
+                                  pool=70)
+
+    first = mut.sample_mutants(mutants, 30, 1)
+    mut.write_score(lesson, run(first, 1, False))
+    second = mut.held_out_sample(mutants, first, 30, 2, mut.recorded_first_sample(lesson) | mut.recorded_held_out(lesson))
+    mut.write_score(lesson, run(second, 2, True))
+    assert mut.recorded_held_out(lesson) == {m.key for m in second}
+    taken = mut.recorded_first_sample(lesson) | mut.recorded_held_out(lesson)
+    third = mut.held_out_sample(mutants, first, 30, 3, taken)
+    assert not {m.key for m in third} & taken and len(third) == 30
+    mut.write_score(lesson, run(third, 3, True))
+    # the third records the second as earlier, so a fourth leaves out both
+    assert mut.recorded_held_out(lesson) == {m.key for m in second} | {m.key for m in third}
+    fourth = mut.held_out_sample(mutants, first, 30, 4, mut.recorded_first_sample(lesson) | mut.recorded_held_out(lesson))
+    assert len(fourth) == 10 and not {m.key for m in fourth} & ({m.key for m in second} | {m.key for m in third})

@@ -943,10 +943,20 @@ def recorded_first_sample(lesson: Lesson) -> set[str]:
     return {row["key"] for row in rows if isinstance(row, dict) and "key" in row}
 
 
+def recorded_held_out(lesson: Lesson) -> set[str]:
+    """The keys of every mutant a recorded held-out sample of the lesson has shown (the latest one's, and
+    those it lists as ``earlier``): once its survivors were looked at, a held-out mutant is tuned, so the
+    next held-out sample leaves them out (issue 37)."""
+    section = _read_json(lesson.folder / OUTCOMES_FILE).get("held_out") or {}
+    keys = {row["key"] for row in section.get("mutants", []) if isinstance(row, dict) and "key" in row}
+    return keys | {key for key in section.get("earlier", []) if isinstance(key, str)}
+
+
 def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, str] | None = None) -> Path | None:
     """Record a held-out run (:func:`held_out_sample`) as the ``held_out`` section of the lesson's
     ``mutation-score.json`` (its counts, score, raw rate, uncovered survivors, seed, date, fingerprint) and
-    ``mutation-outcomes.json`` (every mutant's outcome, by key); the first sample's figures stay. None when
+    ``mutation-outcomes.json`` (every mutant's outcome, by key, and as ``earlier`` the keys of the held-out
+    samples recorded before it, which it left out); the first sample's figures stay. None when
     the lesson has no recorded first sample (a held-out sample is drawn after it) or its folder is read-only.
     """
     from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
@@ -958,8 +968,10 @@ def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, st
     section = _summary(found)
     section.update(date=measured["date"], fingerprint=measured["fingerprint"], survivors=found.uncovered())
     score["held_out"] = section
+    rows = _outcome_rows(found)
+    earlier = sorted(recorded_held_out(lesson) - {row["key"] for row in rows})  # left out of this sample
     outcomes["held_out"] = {"fingerprint": measured["fingerprint"], "date": measured["date"], "seed": found.seed,
-                            "mutants": _outcome_rows(found)}
+                            "mutants": rows, **({"earlier": earlier} if earlier else {})}
     path = lesson.folder / SCORE_FILE
     try:
         atomic_write_text(path, json.dumps(score, indent=1) + "\n")

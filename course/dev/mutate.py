@@ -85,7 +85,7 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         held_out: instead of the first sample, grade a held-out one of this many mutants
             (:func:`ros2course.dev.mutants.held_out_sample`): drawn with ``held_out_seed`` (default
             ``seed + 1``) from the mutants neither the first sample (``sample``, ``seed``) nor the lesson's
-            recorded first run took, triaged with ``mutation.yaml`` as it is.
+            recorded first run nor a held-out sample recorded before took, triaged with ``mutation.yaml`` as it is.
 
     Raises:
         MissingRequirement: universalmutator, or what the lesson requires, is not installed.
@@ -104,7 +104,8 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         picked = mut.sample_mutants(candidates, sample, seed)
         pool = len(candidates)
         if held_out is not None:
-            recorded = mut.recorded_first_sample(lesson)
+            # neither the first sample nor a held-out sample recorded before (its survivors were looked at)
+            recorded = mut.recorded_first_sample(lesson) | mut.recorded_held_out(lesson)
             first = picked
             picked = mut.held_out_sample(candidates, first, held_out,
                                          seed + 1 if held_out_seed is None else held_out_seed, recorded)
@@ -120,7 +121,7 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
             console.print(f"{lesson.id}: {len(every)} mutants generated"
                           + (f" ({len(aside)} of rules marked set_aside, set aside)" if aside else "")
                           + f", {len(picked)} picked"
-                          + (f" for the held-out sample, from the {pool} the first sample left"
+                          + (f" for the held-out sample, from the {pool} no recorded sample took"
                              if held_out is not None else
                              f"{f' (--sample {sample} --seed {seed})' if len(picked) < len(candidates) else ''}")
                           + ", "
