@@ -13,7 +13,7 @@ pydantic (its import and model construction, about 90 ms) and PyYAML for every
   per lesson folder, the ``lesson.yaml``'s size and
   mtime (ns) and the starter folder's mtime (a starter's top-level entries
   name the files of lessons without packages), and the mtimes of the loader's
-  own code (``catalog.py``, this file). Any change, a malformed lesson
+  own code (``catalog.py``, ``schema.py``, this file). Any change, a malformed lesson
   included, fails the match, so the full loader runs and reports errors
   exactly as before. An unwritable cache folder only costs the speed-up.
 * a **plain read of progress.json** (:func:`progress_view`) that accepts only
@@ -54,7 +54,7 @@ class LessonEntry(NamedTuple):
 def _loader_stamp() -> list[int]:
     """mtimes (ns) of the code that turns a ``lesson.yaml`` into a row: a changed loader rebuilds the index."""
     here = Path(__file__).resolve().parent
-    return [os.stat(here / name).st_mtime_ns for name in ("catalog.py", "index.py", "courses.py")]
+    return [os.stat(here / name).st_mtime_ns for name in ("catalog.py", "schema.py", "index.py", "courses.py")]
 
 
 def fingerprint(chapters_dir: Path) -> list[list]:
