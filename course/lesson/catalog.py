@@ -89,7 +89,14 @@ class LessonGraph:
         """
         from ros2course.lesson.schema import validate_graph  # noqa: PLC0415 - pydantic only to validate
 
-        return validate_graph(data)
+        return cls.from_values(validate_graph(data))
+
+    @classmethod
+    def from_values(cls, values: dict) -> LessonGraph:
+        """From validated plain values (:func:`ros2course.lesson.schema.validate_graph`)."""
+        return cls(nodes=[GraphNode(**n) for n in values["nodes"]],
+                   topics=[GraphEndpoint(**e) for e in values["topics"]],
+                   services=[GraphEndpoint(**e) for e in values["services"]])
 
     def for_part(self, part: str) -> LessonGraph:
         """The entries that apply to a check of grader part ``part`` (its own and the part-less ones)."""
@@ -218,10 +225,13 @@ def load_lesson(path: Path) -> Lesson:
         raise LessonFormatError(f"{path}: (top level): expected a mapping of fields, got {type(data).__name__}",
                                 "a lesson file is a YAML mapping with id, title, instructions, hints, grader")
     try:
-        lesson = validate_lesson(data)
+        values = validate_lesson(data)
     except ValidationError as exc:
         raise LessonFormatError(format_validation_error(path, exc),
                                 "see course/lesson/schema.py (LessonSchema) for the lesson schema") from exc
+    values["reference"] = ReferenceSolution(**values["reference"])
+    values["graph"] = None if values["graph"] is None else LessonGraph.from_values(values["graph"])
+    lesson = Lesson(**values)
     lesson.folder = path.parent
     folder_id = re.sub(r"^\d+-", "", path.parent.name)
     if folder_id != lesson.id:

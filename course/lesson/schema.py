@@ -2,8 +2,8 @@
 
 A malformed lesson is reported as ``<file>: <field>: <what is wrong>`` (pydantic's
 error locations, :func:`format_validation_error`). What validation yields are the
-plain values of :mod:`ros2course.lesson.catalog` (:class:`~ros2course.lesson.catalog.Lesson`
-and its parts): a warm ``check`` loads them from the kept catalog without importing
+plain values :mod:`ros2course.lesson.catalog` builds its :class:`~ros2course.lesson.catalog.Lesson`
+and its parts from (this module imports nothing of it): a warm ``check`` loads them from the kept catalog without importing
 pydantic at all (about 50 ms of every check before the learner's node starts, issue 36).
 Each model here mirrors one of those classes field for field; a test keeps the two in step.
 """
@@ -15,7 +15,6 @@ from typing import Annotated, Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, ValidationInfo, field_validator, model_validator
 
 from ros2course.lesson import ID_PATTERN as _ID
-from ros2course.lesson.catalog import GraphEndpoint, GraphNode, Lesson, LessonGraph, ReferenceSolution
 from ros2course.ros.requirements import KNOWN_REQUIREMENTS
 
 
@@ -134,31 +133,20 @@ def format_validation_error(path, error: ValidationError) -> str:
     return "; ".join(lines)
 
 
-def _graph(model: LessonGraphSchema | None) -> LessonGraph | None:
-    if model is None:
-        return None
-    return LessonGraph(nodes=[GraphNode(**n.model_dump()) for n in model.nodes],
-                       topics=[GraphEndpoint(**e.model_dump()) for e in model.topics],
-                       services=[GraphEndpoint(**e.model_dump()) for e in model.services])
-
-
-def validate_lesson(data: dict) -> Lesson:
-    """``data`` (a parsed ``lesson.yaml``) validated, as a :class:`~ros2course.lesson.catalog.Lesson`.
+def validate_lesson(data: dict) -> dict:
+    """``data`` (a parsed ``lesson.yaml``) validated, as plain values: every field of
+    :class:`~ros2course.lesson.catalog.Lesson` that YAML gives, defaults filled in, the graph's roles set.
 
     Raises:
         pydantic.ValidationError: a schema violation (see :func:`format_validation_error`).
     """
-    model = LessonSchema.model_validate(data)
-    fields = {name: getattr(model, name) for name in LessonSchema.model_fields}
-    fields["reference"] = ReferenceSolution(commands=list(model.reference.commands))
-    fields["graph"] = _graph(model.graph)
-    return Lesson(**fields)
+    return LessonSchema.model_validate(data).model_dump()
 
 
-def validate_graph(data: dict) -> LessonGraph:
-    """``data`` (a lesson's ``graph:`` mapping) validated, as a :class:`~ros2course.lesson.catalog.LessonGraph`.
+def validate_graph(data: dict) -> dict:
+    """``data`` (a lesson's ``graph:`` mapping) validated, as plain values (roles set).
 
     Raises:
         pydantic.ValidationError: a schema violation.
     """
-    return _graph(LessonGraphSchema.model_validate(data))
+    return LessonGraphSchema.model_validate(data).model_dump()
