@@ -367,12 +367,38 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
     if not quiet:  # --json: no console made before the nodes start (rich's import, issue 36)
         err = stderr_console()
         status = err.status(f"grading {lesson.id} in {ws.root} ...") if err.is_terminal else None
-    with status or contextlib.nullcontext():
+    with status or contextlib.nullcontext(), _ctrl_c_seen() as interrupted:
         progress = (lambda line: status.update(f"{lesson.id}: {line}")) if status is not None else None
         result = grade_lesson(lesson, ws.root, progress=progress)
+    if interrupted:  # Ctrl+C came, and a layer below ended the check early instead of raising it
+        raise KeyboardInterrupt
     if ws.initialised:
         ws.record_attempt(lesson.id, result.status.value, result.score, result.max_score)
     return result
+
+
+@contextlib.contextmanager
+def _ctrl_c_seen():
+    """Note every SIGINT (Ctrl+C) while the block runs, and raise KeyboardInterrupt as Python does; yields the list
+    of them. An interrupted check is never recorded in progress.json, whichever layer the KeyboardInterrupt
+    met (a check killed mid-way loses nothing: tests/test_interrupted_check.py)."""
+    import signal  # noqa: PLC0415 - start time, see the imports
+
+    seen: list[int] = []
+    previous = signal.getsignal(signal.SIGINT)
+    if previous is not signal.default_int_handler:  # ignored, or someone else's handler: leave it alone
+        yield seen
+        return
+
+    def on_sigint(signum, frame) -> None:
+        seen.append(signum)
+        signal.default_int_handler(signum, frame)
+
+    signal.signal(signal.SIGINT, on_sigint)
+    try:
+        yield seen
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 def _ensure_components(ws: Workspace, packages: list[str]) -> None:

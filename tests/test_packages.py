@@ -50,7 +50,7 @@ def test_the_course_packages_are_found_as_catkin_pkg_finds_them():
             for key in ("build_depends", "buildtool_depends", "exec_depends", "build_export_depends",
                         "test_depends", "member_of_groups"):
                 assert [d.name for d in getattr(manifest, key)] == [d.name for d in getattr(pkg, key)], (name, key)
-            assert manifest.version == pkg.version
+            assert (manifest.version, manifest.package_format) == (pkg.version, int(pkg.package_format))
 
 
 def test_a_kept_manifest_spares_the_parser_import(tmp_path):

@@ -30,7 +30,7 @@ from ros2course.errors import NotGradable
 IGNORE_MARKERS = frozenset({"AMENT_IGNORE", "CATKIN_IGNORE", "COLCON_IGNORE"})
 MANIFEST_FILE = "package.xml"
 #: Bumped when what a kept manifest holds changes.
-_CACHE_FORMAT = 1
+_CACHE_FORMAT = 2
 #: Kept manifests beyond this many: the oldest are removed (a class graded on this machine adds one per
 #: distinct package.xml).
 _CACHE_LIMIT = 4000
@@ -61,6 +61,7 @@ class Manifest:
     Attributes:
         name: ``<name>``.
         version: ``<version>``.
+        package_format: the ``format`` attribute of ``<package>`` (REP 149: 3; catkin_pkg reads 1 when absent).
         build_depends, buildtool_depends, exec_depends, build_export_depends, test_depends: the
             dependency lists of catkin_pkg's ``Package`` (``<depend>`` is in build, build-export and exec).
         member_of_groups: ``<member_of_group>`` entries (interface packages: ``rosidl_interface_packages``).
@@ -69,6 +70,7 @@ class Manifest:
 
     name: str
     version: str
+    package_format: int = 3
     build_depends: tuple[Dependency, ...] = ()
     buildtool_depends: tuple[Dependency, ...] = ()
     exec_depends: tuple[Dependency, ...] = ()
@@ -95,7 +97,7 @@ class Manifest:
 
     def to_json(self) -> dict:
         """A JSON-ready dict (the cache's format)."""
-        data = {"name": self.name, "version": self.version,
+        data = {"name": self.name, "version": self.version, "package_format": self.package_format,
                 "exports": [[e.tagname, e.content] for e in self.exports]}
         data.update({key: [d.name for d in getattr(self, key)] for key in self._lists()})
         return data
@@ -109,14 +111,16 @@ class Manifest:
         """
         lists = {key: tuple(Dependency(str(n)) for n in data[key]) for key in cls._lists()}
         exports = tuple(Export(str(t), str(c)) for t, c in data["exports"])
-        return cls(name=str(data["name"]), version=str(data["version"]), exports=exports, **lists)
+        return cls(name=str(data["name"]), version=str(data["version"]), package_format=int(data["package_format"]),
+                   exports=exports, **lists)
 
     @classmethod
     def from_catkin(cls, package) -> Manifest:
         """From a catkin_pkg ``Package`` (build-type exports only)."""
         lists = {key: tuple(Dependency(d.name) for d in getattr(package, key)) for key in cls._lists()}
         exports = tuple(Export(e.tagname, e.content) for e in package.exports if e.tagname == "build_type")
-        return cls(name=package.name, version=package.version, exports=exports, **lists)
+        return cls(name=package.name, version=package.version, package_format=int(package.package_format),
+                   exports=exports, **lists)
 
 
 def package_folders(src: Path) -> list[Path]:
