@@ -383,10 +383,12 @@ def _ctrl_c_seen():
     of them. An interrupted check is never recorded in progress.json, whichever layer the KeyboardInterrupt
     met (a check killed mid-way loses nothing: tests/test_interrupted_check.py)."""
     import signal  # noqa: PLC0415 - start time, see the imports
+    import threading  # noqa: PLC0415 - same
 
     seen: list[int] = []
     previous = signal.getsignal(signal.SIGINT)
-    if previous is not signal.default_int_handler:  # ignored, or someone else's handler: leave it alone
+    # ignored, someone else's handler, or a thread that may not set one (signal.signal: main thread only)
+    if previous is not signal.default_int_handler or threading.current_thread() is not threading.main_thread():
         yield seen
         return
 
