@@ -188,7 +188,7 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "count against it and are listed below for the author (strengthen the grader, or add a rule that "
         "applies from the next held-out sample on). **Fingerprint**: each run records its lesson's "
         "grader fingerprint (`ros2course.grade.fingerprint`: the grader and the course modules it imports, the kit "
-        "and grading engine, lesson.yaml, the reference files); a row measured under another fingerprint (the "
+        "and grading engine modules they or the engine import, lesson.yaml, the reference files); a row measured under another fingerprint (the "
         "grader, engine or reference changed since) is **stale**, with the date of its run, and `dev validate` "
         "says so too. Triage is a configuration: the raw rate is the figure it cannot change. "
         "Triage lives in `chapters/<lesson>/mutation.yaml` (whose `files:` may also narrow the files mutated; "

@@ -2,11 +2,15 @@
 
 The grader plays the launch-files lesson's node (``/peanut_butter_falcon_quote_publisher_node``,
 the parameters lesson's interface, :class:`ros2course.kit.mystery.ConfigurableQuotePublisher`)
-with a random initial ``quote``, runs the learner's ``cli/inspect_params.sh``
+with a random initial ``quote``, runs the learner's ``cli/inspect_params.sh`` (a ``ros2`` daemon already listing the node)
 in that graph and judges: the parameter names and the random quote in its
 output, the quote the node publishes after the script's ``ros2 param set``
 (messages sent after the node accepted the change, by send stamps), and the
-file ``cli/params_dump.yaml`` (the ``ros2 param dump`` format).
+file ``cli/params_dump.yaml`` (the ``ros2 param dump`` format). A second run, in
+a fresh graph with no ``ros2`` daemon, starts the node only 3 s after the
+script's first ``ros2`` command joined the graph (kit.scripts.run_script_first):
+a script that waits until ``ros2 node list`` shows the node still gets its
+quote, one that asks at once does not.
 """
 
 from __future__ import annotations
@@ -36,6 +40,12 @@ NAMES = ("period", "philosopher_name", "quote", "topic_name")
 TIMEOUT = 30.0  # seconds for the whole script (each ros2 command starts in ~1 s)
 NEXT_MESSAGES = 2  # the change must show within this many messages (one may be on its way)
 
+#: Seconds between the script's first ``ros2`` command joining the graph and the second run's node.
+LATE_BY = 3.0
+WAIT_HINT = ("the node may join after your first command (a daemon that has just started has not discovered it "
+             "yet): `ros2 daemon start`, then wait until `ros2 node list` shows the node (the starter's loop) "
+             "before the first `ros2 param` command")
+
 SCRIPTED = ("script",)
 CHECKS = [
     Check("build", "package_with_interfaces builds with colcon", 1),
@@ -52,6 +62,8 @@ CHECKS = [
           f"ros2 param dump {NODE} > {DUMP} (the whole output: it lists every parameter)", needs=SCRIPTED),
     Check("dump_after_set", "The dump holds the new quote (dumped after the set)", 1,
           "dump after the set, so the file saves the node's parameters as they are now", needs=("dump_file",)),
+    Check("waits_for_node", "It waits for a node that starts 3 s after the script before asking it (ros2 node "
+          "list until it shows the node)", 1, WAIT_HINT, needs=("got",)),
 ]
 
 
@@ -60,7 +72,9 @@ def grade(s: GradingSession) -> None:
     path = scripts.script(s, "script", SCRIPT)
     dump = s.workspace_root / DUMP
     started = time.time()
-    run = scripts.run_script(s, path, timeout=TIMEOUT)
+    # a daemon that already lists the node, as in a learner's terminal (kit.scripts.ros2_daemon); the second run
+    # (judge_late_node) has none
+    run = scripts.run_script(s, path, timeout=TIMEOUT, daemon_sees=[NODE])
     scripts.ended(s, "ends", run, "it ends by itself with exit code 0")
     scripts.printed(s, "listed", run, [f"  {name}" for name in NAMES],  # --param-type appends " (type: ...)"
                     f"the names of {NODE}'s parameters, one per line", f"ros2 param list {NODE}", whole_lines=True,
@@ -69,6 +83,29 @@ def grade(s: GradingSession) -> None:
                     f"ros2 param get {NODE} quote")
     judge_set(s, node, run)
     judge_dump(s, dump, started, node.parameters())
+    judge_late_node(s, path)
+
+
+def judge_late_node(s: GradingSession, path) -> None:
+    """Record ``waits_for_node``: run the script again in a fresh graph with no daemon; the node starts
+    :data:`LATE_BY` s after the script's first ``ros2`` command joined the graph; its quote must be printed.
+    Run after :func:`judge_dump`: the file this run may write is not the one judged."""
+    if (blocker := s.unmet_need("waits_for_node")) is not None:
+        s.record("waits_for_node", False, blocker, "")
+        return
+    with s.part("late node", own_graph=True):
+        late: list[ConfigurableQuotePublisher] = []
+        msg_type = amazing_quote(s)
+        run = scripts.run_script_first(s, path, lambda: late.append(ConfigurableQuotePublisher(s, msg_type)),
+                                       late_by=LATE_BY, timeout=TIMEOUT,
+                                       until=lambda out: bool(late) and late[0].initial_quote in out)
+        got = late[0].initial_quote in run.run.stdout
+        s.record("waits_for_node", got,
+                 f"{run.describe()}; " + ("it printed the node's quote" if got else
+                                          f"it never printed the node's quote ({short(late[0].initial_quote)}); "
+                                          f"it printed: {scripts.excerpt(run.run.stdout + run.run.stderr)}"),
+                 f"the script waits for {NODE}, which joins {LATE_BY:.0f} s after its first ros2 command, "
+                 "and prints its quote (ros2 param get)")
 
 
 def judge_set(s: GradingSession, node: ConfigurableQuotePublisher, run: Any) -> None:

@@ -6,6 +6,10 @@ summing to 42 for a quote about life (:mod:`graders._mystery_services`).
 The learner's ``cli/inspect_services.sh`` runs in that graph (kit.scripts); it
 is judged on the service list it printed, the requests the server received
 and the responses it printed (random values only a real call can show).
+A second run, in a fresh graph with no ``ros2`` daemon, starts another oracle only
+after the script's first ``ros2`` command has been listening for 1 s
+(kit.scripts.run_script_first): ``ros2 service list --spin-time 2`` still lists
+it, a list that listens the default 0.5 s cannot.
 """
 
 from __future__ import annotations
@@ -24,10 +28,16 @@ OTHER_CALL = (f"ros2 service call {SERVICE} {SERVICE_TYPE} "
 
 #: Without a running ``ros2`` daemon (a fresh terminal) ``ros2 service list`` listens for the graph itself
 #: for ``--spin-time`` seconds (default 0.5 s, ros2cli ``node/direct.py``): too short on a busy machine. The
-#: check starts a daemon that already lists the oracle before the script runs, so there the list comes from
-#: that daemon and ``--spin-time`` changes nothing (contract.yaml: list-spin-time, not graded).
-LIST_HINT = ("ros2 service list --spin-time 2, its output printed (no `> /dev/null`, no `| grep`): in the check a "
-             "ros2 daemon already lists the server, so the list is complete when the command runs")
+#: first run starts a daemon that already lists the oracle, so there the list comes from that daemon; the
+#: second run has none, and its oracle starts LATE_BY s after the list's own node joined the graph.
+LIST_HINT = ("ros2 service list --spin-time 2, its output printed (no `> /dev/null`, no `| grep`): in the first "
+             "run a ros2 daemon already lists the server, so the list is complete when the command runs")
+#: Seconds between the script's first ``ros2`` command joining the graph and the second run's oracle: after
+#: the default 0.5 s of listening, well inside the 2 s of ``--spin-time 2``.
+LATE_BY = 1.0
+LATE_HINT = ("give ros2 service list --spin-time 2: with no ros2 daemon running (a fresh terminal, as in this "
+             "run), the command listens for the graph itself for only 0.5 s by default, and a server it has "
+             "not discovered by then is missing from the list")
 
 SCRIPTED = ("script",)
 CHECKS = [
@@ -43,6 +53,8 @@ CHECKS = [
           needs=SCRIPTED),
     Check("responses", "It prints the response of each call (the point the server sent)", 2,
           "let `ros2 service call` print to the terminal: no `> /dev/null`, no `| grep`", needs=("call_life",)),
+    Check("listed_late", "With no ros2 daemon running, its service list waits for a server discovered late "
+          "(--spin-time 2)", 1, LATE_HINT, needs=("listed",)),
 ]
 
 
@@ -72,3 +84,26 @@ def grade(s: GradingSession) -> None:
                  f"which your script did not print; it printed: {scripts.excerpt(run.stdout)}", expected)
     else:
         s.record("responses", True, f"it printed the {len(calls)} response(s) the server sent", expected)
+    judge_late_list(s, path, srv_type)
+
+
+def judge_late_list(s: GradingSession, path, srv_type) -> None:
+    """Record ``listed_late``: run the script again in a fresh graph with no daemon; the oracle starts
+    :data:`LATE_BY` s after the script's first ``ros2`` command joined the graph; its services must be listed."""
+    if (blocker := s.unmet_need("listed_late")) is not None:
+        s.record("listed_late", False, blocker, "")
+        return
+    with s.part("late server", own_graph=True):
+        oracles: list[PointOracle] = []
+        late = scripts.run_script_first(s, path, lambda: oracles.append(PointOracle(s, srv_type)),
+                                        late_by=LATE_BY, timeout=TIMEOUT,
+                                        until=lambda out: bool(oracles) and all(
+                                            name in out for name in oracles[0].listed_services()))
+        wanted = oracles[0].listed_services()
+        missing = [name for name in wanted if name not in late.run.stdout]
+        expected = (f"with no ros2 daemon running, the list names the server that joined {LATE_BY:.0f} s after "
+                    "the command started listening (`ros2 service list --spin-time 2` listens 2 s)")
+        s.record("listed_late", not missing,
+                 f"{late.describe()}; " + (f"the list lacked {', '.join(missing)}; it printed: "
+                                           f"{scripts.excerpt(late.run.stdout)}" if missing
+                                           else f"it listed {', '.join(wanted)}"), expected)

@@ -6,6 +6,10 @@ number (1-3) of publishers, and listens on ``/amazing_quote_in``. Then it runs
 the learner's ``cli/inspect_topics.sh`` in that graph (kit.scripts) and judges
 what it printed (the random values only the real commands can show) and what
 it published (the message the grader's subscription received).
+A second run, in a fresh graph with no ``ros2`` daemon, starts another mystery
+node only 3 s after the script's first ``ros2`` command joined the graph
+(kit.scripts.run_script_first): a script that asks again until the topic shows
+up finds it, one that looks once does not.
 """
 
 from __future__ import annotations
@@ -29,6 +33,13 @@ PUB_COMMAND = (f"ros2 topic pub --once {INBOX_TOPIC} {TYPE} "
 FIND_HINT = ("`ros2 topic list | grep quote` prints it; a list of only /parameter_events and /rosout comes from a "
              "daemon that has not discovered the node yet: `ros2 daemon start`, then ask again until the topic shows up")
 
+#: Seconds between the script's first ``ros2`` command joining the graph and the second run's mystery node:
+#: a script that lists the topics once (~1 s after ``ros2 daemon start``) has given up by then.
+LATE_BY = 3.0
+LATE_HINT = ("a node you look for may join after your first look (a daemon that has just started has not "
+             "discovered it yet): `ros2 daemon start`, then ask again, e.g. up to 10 times with `sleep 1` in between, "
+             "until `ros2 topic list` shows the topic (the starter's loop)")
+
 SCRIPTED = ("script",)
 CHECKS = [
     Check("build", "package_with_interfaces builds with colcon", 1),
@@ -42,6 +53,8 @@ CHECKS = [
           "ros2 topic echo --once <the topic>", needs=SCRIPTED),
     Check("published", f"It publishes an AmazingQuote with id {PUB_ID} and philosopher_name {PUB_PHILOSOPHER} "
           f"on {INBOX_TOPIC}", 2, PUB_COMMAND, needs=SCRIPTED),
+    Check("asks_again", "It still finds the topic when its node starts 3 s after the script (asking again until "
+          "the topic shows up)", 1, LATE_HINT, needs=("topic_found",)),
 ]
 
 
@@ -61,6 +74,28 @@ def grade(s: GradingSession) -> None:
     scripts.printed(s, "echo", run, [f"id: {mystery.quote_id}", mystery.quote, mystery.philosopher],
                     f"message from {mystery.topic}", f"ros2 topic echo --once {mystery.topic}")
     judge_inbox(s, inbox)
+    judge_late_topic(s, path, msg_type)
+
+
+def judge_late_topic(s: GradingSession, path, msg_type) -> None:
+    """Record ``asks_again``: run the script again in a fresh graph with no daemon; the mystery node starts
+    :data:`LATE_BY` s after the script's first ``ros2`` command joined the graph; its topic must be printed."""
+    if (blocker := s.unmet_need("asks_again")) is not None:
+        s.record("asks_again", False, blocker, "")
+        return
+    with s.part("late topic", own_graph=True):
+        quote_inbox(s, msg_type)  # so that `ros2 topic pub --once` ends as in the first run
+        late: list[QuotePublisher] = []
+        run = scripts.run_script_first(s, path, lambda: late.append(QuotePublisher(s, msg_type)),
+                                       late_by=LATE_BY, timeout=TIMEOUT,
+                                       until=lambda out: bool(late) and late[0].topic in out)
+        found = late[0].topic in run.run.stdout
+        s.record("asks_again", found,
+                 f"{run.describe()}; " + (f"it printed {late[0].topic}" if found else
+                                          f"it never printed {late[0].topic}; it printed: "
+                                          f"{scripts.excerpt(run.run.stdout)}"),
+                 f"the script finds and prints the topic of a node that joins {LATE_BY:.0f} s after its first "
+                 "ros2 command (it asks again until the topic shows up)")
 
 
 def judge_inbox(s: GradingSession, inbox) -> None:

@@ -39,19 +39,23 @@ def _node_children(pid: int) -> list[psutil.Process]:
     return out
 
 
-@pytest.mark.ros
-@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT])
-def test_check_killed_mid_way(solution_workspace, sig):
-    ws = solution_workspace
-    before = ws.progress_path.read_bytes()
+#: Tries at interrupting the check while it grades (see _interrupt_once).
+TRIES = 3
+
+
+def _interrupt_once(ws, sig) -> int:
+    """Start `ros2course check`, send ``sig`` to it 0.2 s after the learner's node started; return its exit code.
+
+    Only ros2course itself gets the signal, not its process group; every learner node must be gone after it.
+    """
     cli = subprocess.Popen([sys.executable, "-m", "ros2course", "check", "print-forever-node", "--workspace", str(ws.root)],
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
                            start_new_session=True)
     try:
         assert _wait_for(lambda: _node_children(cli.pid), 120), "the learner node never started"
         nodes = _node_children(cli.pid)
-        time.sleep(0.5)
-        os.kill(cli.pid, sig)  # only ros2course itself, not its process group
+        time.sleep(0.2)
+        os.kill(cli.pid, sig)
         cli.wait(timeout=30)
         gone, alive = psutil.wait_procs(nodes, timeout=15)
         assert not alive, f"learner node(s) survived ros2course: {[p.pid for p in alive]}"
@@ -59,6 +63,24 @@ def test_check_killed_mid_way(solution_workspace, sig):
         if cli.poll() is None:
             os.killpg(cli.pid, signal.SIGKILL)
             cli.wait()
+    return cli.returncode
+
+
+@pytest.mark.ros
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGINT])
+def test_check_killed_mid_way(solution_workspace, sig):
+    ws = solution_workspace
+    before = ws.progress_path.read_bytes()
+    for _ in range(TRIES):
+        code = _interrupt_once(ws, sig)
+        # Ctrl+C ends a check with 130 (cli: "interrupted"). Any other code means the check had finished
+        # grading before the signal came (the test process saw the node late on a loaded machine): then a
+        # recorded attempt is right, and the premise is tried again on the file as it was.
+        if sig != signal.SIGINT or code == 130:
+            break
+        ws.progress_path.write_bytes(before)
+    else:
+        pytest.fail(f"in {TRIES} tries the check always finished before Ctrl+C reached it (exit code {code})")
     # the progress file is intact: the interrupted check was simply not recorded
     assert ws.progress_path.read_bytes() == before
     json.loads(ws.progress_path.read_text())

@@ -446,6 +446,29 @@ def test_the_grader_fingerprint_follows_the_grader_its_helpers_and_the_lesson(tm
     assert grader_fingerprint(lesson) != before
 
 
+def test_the_fingerprint_covers_the_engine_modules_the_grader_reaches_and_no_others(tmp_path: Path) -> None:
+    """The engine part of the fingerprint is the import closure of the grader and of the grading engine (read from
+    the code, function-level imports included): the script lessons' kit step is in inspect-services' fingerprint and
+    not in lifecycle-node's, so adding a step for one lesson leaves the other's figures current."""
+    from ros2course.grade.fingerprint import engine_modules, grader_files
+    from ros2course.lesson.catalog import load_catalog
+
+    catalog = load_catalog()
+    def engine_names(lesson_id: str) -> set[str]:
+        return {"/".join(p.parts[-2:]) for p in grader_files(catalog.get(lesson_id)) if "graders" not in p.parts
+                and p.suffix == ".py"}
+
+    services, lifecycle = engine_names("inspect-services"), engine_names("lifecycle-node")
+    assert {"kit/scripts.py", "kit/mystery.py", "grade/session.py", "grade/engine.py", "run/process.py",
+            "kit/__init__.py"} <= services
+    assert "kit/scripts.py" not in lifecycle and "kit/mystery.py" not in lifecycle
+    assert {"grade/session.py", "run/probes.py", "kit/__init__.py"} <= lifecycle
+    # a module reached only through a function-level import of a reached module is found too
+    module = tmp_path / "grader.py"
+    module.write_text("def grade(s):\n    from ros2course.kit import scripts  # noqa\n    return scripts\n")
+    assert "scripts.py" in {p.name for p in engine_modules([module])}
+
+
 def test_the_committed_grader_strength_doc_is_made_from_the_recorded_runs(tmp_path: Path) -> None:
     """docs/grader-strength.md is regenerated from each lesson's mutation-score.json (and steadiness.json) and
     compared: the figure can only say what the records say (`python benchmarks/grader_strength.py --doc-only`)."""

@@ -887,7 +887,9 @@ def _summary(found: LessonMutation) -> dict[str, Any]:
             if key not in ("mutants", "stale", "lesson", "held_out", "raw")}
 
 
-def _read_json(path: Path) -> dict[str, Any]:
+def read_json_object(path: Path) -> dict[str, Any]:
+    """The JSON object in ``path``; {} when the file is missing, unreadable, not JSON or not an object
+    (a record or cache that is not there yet reads as empty)."""
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError):
@@ -924,13 +926,19 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
     # every mutant's outcome, committed with the lesson: the figure can be checked and re-derived (issue 37)
     outcomes = {"fingerprint": fingerprint, "date": data["date"], "mutants": _outcome_rows(found)}
     if keep_held_out:
-        if "held_out" in (before := _read_json(lesson.folder / SCORE_FILE)):
+        if "held_out" in (before := read_json_object(lesson.folder / SCORE_FILE)):
             data["held_out"] = before["held_out"]
-        if "held_out" in (before := _read_json(lesson.folder / OUTCOMES_FILE)):
+        if "held_out" in (before := read_json_object(lesson.folder / OUTCOMES_FILE)):
             outcomes["held_out"] = before["held_out"]
+    return _write_records(lesson, data, outcomes)
+
+
+def _write_records(lesson: Lesson, score: dict[str, Any], outcomes: dict[str, Any]) -> Path | None:
+    """Write the lesson's ``mutation-score.json`` and ``mutation-outcomes.json`` (each atomically); the score
+    file's path, or None when the lesson folder is read-only (an installed course)."""
     path = lesson.folder / SCORE_FILE
     try:
-        atomic_write_text(path, json.dumps(data, indent=1) + "\n")
+        atomic_write_text(path, json.dumps(score, indent=1) + "\n")
         atomic_write_text(lesson.folder / OUTCOMES_FILE, json.dumps(outcomes, indent=0) + "\n")
     except OSError:
         return None
@@ -939,7 +947,7 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
 
 def recorded_first_sample(lesson: Lesson) -> set[str]:
     """The keys of the mutants the lesson's recorded first sample graded (``mutation-outcomes.json``)."""
-    rows = _read_json(lesson.folder / OUTCOMES_FILE).get("mutants", [])
+    rows = read_json_object(lesson.folder / OUTCOMES_FILE).get("mutants", [])
     return {row["key"] for row in rows if isinstance(row, dict) and "key" in row}
 
 
@@ -947,7 +955,7 @@ def recorded_held_out(lesson: Lesson) -> set[str]:
     """The keys of every mutant a recorded held-out sample of the lesson has shown (the latest one's, and
     those it lists as ``earlier``): once its survivors were looked at, a held-out mutant is tuned, so the
     next held-out sample leaves them out (issue 37)."""
-    section = _read_json(lesson.folder / OUTCOMES_FILE).get("held_out") or {}
+    section = read_json_object(lesson.folder / OUTCOMES_FILE).get("held_out") or {}
     keys = {row["key"] for row in section.get("mutants", []) if isinstance(row, dict) and "key" in row}
     return keys | {key for key in section.get("earlier", []) if isinstance(key, str)}
 
@@ -961,7 +969,7 @@ def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, st
     """
     from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
 
-    score, outcomes = _read_json(lesson.folder / SCORE_FILE), _read_json(lesson.folder / OUTCOMES_FILE)
+    score, outcomes = read_json_object(lesson.folder / SCORE_FILE), read_json_object(lesson.folder / OUTCOMES_FILE)
     if not score or not outcomes:
         return None
     measured = measured or {"date": dt.date.today().isoformat(), "fingerprint": grader_fingerprint(lesson)}
@@ -972,13 +980,7 @@ def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, st
     earlier = sorted(recorded_held_out(lesson) - {row["key"] for row in rows})  # left out of this sample
     outcomes["held_out"] = {"fingerprint": measured["fingerprint"], "date": measured["date"], "seed": found.seed,
                             "mutants": rows, **({"earlier": earlier} if earlier else {})}
-    path = lesson.folder / SCORE_FILE
-    try:
-        atomic_write_text(path, json.dumps(score, indent=1) + "\n")
-        atomic_write_text(lesson.folder / OUTCOMES_FILE, json.dumps(outcomes, indent=0) + "\n")
-    except OSError:
-        return None
-    return path
+    return _write_records(lesson, score, outcomes)
 
 
 #: Below this many counted mutants a score is too small to judge a grader by (issue 37).
@@ -1024,7 +1026,7 @@ def _figures(data: dict, now: str) -> RecordedScore:
 
 def recorded_score(lesson: Lesson) -> RecordedScore | None:
     """The lesson's recorded mutation run (:func:`write_score`), or None when there is none or it is unreadable."""
-    data = _read_json(lesson.folder / SCORE_FILE)
+    data = read_json_object(lesson.folder / SCORE_FILE)
     from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
 
     now = grader_fingerprint(lesson) if data else ""
@@ -1191,7 +1193,7 @@ def triage_problems(lesson: Lesson, every: list[Mutant] | None = None, reference
                     problems.append(f"{triage_path(lesson)}:{lines[index] if index < len(lines) else 1}: "
                                     f"{what} matches no mutant of the reference")
     outcomes_path, score_path = lesson.folder / OUTCOMES_FILE, lesson.folder / SCORE_FILE
-    outcomes, score = _read_json(outcomes_path), _read_json(score_path)
+    outcomes, score = read_json_object(outcomes_path), read_json_object(score_path)
     if outcomes or score:
         now = grader_fingerprint(lesson)
         for part, record, path in (("", outcomes, outcomes_path), ("held_out", outcomes.get("held_out"), outcomes_path),

@@ -57,14 +57,6 @@ def _forget_unfinished(results_path: Path) -> int:
     return len(records) - len(kept)
 
 
-def _read_cache(path: Path) -> dict[str, Any]:
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    return data if isinstance(data, dict) else {}
-
-
 def _student(mutant: mut.Mutant) -> str:
     return f"{Path(mutant.file).stem[:24]}.{mutant.key}"
 
@@ -113,7 +105,7 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
             pool = sum(m.key not in taken for m in candidates)
         grader, course = mut.grader_hash(lesson), mut.course_hash(reference, lesson)
         cache_path = out / CACHE_FILE
-        cache = _read_cache(cache_path)
+        cache = mut.read_json_object(cache_path)
         todo = [m for m in picked if mut.cache_key(grader, course, m) not in cache]
         this_run: dict[str, dict[str, Any]] = {}  # outcomes of this run that are never cached (UNFINISHED)
         graded_now: dict[str, dict[str, Any]] = {}  # outcomes of this run that are cached
@@ -152,7 +144,7 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
             # merged into the file as it is now: another run on the same --out (another lesson) may have
             # written it since this one read it
             cache.update(graded_now)
-            atomic_write_text(cache_path, json.dumps({**_read_cache(cache_path), **graded_now}, indent=1,
+            atomic_write_text(cache_path, json.dumps({**mut.read_json_object(cache_path), **graded_now}, indent=1,
                                                      sort_keys=True) + "\n")
         graded = []
         fresh = {m.key for m in todo}
@@ -218,7 +210,7 @@ def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, 
             found.append(mutate_lesson(lesson, out, sample, seed, jobs, timeout, console, held_out, held_out_seed))
             mut.write_score(lesson, found[-1])
     finally:
-        before = _read_cache(out / RESULT_FILE)
+        before = mut.read_json_object(out / RESULT_FILE)
         section = "held_out" if held_out is not None else "lessons"
         previous = {name: before.get(name, {}) if isinstance(before.get(name, {}), dict) else {}
                     for name in ("lessons", "held_out")}

@@ -6,9 +6,11 @@ The fingerprint is one sha256 over the contents of:
 
 * the lesson's grader module and every course module it imports (``graders/_*.py``, another
   lesson's grader), transitively, and the grader's data folder (``graders/data/<grader>/``);
-* the engine code a grader runs on: the kit (``ros2course.kit``), the grading session and
-  engine (``ros2course.grade``'s ``engine``, ``session``, ``checks``, ``results``) and the
-  runtime (``ros2course.run``);
+* the engine code a grader runs on: the modules of the kit (``ros2course.kit``), the grading
+  session and engine (``ros2course.grade``'s ``engine``, ``session``, ``checks``, ``results``) and
+  the runtime (``ros2course.run``) that the grader's imports and the grading engine's reach,
+  transitively (:func:`engine_modules`): a kit step only another lesson's grader imports is not
+  part of this lesson's fingerprint, so adding one leaves this lesson's figures current;
 * the lesson's ``lesson.yaml``;
 * the reference files the mutants are made from (the lesson's packages, their dependencies in
   ``solutions/src`` and its ``folders``: what :func:`ros2course.build.reference.reference_workspace`
@@ -55,10 +57,78 @@ def _course_imports(module: Path, graders: Path) -> list[Path]:
     return [path for path in out if path.is_file()]
 
 
-def grader_files(lesson: Lesson) -> list[Path]:
-    """Every file :func:`grader_fingerprint` covers for ``lesson``, sorted, each once."""
+def _module_file(engine: Path, dotted: str) -> Path | None:
+    """The file of engine module ``ros2course.a.b`` (``a/b.py`` or ``a/b/__init__.py``), None if not one."""
+    parts = dotted.split(".")[1:]
+    base = engine.joinpath(*parts) if parts else engine
+    for candidate in (base.with_suffix(".py") if parts else None, base / "__init__.py"):
+        if candidate is not None and candidate.is_file():
+            return candidate
+    return None
+
+
+def _engine_imports(module: Path, engine: Path) -> list[Path]:
+    """The ``ros2course`` modules ``module`` imports anywhere in its code (function-level imports too), with the
+    packages they sit in (importing ``ros2course.kit.scripts`` runs ``ros2course/kit/__init__.py``), and the
+    submodules a ``from ros2course.kit import scripts`` names."""
+    try:
+        tree = ast.parse(module.read_text(encoding="utf-8"))
+    except (OSError, SyntaxError, ValueError):
+        return []
+    names: list[str] = []
+    package = None
+    if module.resolve().is_relative_to(engine):
+        rel = module.resolve().relative_to(engine).with_suffix("").parts
+        package = ["ros2course", *rel[:-1]] if rel[-1] != "__init__" else ["ros2course", *rel[:-1]]
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            names += [alias.name for alias in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                if package is None or node.level > len(package):
+                    continue
+                base = package[:len(package) - node.level + 1]
+                dotted = ".".join(base + ([node.module] if node.module else []))
+            else:
+                dotted = node.module or ""
+            names.append(dotted)
+            names += [f"{dotted}.{alias.name}" for alias in node.names]
+    out = []
+    for dotted in names:
+        if dotted != "ros2course" and not dotted.startswith("ros2course."):
+            continue
+        parts = dotted.split(".")
+        for end in range(1, len(parts) + 1):  # the packages on the way, then the module itself
+            found = _module_file(engine, ".".join(parts[:end]))
+            if found is not None:
+                out.append(found)
+    return out
+
+
+def engine_modules(course_modules: list[Path]) -> list[Path]:
+    """The engine files (under :data:`ENGINE_PARTS`) a grader runs on: every ``ros2course`` module that
+    ``course_modules`` (the grader and the course modules it imports) or the grading engine
+    (``ros2course.grade.engine``, which loads and runs every grader) import, transitively, read from their
+    code (:mod:`ast`, never imported). A module reached only through modules outside ENGINE_PARTS counts
+    too: the walk goes through every ``ros2course`` module, and only the files hashed are filtered."""
     import ros2course  # noqa: PLC0415 - the engine's own folder
 
+    engine = Path(ros2course.__file__).resolve().parent
+    todo = [*course_modules, engine / "grade" / "engine.py"]
+    seen: set[Path] = set()
+    while todo:
+        module = todo.pop()
+        if module in seen or not module.is_file():
+            continue
+        seen.add(module)
+        todo += _engine_imports(module, engine)
+    parts = [engine / part for part in ENGINE_PARTS]
+    return sorted(p for p in seen if p.resolve().is_relative_to(engine)
+                  and any(p == part or p.is_relative_to(part) for part in parts))
+
+
+def grader_files(lesson: Lesson) -> list[Path]:
+    """Every file :func:`grader_fingerprint` covers for ``lesson``, sorted, each once."""
     root = content_root()
     graders = root / "graders"
     todo, modules = [graders / f"{lesson.grader}.py"], set()
@@ -70,9 +140,7 @@ def grader_files(lesson: Lesson) -> list[Path]:
         todo += _course_imports(module, graders)
     files = set(modules)
     files.update(_files(graders / "data" / lesson.grader) if (graders / "data" / lesson.grader).is_dir() else [])
-    engine = Path(ros2course.__file__).resolve().parent
-    for part in ENGINE_PARTS:
-        files.update(p for p in _files(engine / part) if p.suffix == ".py")
+    files.update(engine_modules(sorted(modules)))
     if (lesson.folder / "lesson.yaml").is_file():
         files.add(lesson.folder / "lesson.yaml")
     solutions = root / "solutions"

@@ -26,7 +26,7 @@ from typing import Any
 
 from ros2course.grade.session import GradingSession
 from ros2course.kit.topics_services import reliable_qos
-from ros2course.run.probes import record, stop_spinning, wait_until
+from ros2course.run.probes import record, spin_until_shutdown, stop_spinning, wait_until
 
 #: action_msgs/msg/GoalStatus status values, by name (GoalStatus.msg).
 STATUS_NAMES = {0: "UNKNOWN", 1: "ACCEPTED", 2: "EXECUTING", 3: "CANCELING", 4: "SUCCEEDED", 5: "CANCELED",
@@ -278,12 +278,7 @@ class StandInActionServer:
         self._thread.start()
 
     def _spin(self) -> None:
-        from rclpy.executors import ExternalShutdownException
-
-        try:
-            self._executor.spin()
-        except (ExternalShutdownException, RuntimeError):
-            return
+        spin_until_shutdown(self._executor)
 
     def _on_goal(self, goal: Any) -> Any:
         from rclpy.action import GoalResponse

@@ -23,7 +23,7 @@ from typing import Any
 
 from ros2course.errors import NotGradable
 from ros2course.grade.session import GradingSession
-from ros2course.run.probes import TopicProbe, stop_spinning
+from ros2course.run.probes import TopicProbe, spin_until_shutdown, stop_spinning
 
 _RANDOM = random.SystemRandom()
 
@@ -95,12 +95,7 @@ class MysteryNode:
         s.on_close(self.close)
 
     def _spin(self) -> None:
-        from rclpy.executors import ExternalShutdownException  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
-
-        try:
-            self._executor.spin()
-        except (ExternalShutdownException, RuntimeError):
-            pass
+        spin_until_shutdown(self._executor)
 
     def close(self) -> None:
         """Stop spinning and destroy the node (idempotent)."""

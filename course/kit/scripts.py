@@ -9,7 +9,10 @@ every process carrying its run marker is killed too, so a ``ros2`` daemon that
 the script's first ``ros2 topic list`` spawned (ros2cli's ``spawn_daemon``
 detaches it with ``setsid``) does not outlive the check. A grader whose script
 lists the graph starts a daemon first (``run_script(daemon_sees=...)``,
-:func:`ros2_daemon`); its own probes are rclpy nodes.
+:func:`ros2_daemon`); its own probes are rclpy nodes. The discovery steps a
+lesson teaches (``--spin-time``, ``ros2 daemon start`` and asking again) are
+graded by a second run where what the script must find appears only after it
+has started looking (:func:`run_script_first`).
 
 Typical use::
 
@@ -22,11 +25,15 @@ Typical use::
 
 from __future__ import annotations
 
+import dataclasses
+import re
 import shutil
 import subprocess
+import time
 import xmlrpc.client
 from collections.abc import Callable, Iterable
 from pathlib import Path
+from typing import Any
 
 from ros2course.grade.checks import Unmet
 from ros2course.grade.session import GradingSession
@@ -106,6 +113,92 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
         return interrupt_after(s, argv, label, interrupt_after_s, exit_timeout=exit_timeout, env=env,
                                cwd=s.workspace_root, wait_for=wait_for, first_timeout=first_timeout)
     return run_program(s, argv, label, timeout=timeout, env=env, cwd=s.workspace_root)
+
+
+#: The nodes ``ros2`` commands make: ``_ros2cli_<pid>``, the node a command listens with itself when no daemon
+#: answers (ros2cli ``node/direct.py`` DirectNode, ``node/__init__.py`` NODE_NAME_PREFIX), and
+#: ``_ros2cli_daemon_<domain>_<uuid>``, the daemon (ros2cli ``daemon/__init__.py``).
+ROS2CLI_NODE = re.compile(r"_ros2cli_(\d+|daemon_\d+_[0-9a-f]+)")
+#: Seconds to wait for the script's first ``ros2`` command to join the graph before starting the late part anyway.
+FIRST_COMMAND_TIMEOUT = 10.0
+
+
+@dataclasses.dataclass(frozen=True)
+class LateRun:
+    """A run of :func:`run_script_first`.
+
+    Attributes:
+        run: what the script did (stopped early once ``until`` held).
+        first_command_at: seconds after the script started when its first ``ros2`` command joined the
+            graph (None: none did within :data:`FIRST_COMMAND_TIMEOUT`).
+        started_at: seconds after the script started when the grader's late part was started.
+    """
+
+    run: ProgramRun
+    first_command_at: float | None
+    started_at: float
+
+    def describe(self) -> str:
+        """When things happened, for an "observed" sentence."""
+        first = ("its first ros2 command joined the graph after "
+                 f"{self.first_command_at:.1f} s" if self.first_command_at is not None
+                 else f"no ros2 command of it joined the graph within {FIRST_COMMAND_TIMEOUT:.0f} s")
+        return f"{first}; the grader's node started {self.started_at:.1f} s after the script"
+
+
+def run_script_first(s: GradingSession, path: Path, start: Callable[[], Any], *, late_by: float,
+                     timeout: float = 30.0, until: Callable[[str], bool] | None = None,
+                     args: Iterable[str] = ()) -> LateRun:
+    """Run ``bash path`` in a graph where what it must discover appears only after it has started looking.
+
+    The situation the tutorial's discovery advice is for (ch. 19 and 21: a terminal where no
+    ``ros2`` daemon runs yet, a node that has not been discovered when the first command asks):
+    no daemon is started for the script, so its first ``ros2 ... list`` spawns one and meanwhile
+    listens for the graph itself for ``--spin-time`` seconds (0.5 by default; ros2cli
+    ``node/strategy.py``, ``node/direct.py``), and ``start()`` is called ``late_by`` seconds
+    after the script's first ``ros2`` command joined the graph (its own node or the daemon it
+    spawned: :data:`ROS2CLI_NODE`). A script that looks once and gives up (no ``--spin-time``,
+    no asking again until the name shows up) misses it whatever the machine's load, and one that
+    waits as the lesson teaches finds it: the times count from what the script did, not from the
+    clock, so a slow interpreter start shifts both alike.
+
+    Call it inside ``s.part(..., own_graph=True)`` so the graph is fresh: no daemon, none of the
+    grader's earlier nodes; ``start`` then creates the grader's node in ``s.graph``.
+
+    Args:
+        start: starts what the script must find (e.g. a :class:`~ros2course.kit.mystery.MysteryNode`).
+        late_by: seconds from the script's first ``ros2`` command to ``start()``.
+        timeout: seconds the script may run in all.
+        until: stop the script early once its standard output so far makes this True (what the
+            check judges has been printed: the rest of the script would only cost time).
+        args: extra arguments after the script path.
+    """
+    graph = s.graph
+    graph.node  # noqa: B018 - the grader's participant joins first, so it sees the script's first command at once
+    env = graph.learner_env(s.overlay())
+    label = f"{path.stem}.late"
+    if "ROS_HOME" not in env:
+        env["ROS_HOME"] = str(s.submission_folder(f"{label}.ros_home"))
+
+    def first_command() -> bool:
+        return any(ROS2CLI_NODE.fullmatch(name) for name, _ in graph.node.get_node_names_and_namespaces())
+
+    proc = s.start_program(["bash", str(path), *args], label, env=env, cwd=s.workspace_root,
+                           deadline=timeout + FIRST_COMMAND_TIMEOUT + 10.0)
+    begin = time.monotonic()
+    with s.phase("run"):
+        seen = wait_until(lambda: proc.poll() is not None or first_command(), FIRST_COMMAND_TIMEOUT, interval=0.02)
+        first_at = time.monotonic() - begin if seen and proc.poll() is None else None
+        wait_until(lambda: proc.poll() is not None, late_by if first_at is not None else 0.0, interval=0.02)
+        started_at = time.monotonic() - begin
+        start()
+        left = max(0.0, timeout - (time.monotonic() - begin))
+        finished = wait_until(lambda: proc.poll() is not None or (until is not None and until(proc.stdout())),
+                              left, interval=0.05)
+    seconds = time.monotonic() - begin
+    report = proc.stop(sigint_timeout=0.5, sigterm_timeout=1.0)
+    run = ProgramRun(report.returncode, proc.stdout(), proc.stderr(), not finished, seconds, report.traceback)
+    return LateRun(run, first_at, started_at)
 
 
 #: ros2cli's daemon serves XML-RPC on 127.0.0.1 at this port plus ROS_DOMAIN_ID (ros2cli.daemon.get_port).
@@ -222,4 +315,5 @@ def daemon_port(domain_id: int) -> int:
     return 11511 + domain_id
 
 
-__all__ = ["EXCERPT", "daemon_port", "ended", "excerpt", "printed", "run_script", "script"]
+__all__ = ["EXCERPT", "LateRun", "daemon_port", "ended", "excerpt", "printed", "run_script",
+           "run_script_first", "script"]

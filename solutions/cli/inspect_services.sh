@@ -4,7 +4,7 @@
 
 # 1. Every service in the graph (-t would add their types). In a terminal where no ros2 daemon
 #    runs yet (a fresh ROS domain), the command listens for the nodes itself: give it 2 s, not
-#    0.5 s. (The check starts a daemon that already knows the server, so it cannot tell.)
+#    0.5 s. (The check's second run has no daemon, and its server joins 1 s after the list began.)
 ros2 service list --spin-time 2
 
 # 2. The type of /what_is_the_point: the one to give `ros2 service call`.
