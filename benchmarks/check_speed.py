@@ -219,7 +219,7 @@ def measure_floor(runs: int, folder: Path, period: float, progress: Console) -> 
     RosSession's open/close times (what a check pays around its node).
     """
     from ros2course.run.probes import RosSession, wait_until  # noqa: PLC0415 - rclpy only when measuring
-    from ros2course.run.process import LearnerProcess, rclpy_shutdown_race, sweep_stale_fastdds_shm
+    from ros2course.run.process import LearnerProcess, rclpy_shutdown_race, sweep_stale_fastdds_shm  # noqa: PLC0415 - rclpy only when measuring
 
     folder.mkdir(parents=True, exist_ok=True)
     script = folder / "floor_node.py"

@@ -26,7 +26,6 @@ from its first (:func:`ros2course.dev.mutants.held_out_sample`), triaged with ``
 from __future__ import annotations
 
 import argparse
-import datetime as dt
 import json
 import shutil
 import sys

@@ -283,7 +283,7 @@ def next_(workspace: WorkspaceOpt = None) -> None:
         err.print(f"[yellow]note:[/] your current lesson {progress.current!r} is no longer in the course; "
                   "continuing with the first lesson not done yet")
         progress.current = None
-        lesson = next((l for l in catalog.lessons if progress.status(l.id) != "done"), None)
+        lesson = next((item for item in catalog.lessons if progress.status(item.id) != "done"), None)
     else:
         lesson = catalog.after(progress.current)
     if lesson is None:

@@ -39,6 +39,6 @@ def cache_dir() -> Path:
     override = os.environ.get("ROS2COURSE_CACHE_DIR")
     if override:
         return Path(override)
-    from platformdirs import user_cache_path
+    from platformdirs import user_cache_path  # noqa: PLC0415 - platformdirs only when no cache folder is set (start time of list)
 
     return user_cache_path("ros2course", appauthor=False)

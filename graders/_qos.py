@@ -21,12 +21,13 @@ is also loaded for its CHECKS alone (``ros2course list``, ``hint``), where ROS i
 
 from __future__ import annotations
 
+import copy
 import random
 import threading
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from ros2course.kit import GradingSession
+from ros2course.kit import GradingSession, wait_until
 
 _RANDOM = random.SystemRandom()
 
@@ -35,14 +36,14 @@ _RANDOM = random.SystemRandom()
 
 def sensor_qos() -> Any:
     """``rclpy.qos.qos_profile_sensor_data``: BEST_EFFORT, VOLATILE, KEEP_LAST 5 (rmw/qos_profiles.h)."""
-    from rclpy.qos import qos_profile_sensor_data
+    from rclpy.qos import qos_profile_sensor_data  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
     return qos_profile_sensor_data
 
 
 def profile(*, reliable: bool, transient_local: bool, depth: int) -> Any:
     """A KEEP_LAST ``depth`` profile, RELIABLE or BEST_EFFORT, TRANSIENT_LOCAL or VOLATILE."""
-    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth,
                       reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
@@ -69,7 +70,7 @@ def compatible(offered: Any, requested: Any) -> tuple[bool, str]:
     Returns:
         ``(compatible, reason)``; the reason is rmw's sentence, "" when compatible.
     """
-    from rclpy.qos import QoSCompatibility, qos_check_compatible
+    from rclpy.qos import QoSCompatibility, qos_check_compatible  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
     result, reason = qos_check_compatible(as_reported(offered), as_reported(requested))
     if result == QoSCompatibility.ERROR:
@@ -87,10 +88,8 @@ def as_reported(qos: Any) -> Any:
     that the endpoints themselves never have), so a profile made in code is resolved first.
     Profiles from the graph come back unchanged.
     """
-    import copy
-
-    from rclpy.duration import Infinite
-    from rclpy.qos import LivelinessPolicy
+    from rclpy.duration import Infinite  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+    from rclpy.qos import LivelinessPolicy  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
     resolved = copy.copy(qos)
     for field in ("deadline", "lifespan", "liveliness_lease_duration"):
@@ -127,8 +126,6 @@ def wait_endpoint_qos(graph: Any, topic: str, node: str | None, kind: str, timeo
 
 
 def _wait(predicate: Callable[[], bool], timeout: float, abort: Callable[[], bool] | None = None) -> bool:
-    from ros2course.kit import wait_until
-
     return wait_until(predicate, timeout, interval=0.02, abort=abort)
 
 
@@ -146,7 +143,7 @@ class Probe:
     """
 
     def __init__(self, graph: Any, topic: str, msg_type: type, qos: Any) -> None:
-        from rclpy.event_handler import SubscriptionEventCallbacks
+        from rclpy.event_handler import SubscriptionEventCallbacks  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
         self.qos = qos
         self.topic = topic
@@ -210,7 +207,7 @@ class Feed:
         self._lock = threading.Lock()
         self._sensor_type = sensor_type
         self._node = graph.node
-        from rclpy.event_handler import PublisherEventCallbacks
+        from rclpy.event_handler import PublisherEventCallbacks  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
         # a learner's subscription that cannot match is judged from the graph; the event only
         # replaces rclpy's default warning, which would print in the learner's terminal
@@ -263,7 +260,7 @@ class Oracle:
 
     def __init__(self, s: GradingSession, graph: Any, sensor_type: type, config_type: type, *,
                  sensor_topic: str, config_topic: str) -> None:
-        import rclpy
+        import rclpy  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
         self.sensor_node = f"thermometer_{_RANDOM.randrange(1000, 10000)}"
         self.config_node = f"configurator_{_RANDOM.randrange(1000, 10000)}"

@@ -138,7 +138,7 @@ CHECKS = [
 
 
 def _point(x: float, y: float) -> Any:
-    from geometry_msgs.msg import (
+    from geometry_msgs.msg import (  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
         Point,  # a wheel of the venv; graders load for CHECKS without ROS
     )
 

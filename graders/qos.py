@@ -128,8 +128,8 @@ CHECKS = [
 
 
 def _types() -> tuple[type, type]:
-    from sensor_msgs.msg import Temperature
-    from std_msgs.msg import String
+    from sensor_msgs.msg import Temperature  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+    from std_msgs.msg import String  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
     return Temperature, String
 

@@ -356,7 +356,7 @@ def _to_grade(entries: list, lessons: list[str], student_lessons: dict[str, list
     (``student_lessons``, else every lesson) less the ``(student, lesson)`` pairs already ``done`` (resume)."""
     pending = []
     for entry in entries:
-        theirs = lessons if student_lessons is None else [l for l in lessons if l in student_lessons.get(entry.student, ())]
+        theirs = lessons if student_lessons is None else [name for name in lessons if name in student_lessons.get(entry.student, ())]
         missing = [lesson for lesson in theirs if (entry.student, lesson) not in done]
         if missing:
             pending.append((entry, missing))

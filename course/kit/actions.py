@@ -48,11 +48,11 @@ def action_endpoints(graph: Any, node: str | None, kind: str) -> dict[str, list[
     (``rclpy.action.get_action_server_names_and_types_by_node``). Empty when
     ``node`` (``/name``) is None or not in ``graph`` (a :class:`~ros2course.run.probes.RosSession`).
     """
-    from rclpy.action import (
+    from rclpy.action import (  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
         get_action_client_names_and_types_by_node,
         get_action_server_names_and_types_by_node,
     )
-    from rclpy.node import NodeNameNonExistentError
+    from rclpy.node import NodeNameNonExistentError  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
     if node is None:
         return {}
@@ -137,7 +137,7 @@ class GoalClient:
     """
 
     def __init__(self, s: GradingSession, action_type: type, name: str, graph: Any = None) -> None:
-        from rclpy.action import ActionClient
+        from rclpy.action import ActionClient  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
         self.graph = graph or s.graph
         self.action_type, self.name = action_type, name
@@ -260,11 +260,11 @@ class StandInActionServer:
 
     def offer(self) -> None:
         """Create the server (it appears in the graph) and start answering."""
-        import rclpy
-        from rclpy.action import ActionServer
-        from rclpy.callback_groups import ReentrantCallbackGroup
-        from rclpy.executors import MultiThreadedExecutor
-        from rclpy.parameter import Parameter
+        import rclpy  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+        from rclpy.action import ActionServer  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+        from rclpy.callback_groups import ReentrantCallbackGroup  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+        from rclpy.executors import MultiThreadedExecutor  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+        from rclpy.parameter import Parameter  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
         self._node = rclpy.create_node(
             "_ros2course_stand_in_action_server", context=self.graph.context, enable_rosout=False,
@@ -281,7 +281,7 @@ class StandInActionServer:
         spin_until_shutdown(self._executor)
 
     def _on_goal(self, goal: Any) -> Any:
-        from rclpy.action import GoalResponse
+        from rclpy.action import GoalResponse  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
         with self._lock:
             index = len(self.goals)

@@ -265,7 +265,7 @@ def run_cases(s: GradingSession, jobs: Sequence[Callable[[], None]], workers: in
     Runs are learner programs in their own process groups: two at a time keeps a 2-core
     machine responsive for the tests' own timing. A grader fault in a job is raised here.
     """
-    import concurrent.futures
+    import concurrent.futures  # noqa: PLC0415 - only the cases that run at once need threads
 
     with concurrent.futures.ThreadPoolExecutor(max_workers=workers, thread_name_prefix="ros2course-tests") as pool:
         for done in [pool.submit(job) for job in jobs]:

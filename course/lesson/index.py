@@ -107,7 +107,7 @@ def catalog_entries(chapters_dir: Path) -> list[LessonEntry]:
             index = json.loads(path.read_text(encoding="utf-8"))
             if index["format"] == INDEX_FORMAT and index["folders"] == current and index["loader"] == _loader_stamp():
                 return [LessonEntry(*row) for row in index["lessons"]]
-    from ros2course.lesson.catalog import Catalog
+    from ros2course.lesson.catalog import Catalog  # noqa: PLC0415 - the validating loader (pydantic, PyYAML) only when the index misses
 
     lessons = [LessonEntry(lesson.id, lesson.title, list(lesson.chapters), lesson.workspace_paths)
                for lesson in Catalog(chapters_dir).lessons]

@@ -104,7 +104,7 @@ def _build_env(prefix: Path, component: Component) -> dict[str, str]:
     # clone's venv hits the entries an earlier clone's build left): ros2course.ros.compiler_cache
     env = with_compiler_cache(env, Path(os.path.commonpath([str(prefix.resolve()), str(Path(sys.prefix).resolve())])))
     if component is SAS_COMPONENT:  # shared/ROS_ENV.md, "Building SmartArmStack (sas) from source"
-        import pybind11
+        import pybind11  # noqa: PLC0415 - pybind11 only for the sas build
 
         env["pybind11_DIR"] = pybind11.get_cmake_dir()
         env["CPATH"] = os.pathsep.join([str(prefix / "include"), str(EIGEN_INCLUDE), env.get("CPATH", "")]).rstrip(":")

@@ -103,7 +103,7 @@ def _dump():
 
 
 def _probe():
-    import importlib
+    import importlib  # noqa: PLC0415 - the learner's module, imported when the probe runs
     module = importlib.import_module("minimalist_package.minimalist_async")
     function = getattr(module, "unlikely_to_return", None)
     events.append(["function", function is not None, inspect.iscoroutinefunction(function)])
