@@ -232,13 +232,13 @@ def init(directory: Annotated[Path, typer.Argument(help="Workspace folder to cre
 @_handle_errors
 def list_(workspace: WorkspaceOpt = None) -> None:
     """Every lesson, its status and best score."""
-    # the catalog index and a plain read of progress.json: no pydantic, no yaml (course/lesson/index.py)
-    from ros2course.lesson import content_root  # noqa: PLC0415 - start time, see the imports
-    from ros2course.lesson.index import catalog_entries, progress_view  # noqa: PLC0415 - same
+    # the kept catalog and a plain read of progress.json: no pydantic, no yaml (course/lesson/progress_view.py)
+    from ros2course.lesson.catalog import load_catalog  # noqa: PLC0415 - start time, see the imports
+    from ros2course.lesson.progress_view import progress_view  # noqa: PLC0415 - same
     from ros2course.report.listing import render_list  # noqa: PLC0415 - same
 
     ws = _workspace(workspace)  # first: it chooses the course the workspace follows
-    lessons = catalog_entries(content_root() / "chapters")
+    lessons = load_catalog().lessons
     progress = progress_view(ws)
     render_list(lessons, progress, stdout_console(), root=ws.root if ws.initialised else None)
     gone = sorted(set(progress.lessons) - {lesson.id for lesson in lessons})
@@ -339,8 +339,8 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
         return
     # read once, before the long check: a corrupt progress file is reported first (the attempt is recorded
     # on a fresh read afterwards, so one that `watch` recorded meanwhile is kept); read as `list` reads it,
-    # without pydantic unless the file needs it (lesson.index.progress_view: issue 36)
-    from ros2course.lesson.index import progress_view  # noqa: PLC0415 - start time, see the imports
+    # without pydantic unless the file needs it (lesson.progress_view: issue 36)
+    from ros2course.lesson.progress_view import progress_view  # noqa: PLC0415 - start time, see the imports
 
     progress = progress_view(ws) if ws.initialised else None
     lesson = _lesson_for(lesson_id, ws, progress)

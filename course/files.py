@@ -33,7 +33,7 @@ def atomic_write_bytes(path: Path, data: bytes) -> None:
 def cache_dir() -> Path:
     """The folder for ros2course's caches: ``ROS2COURSE_CACHE_DIR`` or platformdirs' user cache folder.
 
-    Holds the catalog index of ``list`` (:mod:`ros2course.lesson.index`) and the
+    Holds the kept catalog (:func:`ros2course.lesson.catalog.load_catalog`), the kept manifests and the
     built underlays (:mod:`ros2course.ros.underlay_cache`); ``~/.cache/ros2course`` on Linux.
     """
     override = os.environ.get("ROS2COURSE_CACHE_DIR")

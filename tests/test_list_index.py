@@ -1,8 +1,8 @@
-"""``list`` reads a cached catalog index and progress.json without pydantic (course/lesson/index.py).
+"""``list`` reads the kept catalog and progress.json without pydantic (course/lesson/progress_view.py).
 
-The index must never show something the validated catalog would not: it is
-rebuilt whenever a lesson file, a starter folder or the loader changes, and a
-malformed lesson is reported exactly as without it.
+The kept catalog must never show something the validated catalog would not: it is
+rebuilt whenever what validation reads changes (by content), and a malformed lesson
+is reported exactly as without it.
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ import pytest
 import yaml
 
 from ros2course.errors import ProgressError
-from ros2course.lesson.catalog import Catalog, content_root
-from ros2course.lesson.index import catalog_entries, progress_view
+from ros2course.lesson.catalog import Catalog, content_root, load_catalog
+from ros2course.lesson.progress_view import progress_view
 from ros2course.lesson.progress import Progress
 from ros2course.lesson.workspace import Workspace, plain_progress, progress_text
 from tests.test_cli import assert_clean_error, copy_course
@@ -41,31 +41,36 @@ def learner_ws(tmp_path: Path, cli) -> Path:
     return tmp_path / "ws"
 
 
-def test_entries_match_the_validated_catalog_from_miss_and_hit(tmp_path, monkeypatch):
+def test_list_shows_the_validated_catalog_from_miss_and_hit(tmp_path, monkeypatch, learner_ws, cli):
     monkeypatch.setenv("ROS2COURSE_CACHE_DIR", str(tmp_path / "cache"))
-    expected = [(lesson.id, lesson.title, lesson.chapters, lesson.workspace_paths)
-                for lesson in Catalog(CHAPTERS).lessons]
-    first = catalog_entries(CHAPTERS)  # miss: full load, index written
-    assert [tuple(e) for e in first] == expected
-    files = list((tmp_path / "cache").iterdir())
-    assert len(files) == 1 and files[0].name.startswith("catalog-index-")
-    second = catalog_entries(CHAPTERS)  # hit
-    assert [tuple(e) for e in second] == expected
+    from ros2course.lesson import catalog as catalog_module
+
+    ids = [lesson.id for lesson in Catalog(CHAPTERS).lessons]
+    for _ in range(2):  # miss (the kept catalog is written), then hit
+        catalog_module._catalog_of.cache_clear()  # as in a new process: only the kept file is shared
+        proc = cli("list", cwd=learner_ws, env={"ROS2COURSE_CACHE_DIR": str(tmp_path / "cache"), "COLUMNS": "320"})
+        assert proc.returncode == 0, proc.stderr
+        shown = [line.split("│")[2].strip() for line in proc.stdout.splitlines() if line.count("│") > 3]
+        assert [name for name in shown if name and name != "lesson"] == ids
+    assert any(p.name.startswith("catalog-") for p in (tmp_path / "cache").iterdir())
 
 
 def test_a_changed_title_is_seen_at_once(tmp_path, monkeypatch):
+    from ros2course.lesson import catalog as catalog_module
+
     monkeypatch.setenv("ROS2COURSE_CACHE_DIR", str(tmp_path / "cache"))
     course = copy_course(tmp_path / "c")
     chapters = course / "chapters"
-    first = catalog_entries(chapters)
-    path = chapters / sorted(p.name for p in chapters.iterdir())[0] / "lesson.yaml"
+    first = load_catalog(course).lessons[0].title  # kept
+    path = chapters / sorted(p.name for p in chapters.iterdir())[0] / "lesson.yaml"  # 01-: the first lesson
     data = yaml.safe_load(path.read_text(encoding="utf-8"))
-    data["title"] = "A title the index has never seen"
+    data["title"] = "A title the kept catalog has never seen"
     path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
-    assert catalog_entries(chapters)[0].title == "A title the index has never seen" != first[0].title
+    catalog_module._catalog_of.cache_clear()  # as in a new process: only the kept file is shared
+    assert load_catalog(course).lessons[0].title == "A title the kept catalog has never seen" != first
 
 
-def test_list_reports_a_lesson_broken_after_the_index_was_written(tmp_path, learner_ws, cli):
+def test_list_reports_a_lesson_broken_after_the_catalog_was_kept(tmp_path, learner_ws, cli):
     course = copy_course(tmp_path / "c")
     env = {"ROS2COURSE_CONTENT": str(course), "ROS2COURSE_CACHE_DIR": str(tmp_path / "cache")}
     assert cli("list", cwd=learner_ws, env=env).returncode == 0
@@ -74,6 +79,9 @@ def test_list_reports_a_lesson_broken_after_the_index_was_written(tmp_path, lear
     data = yaml.safe_load(path.read_text(encoding="utf-8"))
     data["hints"] = data["hints"][:1]
     path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    from ros2course.lesson import catalog as catalog_module
+
+    catalog_module._catalog_of.cache_clear()  # as in a new process: only the kept file is shared
     assert_clean_error(cli("list", cwd=learner_ws, env=env), 5, str(path.resolve()), "hints")
 
 
@@ -85,13 +93,13 @@ def test_list_works_when_the_cache_folder_cannot_be_written(tmp_path, learner_ws
     assert "terminal-basics" in proc.stdout and not proc.stderr
 
 
-def test_list_imports_neither_pydantic_nor_yaml_once_indexed(learner_ws, cli):
-    assert cli("list", cwd=learner_ws).returncode == 0  # writes the index if this run has none yet
+def test_list_imports_neither_pydantic_nor_yaml_once_kept(learner_ws, cli):
     probe = ("import sys; from ros2course.cli import main; sys.argv = ['ros2course', 'list']\n"
              "try:\n    main()\nexcept SystemExit:\n    pass\n"
              "print('LOADED', sorted(m for m in ('pydantic', 'yaml', 'rclpy') if m in sys.modules), file=sys.stderr)")
-    proc = subprocess.run([sys.executable, "-c", probe], cwd=learner_ws, capture_output=True, text=True, timeout=60,
-                          env={**os.environ, "COLUMNS": "320"}, check=False)
+    for _ in range(2):  # the first process keeps the catalog if none is kept for this course yet
+        proc = subprocess.run([sys.executable, "-c", probe], cwd=learner_ws, capture_output=True, text=True,
+                              timeout=60, env={**os.environ, "COLUMNS": "320"}, check=False)
     assert "LOADED []" in proc.stderr, proc.stderr
 
 
@@ -180,7 +188,7 @@ def test_a_warm_check_reads_its_lesson_and_progress_without_pydantic_or_yaml(lea
     progress file as `list` reads it; neither pydantic nor PyYAML is imported (about 60 ms, issue 36)."""
     probe = ("import sys; from pathlib import Path\n"
              "from ros2course.lesson.catalog import load_catalog\n"
-             "from ros2course.lesson.index import progress_view\n"
+             "from ros2course.lesson.progress_view import progress_view\n"
              "from ros2course.lesson.workspace import Workspace\n"
              "lesson = load_catalog().get('print-forever-node'); view = progress_view(Workspace(Path('.')))\n"
              "print('READ', lesson.packages, lesson.graph is not None, view.status(lesson.id))\n"

@@ -63,7 +63,7 @@ class DeclaredMutant:
     """A hidden wrong version of a reference package, by the course's author: the learner's tests must fail on it.
 
     Declared by hand, with the words of its feedback, unlike the mutants ``dev mutate``
-    generates to measure a grader (:class:`ros2course.grade.mutate.Mutant`, universalmutator's):
+    generates to measure a grader (:class:`ros2course.dev.mutants.Mutant`, universalmutator's):
     two tools of one method, mutation analysis, with one name each.
 
     Attributes:

@@ -2,7 +2,7 @@
 
 The file is small and versioned; :class:`ros2course.lesson.workspace.Workspace`
 reads and writes it (atomically). ``list`` reads it without this module
-(:mod:`ros2course.lesson.index`) and falls back to it for any file it does not
+(:mod:`ros2course.lesson.progress_view`) and falls back to it for any file it does not
 recognise, so both give the same statuses.
 """
 

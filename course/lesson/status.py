@@ -1,7 +1,7 @@
 """A lesson's status in the learner's progress, computed without pydantic.
 
 Both the pydantic schema (:mod:`ros2course.lesson.progress`) and the plain
-readers (:mod:`ros2course.lesson.workspace`, :mod:`ros2course.lesson.index`) use it,
+readers (:mod:`ros2course.lesson.workspace`, :mod:`ros2course.lesson.progress_view`) use it,
 so neither imports the other at module level.
 """
 

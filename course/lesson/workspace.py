@@ -2,7 +2,7 @@
 
 The progress file's schema (pydantic models) lives in :mod:`ros2course.lesson.progress`
 and is imported only by the methods that read or write it with validation:
-``list`` reads the file without pydantic (:mod:`ros2course.lesson.index`) for its
+``list`` reads the file without pydantic (:mod:`ros2course.lesson.progress_view`) for its
 start time (issue 13: under 0.25 s), and ``check`` records its attempt without it
 (:func:`plain_progress`, :meth:`Workspace.record_attempt`; issue 36) whenever the
 file's fields already have their declared types; one writer format for both

@@ -2,7 +2,7 @@
 
 Kept apart from :mod:`ros2course.report.table` (results, plots, markdown) so
 ``list`` imports only rich (issue 13: start under 0.25 s). Rows are
-:class:`ros2course.lesson.index.LessonEntry` or full lessons alike.
+:class:`ros2course.lesson.catalog.Lesson` (the kept catalog, read without pydantic).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from rich.text import Text
 
 if TYPE_CHECKING:
     from ros2course.lesson.catalog import Lesson
-    from ros2course.lesson.index import LessonEntry, ProgressView
+    from ros2course.lesson.progress_view import ProgressView
     from ros2course.lesson.progress import Progress
 
 
@@ -26,7 +26,7 @@ def points_text(value: float) -> str:
     return f"{value:g}"
 
 
-def render_list(lessons: Sequence[LessonEntry], progress: ProgressView | Progress, console: Console,
+def render_list(lessons: Sequence[Lesson], progress: ProgressView | Progress, console: Console,
                 root: Path | None = None) -> None:
     """Every lesson with its status, best score and where its files are in the workspace ``root``.
 
@@ -54,7 +54,7 @@ def render_list(lessons: Sequence[LessonEntry], progress: ProgressView | Progres
     console.print(table)
 
 
-def lesson_files(lesson: LessonEntry | Lesson, root: Path) -> Text:
+def lesson_files(lesson: Lesson, root: Path) -> Text:
     """The lesson's workspace paths (:attr:`Lesson.workspace_paths`), dim where not made yet."""
     text = Text()
     for index, relative in enumerate(lesson.workspace_paths):
