@@ -66,10 +66,7 @@ PRETENDS = re.compile(r"succe|abort|cancel|unknown|status|final|result", re.IGNO
 RUN = ("executable",)
 CHECKS = [
     Check("build", "The packages build with colcon", 1),
-    Check("executable", f"ros2 run finds {EXECUTABLE}", 1,
-          f"add '{EXECUTABLE} = {PACKAGE}.{EXECUTABLE}:main' to console_scripts in setup.py, then colcon build"),
-    Check("node_name", f"A node named {NODE} starts", 1, f"pass '{NODE}' to super().__init__()", needs=RUN,
-          part="goal"),
+    *checks.started("", PACKAGE, EXECUTABLE, NODE, node_part="goal"),
     Check("waits", f"While no server offers {ACTION}, it says in its log that it waits", 1,
           "in a timer: if not self.action_client.server_is_ready(): log 'action server not available, waiting...' "
           "(throttle_duration_sec=1.0) and return", needs=RUN, part="goal"),

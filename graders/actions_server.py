@@ -83,9 +83,7 @@ CHECKS = [
           "package_with_interfaces/package.xml: <depend>action_msgs</depend> (actions need it); "
           f"{PACKAGE}/package.xml: <depend>rclpy</depend>, <depend>action_msgs</depend>, "
           "<depend>package_with_interfaces</depend>"),
-    Check("executable", f"ros2 run finds {EXECUTABLE}", 1,
-          f"add '{EXECUTABLE} = {PACKAGE}.{EXECUTABLE}:main' to console_scripts in setup.py, then colcon build"),
-    Check("node_name", f"A node named {NODE} starts", 1, f"pass '{NODE}' to super().__init__()", needs=RUN),
+    *checks.started("", PACKAGE, EXECUTABLE, NODE),
     Check("action_served", f"It serves the action {ACTION} [{ACTION_TYPE}]", 2,
           f"ActionServer(self, MoveStraightIn2D, '{ACTION}', execute_callback=...) in __init__; the action "
           "must be in package_with_interfaces (action/MoveStraightIn2D.action, listed in rosidl_generate_interfaces)",

@@ -22,7 +22,7 @@ from pathlib import Path
 
 from ros2course.kit import LATE_DELIVERY, stamp_seconds, wait_until
 from ros2course import kit
-from ros2course.kit import Check, GradingSession
+from ros2course.kit import Check, GradingSession, checks
 from . import _cpp_packages as cpp
 from ros2course.kit.parts import at_once
 from ros2course.kit.programs import run_program
@@ -68,11 +68,8 @@ CHECKS = [
     Check("library_works", "SampleClass behaves as in the chapter when another package calls it", 2,
           "square_of_sum(a, b) returns a*a + 2*a*b + b*b; a_private_member_ starts at 0; operator<< prints "
           "to_string()", needs=("consumer_builds",), part="library"),
-    Check("executable", f"ros2 run finds {EXECUTABLE}", 2,
-          "add_executable(sample_class_local_node ...) and install(TARGETS sample_class_local_node DESTINATION "
-          "lib/${PROJECT_NAME})", part="node"),
-    Check("node_name", f"A node named {NODE} starts", 1, f"pass \"{NODE}\" to the rclcpp::Node constructor",
-          needs=("executable",), part="node"),
+    *checks.started("", PACKAGE, EXECUTABLE, NODE, part="node", points=2, node_points=1, client_library="rclcpp",
+                    executable_hint=checks.cmake_executable_hint(EXECUTABLE, "src/sample_class_local_node.cpp")),
     Check("node_uses_library", f"The node loads {LIBRARY_FILE} instead of compiling SampleClass again", 2,
           "add_executable lists only the node's .cpp; target_link_libraries(sample_class_local_node "
           "${PROJECT_NAME}) brings SampleClass", needs=("executable",), part="node"),

@@ -65,9 +65,7 @@ WINDOW = 4 * QUIET + 2 * SAMPLES * PERIOD
 RUN = ("executable",)
 CHECKS = [
     Check("build", "The package builds with colcon", 1),
-    Check("executable", f"ros2 run finds {EXECUTABLE}", 1,
-          f"add '{EXECUTABLE} = {PACKAGE}.{EXECUTABLE}:main' to console_scripts in setup.py, then colcon build"),
-    Check("node_name", f"A node named {NODE} starts", 1, f"pass '{NODE}' to super().__init__()", needs=RUN),
+    *checks.started("", PACKAGE, EXECUTABLE, NODE),
     Check("managed", f"It is a managed node: /{NODE}/get_state answers 'unconfigured' at start", 2,
           "subclass rclpy.lifecycle.LifecycleNode (from rclpy.lifecycle import LifecycleNode), not rclpy.node.Node: "
           "only a LifecycleNode offers the change_state/get_state services ros2 lifecycle uses", needs=RUN),

@@ -47,11 +47,9 @@ WINDOW = max(DEFAULT_SAMPLES * DEFAULT_PERIOD + RUNTIME_MESSAGES * DEFAULT_PERIO
 RUNS = ("executable",)  # every check of a run needs the executable
 CHECKS = [
     Check("build", "The package builds with colcon", 1),
-    Check("executable", "ros2 run finds amazing_quote_configurable_publisher_node", 1,
-          "add 'amazing_quote_configurable_publisher_node = python_package_that_uses_parameters_and_launch_files."
-          "amazing_quote_configurable_publisher_node:main' to console_scripts in setup.py, then colcon build"),
-    Check("node_name", "A node named amazing_quote_configurable_publisher_node starts", 1,
-          "pass 'amazing_quote_configurable_publisher_node' to super().__init__()", needs=RUNS, part="defaults"),
+    *checks.started("", "python_package_that_uses_parameters_and_launch_files",
+                    "amazing_quote_configurable_publisher_node", "amazing_quote_configurable_publisher_node",
+                    node_part="defaults"),
     Check("declared", "It declares quote, philosopher_name, topic_name and period", 2,
           "call self.declare_parameter(name, default) for each of the four parameters in __init__",
           needs=RUNS, part="defaults"),

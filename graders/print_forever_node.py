@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 from ros2course.kit import LATE_DELIVERY, stamp_seconds, wait_until
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, Unmet, params
+from ros2course.kit import Check, GradingSession, Unmet, checks, params
 
 PACKAGE = "python_package_with_a_node"
 EXECUTABLE = "print_forever_node"
@@ -40,14 +40,9 @@ def make_checks(client_library: str = "rclpy", package: str = PACKAGE, node: str
         Check("depends_rclpy" if python else "depends_client", f"package.xml declares the {client_library} dependency",
               1, f"add <depend>{client_library}</depend> to package.xml"
               + (" (seed ch. 12.1)" if python else " (seed ch. 25)")),
-        Check("executable", "ros2 run finds print_forever_node", 2,
-              f"add 'print_forever_node = {package}.print_forever_node:main' to console_scripts in setup.py, "
-              "then colcon build" if python else
-              "add_executable(print_forever_node src/print_forever_node.cpp) and install(TARGETS print_forever_node "
-              "DESTINATION lib/${PROJECT_NAME}) in CMakeLists.txt, then colcon build"),
-        Check("node_name", f"A node named {node} starts", 2, needs=("executable",), hint=
-              f"pass '{node}' to super().__init__() in your Node subclass" if python else
-              f"pass \"{node}\" to the rclcpp::Node constructor"),
+        *checks.started("", package, EXECUTABLE, node, points=2, client_library=client_library,
+                        executable_hint=None if python else
+                        checks.cmake_executable_hint(EXECUTABLE, "src/print_forever_node.cpp")),
         Check("log_format", "It logs 'Printed N times.' on /rosout", 2, needs=("executable",), hint=
               "use self.get_logger().info(f'Printed {self.print_count} times.') in the timer callback; "
               "print() does not reach /rosout" if python else

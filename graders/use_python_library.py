@@ -15,7 +15,7 @@ from __future__ import annotations
 
 from ros2course.kit import LATE_DELIVERY, stamp_seconds, wait_until
 from ros2course import kit
-from ros2course.kit import Check, GradingSession
+from ros2course.kit import Check, GradingSession, checks
 from ros2course.kit.packaging import (
     classify,
     name_lines,
@@ -45,12 +45,10 @@ CHECKS = [
     Check("depends_library", "package.xml depends on python_package_with_a_library", 1,
           "add <depend>python_package_with_a_library</depend> to package.xml: colcon then builds the library "
           "first, and ros2 run finds it installed"),
-    Check("executable", "ros2 run finds node_that_uses_the_library", 2,
-          "register 'node_that_uses_the_library = python_package_that_uses_the_library.node_that_uses_the_library:main' "
-          "in console_scripts (setup.py), then colcon build"),
-    Check("node_name", "A node named node_that_uses_the_library starts", 2,
-          "pass 'node_that_uses_the_library' to super().__init__(); if it crashes, read the traceback: "
-          "a ModuleNotFoundError means the library is not built/installed or not sourced", needs=("executable",)),
+    *checks.started("", "python_package_that_uses_the_library", "node_that_uses_the_library",
+                    "node_that_uses_the_library", points=2,
+                    node_hint="pass 'node_that_uses_the_library' to super().__init__(); if it crashes, read the "
+                    "traceback: a ModuleNotFoundError means the library is not built/installed or not sourced"),
     Check("square_log", f"It logs '{SQUARE_FORMAT}' on /rosout", 2,
           "self.get_logger().info(f'sample_function_for_square_of_sum({a},{b}) returned {c}.') in the timer "
           "callback; print() does not reach /rosout", needs=("executable",)),

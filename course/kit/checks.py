@@ -22,15 +22,49 @@ def interfaces_depend() -> Check:
                  "(seed ch. 18.1)")
 
 
-def started(prefix: str, package: str, executable: str, node: str, *, part: str) -> list[Check]:
-    """``<prefix>_executable`` (``ros2 run`` finds it) and ``<prefix>_node_name`` (a node called ``node``
-    starts; needs the executable), 1 point each, in ``part``."""
+def console_script_hint(package: str, executable: str) -> str:
+    """The fix for a Python executable ``ros2 run`` does not find (ament_python, tutorial ch. 12-13)."""
+    return f"add '{executable} = {package}.{executable}:main' to console_scripts in setup.py, then colcon build"
+
+
+def cmake_executable_hint(executable: str, source: str) -> str:
+    """The fix for a C++ executable ``ros2 run`` does not find (ament_cmake, tutorial ch. 27)."""
+    return (f"add_executable({executable} {source}) and install(TARGETS {executable} DESTINATION "
+            "lib/${PROJECT_NAME}) in CMakeLists.txt, then colcon build")
+
+
+def node_name_hint(node: str, client_library: str = "rclpy") -> str:
+    """The fix for a node that starts under another name: the name its constructor gives."""
+    if client_library == "rclcpp":
+        return f'pass "{node}" to the rclcpp::Node constructor'
+    return f"pass '{node}' to super().__init__()"
+
+
+def started(prefix: str, package: str, executable: str, node: str, *, part: str = "", points: float = 1,
+            node_points: float | None = None, client_library: str = "rclpy", executable_hint: str | None = None,
+            node_hint: str | None = None, node_needs: tuple[str, ...] | None = None,
+            node_part: str | None = None) -> list[Check]:
+    """The executable / node-name pair every node lesson grades, worded the same in every lesson.
+
+    ``<prefix>_executable`` (``ros2 run PACKAGE EXECUTABLE`` finds it) and ``<prefix>_node_name``
+    (a node called ``node`` joins the graph; needs the executable); with ``prefix=""`` the ids
+    are ``executable`` and ``node_name`` (a lesson with one node).
+
+    Args:
+        points: the executable check's points; ``node_points`` the node name's (default: the same).
+        client_library: ``rclpy`` (the hints name console_scripts and ``super().__init__()``) or
+            ``rclcpp`` (give ``executable_hint``, e.g. :func:`cmake_executable_hint`).
+        executable_hint, node_hint: replace the standard hints (say more, never something else).
+        node_needs: the node name check's needs (default: the executable check).
+        node_part: the node name check's part (default: ``part``).
+    """
+    ids = (f"{prefix}_executable", f"{prefix}_node_name") if prefix else ("executable", "node_name")
     return [
-        Check(f"{prefix}_executable", f"ros2 run finds {executable}", 1,
-              f"register '{executable} = {package}.{executable}:main' in console_scripts, then colcon build",
-              part=part),
-        Check(f"{prefix}_node_name", f"A node named {node} starts", 1, f"pass '{node}' to super().__init__()",
-              needs=(f"{prefix}_executable",), part=part),
+        Check(ids[0], f"ros2 run finds {executable}", points,
+              executable_hint or console_script_hint(package, executable), part=part),
+        Check(ids[1], f"A node named {node} starts", points if node_points is None else node_points,
+              node_hint or node_name_hint(node, client_library),
+              needs=(ids[0],) if node_needs is None else node_needs, part=part if node_part is None else node_part),
     ]
 
 
