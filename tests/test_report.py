@@ -9,6 +9,7 @@ import math
 import pytest
 from rich.console import Console
 
+from ros2course.grade.checks import Check
 from ros2course.grade.session import GradingSession
 from ros2course.grade.results import CheckResult, LessonResult, Plot
 from ros2course.report.table import render_result, result_json, sparkline
@@ -52,9 +53,9 @@ def test_plots_render_under_the_table_but_stay_out_of_json():
 
 
 def test_add_plot_rejects_series_of_the_wrong_length(tmp_path):
-    session = GradingSession.__new__(GradingSession)
-    session.plots = []
-    GradingSession.add_plot(session, "ok", [0.0, 1.0], {"a": [1, 2]}, "rad")
+    session = GradingSession(None, [Check("a", "a", 1)], tmp_path, tmp_path / "log", {})  # no ROS: plots only
+    session.add_plot("ok", [0.0, 1.0], {"a": [1, 2]}, "rad")
     assert session.plots[0].series == {"a": [1.0, 2.0]}
     with pytest.raises(ValueError, match="series 'b' has 1 values for 2 times"):
-        GradingSession.add_plot(session, "bad", [0.0, 1.0], {"b": [1]})
+        session.add_plot("bad", [0.0, 1.0], {"b": [1]})
+    session.close()
