@@ -606,3 +606,10 @@ def test_a_second_held_out_sample_leaves_out_every_mutant_an_earlier_one_showed(
     assert mut.recorded_held_out(lesson) == {m.key for m in second} | {m.key for m in third}
     fourth = mut.held_out_sample(mutants, first, 30, 4, mut.recorded_first_sample(lesson) | mut.recorded_held_out(lesson))
     assert len(fourth) == 10 and not {m.key for m in fourth} & ({m.key for m in second} | {m.key for m in third})
+    mut.write_score(lesson, run(fourth, 4, True))
+    # the first sample graded again (a new grader fingerprint) drops the held-out figures, never what they showed
+    mut.write_score(lesson, run(first, 1, False))
+    assert "held_out" not in mut.read_json_object(tmp_path / mut.SCORE_FILE)
+    assert mut.recorded_held_out(lesson) == {m.key for m in second} | {m.key for m in third} | {m.key for m in fourth}
+    fifth = mut.held_out_sample(mutants, first, 30, 5, mut.recorded_first_sample(lesson) | mut.recorded_held_out(lesson))
+    assert not fifth

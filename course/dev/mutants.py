@@ -930,6 +930,10 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
             data["held_out"] = before["held_out"]
         if "held_out" in (before := read_json_object(lesson.folder / OUTCOMES_FILE)):
             outcomes["held_out"] = before["held_out"]
+    elif shown := recorded_held_out(lesson):
+        # the held-out figures go with the old first sample, but what its samples showed stays shown: a mutant
+        # whose survival the author has seen is tuned, and no later held-out sample may draw it again
+        outcomes[SHOWN_KEY] = sorted(shown)
     return _write_records(lesson, data, outcomes)
 
 
@@ -945,6 +949,10 @@ def _write_records(lesson: Lesson, score: dict[str, Any], outcomes: dict[str, An
     return path
 
 
+#: ``mutation-outcomes.json``'s list of the held-out mutants shown before its first sample was graded again.
+SHOWN_KEY = "held_out_shown_before"
+
+
 def recorded_first_sample(lesson: Lesson) -> set[str]:
     """The keys of the mutants the lesson's recorded first sample graded (``mutation-outcomes.json``)."""
     rows = read_json_object(lesson.folder / OUTCOMES_FILE).get("mutants", [])
@@ -955,9 +963,11 @@ def recorded_held_out(lesson: Lesson) -> set[str]:
     """The keys of every mutant a recorded held-out sample of the lesson has shown (the latest one's, and
     those it lists as ``earlier``): once its survivors were looked at, a held-out mutant is tuned, so the
     next held-out sample leaves them out (issue 37)."""
-    section = read_json_object(lesson.folder / OUTCOMES_FILE).get("held_out") or {}
+    outcomes = read_json_object(lesson.folder / OUTCOMES_FILE)
+    section = outcomes.get("held_out") or {}
     keys = {row["key"] for row in section.get("mutants", []) if isinstance(row, dict) and "key" in row}
-    return keys | {key for key in section.get("earlier", []) if isinstance(key, str)}
+    earlier = [*section.get("earlier", []), *outcomes.get(SHOWN_KEY, [])]
+    return keys | {key for key in earlier if isinstance(key, str)}
 
 
 def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, str] | None = None) -> Path | None:
