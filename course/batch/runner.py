@@ -53,6 +53,7 @@ from rich.progress import (
 )
 from rich.table import Table
 
+from ros2course.batch import provenance
 from ros2course.batch.archive import discover
 from ros2course.batch.job import (
     DEFAULT_MEMORY_LIMIT,
@@ -71,6 +72,7 @@ from ros2course.build.reference import (
 )
 from ros2course.errors import CourseError, MissingRequirement
 from ros2course.files import atomic_write_text
+from ros2course.grade.fingerprint import grader_fingerprint
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import content_root, load_catalog
 from ros2course.lesson.courses import course_fixtures
@@ -159,6 +161,7 @@ class BatchReport:
         seconds: wall time of the batch, seconds.
         isolation: the isolation of the first job run (or of the resumed records).
         peak_rss: per job run now, bytes.
+        regrades: what each regraded row changed (``--regrade``, ``--only``), in the order graded.
     """
 
     out_dir: Path
@@ -168,6 +171,7 @@ class BatchReport:
     seconds: float
     isolation: dict[str, Any]
     peak_rss: list[int]
+    regrades: list[provenance.RegradeChange] = dataclasses.field(default_factory=list)
 
 
 def make_executor(jobs: int, scheduler: str | None) -> tuple[cf.Executor, Any]:
@@ -242,7 +246,8 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
               timeout: float = DEFAULT_TIMEOUT, scheduler: str | None = None, resume: bool = False,
               console: Any = None, memory_limit: int = DEFAULT_MEMORY_LIMIT, isolate: bool = True,
               executor: cf.Executor | None = None, pids_limit: int = sandbox.DEFAULT_PIDS_LIMIT,
-              require_isolation: bool = False, student_lessons: dict[str, list[str]] | None = None) -> BatchReport:
+              require_isolation: bool = False, student_lessons: dict[str, list[str]] | None = None,
+              regrade: str | None = None, only: list[str] | None = None) -> BatchReport:
     """Grade every submission in ``submissions`` for ``lessons``; write OUTDIR as each one finishes.
 
     Args:
@@ -263,11 +268,16 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
         student_lessons: student id -> the lessons (of ``lessons``) that student is graded for
             (default: every lesson for every student; ``dev validate --batch`` hands in one
             workspace per lesson and case).
+        regrade: ``changed`` (regrade the rows whose grader fingerprint or submission digest changed since
+            they were graded) or ``all`` (every row); None: grade only what has no row yet (with ``resume``).
+            See :mod:`ros2course.batch.provenance`.
+        only: student ids: grade (and regrade, an appeal) only these students' submissions.
 
     Raises:
         CourseError: bad input (no such folder, OUTDIR inside SUBMISSIONS or already
-            holding results without ``resume``, unknown lesson, bad numbers), or
-            ``require_isolation`` and a protection is missing.
+            holding results without ``resume``/``regrade``/``only``, ``regrade`` without earlier
+            results or of an unknown mode, a student of ``only`` not among the submissions, unknown
+            lesson, bad numbers), or ``require_isolation`` and a protection is missing.
         MissingRequirement: a lesson needs what is not installed.
     """
     begin = time.monotonic()
@@ -279,12 +289,33 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     catalog = load_catalog()
     results_path = out_dir / "results.jsonl"
     existing = gradebook.read_results(results_path)
-    if existing and not resume:
+    if regrade is not None and regrade not in provenance.REGRADE_MODES:
+        raise CourseError(f"unknown --regrade {regrade!r}", "use --regrade changed or --regrade all")
+    if regrade is not None and not existing:
+        raise CourseError(f"--regrade {regrade}: {out_dir} holds no results to regrade",
+                          "give the --out folder of an earlier `ros2course grade`")
+    if existing and not (resume or regrade or only):
         raise CourseError(f"{out_dir} already holds results ({results_path.name})",
-                          "add --resume to continue that batch, or choose another --out folder")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    done = set(gradebook.latest(existing))
+                          "add --resume to continue that batch, --regrade changed to regrade what changed, "
+                          "or choose another --out folder")
     entries = discover(submissions)
+    if only:
+        unknown = sorted(set(only) - {entry.student for entry in entries})
+        if unknown:
+            raise CourseError(f"--only: no submission of {', '.join(unknown)} in {submissions}",
+                              "give student ids as the submissions folder names them (without .zip)")
+        entries = [entry for entry in entries if entry.student in only]
+    out_dir.mkdir(parents=True, exist_ok=True)
+    provenance.write_run_file(out_dir, submissions, lessons)
+    graders = {lesson: grader_fingerprint(catalog.get(lesson)) for lesson in lessons}
+    digests = {entry.student: provenance.submission_digest(entry) for entry in entries}
+    before_with = provenance.read_graded_with(results_path)
+    previous = gradebook.latest(existing)
+    why = {(entry.student, lesson): provenance.why_regrade(
+               before_with.get((entry.student, lesson)) if (entry.student, lesson) in previous else None,
+               graders[lesson], digests[entry.student], regrade, bool(only))
+           for entry in entries for lesson in lessons}
+    done = {pair for pair in previous if not why.get(pair)}
     batch_id = uuid.uuid4().hex
     scratch_root = Path(tempfile.mkdtemp(prefix="ros2course-batch-"))
     scratch_root.chmod(0o711)
@@ -305,6 +336,8 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     skipped = len(entries) - len(todo)
     records = list(existing)
     peaks: list[int] = []
+    changes: list[provenance.RegradeChange] = []
+    logged = 0
     isolation: dict[str, Any] = next((r.isolation for r in reversed(existing)), {})
     if existing:
         write_outputs(out_dir, records, lessons, sorted({r.student for r in existing}))
@@ -321,8 +354,21 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
                 job = futures[future]
                 outcome = _outcome(future, job)
                 for record in outcome.records:
-                    gradebook.append_record(results_path, record)
+                    pair = (record.student, record.lesson)
+                    now_with = provenance.graded_with(graders.get(record.lesson, ""), digests.get(record.student, ""))
+                    old = previous.get(pair)
+                    kept = provenance.failed_regrade(record) if old is not None else ""
+                    if old is not None:
+                        changes.append(provenance.compare(old, record, why.get(pair, ""), before_with.get(pair, {}),
+                                                          now_with, kept))
+                    if kept:  # a regrade never loses a row: the previous result stays, saying why
+                        record = old
+                        now_with = {**before_with.get(pair, {}), "regrade_failed": kept}
+                    gradebook.append_record(results_path, record, now_with)
                     records.append(record)
+                if changes:
+                    provenance.append_changes(out_dir, changes[logged:])
+                    logged = len(changes)
                 if outcome.records:
                     write_outputs(out_dir, records, lessons, [job.student])
                     if outcome.isolation is not None:  # a job that raised tells nothing of the walls
@@ -347,7 +393,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
         if trusted is not None:
             trusted.discard()
     return BatchReport(out_dir, list(gradebook.latest(records).values()), len(todo), skipped,
-                       time.monotonic() - begin, isolation, peaks)
+                       time.monotonic() - begin, isolation, peaks, changes)
 
 
 def _to_grade(entries: list, lessons: list[str], student_lessons: dict[str, list[str]] | None,
@@ -387,8 +433,18 @@ def _progress(console: Any):
 def render_summary(report: BatchReport, console: Any) -> None:
     """Rich tables on ``console``: score distribution, most failed checks, not gradable reasons, isolation."""
     records = report.records
-    console.print(f"graded {report.graded_now} submission(s) now, {report.skipped} skipped (--resume), "
-                  f"{len(records)} result(s) in {report.out_dir / 'results.jsonl'} ({report.seconds:.1f} s)")
+    console.print(f"graded {report.graded_now} submission(s) now, {report.skipped} skipped (graded before, "
+                  f"unchanged), {len(records)} result(s) in {report.out_dir / 'results.jsonl'} ({report.seconds:.1f} s)")
+    if report.regrades:
+        moved = Counter(change.direction for change in report.regrades)
+        console.print(f"regraded {len(report.regrades)} row(s): {moved['up']} up, {moved['down']} down, "
+                      f"{moved['same']} unchanged, {moved['kept']} kept (the regrade failed); what changed: "
+                      f"{report.out_dir / 'regrades.jsonl'}")
+        for change in report.regrades:
+            if change.direction != "same":
+                checks = ", ".join(f"{cid} {old} -> {new}" for cid, (old, new) in change.checks.items())
+                console.print(f"  {change.student} {change.lesson}: {change.old_score:g} -> {change.new_score:g}"
+                              f" ({change.why}){': ' + checks if checks else ''}{'; kept: ' + change.kept if change.kept else ''}")
     graded = [r for r in records if r.status.graded]
     if graded:
         table = Table(title="score distribution (percent of max)", title_justify="left")

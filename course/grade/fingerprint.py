@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import ast
 import hashlib
+from collections.abc import Callable
 from pathlib import Path
 
 from ros2course.lesson import content_root
@@ -105,6 +106,19 @@ def _engine_imports(module: Path, engine: Path) -> list[Path]:
     return out
 
 
+def _closure(start: list[Path], imports: Callable[[Path], list[Path]]) -> set[Path]:
+    """The module files reachable from ``start`` through ``imports`` (module file -> the files it imports),
+    each once; a path that is not a file is left out."""
+    todo, seen = list(start), set()
+    while todo:
+        module = todo.pop()
+        if module in seen or not module.is_file():
+            continue
+        seen.add(module)
+        todo += imports(module)
+    return seen
+
+
 def engine_modules(course_modules: list[Path]) -> list[Path]:
     """The engine files (under :data:`ENGINE_PARTS`) a grader runs on: every ``ros2course`` module that
     ``course_modules`` (the grader and the course modules it imports) or the grading engine
@@ -114,14 +128,7 @@ def engine_modules(course_modules: list[Path]) -> list[Path]:
     import ros2course  # noqa: PLC0415 - the engine's own folder
 
     engine = Path(ros2course.__file__).resolve().parent
-    todo = [*course_modules, engine / "grade" / "engine.py"]
-    seen: set[Path] = set()
-    while todo:
-        module = todo.pop()
-        if module in seen or not module.is_file():
-            continue
-        seen.add(module)
-        todo += _engine_imports(module, engine)
+    seen = _closure([*course_modules, engine / "grade" / "engine.py"], lambda module: _engine_imports(module, engine))
     parts = [engine / part for part in ENGINE_PARTS]
     return sorted(p for p in seen if p.resolve().is_relative_to(engine)
                   and any(p == part or p.is_relative_to(part) for part in parts))
@@ -131,13 +138,7 @@ def grader_files(lesson: Lesson) -> list[Path]:
     """Every file :func:`grader_fingerprint` covers for ``lesson``, sorted, each once."""
     root = content_root()
     graders = root / "graders"
-    todo, modules = [graders / f"{lesson.grader}.py"], set()
-    while todo:
-        module = todo.pop()
-        if module in modules or not module.is_file():
-            continue
-        modules.add(module)
-        todo += _course_imports(module, graders)
+    modules = _closure([graders / f"{lesson.grader}.py"], lambda module: _course_imports(module, graders))
     files = set(modules)
     files.update(_files(graders / "data" / lesson.grader) if (graders / "data" / lesson.grader).is_dir() else [])
     files.update(engine_modules(sorted(modules)))

@@ -31,13 +31,17 @@ from typing import Any
 from ros2course.grade.results import LessonResult
 
 
-def append_record(path: Path, result: LessonResult) -> None:
+def append_record(path: Path, result: LessonResult, graded_with: dict[str, str] | None = None) -> None:
     """Append ``result`` (:meth:`~ros2course.grade.results.LessonResult.to_record`) as one JSON line, flushed and fsync'd.
 
-    A previous run killed mid-line left a truncated last line: a newline is
-    written first so the new record starts on a line of its own.
+    ``graded_with``: what graded it (:mod:`ros2course.batch.provenance`: grader fingerprint, submission
+    digest, time), kept under that key of the record. A previous run killed mid-line left a truncated
+    last line: a newline is written first so the new record starts on a line of its own.
     """
-    line = json.dumps(result.to_record(), separators=(",", ":"), ensure_ascii=False) + "\n"
+    record = result.to_record()
+    if graded_with:
+        record["graded_with"] = graded_with
+    line = json.dumps(record, separators=(",", ":"), ensure_ascii=False) + "\n"
     with open(path, "ab+") as handle:
         if handle.tell() > 0:
             handle.seek(-1, os.SEEK_END)
