@@ -780,6 +780,10 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
           scheduler: Annotated[Optional[str], typer.Option("--scheduler", envvar="DASK_SCHEDULER_ADDRESS",
                                                            help="Dask scheduler address: grade on that cluster instead.")] = None,
           resume: Annotated[bool, typer.Option("--resume", help="Skip submissions already in OUTDIR/results.jsonl.")] = False,
+          regrade: Annotated[Optional[str], typer.Option("--regrade", metavar="changed|all",
+                                                         help="Regrade the rows of OUTDIR whose grader or submission changed since (changed), or every row (all).")] = None,
+          only: Annotated[Optional[list[str]], typer.Option("--only", metavar="STUDENT",
+                                                            help="Grade (or regrade: an appeal) only this student's submission (repeatable).")] = None,
           memory_mb: Annotated[int, typer.Option("--memory-mb", help="Address-space limit per process of a submission, MiB (0: none).")] = 4096,
           pids_limit: Annotated[int, typer.Option("--pids-limit", help="Processes + threads a submission may have at once.")] = 256,
           require_isolation: Annotated[bool, typer.Option("--require-isolation",
@@ -797,7 +801,7 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
         raise CourseError(f"--memory-mb must be 0 or more (got {memory_mb})", "e.g. --memory-mb 4096")
     report = run_batch(submissions, lesson, out, jobs=jobs, timeout=timeout, scheduler=scheduler, resume=resume,
                        console=err, memory_limit=memory_mb * 1024 * 1024, pids_limit=pids_limit,
-                       require_isolation=require_isolation)
+                       require_isolation=require_isolation, regrade=regrade, only=only)
     render_summary(report, err)
     stdout_console().print(f"gradebook: {report.out_dir / 'gradebook.csv'}")
     if not no_report:
