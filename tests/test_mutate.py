@@ -220,6 +220,23 @@ def test_rules_match_kinds_of_mutant_mechanically() -> None:
         mut.Rule(id="bad", reason="a broken expression", original="(")
 
 
+def test_a_starter_line_rule_covers_only_the_lines_the_starter_gives_in_place() -> None:
+    """``starter_line``: a line of the reference the starter gives as is, in the same place (issue 37). A line
+    the learner changed (the TODO's) or wrote is not one, even when the same text sits elsewhere in the starter."""
+    starter = "ros2 daemon start\nfor i in 1 2 3; do\n  sleep 1\ndone\n\n# TODO: add --verbose\nros2 topic info /t\n"
+    reference = "ros2 daemon start\nfor i in 1 2 3; do\n  sleep 1\ndone\n\n# --verbose shows the QoS\nros2 topic info --verbose /t\nsleep 1\n"
+    assert mut.starter_given_lines(tuple(reference.splitlines()), tuple(starter.splitlines())) == {1, 2, 3, 4, 5}
+    rule = mut.Rule(id="given", reason="a line the starter gives as is", file="cli/*.sh", starter_line=True)
+    rule._starters = {"cli/a.sh": starter.splitlines()}
+    assert rule.matches(_mutant(reference, "cli/a.sh", 3, "  sleep 0"))
+    assert rule.matches(_mutant(reference, "cli/a.sh", 5, "break;", insert=True))
+    assert not rule.matches(_mutant(reference, "cli/a.sh", 7, "ros2 topic info /t"))  # the learner's line
+    assert not rule.matches(_mutant(reference, "cli/a.sh", 8, "sleep 0"))  # same text, not the starter's place
+    assert not rule.matches(_mutant(reference, "cli/b.sh", 3, "  sleep 0"))  # no starter copy of that file
+    assert rule.covers_line("cli/a.sh", reference.splitlines(), 2)
+    assert not rule.covers_line("cli/a.sh", reference.splitlines(), 8)
+
+
 def test_entries_name_one_mutant_by_identity_and_rules_come_first(tmp_path: Path) -> None:
     guard = _mutant(NODE_SOURCE, PY, 14, "if __name__ <= '__main__':")
     spin = _mutant(NODE_SOURCE, PY, 11, "    pass")

@@ -70,6 +70,7 @@ import dataclasses
 import datetime as dt
 import difflib
 import fnmatch
+import functools
 import hashlib
 import importlib.util
 import json
@@ -84,7 +85,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, model_validator
 from ros2course.errors import CourseError, LessonFormatError, MissingRequirement
 from ros2course.files import atomic_write_text
 from ros2course.grade.results import LessonResult, Status
@@ -182,6 +183,11 @@ class Rule(BaseModel):
     * ``not_block``: a regular expression; the changed line is *not* in the indented block of a line matching it
       (``^\s*(for|while|until)\b``: outside every loop of a script, where a ``break`` is a no-op). Blocks are
       found by indentation (:func:`in_block`), as the course's scripts are written.
+    * ``starter_line``: the changed line is one the lesson's starter gives as is, in the same place (a line of
+      the reference that :func:`starter_given_lines` pairs with an equal line of the starter's copy of the
+      file): the learner never writes it, so a change there is outside what the lesson asks of them, unless
+      the contract says otherwise (a rule never covers a line that implements a requirement, so a given line
+      the lesson makes a requirement, e.g. a discovery loop the grader runs late, stays counted).
 
     ``set_aside``: its mutants are set aside before sampling, never graded (free text no program reads),
     so a sample is spent on mutants that count. A rule may never cover a line that implements a requirement
@@ -198,7 +204,10 @@ class Rule(BaseModel):
     block: str | None = None
     strings_only: bool = False
     not_block: str | None = None
+    starter_line: bool = False
     set_aside: bool = False
+    #: ``{workspace-relative file: the starter's copy's lines}``, set by :func:`load_config` (``starter_line``).
+    _starters: dict[str, list[str]] = PrivateAttr(default_factory=dict)
 
     @model_validator(mode="before")
     @classmethod
@@ -211,9 +220,10 @@ class Rule(BaseModel):
     def _matches_something(self) -> Rule:
         for name in ("original", "mutated", "block", "not_block"):
             _regex(getattr(self, name), name)
-        if self.original is None and self.mutated is None and self.block is None and not self.strings_only:
-            raise ValueError("a rule needs a matcher besides `file`: `original`, `mutated`, `block` or "
-                             "`strings_only` (a whole file is left out with `files:`)")
+        if (self.original is None and self.mutated is None and self.block is None and not self.strings_only
+                and not self.starter_line):
+            raise ValueError("a rule needs a matcher besides `file`: `original`, `mutated`, `block`, "
+                             "`strings_only` or `starter_line` (a whole file is left out with `files:`)")
         return self
 
     def _file(self, rel: str) -> bool:
@@ -225,7 +235,12 @@ class Rule(BaseModel):
         text = lines[number - 1] if 1 <= number <= len(lines) else ""
         return (self._file(rel) and (self.original is None or re.search(self.original, text) is not None)
                 and (self.block is None or in_block(lines, number, self.block))
-                and (self.not_block is None or not in_block(lines, number, self.not_block, own=False)))
+                and (self.not_block is None or not in_block(lines, number, self.not_block, own=False))
+                and (not self.starter_line or self._given(rel, lines, number)))
+
+    def _given(self, rel: str, lines: list[str], number: int) -> bool:
+        starter = self._starters.get(rel)
+        return starter is not None and number in starter_given_lines(tuple(lines), tuple(starter))
 
     def matches(self, mutant: Mutant, originals: dict[str, str] | None = None) -> bool:
         """Whether this rule triages ``mutant`` (``originals``: ``{file: text}`` when the mutant has no content)."""
@@ -249,7 +264,22 @@ class Rule(BaseModel):
                 return False
             if self.not_block is not None and in_block(lines, mutant.line, self.not_block, own=False):
                 return False
+        if self.starter_line:
+            whole = original_lines(mutant, originals)
+            if not whole or not self._given(mutant.file, whole, mutant.line):
+                return False  # the file is not known, or the line is the learner's to write
         return True
+
+
+@functools.lru_cache(maxsize=256)
+def starter_given_lines(reference: tuple[str, ...], starter: tuple[str, ...]) -> frozenset[int]:
+    """The 1-based numbers of the ``reference`` lines the ``starter`` gives as they are, in the same place:
+    those in the blocks :class:`difflib.SequenceMatcher` (no junk heuristic) finds equal in both, compared
+    with trailing whitespace removed. A starter line the learner must change (a TODO's line) differs from the
+    reference's, so it is never one of them."""
+    matcher = difflib.SequenceMatcher(None, [line.rstrip() for line in reference],
+                                      [line.rstrip() for line in starter], autojunk=False)
+    return frozenset(i + 1 for block in matcher.get_matching_blocks() for i in range(block.a, block.a + block.size))
 
 
 #: How many mutants with the same file, original and mutated line an entry's key is checked against.
@@ -362,12 +392,18 @@ def load_config(lesson: Lesson) -> MutationConfig:
         raise LessonFormatError(f"{path}: (top level): expected a mapping with 'rules', 'survivors' (and 'files'), "
                                 f"got {type(data).__name__}", "see course/dev/mutants.py for the format")
     try:
-        return MutationConfig.model_validate(data)
+        config = MutationConfig.model_validate(data)
     except ValidationError as exc:
         raise LessonFormatError(format_validation_error(path, exc),
                                 "a rule has an id, a reason of a sentence and matchers; a survivor has file, key "
                                 "(or line number + original + mutated) and a reason; see course/dev/mutants.py "
                                 "(Rule, TriageEntry)") from exc
+    if any(rule.starter_line for rule in config.rules):
+        starters = {rel: file.read_text(encoding="utf-8", errors="replace").splitlines()
+                    for rel, file in _own_starter(lesson).items() if _mutable(file)}
+        for rule in config.rules:
+            rule._starters = starters
+    return config
 
 
 @dataclasses.dataclass
