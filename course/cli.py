@@ -772,7 +772,8 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
 @app.command()
 @_handle_errors
 def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
-                                                      help="Folder with one entry per student: a workspace, a folder of packages, or a .zip / .tar.gz of either.")],
+                                                      help="Folder with one entry per student: a workspace, a folder of packages, or a .zip / .tar.gz of either "
+                                                           "(--from: an LMS download or a folder of git clones).")],
           lesson: Annotated[list[str], typer.Option("--lesson", "-l", metavar="LESSON", help="Lesson to grade (repeatable).")],
           out: Annotated[Path, typer.Option("--out", "-o", metavar="OUTDIR", help="Where the gradebook and results go.")],
           jobs: Annotated[Optional[int], typer.Option("--jobs", "-j", help="Submissions graded at once (default: number of cores).")] = None,
@@ -789,9 +790,20 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
           require_isolation: Annotated[bool, typer.Option("--require-isolation",
                                                           help="Refuse to grade unless every protection (namespaces, unprivileged uid, process limit) is in effect.")] = False,
           no_report: Annotated[bool, typer.Option("--no-report", help="Do not write OUTDIR/report.html at the end.")] = False,
+          from_fmt: Annotated[str, typer.Option("--from", metavar="folder|canvas|moodle|blackboard|git",
+                                                help="What SUBMISSIONS is: today's folder, an LMS's download of all submissions (a .zip or its "
+                                                     "unpacked folder), or a folder of git clones; taken into OUTDIR/intake/ first.")] = "folder",
+          before: Annotated[Optional[str], typer.Option("--before", metavar="DATETIME",
+                                                        help="Deadline, ISO 8601 with its time zone (2026-03-01T23:59:00+01:00): "
+                                                             "--from git takes each clone's last commit before it.")] = None,
           course: CourseOpt = None,
           ) -> None:
     """Grade a whole class: each submission isolated, in parallel, resumable; writes a gradebook."""
+    from ros2course.batch import intake as intake_mod  # noqa: PLC0415 - start time, see the imports
+
+    if from_fmt not in intake_mod.FORMATS:
+        raise CourseError(f"unknown --from {from_fmt!r}", f"use --from {', --from '.join(intake_mod.FORMATS)}")
+    deadline = intake_mod.parse_deadline(before) if before is not None else None
     _choose_course(None, course)
     _ros()
     from ros2course.batch.runner import render_summary, run_batch  # noqa: PLC0415 - start time, see the imports
@@ -799,9 +811,27 @@ def grade(submissions: Annotated[Path, typer.Argument(metavar="SUBMISSIONS",
     err = stderr_console()
     if memory_mb < 0:
         raise CourseError(f"--memory-mb must be 0 or more (got {memory_mb})", "e.g. --memory-mb 4096")
+    not_taken: dict[str, str] | None = None
+    if from_fmt != "folder":  # issue 39: the LMS download or the clones become OUTDIR/intake/, graded as today
+        if (out / "results.jsonl").is_file() and not (resume or regrade or only):  # before the intake replaces its folder
+            raise CourseError(f"{out} already holds results (results.jsonl)",
+                              "add --resume to continue that batch, --regrade changed to regrade what changed, "
+                              "or choose another --out folder")
+        taken = intake_mod.intake(submissions, from_fmt, out / "intake", before=deadline)
+        err.print(f"intake ({from_fmt}): {len(taken.taken)} submissions in {taken.folder}, "
+                  f"{len(taken.problems)} not taken (see {taken.staging / intake_mod.MANIFEST})")
+        for student, why in taken.problems.items():
+            err.print(f"  not taken: {student}: {why}", markup=False, highlight=False)
+        submissions, not_taken = taken.folder, taken.problems
     report = run_batch(submissions, lesson, out, jobs=jobs, timeout=timeout, scheduler=scheduler, resume=resume,
                        console=err, memory_limit=memory_mb * 1024 * 1024, pids_limit=pids_limit,
-                       require_isolation=require_isolation, regrade=regrade, only=only)
+                       require_isolation=require_isolation, regrade=regrade, only=only,
+                       not_taken=not_taken)
+    if from_fmt == "folder":  # the manifest of today's layout (cheap: nothing copied); never fails a batch
+        try:
+            intake_mod.intake(submissions, "folder", out / "intake")
+        except CourseError as exc:
+            err.print(f"warning: {out / 'intake'} was not written: {exc.message}", markup=False, highlight=False)
     render_summary(report, err)
     stdout_console().print(f"gradebook: {report.out_dir / 'gradebook.csv'}")
     if not no_report:
@@ -835,6 +865,44 @@ def report(out_dir: Annotated[Path, typer.Argument(metavar="OUTDIR", help="The -
         raise CourseError(f"--submissions {submissions} is not a folder", "give the folder graded by `ros2course grade`")
     stdout_console().print(str(write_report(out_dir, similarity=not no_similarity, submissions=submissions,
                                             exclude_reference=exclude_reference)))
+
+
+@app.command("export")
+@_handle_errors
+def export_(out_dir: Annotated[Path, typer.Argument(metavar="OUTDIR", help="The --out folder of `ros2course grade`.")],
+            fmt: Annotated[str, typer.Option("--format", help="canvas (Gradebook import CSV), moodle (grade import CSV) "
+                                             "or csv (every adjustment with its reason).")] = "csv",
+            class_path: Annotated[Optional[Path], typer.Option("--class", metavar="CLASS_YAML",
+                                                               help="The class file: due dates, extensions, late policy "
+                                                               "(default: OUTDIR/class.yaml when it exists).")] = None,
+            output: Annotated[Optional[Path], typer.Option("--output", "-o", metavar="FILE",
+                                                           help="Write here instead of stdout.")] = None,
+            course: CourseOpt = None,
+            ) -> None:
+    """Export the class's gradebook, late penalties applied, for Canvas, Moodle or as a CSV."""
+    _choose_course(None, course)
+    from ros2course.files import atomic_write_text  # noqa: PLC0415 - start time, see the imports
+    from ros2course.report.lms import FORMATS, export  # noqa: PLC0415 - same
+    from ros2course.report.term import adjust_out_dir, intake_format  # noqa: PLC0415 - same
+
+    if fmt not in FORMATS:
+        raise CourseError(f"unknown --format {fmt!r}", "use --format canvas, --format moodle or --format csv")
+    if output is not None and output.is_dir():
+        raise CourseError(f"--output {output} is a folder", "give a file name, e.g. --output grades-canvas.csv")
+    book = adjust_out_dir(out_dir, class_path)
+    text = export(book.adjusted, fmt, book.names, book.lessons, canvas_user_ids=intake_format(out_dir) == "canvas")
+    if output is None:
+        sys.stdout.write(text)
+        return
+    try:
+        atomic_write_text(output, text)
+    except OSError as exc:
+        raise CourseError(f"cannot write {output}: {exc.strerror or exc}", "check that its folder exists and is writable") from None
+    late = sum(1 for row in book.adjusted if row.late)
+    stderr_console().print(f"{len(book.adjusted)} result(s), {late} late"
+                           + (f" (class file {book.class_path})" if book.class_path else " (no class file: nothing adjusted)"),
+                           markup=False, highlight=False)
+    stdout_console().print(str(output), markup=False, highlight=False)
 
 
 @app.command()

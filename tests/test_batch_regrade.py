@@ -88,7 +88,7 @@ def test_regrade_changed_regrades_exactly_the_rows_whose_grader_or_submission_ch
     assert grader.graded == ["bob"] and _scores(out)["bob"] == 3
     (change,) = report.regrades
     assert (change.why, change.direction, change.checks) == ("submission changed", "up", {"answer": [0.0, 2.0]})
-    assert provenance.read_changes(out)[-1]["student"] == "bob"
+    assert gradebook.read_regrades(out)[-1]["student"] == "bob"
 
     # the grader changes: every row is regraded once, the report names both fingerprints
     grader.graded.clear()
@@ -172,3 +172,18 @@ def test_cli_regrade_options_are_refused_in_one_line(tmp_path: Path, cli) -> Non
     proc = cli("grade", str(subs), "--lesson", LESSON, "--out", str(tmp_path / "out"), "--regrade", "changed")
     assert proc.returncode == 5 and "Traceback" not in proc.stderr and "holds no results to regrade" in proc.stderr
     assert "hint:" in proc.stderr
+
+
+def test_the_report_shows_what_each_regrade_changed(tmp_path: Path, grader) -> None:
+    from ros2course.report.html import regrades_section, render_report
+
+    subs, out = _class(tmp_path / "subs", {"alice": 2, "bob": 0}), tmp_path / "out"
+    _grade(subs, out)
+    assert regrades_section(out) is None
+    (subs / "bob" / "src" / "score.txt").write_text("2\n")
+    _grade(subs, out, regrade="changed")
+    section = regrades_section(out)
+    (row,) = section["rows"]
+    assert row["student"] == "bob" and row["score"] == "1 -> 3 of 3" and row["checks"] == "answer 0.0 -> 2.0"
+    assert "1 up" in section["note"]
+    assert "Regrades" in render_report(out, similarity=False)

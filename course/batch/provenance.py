@@ -225,23 +225,6 @@ def append_changes(out_dir: Path, changes: Iterable[RegradeChange]) -> None:
             os.fsync(handle.fileno())
 
 
-def read_changes(out_dir: Path) -> list[dict[str, Any]]:
-    """Every object of ``OUTDIR/regrades.jsonl`` (none when missing; broken lines skipped)."""
-    out = []
-    try:
-        text = (out_dir / "regrades.jsonl").read_text(encoding="utf-8", errors="replace")
-    except FileNotFoundError:
-        return out
-    for line in text.splitlines():
-        try:
-            data = json.loads(line)
-        except ValueError:
-            continue
-        if isinstance(data, dict):
-            out.append(data)
-    return out
-
-
 def write_run_file(out_dir: Path, submissions: Path, lessons: list[str]) -> Path:
     """Write ``OUTDIR/run.json``: the submissions folder (absolute) and the lessons of the batch (those of
     earlier runs into the same OUTDIR kept), so that ``report OUTDIR`` finds the submissions again."""

@@ -247,7 +247,8 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
               console: Any = None, memory_limit: int = DEFAULT_MEMORY_LIMIT, isolate: bool = True,
               executor: cf.Executor | None = None, pids_limit: int = sandbox.DEFAULT_PIDS_LIMIT,
               require_isolation: bool = False, student_lessons: dict[str, list[str]] | None = None,
-              regrade: str | None = None, only: list[str] | None = None) -> BatchReport:
+              regrade: str | None = None, only: list[str] | None = None,
+              not_taken: dict[str, str] | None = None) -> BatchReport:
     """Grade every submission in ``submissions`` for ``lessons``; write OUTDIR as each one finishes.
 
     Args:
@@ -272,6 +273,8 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
             they were graded) or ``all`` (every row); None: grade only what has no row yet (with ``resume``).
             See :mod:`ros2course.batch.provenance`.
         only: student ids: grade (and regrade, an appeal) only these students' submissions.
+        not_taken: student id -> why the intake could not take their submission (:mod:`ros2course.batch.intake`):
+            each gets a "not gradable" row per lesson with that reason, so the gradebook lists the whole class.
 
     Raises:
         CourseError: bad input (no such folder, OUTDIR inside SUBMISSIONS or already
@@ -339,8 +342,19 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     changes: list[provenance.RegradeChange] = []
     logged = 0
     isolation: dict[str, Any] = next((r.isolation for r in reversed(existing)), {})
-    if existing:
-        write_outputs(out_dir, records, lessons, sorted({r.student for r in existing}))
+    for student, reason in sorted((not_taken or {}).items()):
+        if only and student not in only:
+            continue
+        for lesson in lessons:
+            if (student, lesson) in previous and not (regrade or only):
+                continue
+            row = unfinished_result(lesson, Status.NOT_GRADABLE, f"not taken from the download: {reason}",
+                                    "hand in again, in the format the course asks for")
+            row.student = student
+            gradebook.append_record(results_path, row, provenance.graded_with(graders[lesson], "not-taken"))
+            records.append(row)
+    if existing or not_taken:
+        write_outputs(out_dir, records, lessons, sorted({r.student for r in records}))
     client = None
     own_executor = executor is None
     if own_executor:

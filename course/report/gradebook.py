@@ -158,3 +158,21 @@ def junit_xml(results: Iterable[LessonResult]) -> str:
         root.set(key, str(value))
     ET.indent(root)
     return '<?xml version="1.0" encoding="utf-8"?>\n' + ET.tostring(root, encoding="unicode") + "\n"
+
+
+def read_regrades(out_dir: Path) -> list[dict[str, Any]]:
+    """Every object of ``OUTDIR/regrades.jsonl`` (what each regrade changed, written by
+    :func:`ros2course.batch.provenance.append_changes`); none when missing, broken lines skipped."""
+    out = []
+    try:
+        text = (out_dir / "regrades.jsonl").read_text(encoding="utf-8", errors="replace")
+    except FileNotFoundError:
+        return out
+    for line in text.splitlines():
+        try:
+            data = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(data, dict):
+            out.append(data)
+    return out

@@ -27,7 +27,7 @@ from typing import Any
 from ros2course.errors import CourseError
 from ros2course.files import atomic_write_text
 from ros2course.grade.results import LessonResult, Status
-from ros2course.report.gradebook import latest, read_results_counted
+from ros2course.report.gradebook import latest, read_regrades, read_results_counted
 
 #: Plots of recorded rates drawn in one report (each costs ~50 ms); the rest say where to look.
 MAX_PLOTS = 40
@@ -76,6 +76,17 @@ _TEMPLATE = """<!DOCTYPE html>
 {% for r in unfinished %}<tr><td><a href="#{{ r.anchor }}">{{ r.student }}</a></td><td>{{ r.lesson }}</td><td>{{ r.status }}</td><td><pre>{{ r.message }}</pre></td><td>{{ r.hint }}</td></tr>
 {% endfor %}</table>{% else %}<p>none</p>{% endif %}
 
+{% if adjustments %}<h2 id="deadlines">Deadlines and late policy</h2>
+<p class="note">{{ adjustments.note }}</p>
+{% if adjustments.rows %}<table><tr><th>student</th><th>lesson</th><th>raw score</th><th>adjusted score</th><th>reason</th></tr>
+{% for a in adjustments.rows %}<tr><td>{{ a.student }}</td><td>{{ a.lesson }}</td><td>{{ a.raw }} / {{ a.max }}</td><td>{{ a.score }}</td><td>{{ a.reason }}</td></tr>
+{% endfor %}</table>{% endif %}
+{% endif %}
+{% if regrades %}<h2 id="regrades">Regrades</h2>
+<p class="note">{{ regrades.note }}</p>
+<table><tr><th>student</th><th>lesson</th><th>score</th><th>checks whose points moved</th><th>why</th><th>graded with</th></tr>
+{% for r in regrades.rows %}<tr><td>{{ r.student }}</td><td>{{ r.lesson }}</td><td>{{ r.score }}</td><td>{{ r.checks }}</td><td>{{ r.why }}</td><td>{{ r.graders }}</td></tr>
+{% endfor %}</table>{% endif %}
 <h2 id="checks">The checks</h2>
 {% if checks %}<p>Sorted by how many lost each: what to re-teach first.</p>
 <table><tr><th>lesson</th><th>check</th><th>lost by</th><th>most common observed (among those who lost it)</th></tr>
@@ -98,7 +109,7 @@ _TEMPLATE = """<!DOCTYPE html>
 
 <h2 id="similar">Similar submissions</h2>
 <p class="note">{{ similarity.note }}</p>
-{% for pair in similarity.pairs %}<h3>{{ pair.lesson }}: {{ pair.first }} / {{ pair.second }} ({{ "%.0f" % (100 * pair.score) }}%)</h3>
+{% for pair in similarity.pairs %}<h3>{{ pair.lesson }}: {{ pair.first }} / {{ pair.second }} ({{ "%.0f" % (100 * pair.score) }}%, {{ pair.shared_tokens }} tokens shared beyond boilerplate)</h3>
 <table><tr><th>{{ pair.first }}: {{ pair.files[0] }}</th><th>{{ pair.second }}: {{ pair.files[1] }}</th></tr>
 {% for left, right in pair.fragments %}<tr><td><pre>{{ left }}</pre></td><td><pre>{{ right }}</pre></td></tr>
 {% endfor %}</table>
@@ -427,24 +438,46 @@ def _students(out_dir: Path, results: list[LessonResult], max_plots: int) -> lis
 
 def _similarity(results: list[LessonResult], similarity: bool, exclude_reference: bool,
                 submissions: Path | None) -> dict[str, Any]:
+    """The "similar submissions" section: ``{note, pairs}``, the note saying in one line what was compared, what
+    was left out, and each flagged pair's size, or why nothing was compared.
+
+    Args:
+        submissions: the folder to compare; None: none given nor recorded by the run (:func:`write_report`);
+            a path that is no folder: the folder the run recorded in ``run.json``, gone since.
+    """
     if not similarity:
         return {"note": "not computed (--no-similarity)", "pairs": []}
     if submissions is None:
-        return {"note": "not computed: give the submissions folder (--submissions SUBMISSIONS)", "pairs": []}
+        return {"note": "not computed: give the submissions folder (--submissions SUBMISSIONS): the run did not "
+                        "record its submissions folder", "pairs": []}
+    if not Path(submissions).is_dir():
+        return {"note": f"not computed: the submissions folder {submissions} recorded by the run is gone "
+                        "(give --submissions SUBMISSIONS)", "pairs": []}
     try:
-        from ros2course.report.similarity import THRESHOLD, common_limit, similar_pairs  # noqa: PLC0415
+        from ros2course.report.similarity import (  # noqa: PLC0415
+            MIN_SHARED_TOKENS,
+            THRESHOLD,
+            common_limit,
+            similar_pairs,
+        )
         comparison = similar_pairs(results, submissions, exclude_reference=exclude_reference)
     except ImportError as exc:
         return {"note": f"not computed: {exc}", "pairs": []}
     if not any(count >= 2 for count in comparison.students.values()):
         return {"note": f"not computed: fewer than two students' sources found in {submissions}", "pairs": []}
+    generated = (f"what `ros2 pkg create` writes ({comparison.generated_files} files rendered from "
+                 f"{comparison.generated_from})" if comparison.generated_files else
+                 f"not what `ros2 pkg create` writes ({comparison.generated_from}): it counts only as common code")
     left = ("the course's starter files" + (" and reference solutions" if exclude_reference else "")
-            + f" ({comparison.boilerplate_files} files) left out; code shared by more than "
-            + ", ".join(f"{common_limit(n)} students of {lesson}" for lesson, n in comparison.students.items())
-            + " does not make a pair")
-    note = (f"copydetect (winnowing) per lesson over {comparison.files} file(s); {left}; pairs at least "
-            f"{THRESHOLD:.0%} alike: {len(comparison.pairs)}"
+            + f" ({comparison.boilerplate_files} files) and {generated} left out; code found in more than "
+            + ", ".join(f"{common_limit(n)} of the {n} students of {lesson}" for lesson, n in comparison.students.items())
+            + " is common (a third of a section, 2 to 10, or a tenth of a larger class: Moss's -m) and left out too")
+    sizes = "; ".join(f"{pair.first} / {pair.second}: {pair.shared_tokens}" for pair in comparison.pairs[:MAX_PAIRS])
+    note = (f"copydetect (winnowing) per lesson over {comparison.files} file(s) with code of their own; {left}; "
+            f"pairs at least {THRESHOLD:.0%} alike over what is left and sharing at least {MIN_SHARED_TOKENS} "
+            f"tokens of it (about 8 lines): {len(comparison.pairs)}"
             + (f" (the first {MAX_PAIRS} shown)" if len(comparison.pairs) > MAX_PAIRS else "")
+            + (f"; shared beyond boilerplate, in copydetect tokens (~15 a line of Python): {sizes}" if sizes else "")
             + f"; {comparison.seconds:.1f} s. Similarity only flags; it never changes a grade.")
     return {"note": note, "pairs": comparison.pairs[:MAX_PAIRS]}
 
@@ -487,7 +520,8 @@ def render_report(out_dir: Path, *, similarity: bool = True, exclude_reference: 
         isolation=isolation.most_common(), unfinished=unfinished, checks=summary["checks"],
         students=[dict(s, plots=[dict(p, svg=jinja2.utils.markupsafe.Markup(p["svg"])) for p in s["plots"]])
                   for s in students],
-        similarity=_similarity(results, similarity, exclude_reference, submissions))
+        similarity=_similarity(results, similarity, exclude_reference, submissions),
+        adjustments=adjustments_section(out_dir), regrades=regrades_section(out_dir))
 
 
 def write_report(out_dir: Path, *, similarity: bool = True, exclude_reference: bool = True,
@@ -498,7 +532,9 @@ def write_report(out_dir: Path, *, similarity: bool = True, exclude_reference: b
         out_dir: the ``--out`` folder of ``ros2course grade``.
         similarity: compare the submissions (:mod:`ros2course.report.similarity`) and list similar pairs.
         exclude_reference: leave the reference solution out of the comparison (the starter always is).
-        submissions: the submissions folder graded (folders or archives); None: no similarity.
+        submissions: the submissions folder graded (folders or archives); None: the folder the run recorded
+            (``{"submissions": "<absolute path>"}`` in ``OUTDIR/run.json``, the batch runner writes it), if
+            it is still there; else the similarity section says in one line why it is absent.
         max_plots: rate plots drawn at most (failed checks first).
 
     Returns:
@@ -507,6 +543,16 @@ def write_report(out_dir: Path, *, similarity: bool = True, exclude_reference: b
     Raises:
         CourseError: ``out_dir`` or its results.jsonl is missing or holds no complete record.
     """
+    if submissions is None and similarity:
+        import json  # noqa: PLC0415
+
+        try:
+            recorded = json.loads((Path(out_dir) / "run.json").read_text(encoding="utf-8")).get("submissions")
+        except (OSError, ValueError, AttributeError):  # no run.json (an older run), unreadable, not an object
+            recorded = None
+        if isinstance(recorded, str) and recorded.strip():
+            # a folder gone since reaches _similarity, which says so; a relative path is read from OUTDIR
+            submissions = Path(out_dir) / Path(recorded).expanduser()
     text = render_report(out_dir, similarity=similarity, exclude_reference=exclude_reference,
                          submissions=submissions, max_plots=max_plots)
     path = Path(out_dir) / "report.html"
@@ -541,9 +587,77 @@ def write_markdown(out_dir: Path) -> str:
     if summary["median_seconds"] is not None:
         lines.append(f"Grading time: median {summary['median_seconds']:.1f} s, "
                      f"slowest {summary['slowest_seconds']:.1f} s")
+    lines += _late_markdown(Path(out_dir))
     lines += ["", "## The checks", "", "| lesson | check | lost by |", "|---|---|---|"]
     for row in summary["checks"]:
         lines.append(f"| {cell(row['lesson'])} | {cell(row['name'])} | {row['lost']} of {row['graded']} |")
     return "\n".join(lines) + "\n"
 
 
+def adjustments_section(out_dir: Path, class_path: Path | None = None) -> dict[str, Any] | None:
+    """The report's "Deadlines and late policy" section: raw score, adjusted score and reason per result.
+
+    Args:
+        out_dir: the ``--out`` folder of ``ros2course grade``.
+        class_path: the class file (:mod:`ros2course.report.term`); None: ``OUTDIR/class.yaml``.
+
+    Returns:
+        None when there is no class file (the section is left out); else ``{note, rows}`` with
+        ``rows`` of ``{student, lesson, raw, max, score, reason}``. A class file that cannot be
+        used gives a note saying why and no rows: the report is never lost to it.
+    """
+    from ros2course.report.term import CLASS_FILE, adjust_out_dir  # noqa: PLC0415
+
+    out_dir = Path(out_dir)
+    path = Path(class_path) if class_path is not None else out_dir / CLASS_FILE
+    if not path.is_file():
+        return None
+    try:
+        book = adjust_out_dir(out_dir, path)
+    except CourseError as exc:
+        return {"note": f"the class file was not applied: {exc.message}" + (f" ({exc.hint})" if exc.hint else ""),
+                "rows": []}
+    late = sum(1 for a in book.adjusted if a.late)
+    rows = [{"student": a.student or "(no id)", "lesson": a.lesson, "raw": f"{a.raw_score:g}",
+             "max": f"{a.max_score:g}", "score": f"{a.score:g}", "reason": a.reason} for a in book.adjusted]
+    return {"note": f"Due dates, extensions and late policy of {path.name}; {late} late submission(s). "
+                    "`ros2course export OUTDIR --format canvas|moodle|csv` exports the adjusted scores.",
+            "rows": rows}
+
+
+def _late_markdown(out_dir: Path) -> list[str]:
+    """Lines of late submissions per lesson (no student data) when ``OUTDIR/class.yaml`` applies; else none."""
+    from ros2course.report.term import CLASS_FILE, adjust_out_dir, late_counts  # noqa: PLC0415
+
+    if not (out_dir / CLASS_FILE).is_file():
+        return []
+    try:
+        counts = late_counts(adjust_out_dir(out_dir).adjusted)
+    except CourseError:  # its message may name a student: none in the summary
+        return ["", "Late submissions: not counted (class.yaml has a problem: `ros2course export OUTDIR` says which)"]
+    return ["", "Late submissions (class.yaml): " + ", ".join(f"{k}: {v}" for k, v in counts.items())]
+
+
+def regrades_section(out_dir: Path) -> dict[str, Any] | None:
+    """The report's "Regrades" section from ``OUTDIR/regrades.jsonl`` (``ros2course.batch.provenance``): per
+    regraded row the old and new score, the checks whose points moved, why, and the grader fingerprints
+    before and after; None when nothing was ever regraded (the section is left out)."""
+    changes = read_regrades(Path(out_dir))
+    if not changes:
+        return None
+
+    def score(change: dict[str, Any]) -> str:
+        kept = change.get("kept")
+        return (f"{change.get('old_score', 0):g} kept (the regrade failed: {kept})" if kept
+                else f"{change.get('old_score', 0):g} -> {change.get('new_score', 0):g} of {change.get('max_score', 0):g}")
+
+    rows = [{"student": c.get("student", ""), "lesson": c.get("lesson", ""), "score": score(c),
+             "checks": ", ".join(f"{cid} {old} -> {new}" for cid, (old, new) in (c.get("checks") or {}).items()) or "none",
+             "why": c.get("why", ""),
+             "graders": f"{(c.get('old') or {}).get('grader', '?')} -> {(c.get('new') or {}).get('grader', '?')}"}
+            for c in changes if isinstance(c, dict)]
+    moved = collections.Counter(c.get("direction", "") for c in changes if isinstance(c, dict))
+    return {"note": f"{len(rows)} regraded row(s) (grade --regrade / --only): {moved['up']} up, {moved['down']} down, "
+                    f"{moved['same']} unchanged, {moved['kept']} kept because the regrade failed. Each row of "
+                    "results.jsonl names the grader fingerprint and submission digest it was graded with.",
+            "rows": rows}
