@@ -255,21 +255,39 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
     path.write_text("\n".join(lines), encoding="utf-8")
 
 
+def _recorded_run(lesson) -> dict | None:
+    """The lesson's first sample as its committed records have it (``mutation-outcomes.json``'s mutants and
+    ``mutation-score.json``'s counts), in ``mutation.json``'s row shape; None when either is missing. So a
+    re-triage needs no run folder: the per-mutant outcomes committed with the lesson are enough (issue 37)."""
+    score = mut.read_json_object(lesson.folder / mut.SCORE_FILE)
+    outcomes = mut.read_json_object(lesson.folder / mut.OUTCOMES_FILE)
+    if not score or not isinstance(outcomes.get("mutants"), list):
+        return None
+    mutants = [{**m, "lost": m.get("lost", [])} for m in outcomes["mutants"] if isinstance(m, dict)]
+    return {"mutants": mutants, "generated": score.get("generated", 0), "sampled": bool(score.get("sampled", score.get("sample"))),
+            "seconds": score.get("seconds", 0.0), "set_aside": score.get("set_aside", 0),
+            "sample": score.get("sample"), "seed": score.get("seed", 1), "pool": score.get("pool", 0)}
+
+
 def retriage(lesson_ids: list[str], out: Path) -> list:
-    """Apply each lesson's ``mutation.yaml`` as it is now to the outcomes of its last run (``OUT/mutation.json``),
-    grading nothing, and record the score (``mutation-score.json``): a survivor triaged after its run.
+    """Apply each lesson's ``mutation.yaml`` as it is now to the outcomes of its last run (``OUT/mutation.json``,
+    else the lesson's committed ``mutation-outcomes.json``), grading nothing, and record the score
+    (``mutation-score.json``): a survivor triaged after its run.
 
     The outcomes are that run's; only which survivors are triaged changes (rules, then entries by identity).
     The held-out sample stays as it was graded and triaged: it is never re-triaged. A lesson the file does not
     have is skipped.
     """
-    rows = json.loads((out / "mutation.json").read_text(encoding="utf-8")).get("lessons", {})
+    try:
+        rows = json.loads((out / "mutation.json").read_text(encoding="utf-8")).get("lessons", {})
+    except (OSError, ValueError):
+        rows = {}
     catalog, found = load_catalog(), []
     for lesson_id in lesson_ids:
-        row = rows.get(lesson_id)
+        lesson = catalog.get(lesson_id)
+        row = rows.get(lesson_id) or _recorded_run(lesson)
         if row is None:
             continue
-        lesson = catalog.get(lesson_id)
         graded = [mut.Graded(mut.Mutant(m["file"], m["line"], m["original"], m["mutant"], ""), m["outcome"],
                              list(m["lost"]), m.get("score", 0.0), m.get("max_score", 0.0), m.get("message", ""),
                              cached=True) for m in row["mutants"]]

@@ -336,6 +336,12 @@ rules:
     (lesson.folder / "contract.yaml").write_text(named, encoding="utf-8")
     assert [p.split(": rule ")[1].split()[0] for p in mut.rule_conflicts(lesson, reference=reference)] == ["log-text"]
     assert any("rule log-text covers" in p for p in mut.triage_problems(lesson, reference=reference))
+    # a starter that gives the log line as is: the learner never writes it, so naming `Started` does not make it
+    # logs-start's (a given line the lesson makes a requirement is marked with `code:`, as main-spins' lines are)
+    lesson.starter_dir = tmp_path / "starter"
+    (lesson.starter_dir / "src" / "p" / "p").mkdir(parents=True)
+    (lesson.starter_dir / PY).write_text(NODE_SOURCE, encoding="utf-8")
+    assert mut.rule_conflicts(lesson, reference=reference) == []
 
 
 def test_the_held_out_sample_is_disjoint_from_the_first_and_seeded() -> None:

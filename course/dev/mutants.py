@@ -465,8 +465,8 @@ def require_tool() -> None:
 
 
 def _own_starter(lesson: Lesson) -> dict[str, Path]:
-    folder = lesson.starter_dir
-    if not folder.is_dir():
+    folder = getattr(lesson, "starter_dir", None)
+    if folder is None or not folder.is_dir():
         return {}
     return {p.relative_to(folder).as_posix(): p for p in folder.rglob("*") if p.is_file()}
 
@@ -1181,7 +1181,9 @@ def rule_conflicts(lesson: Lesson, config: MutationConfig | None = None, referen
     FILE:N `text`, which implements requirement R (contract.yaml:M: names `term`)``; [] without a contract.
 
     A rule covers a line when its matchers on the original (file, ``original``, ``block``, ``not_block``)
-    hold there (:meth:`Rule.covers_line`): some mutant of that line could be triaged by it. Issue 37: a rule
+    hold there (:meth:`Rule.covers_line`): some mutant of that line could be triaged by it. A line the starter
+    gives as is (:func:`starter_given_lines`) implements only the requirements whose ``code:`` marks it, never
+    one by naming its terms: the learner does not write it. Issue 37: a rule
     is a kind of change outside the contract, so it may never reach what the contract asks for; the mutants of
     such a line are triaged, if at all, one by one (``survivors:``), each with its own reason.
     """
@@ -1197,13 +1199,21 @@ def rule_conflicts(lesson: Lesson, config: MutationConfig | None = None, referen
     rule_lines = _item_lines(triage_path(lesson), "rules")
     req_lines = requirement_lines(path)
     problems = []
+    starters = {rel: path.read_text(encoding="utf-8", errors="replace").splitlines()
+                for rel, path in _own_starter(lesson).items() if _mutable(path)}
     for rel, text in reference_texts(lesson, reference, config).items():
         lines = text.splitlines()
+        given = starter_given_lines(tuple(lines), tuple(starters[rel])) if rel in starters else frozenset()
         for number, line in enumerate(lines, 1):
             for index, rule in enumerate(config.rules):
                 if not rule.covers_line(rel, lines, number):
                     continue
                 for requirement in contract.requirements:
+                    if number in given and requirement.code is None:
+                        # a line the starter gives as is: the learner never writes it, so naming a term of a
+                        # requirement does not make it that requirement's; a given line the lesson makes a
+                        # requirement is marked with `code:` (the discovery loops of inspect-topics/params)
+                        continue
                     why = implements(requirement, rel, line)
                     if why is not None:
                         where = rule_lines[index] if index < len(rule_lines) else 1
