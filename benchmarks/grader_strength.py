@@ -263,15 +263,27 @@ def _recorded_run(lesson) -> dict | None:
     outcomes = mut.read_json_object(lesson.folder / mut.OUTCOMES_FILE)
     if not score or not isinstance(outcomes.get("mutants"), list):
         return None
-    mutants = [{**m, "lost": m.get("lost", [])} for m in outcomes["mutants"] if isinstance(m, dict)]
+    texts = {rel: text.splitlines() for rel, text in mut.reference_texts(lesson).items()}
+    mutants = []
+    for m in outcomes["mutants"]:
+        if not isinstance(m, dict):
+            continue
+        # the record keeps lines stripped; a rule reads indentation (a block, `^\s`): the reference has it
+        lines, number = texts.get(m.get("file", ""), []), m.get("line", 0)
+        full = lines[number - 1] if 1 <= number <= len(lines) else ""
+        if m.get("original") and full.strip() == m["original"].strip():
+            indent = full[:len(full) - len(full.lstrip())]
+            m = {**m, "original": full, "mutant": indent + m["mutant"].lstrip() if m.get("mutant") else m.get("mutant", "")}
+        mutants.append({**m, "lost": m.get("lost", [])})
     return {"mutants": mutants, "generated": score.get("generated", 0), "sampled": bool(score.get("sampled", score.get("sample"))),
             "seconds": score.get("seconds", 0.0), "set_aside": score.get("set_aside", 0),
             "sample": score.get("sample"), "seed": score.get("seed", 1), "pool": score.get("pool", 0)}
 
 
 def retriage(lesson_ids: list[str], out: Path) -> list:
-    """Apply each lesson's ``mutation.yaml`` as it is now to the outcomes of its last run (``OUT/mutation.json``,
-    else the lesson's committed ``mutation-outcomes.json``), grading nothing, and record the score
+    """Apply each lesson's ``mutation.yaml`` as it is now to the outcomes of its recorded first sample (the
+    lesson's committed ``mutation-outcomes.json``, else its last run in ``OUT/mutation.json``), grading nothing,
+    and record the score
     (``mutation-score.json``): a survivor triaged after its run.
 
     The outcomes are that run's; only which survivors are triaged changes (rules, then entries by identity).
@@ -285,7 +297,8 @@ def retriage(lesson_ids: list[str], out: Path) -> list:
     catalog, found = load_catalog(), []
     for lesson_id in lesson_ids:
         lesson = catalog.get(lesson_id)
-        row = rows.get(lesson_id) or _recorded_run(lesson)
+        # the committed per-mutant outcomes are the record; a run folder may hold an older run of the lesson
+        row = _recorded_run(lesson) or rows.get(lesson_id)
         if row is None:
             continue
         graded = [mut.Graded(mut.Mutant(m["file"], m["line"], m["original"], m["mutant"], ""), m["outcome"],
