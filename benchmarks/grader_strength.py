@@ -81,6 +81,12 @@ def _held_out_cell(row) -> str:
         text += f" (too small to judge: {held.counted} < {mut.MIN_COUNTED})"
     if held.stale and not row.stale:
         text += f" **stale** ({data.get('date', '?')})"
+    earlier = [f"seed {e.get('seed', '?')} ({e.get('date', '?')}): " + (
+        f"{_pct(e['score'])} of {e.get('counted')}" if e.get("score") is not None else "none counted")
+        + ("" if e.get("fingerprint") == data.get("fingerprint") else " under an earlier grader")
+        for e in data.get("earlier", [])]
+    if earlier:
+        text += "; earlier held-out samples: " + ", ".join(earlier)
     return text
 
 
@@ -186,7 +192,8 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "mutants is too small to judge a grader by, and says so. The score after triage is **tuned**: the triage "
         "was written looking at that (first) sample. The **held-out** score is not: a second seeded sample of "
         "mutants that neither the first nor an earlier held-out sample took (`--held-out 30`, another seed: once "
-        "its survivors were looked at, a held-out sample is tuned too), graded afterwards with "
+        "its survivors were looked at, a held-out sample is tuned too, so the cell also lists what every earlier "
+        "held-out sample of the lesson scored, which a new one never hides), graded afterwards with "
         "`mutation.yaml`'s rules and entries as they were, nothing added; its survivors no rule or entry covers "
         "count against it and are listed below for the author (strengthen the grader, or add a rule that "
         "applies from the next held-out sample on). **Fingerprint**: each run records its lesson's "

@@ -12,6 +12,7 @@ with ``-a``; ``-R`` takes ssh-ed25519 recipients; ``-d -i`` decrypts with an SSH
 
 from __future__ import annotations
 
+import glob
 import os
 import secrets
 import shutil
@@ -20,13 +21,29 @@ import tempfile
 from pathlib import Path
 
 from ros2course.kit import Check, GradingSession, NotGradable, Unmet
-from ros2course.kit.programs import run_program
+from ros2course.kit.programs import ProgramRun, run_program
 from . import _files as files
 
 WINDOW = 0.0  # no ROS program is observed
 FOLDER, SCRIPT = "crypto", "cryptography.sh"
 AGE_HEADERS = (b"age-encryption.org/v1\n", b"-----BEGIN AGE ENCRYPTED FILE-----")  # age(1): binary, or -a armored
 SHIPPED = ("exercise_ed25519", "exercise_ed25519.pub", "exercise_message.txt.age")
+#: nss_wrapper (cwrap.org, Debian/Ubuntu package libnss-wrapper): an LD_PRELOAD library that answers
+#: getpwuid() from a passwd file named in NSS_WRAPPER_PASSWD; ssh-keygen(1) exits with "No user exists
+#: for uid" without a passwd entry, and a class grade runs the script as a fresh uid that has none.
+NSS_WRAPPER_GLOBS = ("/usr/lib/*-linux-gnu/libnss_wrapper.so*", "/usr/lib64/libnss_wrapper.so*",
+                     "/usr/lib/libnss_wrapper.so*", "/usr/local/lib/libnss_wrapper.so*")
+NO_PASSWD = 97  # the wrapper's exit code: no passwd entry and no nss_wrapper to lend one
+#: Runs the learner's script; lends its uid a passwd entry (in the run's own folder) only when it has none.
+SCRIPT_WRAPPER = f"""if ! getent passwd "$(id -u)" > /dev/null; then
+  [ -n "$NSS_WRAPPER_LIB" ] || exit {NO_PASSWD}
+  printf 'learner:x:%s:%s:learner:%s:/bin/sh\\n' "$(id -u)" "$(id -g)" "$PWD" > .nss-passwd
+  printf 'learner:x:%s:\\n' "$(id -g)" > .nss-group
+  export LD_PRELOAD="$NSS_WRAPPER_LIB" NSS_WRAPPER_PASSWD="$PWD/.nss-passwd" NSS_WRAPPER_GROUP="$PWD/.nss-group"
+fi
+unset NSS_WRAPPER_LIB
+exec bash {FOLDER}/{SCRIPT}
+"""
 
 K = ("private_key",)  # the key part's checks and the script (run with the learner's pair) need the key
 CHECKS = [
@@ -53,6 +70,9 @@ CHECKS = [
           "the script runs ssh-keygen only if my_key is missing: if [ ! -f my_key ]; then ...", ("script_runs",), "script"),
     Check("script_encrypts", "The script writes message_to_instructor.txt.age for the shipped key", 1,
           "the script pipes a message into age -R exercise_ed25519.pub > message_to_instructor.txt.age",
+          needs=("script_runs",), part="script"),
+    Check("script_makes_key", "Where my_key is missing, the script makes an ed25519 pair, no passphrase, mode 600", 2,
+          "the script runs ssh-keygen -t ed25519 -N \"\" -f my_key when my_key is missing: nothing may ask",
           needs=("script_runs",), part="script"),
 ]
 
@@ -132,6 +152,28 @@ def _kept(made: Path, pair: dict[str, str]) -> dict[str, tuple[bool, str]]:
     return found
 
 
+def _nss_wrapper() -> str:
+    """The path of libnss_wrapper.so on this machine, or "" (then a uid without a passwd entry cannot make keys)."""
+    found = sorted(path for pattern in NSS_WRAPPER_GLOBS for path in glob.glob(pattern))
+    return found[0] if found else ""
+
+
+def _run_script(s: GradingSession, where: Path, label: str) -> ProgramRun:
+    """``bash crypto/cryptography.sh`` in ``where`` as the submission (30 s at most), through SCRIPT_WRAPPER.
+
+    Raises:
+        NotGradable: the script's uid has no passwd entry (a class grade's sandbox) and this machine has
+            no nss_wrapper to lend it one: ssh-keygen would refuse to run, whatever the script.
+    """
+    env = {**s.base_env, "NSS_WRAPPER_LIB": _nss_wrapper()}
+    run = run_program(s, ["bash", "-c", SCRIPT_WRAPPER], label, timeout=30.0, cwd=where, env=env)
+    if run.returncode == NO_PASSWD and not run.stdout and not run.stderr:
+        raise NotGradable("the script runs as a uid with no passwd entry, for which ssh-keygen refuses to work, "
+                          "and this machine has no nss_wrapper library to lend it one",
+                          "apt install libnss-wrapper (Debian, Ubuntu), then grade again")
+    return run
+
+
 def grade(s: GradingSession) -> None:
     """Judge crypto/'s files, then run the learner's script in a fresh folder and judge what it made."""
     missing = [name for name in ("age", "ssh-keygen") if shutil.which(name) is None]
@@ -167,15 +209,16 @@ def grade(s: GradingSession) -> None:
 
         pair = {name: files.read_text(real / name) for name in ("my_key", "my_key.pub") if (real / name).is_file()}
 
-        def fill(where: Path) -> None:  # the shipped files, the script and the learner's pair, as after step 2
-            (where / FOLDER).mkdir()  # (the pair is handed in: ssh-keygen exits for a uid without a passwd entry)
+        def fill(where: Path, with_pair: bool = True) -> None:  # the shipped files, the script (and the pair)
+            (where / FOLDER).mkdir()
             for name, src in [*trusted.items(), (SCRIPT, script)]:
                 shutil.copyfile(src, where / FOLDER / name)
-            for name, text in pair.items():
+            for name, text in pair.items() if with_pair else ():
                 (where / FOLDER / name).write_text(text, encoding="utf-8")
-            (where / FOLDER / "my_key").chmod(0o600)
+            if with_pair:
+                (where / FOLDER / "my_key").chmod(0o600)
         where = s.submission_folder("script-run", fill)
-        run = run_program(s, ["bash", f"{FOLDER}/{SCRIPT}"], "cryptography-script", timeout=30.0, cwd=where)
+        run = _run_script(s, where, "cryptography-script")
         said = run.stderr.strip().splitlines()[-1:]
         s.record("script_runs", run.returncode == 0 and not run.timed_out, f"bash {FOLDER}/{SCRIPT}: {run.describe()}"
                  + "".join(f", last output: {line[:120]}" for line in said), checks["script_runs"].name)
@@ -189,3 +232,15 @@ def grade(s: GradingSession) -> None:
                 check_id: (False, f"after the script ran, crypto/ holds no file {name}")}
             failed = [observed for passed, observed in found.values() if not passed]
             s.record(check_id, not failed, "; ".join(failed or [o for _, o in found.values()]), checks[check_id].name)
+        # a second fresh folder without the pair: step 2 of the script must make it (no question asked)
+        fresh = s.submission_folder("script-run-no-key", lambda where: fill(where, with_pair=False))
+        second = _run_script(s, fresh, "cryptography-script-no-key")
+        key, pub = fresh / FOLDER / "my_key", fresh / FOLDER / "my_key.pub"
+        minted = _pair(key, pub, tmp) if key.is_file() and not key.is_symlink() else {
+            "private_key": (False, "crypto/my_key is missing")}
+        failed = [observed for passed, observed in minted.values() if not passed]
+        if second.returncode != 0 or second.timed_out:
+            failed.insert(0, f"bash {FOLDER}/{SCRIPT} without my_key: {second.describe()}" + "".join(
+                f", last output: {line[:120]}" for line in second.stderr.strip().splitlines()[-1:]))
+        s.record("script_makes_key", not failed, "with no my_key, the script: " + "; ".join(
+            failed or [observed for _, observed in minted.values()]), checks["script_makes_key"].name)

@@ -204,6 +204,10 @@ def test_rules_match_kinds_of_mutant_mechanically() -> None:
     assert OUTSIDE_LOOPS.matches(_mutant(script, "cli/a.sh", 3, "break;", insert=True))
     assert not OUTSIDE_LOOPS.matches(_mutant(script, "cli/a.sh", 6, "  break;", insert=True))
     assert OUTSIDE_LOOPS.matches(_mutant(script, "cli/a.sh", 7, "break;", insert=True))
+    # a line inserted after a backslash joins the command above (`echo hi \\` + `break;` + `| age`): never a no-op
+    piped = "#!/usr/bin/env bash\necho hi \\\n  | cat\n"
+    assert not OUTSIDE_LOOPS.matches(_mutant(piped, "cli/a.sh", 3, "break;", insert=True))
+    assert OUTSIDE_LOOPS.matches(_mutant(piped, "cli/a.sh", 4, "break;", insert=True))
     # a record without content is judged on the original file given
     bare = mut.Mutant(PY, 15, "    main()", "    pass", "")
     assert not MAIN_BLOCK.matches(bare) and MAIN_BLOCK.matches(bare, {PY: NODE_SOURCE})
@@ -403,6 +407,16 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
     mut.write_score(lesson, run(mutants[:30], 0, False))
     assert mut.recorded_score(lesson).held_out is None
     assert "held_out" not in json.loads((tmp_path / mut.OUTCOMES_FILE).read_text())
+    # ... but what the dropped held-out sample scored stays on record, and is shown beside the next one's
+    earlier = json.loads((tmp_path / mut.SCORE_FILE).read_text())[mut.EARLIER_KEY]
+    assert [(e["seed"], e["counted"], e["killed"]) for e in earlier] == [(2, 30, 27)]
+    later = run(mutants[30:], 6, True)
+    later.seed = 3
+    mut.write_score(lesson, later)
+    row = mut.recorded_score(lesson)
+    assert row.held_out.tuned == 0.8 and [e["seed"] for e in row.held_out.data["earlier"]] == [2]
+    assert mut.EARLIER_KEY not in json.loads((tmp_path / mut.SCORE_FILE).read_text())
+    assert module._held_out_cell(row).endswith("; earlier held-out samples: seed 2 (%s): 90 %% of 30" % earlier[0]["date"])
 
 
 @pytest.mark.parametrize("triage,words", [

@@ -360,3 +360,15 @@ def test_report_says_when_the_recorded_folder_is_gone(section, tmp_path: Path) -
     (out / "run.json").write_text(json.dumps({"submissions": str(gone)}))
     text = _section_text(out)
     assert f"the submissions folder {gone} recorded by the run is gone" in text and "ann / ben" not in text
+
+
+def test_the_comparison_is_the_same_in_every_process() -> None:
+    """copydetect hashes k-grams with ``hash()``, salted per process: two reports of one class could flag other
+    pairs. The fingerprints (what winnowing keeps) must not depend on PYTHONHASHSEED."""
+    code = ("import math\n\n\ndef heading(x, y):\n    total = 0\n    for i in range(10):\n        total += math.atan2(y, x) * i\n"
+            "    return total / 10\n\n\nclass Odometry:\n    def __init__(self):\n        self.pose = [0.0, 0.0]\n")
+    probe = ("import sys; from ros2course.report import similarity as s; f = s._fingerprint('a.py', sys.stdin.read()); "
+             "print(sorted(int(h) for h in f.hashes)[:20], sorted(s._kgrams('a.py', 'x = 1\\n' * 40))[:5])")
+    seen = {subprocess.run([sys.executable, "-c", probe], input=code, capture_output=True, text=True, check=True,
+                           env={**os.environ, "PYTHONHASHSEED": seed}).stdout for seed in ("1", "2", "3")}
+    assert len(seen) == 1, seen

@@ -253,6 +253,10 @@ class Rule(BaseModel):
         if self.strings_only and (mutant.original == mutant.mutated or "\n" in mutant.original + mutant.mutated
                                   or _STRING.sub('""', mutant.original) != _STRING.sub('""', mutant.mutated)):
             return False
+        if not mutant.original.strip() and mutant.line > 1:
+            above = original_lines(mutant, originals)[mutant.line - 2:mutant.line - 1]
+            if not above or above[0].rstrip().endswith("\\"):
+                return False  # the file is not known, or the line lands in a command continued from the line above
         if self.block is not None or self.not_block is not None:
             lines = original_lines(mutant, originals)[:mutant.line - 1]
             if len(lines) < mutant.line - 1 or (not lines and mutant.line > 1):
@@ -966,10 +970,13 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
             data["held_out"] = before["held_out"]
         if "held_out" in (before := read_json_object(lesson.folder / OUTCOMES_FILE)):
             outcomes["held_out"] = before["held_out"]
-    elif shown := recorded_held_out(lesson):
-        # the held-out figures go with the old first sample, but what its samples showed stays shown: a mutant
-        # whose survival the author has seen is tuned, and no later held-out sample may draw it again
-        outcomes[SHOWN_KEY] = sorted(shown)
+    else:
+        if shown := recorded_held_out(lesson):
+            # the held-out figures go with the old first sample, but what its samples showed stays shown: a mutant
+            # whose survival the author has seen is tuned, and no later held-out sample may draw it again
+            outcomes[SHOWN_KEY] = sorted(shown)
+        if history := held_out_history(read_json_object(lesson.folder / SCORE_FILE)):
+            data[EARLIER_KEY] = history  # and what they scored stays on record (shown beside the next one)
     return _write_records(lesson, data, outcomes)
 
 
@@ -1021,12 +1028,34 @@ def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, st
     measured = measured or {"date": dt.date.today().isoformat(), "fingerprint": grader_fingerprint(lesson)}
     section = _summary(found)
     section.update(date=measured["date"], fingerprint=measured["fingerprint"], survivors=found.uncovered())
+    section["earlier"] = held_out_history(score)  # a new sample never hides what the ones before it scored
+    score.pop(EARLIER_KEY, None)
     score["held_out"] = section
     rows = _outcome_rows(found)
     earlier = sorted(recorded_held_out(lesson) - {row["key"] for row in rows})  # left out of this sample
     outcomes["held_out"] = {"fingerprint": measured["fingerprint"], "date": measured["date"], "seed": found.seed,
                             "mutants": rows, **({"earlier": earlier} if earlier else {})}
     return _write_records(lesson, score, outcomes)
+
+
+#: ``mutation-score.json``'s key for the figures of held-out samples drawn before its first sample was measured
+#: again (a new first sample drops the held-out section; :func:`held_out_history` keeps what it scored).
+EARLIER_KEY = "held_out_earlier"
+
+
+def held_out_history(score: dict) -> list[dict]:
+    """The figures of every held-out sample recorded in ``score`` (a ``mutation-score.json`` object), oldest
+    first: each earlier one's ``{seed, date, fingerprint, graded, counted, killed, score}`` (``score`` None when
+    nothing was counted), then the current one's. [] when none was drawn. Drawing a new held-out sample keeps
+    this list (issue 37: once looked at, a held-out sample is tuned; the figures before it still stand)."""
+    held, before = score.get("held_out"), list(score.get(EARLIER_KEY, []))
+    if not isinstance(held, dict) or not held.get("graded"):
+        return before + (list(held.get("earlier", [])) if isinstance(held, dict) else [])
+    counted = held.get("graded", 0) - held.get("killed_by_build", 0) - held.get("triaged", 0)
+    return [*before, *held.get("earlier", []), {"seed": held.get("seed"), "date": held.get("date"),
+                                       "fingerprint": held.get("fingerprint"), "graded": held.get("graded"),
+                                       "counted": counted, "killed": held.get("killed"),
+                                       "score": held.get("killed", 0) / counted if counted > 0 else None}]
 
 
 #: Below this many counted mutants a score is too small to judge a grader by (issue 37).

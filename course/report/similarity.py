@@ -256,9 +256,37 @@ def _language(rel: str) -> str | None:
     return "cmake" if pure.name == "CMakeLists.txt" else LEXERS.get(pure.suffix)
 
 
+def _stable_kgram_hashes(string: str, k: int):
+    """Every k-gram hash of ``string``, as :func:`copydetect.utils.hashed_kgrams` computes them but the same in
+    every process: 64-bit BLAKE2b of the k-gram's UTF-8, as a signed numpy int64 array (copydetect's shape)."""
+    import numpy  # noqa: PLC0415 - copydetect's own dependency, loaded with it
+
+    digest = hashlib.blake2b
+    return numpy.array([int.from_bytes(digest(string[offset:offset + k].encode("utf-8", "surrogatepass"),
+                                              digest_size=8).digest(), "little", signed=True)
+                        for offset in range(len(string) - k + 1)], dtype=numpy.int64)
+
+
+@functools.cache
+def _copydetect() -> types.ModuleType:
+    """copydetect, with k-gram hashes that do not change from one process to the next.
+
+    copydetect 0.5 hashes k-grams with Python's ``hash()`` of ``str``, which is salted per process
+    (PYTHONHASHSEED): winnowing then keeps other k-grams in every run, and two reports of one class could
+    flag different pairs. Its ``utils.hashed_kgrams`` (looked up at call time by its own
+    ``get_document_fingerprints``) is replaced once, for the whole process, by :func:`_stable_kgram_hashes`;
+    copydetect has no option for it, and nothing else in this process uses copydetect.
+    """
+    import copydetect  # noqa: PLC0415 - slow to import
+    import copydetect.utils  # noqa: PLC0415
+
+    copydetect.utils.hashed_kgrams = _stable_kgram_hashes
+    return copydetect
+
+
 def _fingerprint(rel: str, text: str):
     """copydetect's fingerprint of one file (no boilerplate removed yet: :func:`_strip` does), or None."""
-    from copydetect import CodeFingerprint  # noqa: PLC0415 - slow to import
+    CodeFingerprint = _copydetect().CodeFingerprint  # noqa: N806 - copydetect's class
 
     language = _language(rel)
     try:
@@ -288,12 +316,10 @@ def _strip(fingerprint, drop: frozenset[int] | set[int]) -> None:
 
 def _kgrams(rel: str, text: str) -> set[int]:
     """Every k-gram hash of ``text`` as copydetect tokenizes it (not only the winnowed ones)."""
-    from copydetect.utils import hashed_kgrams  # noqa: PLC0415 - slow to import
-
     fingerprint = _fingerprint(rel, text)
     if fingerprint is None or len(fingerprint.filtered_code) < _NOISE:
         return set()
-    return {int(value) for value in hashed_kgrams(fingerprint.filtered_code, _NOISE)}
+    return {int(value) for value in _stable_kgram_hashes(fingerprint.filtered_code, _NOISE)}
 
 
 # --- What `ros2 pkg create` generates -----------------------------------------------------------------------
@@ -548,7 +574,7 @@ def compare_sources(lesson: str, sources: dict[str, dict[str, str]], boilerplate
     Returns:
         (pairs, files compared, the boilerplate used).
     """
-    from copydetect import compare_files  # noqa: PLC0415 - slow to import
+    compare_files = _copydetect().compare_files
 
     boilerplate = _boilerplate(tuple(boilerplate_paths), generated)
     drop = boilerplate.hashes
