@@ -328,15 +328,16 @@ def limits(s: GradingSession, published_id: str, radians_id: str, run: DriverRun
 
 
 def span_rate(s: GradingSession, check_id: str, samples: list[JointSample], *, period: float, span: float,
-              noun: str, extra: str = "", few_note: str = "") -> bool:
+              noun: str, extra: str = "", few_note: str = "", median: bool = False) -> bool:
     """Record ``check_id`` on the rate of ``samples`` over their DDS source timestamps: the kit's rate
     judgement (:func:`ros2course.kit.judge.rate`) over at least 90 % of ``span`` seconds, messages the
     probe missed counted by the driver's sequence numbers (not the driver's fault), with what
-    ``ros2 topic hz`` (arrival times) would show beside it. ``extra`` is appended to ``expected``."""
+    ``ros2 topic hz`` (arrival times) would show beside it. ``extra`` is appended to ``expected``; ``median``:
+    judge the median period (a timer-driven stream on a busy machine, :func:`ros2course.kit.judge.rate`)."""
     hz = arrival_rate(samples)
     return rate(s, check_id, [x.source for x in samples], period=period, span=span, noun=noun,
                 sequence=[x.sequence for x in samples],
-                source="the DDS source timestamps", few_note=few_note, expected_note=extra,
+                source="the DDS source timestamps", few_note=few_note, expected_note=extra, median=median,
                 where=f"; ros2 topic hz (arrival times) would show {hz.rate_hz:.1f} Hz" if hz else "")
 
 
@@ -353,9 +354,12 @@ def stream(s: GradingSession, rate_id: str, shape_id: str, zeros_id: str, run: D
         raise Unmet(f"no message on {d.joint_states}; {process_state(run.proc)}")
     with s.phase("observe"):
         window = run.probe.wait_for_span(span, span + 1.0, abort=run.ended)
-    span_rate(s, rate_id, window, period=d.period, span=span, noun="message",
-              extra=" of messages, computed like ros2 topic hz but over the DDS source timestamps "
-              "(the publication times, not disturbed by the grader's own scheduling)")
+    # the median: a 500 Hz timer on a busy machine misses periods, and rcl's timer skips them (one run of the
+    # reference measured a mean of 391 Hz, min 0.32 ms, max 28.61 ms between messages, under CI's load)
+    span_rate(s, rate_id, window, period=d.period, span=span, noun="message", median=True,
+              extra=" of messages, computed over the DDS source timestamps (the publication times, not disturbed "
+              "by the grader's own scheduling); the median, as periods a busy machine made the timer skip do not "
+              "change the period the node asked for")
     sizes = sorted({len(x.positions) for x in window})
     stamps = [x.stamp for x in window]
     backwards = sum(1 for a, b in zip(stamps, stamps[1:]) if b <= a)

@@ -177,10 +177,18 @@ def _grade_listener(s: GradingSession) -> None:
 
 
 def _lookup_rate(s: GradingSession, rosout, name: str, node: kit.StartedNode) -> None:
-    """Record ``lookup_rate`` on the stamps of the node's records from its first warning on (one per lookup)."""
-    records = rosout.records(node=name)
-    first = next((i for i, r in enumerate(records) if r.level == WARN), None)
-    stamps = [kit.stamp_seconds(r.stamp) for r in records[first:]] if first is not None else []
+    """Record ``lookup_rate`` on the stamps of the node's records from its first warning on (one per lookup),
+    waiting (at most twice the time they take at :data:`PERIOD`) until :data:`RATE_RECORDS` of them came: a
+    node whose position checks failed early is judged on as many records as one that passed them."""
+
+    def lookup_stamps() -> list[float]:
+        records = rosout.records(node=name)
+        first = next((i for i, r in enumerate(records) if r.level == WARN), None)
+        return [kit.stamp_seconds(r.stamp) for r in records[first:]] if first is not None else []
+
+    with s.phase("observe"):
+        wait_until(lambda: len(lookup_stamps()) >= RATE_RECORDS, 2 * RATE_RECORDS * PERIOD, abort=node.ended)
+    stamps = lookup_stamps()
     kit.rate(s, "lookup_rate", stamps[:RATE_RECORDS], period=PERIOD, needed=RATE_RECORDS,
              waited=(stamps[-1] - stamps[0]) if stamps else 0.0, noun="record",
              source="the stamps of its log records, one per lookup", few_note=f"; {kit.process_state(node.proc)}")

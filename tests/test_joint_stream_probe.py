@@ -150,6 +150,16 @@ def test_span_rate_judges_the_source_stamps_over_the_span():
     assert "500.0 Hz" in s.results["rate"][1] and "2.0 ms" in s.results["rate"][2]
     # the kit's one rate judgement: the span judged and the band allowed go into the check's recording
     assert s.results["rate"][2].startswith("500.00 Hz: mean period 2.0 ms ± 15%, over at least 1.0 s of messages")
+    # sas's stream is judged on its median period: a busy machine's late callbacks (rcl's timer skips the periods
+    # they missed) lower the mean, not the period the node asked for
+    JointSample = _lesson_module("_joint_stream").JointSample
+    gaps = ([0.002] * 9 + [0.012]) * 60  # one late callback in ten: mean 2.9 ms (345 Hz), median 2 ms
+    stamps = [100.0 + sum(gaps[:i]) for i in range(len(gaps) + 1)]
+    starved = [JointSample(t, t, 0.0, (0.0,) * 6, "") for t in stamps]
+    assert not span_rate(s, "starved", starved, period=0.002, span=1.0, noun="message")
+    assert span_rate(s, "starved", starved, period=0.002, span=1.0, noun="message", median=True)
+    assert "median period 2.00 ms" in s.results["starved"][1]
+    assert s.results["starved"][2].startswith("500.00 Hz: median period 2.0 ms ± 15%")
     assert s.results["rate"][4] == pytest.approx((0.0017, 0.0023))
     assert not span_rate(s, "slow", _samples(0.02, 51), period=0.002, span=1.0, noun="message")
     assert not span_rate(s, "short", _samples(0.002, 100), period=0.002, span=1.0, noun="message")

@@ -381,6 +381,49 @@ def test_parameter_client_times_out_without_node(ros_env):
 
 @pytest.mark.ros
 @pytest.mark.timeout(60)
+def test_the_median_period_is_judged_when_asked():
+    # a 500 Hz timer on a busy machine: most periods 2 ms, a few callbacks late and the periods they missed skipped
+    deltas = [0.002] * 80 + [0.010, 0.0285, 0.006, 0.004] * 5
+    times = [sum(deltas[:i]) for i in range(len(deltas) + 1)]
+    stats = RateStats.from_times(times)
+    assert stats.median_period == pytest.approx(0.002)
+    assert not stats.within(500.0, 0.15)  # the mean: ~360 Hz
+    assert stats.within(500.0, 0.15, median=True)
+    assert not RateStats.from_times([i * 0.02 for i in range(50)]).within(500.0, 0.15, median=True)  # 50 Hz
+
+
+def test_the_graders_fast_dds_profile_never_reaches_learner_nodes(tmp_path, monkeypatch):
+    """The grader's participants announce every 0.25 s (probes.GRADER_ANNOUNCEMENT_PERIOD); learner nodes keep
+    Fast DDS's defaults or the profile the user (or a batch job) set."""
+    from ros2course.run import probes  # noqa: PLC0415
+
+    monkeypatch.setenv("ROS2COURSE_CACHE_DIR", str(tmp_path))
+    monkeypatch.delenv("ROS2COURSE_DISCOVERY_RANGE", raising=False)
+    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")  # configure_process_discovery sets it: restored after
+    monkeypatch.delenv(probes.PROFILES_VARIABLE, raising=False)
+    monkeypatch.setattr(probes, "_learner_profile", {})
+    probes.configure_process_discovery()
+    ours = os.environ[probes.PROFILES_VARIABLE]
+    text = open(ours, encoding="utf-8").read()
+    assert "<leaseAnnouncement><sec>0</sec><nanosec>250000000</nanosec></leaseAnnouncement>" in text
+    assert "useBuiltinTransports" not in text
+    assert probes.PROFILES_VARIABLE not in probes.learner_profile_env(dict(os.environ))
+    # a batch job's UDP-only profile: the grader's own is UDP only too, its learner nodes keep the job's file
+    monkeypatch.setenv("ROS2COURSE_DISCOVERY_RANGE", "SUBNET")
+    monkeypatch.setenv(probes.PROFILES_VARIABLE, "/job/fastdds-udp-only.xml")
+    monkeypatch.setattr(probes, "_learner_profile", {})
+    probes.configure_process_discovery()
+    assert open(os.environ[probes.PROFILES_VARIABLE], encoding="utf-8").read().count("ros2course_udp") == 2
+    assert probes.learner_profile_env(dict(os.environ))[probes.PROFILES_VARIABLE] == "/job/fastdds-udp-only.xml"
+    # a profile of the user's own is theirs: the grader leaves it alone
+    monkeypatch.delenv("ROS2COURSE_DISCOVERY_RANGE")
+    monkeypatch.setenv(probes.PROFILES_VARIABLE, "/home/me/my-dds.xml")
+    monkeypatch.setattr(probes, "_learner_profile", {})
+    probes.configure_process_discovery()
+    assert os.environ[probes.PROFILES_VARIABLE] == "/home/me/my-dds.xml"
+    assert probes.learner_profile_env(dict(os.environ))[probes.PROFILES_VARIABLE] == "/home/me/my-dds.xml"
+
+
 def test_learner_env(ros_env):
     from ros2course.run.probes import RosSession  # noqa: PLC0415
 
