@@ -422,6 +422,13 @@ def test_the_graders_fast_dds_profile_never_reaches_learner_nodes(tmp_path, monk
     probes.configure_process_discovery()
     assert os.environ[probes.PROFILES_VARIABLE] == "/home/me/my-dds.xml"
     assert probes.learner_profile_env(dict(os.environ))[probes.PROFILES_VARIABLE] == "/home/me/my-dds.xml"
+    # a cache folder it cannot write: Fast DDS's defaults, grading goes on
+    monkeypatch.delenv(probes.PROFILES_VARIABLE)
+    monkeypatch.setenv("ROS2COURSE_CACHE_DIR", str(tmp_path / "a-file" / "cache"))
+    (tmp_path / "a-file").write_text("not a folder", encoding="utf-8")
+    monkeypatch.setattr(probes, "_learner_profile", {})
+    probes.configure_process_discovery()
+    assert probes.PROFILES_VARIABLE not in os.environ
 
 
 def test_learner_env(ros_env):

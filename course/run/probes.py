@@ -195,11 +195,16 @@ def _use_grader_profile() -> None:
         return  # the user's own profile; a batch job's (UDP only) is rewritten with the announcements
     text = grader_profile_xml()
     path = cache_dir() / f"fastdds-grader-{hashlib.sha256(text.encode()).hexdigest()[:12]}.xml"
-    if not path.is_file():
-        path.parent.mkdir(parents=True, exist_ok=True)
-        temporary = path.with_name(f"{path.name}.{os.getpid()}.tmp")
-        temporary.write_text(text, encoding="utf-8")
-        temporary.replace(path)
+    try:
+        if not path.is_file():
+            path.parent.mkdir(parents=True, exist_ok=True)
+            temporary = path.with_name(f"{path.name}.{os.getpid()}.tmp")
+            temporary.write_text(text, encoding="utf-8")
+            temporary.replace(path)
+    except OSError as error:  # a read-only cache folder: Fast DDS's defaults, discovery only slower under load
+        logging.getLogger(__name__).warning("the grader's Fast DDS profile could not be written (%s): "
+                                            "its participants announce themselves every 3 s", error)
+        return
     os.environ[PROFILES_VARIABLE] = str(path)
 
 
