@@ -7,8 +7,8 @@ in that graph and judges: the parameter names and the random quote in its
 output, the quote the node publishes after the script's ``ros2 param set``
 (messages sent after the node accepted the change, by send stamps), and the
 file ``cli/params_dump.yaml`` (the ``ros2 param dump`` format). A second run, in
-a fresh graph with no ``ros2`` daemon, starts the node only 3 s after the
-script's first ``ros2`` command joined the graph (kit.scripts.run_script_first):
+a fresh graph with no ``ros2`` daemon, starts the node only as long after the
+script's first ``ros2`` command joined the graph as the first run took (3 to 10 s; kit.scripts.run_script_first):
 a script that waits until ``ros2 node list`` shows the node still gets its
 quote, one that asks at once does not.
 """
@@ -40,8 +40,13 @@ NAMES = ("period", "philosopher_name", "quote", "topic_name")
 TIMEOUT = 30.0  # seconds for the whole script (each ros2 command starts in ~1 s)
 NEXT_MESSAGES = 2  # the change must show within this many messages (one may be on its way)
 
-#: Seconds between the script's first ``ros2`` command joining the graph and the second run's node.
+#: Seconds between the script's first ``ros2`` command joining the graph and the second run's node: as long as
+#: the whole first run took (:func:`late_by`), within these bounds. A script that asks at once asks within its
+#: first run's time (its ``ros2 param get`` after two other commands), so the node joins after it asked,
+#: however slow the machine; a fixed 3 s let a busy machine's slow commands reach the node in time
+#: (CI: the fixture asks_at_once got full marks). The reference's loop waits up to 10 x (1 s + a node list).
 LATE_BY = 3.0
+LATE_BY_MAX = 10.0
 WAIT_HINT = ("the node may join after your first command (a daemon that has just started has not discovered it "
              "yet): `ros2 daemon start`, then wait until `ros2 node list` shows the node (the starter's loop) "
              "before the first `ros2 param` command")
@@ -62,8 +67,9 @@ CHECKS = [
           f"ros2 param dump {NODE} > {DUMP} (the whole output: it lists every parameter)", needs=SCRIPTED),
     Check("dump_after_set", "The dump holds the new quote (dumped after the set)", 1,
           "dump after the set, so the file saves the node's parameters as they are now", needs=("dump_file",)),
-    Check("waits_for_node", "It waits for a node that starts 3 s after the script before asking it (ros2 node "
-          "list until it shows the node)", 1, WAIT_HINT, needs=("got",)),
+    Check("waits_for_node", "It waits for a node that joins only after the script's questions (as long after "
+          "its first ros2 command as its first run took, 3 to 10 s) before asking it (ros2 node list until it "
+          "shows the node)", 1, WAIT_HINT, needs=("got",)),
 ]
 
 
@@ -83,13 +89,19 @@ def grade(s: GradingSession) -> None:
                     f"ros2 param get {NODE} quote")
     judge_set(s, node, run)
     judge_dump(s, dump, started, node.parameters())
-    judge_late_node(s, path)
+    judge_late_node(s, path, late_by(run.seconds))
 
 
-def judge_late_node(s: GradingSession, path) -> None:
+def late_by(first_run: float) -> float:
+    """Seconds (``first_run``: the first run's wall time, seconds) after the script's first ``ros2`` command
+    that the second run's node joins: the first run's time, between :data:`LATE_BY` and :data:`LATE_BY_MAX`."""
+    return min(max(first_run, LATE_BY), LATE_BY_MAX)
+
+
+def judge_late_node(s: GradingSession, path, delay: float = LATE_BY) -> None:
     """Record ``waits_for_node``: run the script again in a fresh graph with no daemon; the node starts
-    :data:`LATE_BY` s after the script's first ``ros2`` command joined the graph; its quote must be printed.
-    Run after :func:`judge_dump`: the file this run may write is not the one judged."""
+    ``delay`` s (:func:`late_by`) after the script's first ``ros2`` command joined the graph; its quote must be
+    printed. Run after :func:`judge_dump`: the file this run may write is not the one judged."""
     if (blocker := s.unmet_need("waits_for_node")) is not None:
         s.record("waits_for_node", False, blocker, "")
         return
@@ -97,15 +109,15 @@ def judge_late_node(s: GradingSession, path) -> None:
         late: list[ConfigurableQuotePublisher] = []
         msg_type = amazing_quote(s)
         run = scripts.run_script_first(s, path, lambda: late.append(ConfigurableQuotePublisher(s, msg_type)),
-                                       late_by=LATE_BY, timeout=TIMEOUT,
+                                       late_by=delay, timeout=TIMEOUT,
                                        until=lambda out: bool(late) and late[0].initial_quote in out)
         got = late[0].initial_quote in run.run.stdout
         s.record("waits_for_node", got,
                  f"{run.describe()}; " + ("it printed the node's quote" if got else
                                           f"it never printed the node's quote ({short(late[0].initial_quote)}); "
                                           f"it printed: {scripts.excerpt(run.run.stdout + run.run.stderr)}"),
-                 f"the script waits for {NODE}, which joins {LATE_BY:.0f} s after its first ros2 command, "
-                 "and prints its quote (ros2 param get)")
+                 f"the script waits for {NODE}, which joins {delay:.1f} s after its first ros2 command (as long as "
+                 "its first run took), and prints its quote (ros2 param get)")
 
 
 def judge_set(s: GradingSession, node: ConfigurableQuotePublisher, run: Any) -> None:
