@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import psutil
 import pytest
@@ -43,11 +44,27 @@ def _node_children(pid: int) -> list[psutil.Process]:
 TRIES = 5
 
 
+def _signal_state(pid: int) -> str:
+    """The SIGINT state of ``pid`` from /proc (caught, ignored, blocked), for a failure message."""
+    try:
+        lines = Path(f"/proc/{pid}/status").read_text().splitlines()
+    except OSError:
+        return "process gone"
+    bit = 1 << (signal.SIGINT - 1)
+    masks = {line.split(":")[0]: int(line.split()[1], 16) for line in lines if line.startswith(("SigCgt", "SigIgn", "SigBlk"))}
+    return ", ".join(f"{name} {'yes' if mask & bit else 'no'}" for name, mask in sorted(masks.items()))
+
+
+#: What each try saw when it signalled (seconds after the start, SIGINT state): shown when every try finished first.
+SEEN: list[str] = []
+
+
 def _interrupt_once(ws, sig) -> int:
     """Start `ros2course check`, send ``sig`` to it as soon as the learner's node started; return its exit code.
 
     Only ros2course itself gets the signal, not its process group; every learner node must be gone after it.
     """
+    began = time.monotonic()
     cli = subprocess.Popen([sys.executable, "-m", "ros2course", "check", "print-forever-node", "--workspace", str(ws.root)],
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
                            start_new_session=True)
@@ -56,6 +73,7 @@ def _interrupt_once(ws, sig) -> int:
         # check starts last (its Ctrl+C check), moments before the check ends by itself
         assert _wait_for(lambda: _node_children(cli.pid), 120, interval=0.01), "the learner node never started"
         nodes = _node_children(cli.pid)
+        SEEN.append(f"node seen after {time.monotonic() - began:.1f} s, ros2course SIGINT {_signal_state(cli.pid)}")
         os.kill(cli.pid, sig)
         cli.wait(timeout=30)
         gone, alive = psutil.wait_procs(nodes, timeout=15)
@@ -81,7 +99,8 @@ def test_check_killed_mid_way(solution_workspace, sig):
             break
         ws.progress_path.write_bytes(before)
     else:
-        pytest.fail(f"in {TRIES} tries the check always finished before Ctrl+C reached it (exit code {code})")
+        pytest.fail(f"in {TRIES} tries the check always finished before Ctrl+C reached it (exit code {code}); "
+                    + "; ".join(SEEN[-TRIES:]))
     # the progress file is intact: the interrupted check was simply not recorded
     assert ws.progress_path.read_bytes() == before
     json.loads(ws.progress_path.read_text())
