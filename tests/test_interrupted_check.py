@@ -13,7 +13,7 @@ from pathlib import Path
 import psutil
 import pytest
 
-from ros2course.run.process import sweep_stale_fastdds_shm
+from ros2course.run.process import default_sigint_prefix, sweep_stale_fastdds_shm
 
 
 def _wait_for(predicate, timeout: float, interval: float = 0.05) -> bool:
@@ -65,7 +65,13 @@ def _interrupt_once(ws, sig) -> int:
     Only ros2course itself gets the signal, not its process group; every learner node must be gone after it.
     """
     began = time.monotonic()
-    cli = subprocess.Popen([sys.executable, "-m", "ros2course", "check", "print-forever-node", "--workspace", str(ws.root)],
+    # as a terminal starts it: SIGINT at its default action. A test run started as a background job of a
+    # non-interactive shell (`cmd &`) inherits SIGINT ignored (POSIX), and Python then leaves it ignored:
+    # the check would rightly finish despite the Ctrl+C (two rehearsals of CI, started that way, failed so)
+    terminal = default_sigint_prefix()
+    assert terminal, "this machine's env(1) cannot reset SIGINT (coreutils >= 8.31 needed)"
+    cli = subprocess.Popen([*terminal, sys.executable, "-m", "ros2course", "check", "print-forever-node",
+                            "--workspace", str(ws.root)],
                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, stdin=subprocess.DEVNULL,
                            start_new_session=True)
     try:
