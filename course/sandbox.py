@@ -72,24 +72,43 @@ UID_SPAN = 90_000_000
 #: PATH of the root side of the wrapper (its environment is otherwise empty).
 SAFE_PATH = "/usr/sbin:/usr/bin:/sbin:/bin"
 
+def fastdds_profile_xml(name: str, udp_only: bool, announcement_period: float | None = None,
+                        comment: str = "") -> str:
+    """A Fast DDS XML profile (the schema of Fast DDS 2.14, Jazzy's) making participant ``name`` the default.
+
+    Args:
+        name: the participant profile's name.
+        udp_only: the UDPv4 transport only (no shared memory, whose segments two users cannot share).
+        announcement_period: seconds between the participant's announcements (``leaseAnnouncement``;
+            Fast DDS's default of 3 s when None).
+        comment: a line of text for an XML comment saying whose profile it is ("" for none).
+
+    The one template of both profiles the engine writes: a batch job's (:data:`FASTDDS_UDP_ONLY`) and the
+    grader's own (``ros2course.run.probes.grader_profile_xml``).
+    """
+    transports = ("\n  <transport_descriptors>\n    <transport_descriptor>\n      <transport_id>ros2course_udp"
+                  "</transport_id>\n      <type>UDPv4</type>\n    </transport_descriptor>\n  </transport_descriptors>"
+                  if udp_only else "")
+    rtps = []
+    if announcement_period is not None:
+        seconds = int(announcement_period)
+        nanoseconds = round((announcement_period - seconds) * 1e9)
+        rtps.append("      <builtin>\n        <discovery_config>\n          <leaseAnnouncement>"
+                    f"<sec>{seconds}</sec><nanosec>{nanoseconds}</nanosec></leaseAnnouncement>\n"
+                    "        </discovery_config>\n      </builtin>")
+    if udp_only:
+        rtps.append("      <userTransports><transport_id>ros2course_udp</transport_id></userTransports>\n"
+                    "      <useBuiltinTransports>false</useBuiltinTransports>")
+    note = f"\n<!-- {comment} -->" if comment else ""
+    return (f'<?xml version="1.0" encoding="UTF-8" ?>{note}\n'
+            f'<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">{transports}\n'
+            f'  <participant profile_name="{name}" is_default_profile="true">\n'
+            "    <rtps>\n" + "\n".join(rtps) + "\n    </rtps>\n  </participant>\n</profiles>\n")
+
+
 #: Fast DDS default participant profile for jobs with a submission uid: the UDPv4 transport
-#: only (no shared memory, whose segments two users cannot share), in Fast DDS's XML schema.
-FASTDDS_UDP_ONLY = """<?xml version="1.0" encoding="UTF-8" ?>
-<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">
-  <transport_descriptors>
-    <transport_descriptor>
-      <transport_id>ros2course_udp</transport_id>
-      <type>UDPv4</type>
-    </transport_descriptor>
-  </transport_descriptors>
-  <participant profile_name="ros2course_udp_only" is_default_profile="true">
-    <rtps>
-      <userTransports><transport_id>ros2course_udp</transport_id></userTransports>
-      <useBuiltinTransports>false</useBuiltinTransports>
-    </rtps>
-  </participant>
-</profiles>
-"""
+#: only (no shared memory, whose segments two users cannot share).
+FASTDDS_UDP_ONLY = fastdds_profile_xml("ros2course_udp_only", udp_only=True)
 
 _ENV_NAME = re.compile(r"^[A-Za-z_][A-Za-z0-9_]*$")
 

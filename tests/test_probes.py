@@ -401,7 +401,7 @@ def test_the_graders_fast_dds_profile_never_reaches_learner_nodes(tmp_path, monk
     monkeypatch.delenv("ROS2COURSE_DISCOVERY_RANGE", raising=False)
     monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")  # configure_process_discovery sets it: restored after
     monkeypatch.delenv(probes.PROFILES_VARIABLE, raising=False)
-    monkeypatch.setattr(probes, "_learner_profile", {})
+    monkeypatch.setattr(probes, "_profile_choice", probes._ProfileChoice())
     probes.configure_process_discovery()
     ours = os.environ[probes.PROFILES_VARIABLE]
     text = open(ours, encoding="utf-8").read()
@@ -411,14 +411,14 @@ def test_the_graders_fast_dds_profile_never_reaches_learner_nodes(tmp_path, monk
     # a batch job's UDP-only profile: the grader's own is UDP only too, its learner nodes keep the job's file
     monkeypatch.setenv("ROS2COURSE_DISCOVERY_RANGE", "SUBNET")
     monkeypatch.setenv(probes.PROFILES_VARIABLE, "/job/fastdds-udp-only.xml")
-    monkeypatch.setattr(probes, "_learner_profile", {})
+    monkeypatch.setattr(probes, "_profile_choice", probes._ProfileChoice())
     probes.configure_process_discovery()
     assert open(os.environ[probes.PROFILES_VARIABLE], encoding="utf-8").read().count("ros2course_udp") == 2
     assert probes.learner_profile_env(dict(os.environ))[probes.PROFILES_VARIABLE] == "/job/fastdds-udp-only.xml"
     # a profile of the user's own is theirs: the grader leaves it alone
     monkeypatch.delenv("ROS2COURSE_DISCOVERY_RANGE")
     monkeypatch.setenv(probes.PROFILES_VARIABLE, "/home/me/my-dds.xml")
-    monkeypatch.setattr(probes, "_learner_profile", {})
+    monkeypatch.setattr(probes, "_profile_choice", probes._ProfileChoice())
     probes.configure_process_discovery()
     assert os.environ[probes.PROFILES_VARIABLE] == "/home/me/my-dds.xml"
     assert probes.learner_profile_env(dict(os.environ))[probes.PROFILES_VARIABLE] == "/home/me/my-dds.xml"
@@ -426,7 +426,7 @@ def test_the_graders_fast_dds_profile_never_reaches_learner_nodes(tmp_path, monk
     monkeypatch.delenv(probes.PROFILES_VARIABLE)
     monkeypatch.setenv("ROS2COURSE_CACHE_DIR", str(tmp_path / "a-file" / "cache"))
     (tmp_path / "a-file").write_text("not a folder", encoding="utf-8")
-    monkeypatch.setattr(probes, "_learner_profile", {})
+    monkeypatch.setattr(probes, "_profile_choice", probes._ProfileChoice())
     probes.configure_process_discovery()
     assert probes.PROFILES_VARIABLE not in os.environ
 

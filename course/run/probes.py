@@ -24,6 +24,8 @@ import time
 from collections.abc import Callable, Iterator
 from typing import Any
 
+from ros2course import sandbox
+
 #: Our own node is hidden (leading underscore), so "nodes seen" lists stay the learner's.
 GRADER_NODE = "_ros2course_grader"
 #: Seconds a reliable sample may be late: a DDS sample lost on a loaded machine is repaired
@@ -149,46 +151,42 @@ PROFILES_VARIABLE = "FASTRTPS_DEFAULT_PROFILES_FILE"
 #: long-standing nodes in 1 run in 3 with two busy cores (measured with a bare rclpy observer and
 #: ``yes`` loads, issue 37's inspect-services ``listed_late``); announcing every 0.25 s, 0 in 8.
 GRADER_ANNOUNCEMENT_PERIOD = 0.25
-_GRADER_PROFILE = """<?xml version="1.0" encoding="UTF-8" ?>
-<!-- ros2course: the grader's own participants (ros2course.run.probes.configure_process_discovery) -->
-<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">{transports}
-  <participant profile_name="ros2course_grader" is_default_profile="true">
-    <rtps>
-      <builtin>
-        <discovery_config>
-          <leaseAnnouncement><sec>0</sec><nanosec>{nanosec}</nanosec></leaseAnnouncement>
-        </discovery_config>
-      </builtin>{user_transports}
-    </rtps>
-  </participant>
-</profiles>
-"""
-#: The profile file learner processes keep (None: none): the grader's own never reaches them.
-_learner_profile: dict[str, str | None] = {}
+
+
+@dataclasses.dataclass
+class _ProfileChoice:
+    """This process's Fast DDS profile decision, made once (at its first ROS context, :func:`_use_grader_profile`).
+
+    Attributes:
+        made: whether it was made.
+        learners: the profile file learner processes keep (None: none): the grader's own never reaches them.
+    """
+
+    made: bool = False
+    learners: str | None = None
+
+
+_profile_choice = _ProfileChoice()
 
 
 def grader_profile_xml() -> str:
     """The Fast DDS XML profile of the grader's participants: announce every :data:`GRADER_ANNOUNCEMENT_PERIOD`
     seconds, over UDP only when a batch job asks for it (``ROS2COURSE_DISCOVERY_RANGE=SUBNET``, the
     transport of :data:`ros2course.sandbox.FASTDDS_UDP_ONLY`, which the job's learner processes keep)."""
-    udp_only = discovery_range() == "SUBNET"
-    transports = ("\n  <transport_descriptors>\n    <transport_descriptor>\n      <transport_id>ros2course_udp"
-                  "</transport_id>\n      <type>UDPv4</type>\n    </transport_descriptor>\n  </transport_descriptors>"
-                  if udp_only else "")
-    user_transports = ("\n      <userTransports><transport_id>ros2course_udp</transport_id></userTransports>"
-                       "\n      <useBuiltinTransports>false</useBuiltinTransports>" if udp_only else "")
-    return _GRADER_PROFILE.format(transports=transports, user_transports=user_transports,
-                                  nanosec=int(GRADER_ANNOUNCEMENT_PERIOD * 1e9))
+    return sandbox.fastdds_profile_xml("ros2course_grader", udp_only=discovery_range() == "SUBNET",
+                                       announcement_period=GRADER_ANNOUNCEMENT_PERIOD,
+                                       comment="ros2course: the grader's own participants "
+                                               "(ros2course.run.probes.configure_process_discovery)")
 
 
 def _use_grader_profile() -> None:
     """Point this process's Fast DDS at :func:`grader_profile_xml` (a file in the cache folder, named by its
     content), unless a profile of the user's own is set (theirs wins: a DDS setup of their machine), and
     remember what learner processes keep. Called with :data:`_DISCOVERY_LOCK` held."""
-    if "value" in _learner_profile:
+    if _profile_choice.made:
         return
     inherited = os.environ.get(PROFILES_VARIABLE)
-    _learner_profile["value"] = inherited
+    _profile_choice.made, _profile_choice.learners = True, inherited
     from ros2course.files import cache_dir  # noqa: PLC0415 - platformdirs only when grading
 
     if inherited and discovery_range() != "SUBNET":
@@ -212,12 +210,12 @@ def learner_profile_env(env: dict[str, str]) -> dict[str, str]:
     """``env`` with the grader's own Fast DDS profile (:func:`grader_profile_xml`) replaced by the one the
     process inherited (or none): learner nodes run with Fast DDS's defaults, or the user's or batch job's
     profile, as in the learner's terminal."""
-    ours = os.environ.get(PROFILES_VARIABLE) if "value" in _learner_profile else None
-    if ours is not None and env.get(PROFILES_VARIABLE) == ours != _learner_profile["value"]:
-        if _learner_profile["value"] is None:
+    ours = os.environ.get(PROFILES_VARIABLE) if _profile_choice.made else None
+    if ours is not None and env.get(PROFILES_VARIABLE) == ours != _profile_choice.learners:
+        if _profile_choice.learners is None:
             env.pop(PROFILES_VARIABLE)
         else:
-            env[PROFILES_VARIABLE] = _learner_profile["value"]
+            env[PROFILES_VARIABLE] = _profile_choice.learners
     return env
 
 
