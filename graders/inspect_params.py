@@ -40,13 +40,6 @@ NAMES = ("period", "philosopher_name", "quote", "topic_name")
 TIMEOUT = 30.0  # seconds for the whole script (each ros2 command starts in ~1 s)
 NEXT_MESSAGES = 2  # the change must show within this many messages (one may be on its way)
 
-#: Seconds between the script's first ``ros2`` command joining the graph and the second run's node: as long as
-#: the whole first run took (:func:`late_by`), within these bounds. A script that asks at once asks within its
-#: first run's time (its ``ros2 param get`` after two other commands), so the node joins after it asked,
-#: however slow the machine; a fixed 3 s let a busy machine's slow commands reach the node in time
-#: (CI: the fixture asks_at_once got full marks). The reference's loop waits up to 10 x (1 s + a node list).
-LATE_BY = 3.0
-LATE_BY_MAX = 10.0
 WAIT_HINT = ("the node may join after your first command (a daemon that has just started has not discovered it "
              "yet): `ros2 daemon start`, then wait until `ros2 node list` shows the node (the starter's loop) "
              "before the first `ros2 param` command")
@@ -89,18 +82,12 @@ def grade(s: GradingSession) -> None:
                     f"ros2 param get {NODE} quote")
     judge_set(s, node, run)
     judge_dump(s, dump, started, node.parameters())
-    judge_late_node(s, path, late_by(run.seconds))
+    judge_late_node(s, path, scripts.late_by(run))
 
 
-def late_by(first_run: float) -> float:
-    """Seconds (``first_run``: the first run's wall time, seconds) after the script's first ``ros2`` command
-    that the second run's node joins: the first run's time, between :data:`LATE_BY` and :data:`LATE_BY_MAX`."""
-    return min(max(first_run, LATE_BY), LATE_BY_MAX)
-
-
-def judge_late_node(s: GradingSession, path, delay: float = LATE_BY) -> None:
+def judge_late_node(s: GradingSession, path, delay: float = scripts.LATE_BY_MIN) -> None:
     """Record ``waits_for_node``: run the script again in a fresh graph with no daemon; the node starts
-    ``delay`` s (:func:`late_by`) after the script's first ``ros2`` command joined the graph; its quote must be
+    ``delay`` s (``kit.scripts.late_by``) after the script's first ``ros2`` command joined the graph; its quote must be
     printed. Run after :func:`judge_dump`: the file this run may write is not the one judged."""
     if (blocker := s.unmet_need("waits_for_node")) is not None:
         s.record("waits_for_node", False, blocker, "")

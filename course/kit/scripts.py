@@ -121,6 +121,23 @@ def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=No
 ROS2CLI_NODE = re.compile(r"_ros2cli_(\d+|daemon_\d+_[0-9a-f]+)")
 #: Seconds to wait for the script's first ``ros2`` command to join the graph before starting the late part anyway.
 FIRST_COMMAND_TIMEOUT = 10.0
+#: Bounds (seconds) of :func:`late_by`.
+LATE_BY_MIN = 3.0
+LATE_BY_MAX = 10.0
+
+
+def late_by(first_run: ProgramRun, low: float = LATE_BY_MIN, high: float = LATE_BY_MAX) -> float:
+    """How late (seconds after the script's first ``ros2`` command) :func:`run_script_first`'s node should join:
+    as long as ``first_run`` (the same script's run against a graph that had everything from the start) took,
+    between ``low`` and ``high``.
+
+    A script that looks once and gives up has given up within its whole first run's time, however slow the
+    machine, so a node that joins later than that is missed by it and found by a script that asks again; a
+    fixed delay let a busy machine's slow commands reach the node in time (CI: inspect-params' asks-at-once
+    fixture got full marks with a fixed 3 s). ``high`` bounds what a correct script must wait (the tutorial's
+    loop asks up to 10 times, a second apart).
+    """
+    return min(max(first_run.seconds, low), high)
 
 
 @dataclasses.dataclass(frozen=True)
