@@ -24,7 +24,6 @@ given as the parameters ``x`` and ``y``:
 
 from __future__ import annotations
 
-import random
 import re
 import time
 from collections.abc import Callable
@@ -100,8 +99,9 @@ CHECKS = [
 ]
 
 
-def _goal_xy() -> tuple[float, float]:
-    return round(random.uniform(0.3, 0.9), 3), round(random.uniform(-0.9, -0.3), 3)
+def _goal_xy(s: GradingSession) -> tuple[float, float]:
+    """A goal for the learner's client to send: x in [0.3, 0.9], y in [-0.9, -0.3] m (GradingSession.random)."""
+    return round(s.random.uniform(0.3, 0.9), 3), round(s.random.uniform(-0.9, -0.3), 3)
 
 
 def _params(xy: tuple[float, float]) -> list[str]:
@@ -158,7 +158,7 @@ def grade(s: GradingSession) -> None:
 def _interrupted_run(s: GradingSession, path: Any) -> None:
     """sigint_exit: Ctrl+C while the client waits for a server that never comes (judged as the part ends)."""
     rosout = s.graph.rosout()
-    proc = _started(s, path, _goal_xy(), f"{EXECUTABLE}.interrupted")
+    proc = _started(s, path, _goal_xy(s), f"{EXECUTABLE}.interrupted")
     s.on_close(lambda: kit.sigint_exit(s, "sigint_exit", proc))
     with s.phase("observe"):  # Ctrl+C once it says it waits (what a learner sees before pressing it)
         kit.wait_until(lambda: bool(_records(rosout)), 2 * WAIT_WINDOW, abort=lambda: proc.poll() is not None)
@@ -166,11 +166,11 @@ def _interrupted_run(s: GradingSession, path: Any) -> None:
 
 def _goal_run(s: GradingSession, action: Any, path: Any) -> None:
     """waits, goal_sent, logs_feedback, logs_result, ends."""
-    xy = _goal_xy()
-    distances = sorted((round(random.uniform(0.05, 0.95), 3) for _ in range(4)), reverse=True) + [0.0]
+    xy = _goal_xy(s)
+    distances = sorted((round(s.random.uniform(0.05, 0.95), 3) for _ in range(4)), reverse=True) + [0.0]
     # x at least 2 mm off the goal's: the record of the goal sent (x, y) never holds the final position
-    final = (round(xy[0] + random.choice((-1, 1)) * random.uniform(0.002, 0.004), 3),
-             round(xy[1] + random.uniform(-0.004, 0.004), 3))
+    final = (round(xy[0] + s.random.choice((-1, 1)) * s.random.uniform(0.002, 0.004), 3),
+             round(xy[1] + s.random.uniform(-0.004, 0.004), 3))
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
         action, final, distances, act.SUCCEEDED))
     rosout = s.graph.rosout()
@@ -276,7 +276,7 @@ def _started(s: GradingSession, path: Any, xy: tuple[float, float], label: str) 
 
 def _aborted_run(s: GradingSession, action: Any, path: Any) -> None:
     """logs_aborted: the grader's server aborts the goal after two feedback messages."""
-    xy = _goal_xy()
+    xy = _goal_xy(s)
     final = (round(xy[0] / 2, 3), round(xy[1] / 2, 3))
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
         action, final, [0.6, 0.5], act.ABORTED))
@@ -302,7 +302,7 @@ def _aborted_run(s: GradingSession, action: Any, path: Any) -> None:
 
 def _rejected_run(s: GradingSession, action: Any, path: Any) -> None:
     """handles_rejection: the grader's server rejects the goal."""
-    xy = _goal_xy()
+    xy = _goal_xy(s)
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: act.Script(accept=False))
     rosout = s.graph.rosout()
     server.offer()

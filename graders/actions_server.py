@@ -188,7 +188,7 @@ def grade(s: GradingSession) -> None:
     with s.part("server"):
         _served(s, client, node)
         start, heading = _first_goal(s, action, client, node)
-        _rejects(s, action, client, start)
+        start = _rejects(s, action, client, start)
         stop = _cancel(s, action, client, node, start, heading)
         stuck = _preempt(s, action, client, node, stop)
     with s.part("cli"):
@@ -251,13 +251,14 @@ def _first_goal(s: GradingSession, action: Any, client: act.GoalClient,
 
     Returns where the point is believed to be afterwards, and the goal's direction (radians).
     """
-    angle = random.uniform(0.0, 2.0 * math.pi)
+    angle = s.random.uniform(0.0, 2.0 * math.pi)  # the same files get the same goals (GradingSession.random)
     target = (round(FIRST_DISTANCE * math.cos(angle), 3), round(FIRST_DISTANCE * math.sin(angle), 3))
     distance = math.hypot(*target)
     goal = client.send(_goal(action, *target))
     s.record("goal_accepted", bool(goal.accepted),
              f"the goal {_show(target)} ({distance:.3f} m from the start (0, 0)) was "
-             + ("accepted" if goal.accepted else "rejected" if goal.accepted is False else f"not answered: {goal.why}"),
+             + {True: "accepted", False: "rejected", None: "not answered"}[goal.accepted]
+             + (f": {goal.why}" if goal.why else ""),
              f"the goal {_show(target)} accepted")
     s.require("goal_accepted")
     began = time.monotonic()
@@ -324,11 +325,16 @@ def _slope(points: list[tuple[float, float]]) -> float:
     return sum((t - mean_t) * (v - mean_v) for t, v in points) / spread if spread else 0.0
 
 
-def _rejects(s: GradingSession, action: Any, client: act.GoalClient, start: tuple[float, float]) -> None:
+def _rejects(s: GradingSession, action: Any, client: act.GoalClient,
+             start: tuple[float, float]) -> tuple[float, float]:
     """Record ``rejects``: goals 3 m from the point along y and along x, one 2.6 m from it across the
     origin (only 1.6 m from the origin: a server measuring from (0, 0) instead of from the point accepts
     it), one with a NaN x and one with a NaN y are all rejected. ``start`` is the point after goal 1, 1 m
     from the origin.
+
+    Returns where the point is afterwards: ``start``, or where a goal the server wrongly accepted
+    stopped when the grader canceled it (its result's final_position; how far it got depends on how
+    soon the cancel arrived, so ``position_kept`` is judged from there, never from ``start``).
 
     The far goals go from the point towards the origin's side along one axis each, whatever goal 1's
     random direction: the distance along the other axis is 0, so a server that ignores it, or mixes
@@ -349,12 +355,15 @@ def _rejects(s: GradingSession, action: Any, client: act.GoalClient, start: tupl
             wrong += 1
             client.cancel(goal)  # a server that accepted it must not drive off: end it
             client.wait_result(goal, 3.0 + 3.0 / SPEED)
+            if goal.result is not None:
+                start = _finite_or(_xy(goal.result.final_position), start)
         verdict = {True: "accepted", False: "rejected", None: f"not answered ({goal.why})"}[goal.accepted]
         seen.append(f"{label}: {verdict}")
         if goal.accepted is None:
             wrong += 1
     s.record("rejects", wrong == 0, "; ".join(seen), "all rejected (GoalResponse.REJECT)",
              fraction=(len(cases) - wrong) / len(cases))
+    return start
 
 
 def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.StartedNode,
@@ -458,7 +467,7 @@ def _position_kept(s: GradingSession, first: list[tuple[float, float]], d: float
              expected)
 
 
-def _away_from(places: list[tuple[float, float]], distance: float) -> tuple[float, float]:
+def _away_from(rng: random.Random, places: list[tuple[float, float]], distance: float) -> tuple[float, float]:
     """A goal ``distance`` metres from the first of ``places``, and from the second too when the two are
     between 5 cm and ``2 * distance`` apart (where the two circles meet, on a random side); otherwise in a
     random direction from the first."""
@@ -466,10 +475,10 @@ def _away_from(places: list[tuple[float, float]], distance: float) -> tuple[floa
     if len(places) > 1 and 0.05 < (gap := math.dist(a, places[1])) < 2 * distance:
         b = places[1]
         mid = ((a[0] + b[0]) / 2, (a[1] + b[1]) / 2)
-        h = random.choice((-1.0, 1.0)) * math.sqrt(distance ** 2 - (gap / 2) ** 2)
+        h = rng.choice((-1.0, 1.0)) * math.sqrt(distance ** 2 - (gap / 2) ** 2)
         ux, uy = (b[0] - a[0]) / gap, (b[1] - a[1]) / gap
         return round(mid[0] - h * uy, 3), round(mid[1] + h * ux, 3)
-    angle = random.uniform(0.0, 2.0 * math.pi)
+    angle = rng.uniform(0.0, 2.0 * math.pi)
     return round(a[0] + distance * math.cos(angle), 3), round(a[1] + distance * math.sin(angle), 3)
 
 
@@ -483,7 +492,7 @@ def _preempt(s: GradingSession, action: Any, client: act.GoalClient, node: kit.S
     """
     late_tries: list[str] = []
     for attempt in range(CANCEL_ATTEMPTS):
-        far = _away_from(places, PREEMPT_DISTANCE)
+        far = _away_from(s.random, places, PREEMPT_DISTANCE)
         back = (round(places[0][0], 3), round(places[0][1], 3))
         expected = ("the first goal ABORTED once the second is accepted; the second SUCCEEDED, final_position "
                     f"{_show(back)} ± {POSITION_TOLERANCE} m")
@@ -537,7 +546,7 @@ def _cli(s: GradingSession, node: kit.StartedNode, start: tuple[float, float]) -
     path = scripts.script(s, "cli_script", SCRIPT)
     if node.ended():
         raise Unmet(f"the server is no longer running: {kit.process_state(node.proc)}")
-    angle = random.uniform(0.0, 2.0 * math.pi)
+    angle = s.random.uniform(0.0, 2.0 * math.pi)
     target = (round(start[0] + 0.5 * math.cos(angle), 3), round(start[1] + 0.5 * math.sin(angle), 3))
     run = scripts.run_script(s, path, timeout=SCRIPT_TIMEOUT, args=[f"{target[0]}", f"{target[1]}"],
                              daemon_sees=[f"/{NODE}", f"{ACTION}/_action/send_goal"])

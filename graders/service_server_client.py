@@ -114,7 +114,7 @@ def _grade_client(s: GradingSession, srv_type: type) -> None:
     rosout = s.graph.rosout()  # the part's own graph
     # Made before the client starts, so it closes after the client's Ctrl+C (closing actions run newest first):
     # the client is stopped while the service still exists, as a learner would stop it.
-    server = ts.stand_in_server(s, srv_type, SERVICE, services.point_answers())
+    server = ts.stand_in_server(s, srv_type, SERVICE, services.point_answers(s.random))
     node = kit.start_node(s, "client_node_name", path, CLIENT_NODE, sigint_check="client_sigint_exit",
                           need_node=False)
     services.says_it_waits(s, "client_waits", rosout, node, SERVICE)  # 1. no service yet

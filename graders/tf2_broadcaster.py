@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import itertools
 import math
-import random
 import time
 
 from ros2course import kit
@@ -235,7 +234,7 @@ def _grade_cli(s: GradingSession, tf_message: type) -> None:
     from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
     path = scripts.script(s, "cli_script", SCRIPT)
-    offset = tuple(round(random.uniform(*bounds), 3) for bounds in ((0.2, 0.9), (-0.9, -0.2), (0.2, 0.9)))
+    offset = tuple(round(s.random.uniform(*bounds), 3) for bounds in ((0.2, 0.9), (-0.9, -0.2), (0.2, 0.9)))
     t = TransformStamped()
     t.header.stamp = s.graph.node.get_clock().now().to_msg()
     t.header.frame_id, t.child_frame_id = CHILD, CAMERA

@@ -17,7 +17,6 @@ grading process's library path).
 
 from __future__ import annotations
 
-import random
 import threading
 
 from ros2course import kit
@@ -102,10 +101,10 @@ class _Broadcast:
         self.thread.join(timeout=2.0)
 
 
-def _random_position(far_from: tuple[float, float, float] | None = None) -> tuple[float, float, float]:
-    """Three decimals each in [-3, 3] m, every coordinate at least 0.5 m from ``far_from``'s."""
+def _random_position(s: GradingSession, far_from: tuple[float, float, float] | None = None) -> tuple[float, float, float]:
+    """Three decimals each in [-3, 3] m, every coordinate at least 0.5 m from ``far_from``'s (GradingSession.random)."""
     while True:
-        found = tuple(round(random.uniform(-3.0, 3.0), 3) for _ in range(3))
+        found = tuple(round(s.random.uniform(-3.0, 3.0), 3) for _ in range(3))
         if min(abs(v) for v in found) > 0.2 and (far_from is None or
                                                   all(abs(a - b) > 0.5 for a, b in zip(found, far_from))):
             return found
@@ -199,7 +198,7 @@ def _follow(s: GradingSession, rosout, name: str, node: kit.StartedNode, tf_mess
     from geometry_msgs.msg import TransformStamped  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
     # 2. the grader becomes the tf2 tree
     broadcast = _Broadcast(s, tf_message, TransformStamped)
-    first = _random_position()
+    first = _random_position(s)
     broadcast.position = first
     with s.phase("observe"):
         wait_until(lambda: bool(_logged(rosout, name, first)), LOG_TIMEOUT, abort=node.ended)
@@ -216,7 +215,7 @@ def _follow(s: GradingSession, rosout, name: str, node: kit.StartedNode, tf_mess
         return
     _every_lookup(s, rosout, name, node, first)
     # 3. target moves
-    second = _random_position(far_from=first)
+    second = _random_position(s, far_from=first)
     broadcast.position = second
     with s.phase("observe"):
         wait_until(lambda: bool(_logged(rosout, name, second)), LOG_TIMEOUT, abort=node.ended)

@@ -212,3 +212,31 @@ def test_the_batch_sample_is_the_wrong_solutions_check_graded_fastest() -> None:
     checked[2] = Outcome(lesson.id, "grep_keeps_the_inbox", True, "", "", 7.9,
                          LessonResult(lesson.id, 1.0, 11.0, "failed", [died]))
     assert sample_fixtures(lesson, 1, checked) == ["wrong_topic_name"]
+
+
+def test_the_graders_random_draws_follow_the_files_not_their_times_or_modes(tmp_path: Path) -> None:
+    """``GradingSession.random``: the same files get the same probes through ``check`` and ``grade`` (a hand-in
+    is a copy: other times, other permission bits); other content, or another lesson, gets other draws."""
+    lesson = load_catalog().get("actions-server")
+
+    def draws(root: Path, which=lesson) -> list[float]:
+        session = GradingSession(which, [Check("a", "a", 1)], root, root / "log", dict(os.environ))
+        return [session.random.uniform(0.0, 6.28) for _ in range(3)]
+
+    mine = tmp_path / "mine"
+    (mine / "src" / "pkg").mkdir(parents=True)
+    node = mine / "src" / "pkg" / "node.py"
+    node.write_text("print('goal')\n", encoding="utf-8")
+    first = draws(mine)
+    assert draws(mine) == first, "two checks of unchanged files draw alike"
+    copy = tmp_path / "handed-in"
+    shutil.copytree(mine, copy)
+    (copy / "src" / "pkg" / "node.py").chmod(0o600)
+    os.utime(copy / "src" / "pkg" / "node.py", (1_000_000, 1_000_000))
+    assert draws(copy) == first, "a copy with other times and modes is the same submission"
+    node.write_text("print('goal!')\n", encoding="utf-8")
+    assert draws(mine) != first, "other content, other probes"
+    assert draws(copy, load_catalog().get("actions-client")) != first, "another lesson, other probes"
+    assert draws(tmp_path / "no-src") == draws(tmp_path / "no-src-either"), "no src/: the lesson alone seeds"
+    (mine / "src" / "dangling").symlink_to(tmp_path / "nowhere")
+    assert draws(mine) == draws(tmp_path / "no-src"), "a src/ that cannot be read whole: the lesson alone seeds"

@@ -159,6 +159,13 @@ def test_evidence_plots_draw_the_band_and_refuse_a_bad_file(tmp_path) -> None:
     assert "their mean must lie in 0.425-0.575 s" in out.getvalue() and "┌" in out.getvalue()
     plot_png(series, tmp_path / "r.png")
     assert (tmp_path / "r.png").read_bytes()[:4] == b"\x89PNG"
+    # a stream judged on its median (kit.rate(median=True), sas's 500 Hz joint states) says so
+    median = [IntervalSeries("stream_rate: /joint_states", [0.002, 0.004, 0.016], [0.002, 0.002, 0.012],
+                             (0.0017, 0.0023), "median")]
+    out = io.StringIO()
+    plot_terminal(median, Console(file=out, width=100, color_system=None))
+    assert "their median must lie in 1.70-2.30 ms" in out.getvalue()
+    plot_png(median, tmp_path / "m.png")
     with pytest.raises(CourseError, match="cannot write"):
         plot_png(series, tmp_path)
     with pytest.raises(CourseError, match="nothing to plot"):

@@ -130,8 +130,9 @@ class _Recorder:
     def __init__(self) -> None:
         self.results: dict[str, tuple] = {}
 
-    def record(self, check_id, passed, observed, expected, hint=None, fraction=None, window=None, band=None):
-        self.results[check_id] = (passed, observed, expected, window, band)
+    def record(self, check_id, passed, observed, expected, hint=None, fraction=None, window=None, band=None,
+               band_of="mean"):
+        self.results[check_id] = (passed, observed, expected, window, band, band_of)
         return passed
 
 
@@ -160,6 +161,11 @@ def test_span_rate_judges_the_source_stamps_over_the_span():
     assert span_rate(s, "starved", starved, period=0.002, span=1.0, noun="message", median=True)
     assert "median period 2.00 ms" in s.results["starved"][1]
     assert s.results["starved"][2].startswith("500.00 Hz: median period 2.0 ms ± 15%")
+    assert s.results["starved"][5] == "median" and s.results["rate"][5] == "mean", "evidence draws what was judged"
+    # the class report finds the band in either wording (it plots every rate check)
+    from ros2course.report.html import RATE_BAND  # noqa: PLC0415
+
+    assert RATE_BAND.search(s.results["starved"][2]).groups() == ("median", "2.0", "ms", "15")
     assert s.results["rate"][4] == pytest.approx((0.0017, 0.0023))
     assert not span_rate(s, "slow", _samples(0.02, 51), period=0.002, span=1.0, noun="message")
     assert not span_rate(s, "short", _samples(0.002, 100), period=0.002, span=1.0, noun="message")

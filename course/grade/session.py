@@ -10,9 +10,11 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import hashlib
 import json
 import logging
 import os
+import random
 import shutil
 import subprocess
 import threading
@@ -22,7 +24,8 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.build import colcon as build_mod
-from ros2course.errors import CourseError
+from ros2course.build.sources import scan_package
+from ros2course.errors import CourseError, NotGradable
 from ros2course.grade.results import NOT_CHECKED, CheckResult, Plot
 from ros2course.lesson.catalog import Lesson, content_root
 from ros2course.ros import index as ament_index
@@ -129,6 +132,33 @@ class GradingSession:
         self.graph_snapshots: list[dict[str, Any]] = []
         #: ``check id -> (low, high)`` seconds between events a verdict allowed (:meth:`record`'s ``band``).
         self.bands: dict[str, tuple[float, float]] = {}
+        #: ``check id -> "mean" | "median"``: which statistic of the intervals its band bounded.
+        self.band_statistics: dict[str, str] = {}
+        self._random: random.Random | None = None
+
+    @property
+    def random(self) -> random.Random:
+        """The grader's random draws for this submission (a goal's direction, a value to send).
+
+        Seeded from the lesson id and the content of the workspace's ``src/`` (each file's path and
+        bytes; never times or permission bits, which a copy or a hand-in changes): the same files get
+        the same probes, through ``check`` and through ``grade``, run after run, so a partial verdict
+        never changes between two runs on unchanged files, and other files get other probes. Values a
+        learner must not be able to predict (a mystery node's name) come from ``random.SystemRandom``
+        instead. A ``src/`` that cannot be read whole (a fifo, a broken link) seeds from the lesson id
+        alone; never raises.
+        """
+        if self._random is None:
+            seed = hashlib.sha256(f"{self.lesson.id}\n".encode())
+            src = self.workspace_root / "src"
+            try:
+                files = scan_package(self.workspace_root, src).files if src.is_dir() else {}
+            except NotGradable:  # a fifo or a broken link outside the lesson's packages: the build's concern, not ours
+                files = {}
+            for rel in sorted(files):
+                seed.update(f"{rel}\0{files[rel].sha256}\n".encode())
+            self._random = random.Random(seed.hexdigest())
+        return self._random
 
     def add_plot(self, title: str, times: Sequence[float], series: Mapping[str, Sequence[float]],
                  unit: str = "") -> None:
@@ -163,7 +193,7 @@ class GradingSession:
 
     def record(self, check_id: str, passed: bool, observed: str, expected: str, hint: str | None = None,
                fraction: float | None = None, window: tuple[float, float] | None = None,
-               band: tuple[float, float] | None = None) -> bool:
+               band: tuple[float, float] | None = None, band_of: str = "mean") -> bool:
         """Record the verdict on ``check_id``; returns ``passed``.
 
         A failed verdict may get the engine's diagnosis of the graph (see :meth:`_diagnosis`);
@@ -179,6 +209,7 @@ class GradingSession:
                 start of its part) to now. Kept with the check's recording (:mod:`ros2course.run.recording`).
             band: the interval between events the verdict allowed, ``(low, high)`` seconds (a rate's
                 mean period ± its tolerance), kept with the window for ``ros2course evidence --plot``.
+            band_of: the statistic of the intervals the band was applied to: ``"mean"`` or ``"median"``.
 
         Raises:
             KeyError: ``check_id`` is not declared in the grader's ``CHECKS``.
@@ -198,6 +229,7 @@ class GradingSession:
         self.windows[check_id] = (int(window[0] * 1e9), int(window[1] * 1e9)) if window else (start, now)
         if band is not None:
             self.bands[check_id] = (float(band[0]), float(band[1]))
+            self.band_statistics[check_id] = band_of
         fresh = self._observe_graph()
         self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
                                              passed, observed, expected,
@@ -651,7 +683,9 @@ class GradingSession:
             self.recorder.metadata(CHECKS_METADATA, {
                 check_id: json.dumps({"start_ns": start, "end_ns": end, "passed": self.results[check_id].passed,
                                       "observed": self.results[check_id].observed,
-                                      **({"band": list(self.bands[check_id])} if check_id in self.bands else {})})
+                                      **({"band": list(self.bands[check_id]),
+                                          "band_of": self.band_statistics.get(check_id, "mean")}
+                                         if check_id in self.bands else {})})
                 for check_id, (start, end) in self.windows.items() if check_id in self.results})
             self.recorder.close()
         if self.graph_snapshots:

@@ -50,22 +50,22 @@ def rate(s: GradingSession, check_id: str, times: list[float], *, period: float,
     stats = RateStats.from_times(times, sequence)
     # the span judged, for the check's recording (``ros2course evidence`` recomputes the rate from it)
     window = (min(times), max(times)) if times else None
-    band = (period * (1 - RATE_TOLERANCE), period * (1 + RATE_TOLERANCE))  # the mean period allowed, seconds
+    band = (period * (1 - RATE_TOLERANCE), period * (1 + RATE_TOLERANCE))  # the mean (median) period allowed, seconds
     shown = f"{period * 1000:.{1 if period < 0.01 else 0}f} ms" if period < 0.1 else f"{period:.3f} s"
     over = f"over at least {span:.1f} s of {noun}s" if span else f"over at least {needed - 1} intervals"
-    expected = f"{1.0 / period:.2f} Hz: mean period {shown} ± {RATE_TOLERANCE:.0%}, {over}{expected_note}"
+    statistic = "median" if median else "mean"
+    expected = f"{1.0 / period:.2f} Hz: {statistic} period {shown} ± {RATE_TOLERANCE:.0%}, {over}{expected_note}"
     covered = window[1] - window[0] if window else 0.0
     if stats is None or (covered < span * 0.9 if span else stats.samples < needed - 1):
         within = f"over {covered:.2f} s" if span else f"within {waited:.1f} s"
         return s.record(check_id, False, f"only {len(times)} {noun}(s) {within}"
-                        + (f" ({stats.describe()})" if stats else "") + where + few_note, expected, window=window, band=band)
-    if median:
-        expected = expected.replace("mean period", "median period", 1)
+                        + (f" ({stats.describe()})" if stats else "") + where + few_note, expected, window=window, band=band,
+                        band_of=statistic)
     shown_median = (f"; median period {stats.median_period * 1000:.2f} ms" if stats.median_period < 0.1
                     else f"; median period {stats.median_period:.3f} s") if median else ""
     return s.record(check_id, stats.within(1.0 / period, RATE_TOLERANCE, median=median),
                     f"{stats.describe()}{shown_median} (from {source}){where}", expected, window=window,
-                    band=band)
+                    band=band, band_of=statistic)
 
 
 def topics_seen(graph: Any) -> str:

@@ -114,7 +114,8 @@ _NAMES = ["Ada", "Grace", "Alan", "Edsger", "Barbara", "Donald", "Margaret", "Li
 
 
 def made_up(msg_type: type, count: int, rng: random.Random | None = None) -> list:
-    """``count`` AmazingQuote messages nobody hard-codes: random words, philosophers and ids (100000-999999)."""
+    """``count`` AmazingQuote messages nobody hard-codes: random words, philosophers and ids (100000-999999),
+    drawn from ``rng`` (a grader passes ``s.random``: other files, other quotes; the same files, the same)."""
     rng = rng or random.Random()
     out = []
     for _ in range(count):
@@ -143,7 +144,7 @@ def subscriber_logs(s: GradingSession, quotes_id: str, details_id: str, node: An
         Unmet: no quote was logged (``details_id`` cannot be judged).
     """
 
-    quotes = made_up(msg_type, count)
+    quotes = made_up(msg_type, count, s.random)
 
     def seen(msg: Any) -> bool:
         return any(msg.quote in r.msg for r in rosout.records())

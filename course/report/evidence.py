@@ -15,6 +15,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import shutil
+import statistics
 from collections import defaultdict
 from pathlib import Path
 from typing import Any
@@ -67,6 +68,8 @@ class CheckWindow:
     end_ns: int
     #: the interval between events the verdict allowed, ``(low, high)`` seconds (a rate's band), if any.
     band: tuple[float, float] | None = None
+    #: the statistic of the intervals the band bounded: ``"mean"``, or ``"median"`` (kit.rate's ``median=``).
+    band_of: str = "mean"
 
 
 def latest_log_dir(workspace_root: Path, lesson_id: str) -> Path:
@@ -157,7 +160,8 @@ def read(path: Path) -> tuple[list[Observation], list[CheckWindow]]:
                     band = data.get("band")
                     windows.append(CheckWindow(check_id, bool(data["passed"]), str(data.get("observed", "")),
                                                int(data["start_ns"]), int(data["end_ns"]),
-                                               (float(band[0]), float(band[1])) if band else None))
+                                               (float(band[0]), float(band[1])) if band else None,
+                                               str(data.get("band_of", "mean"))))
     except Exception as exc:  # noqa: BLE001 - mcap and its decoder raise their own error classes
         raise CourseError(f"{path}: not a readable recording ({type(exc).__name__}: {exc})",
                           "run the check again; a check stopped by force may leave the file unfinished") from exc
@@ -192,12 +196,14 @@ class IntervalSeries:
         times: seconds since the recording's first message, at the end of each interval.
         intervals: seconds between consecutive events (the grader's stamps).
         band: the interval the verdict allowed, ``(low, high)`` seconds, or None.
+        band_of: what the band bounds: the intervals' ``"mean"`` or their ``"median"``.
     """
 
     label: str
     times: list[float]
     intervals: list[float]
     band: tuple[float, float] | None
+    band_of: str = "mean"
 
 
 @dataclasses.dataclass
@@ -228,7 +234,8 @@ def interval_series(shown: Shown) -> list[IntervalSeries]:
             if len(stamps) < 3:
                 continue
             label = f"{window.check_id}: {topic}" + (f" from {source}" if source else "")
-            out.append(IntervalSeries(label, stamps[1:], [b - a for a, b in zip(stamps, stamps[1:])], window.band))
+            out.append(IntervalSeries(label, stamps[1:], [b - a for a, b in zip(stamps, stamps[1:])], window.band,
+                                      window.band_of))
     return out
 
 
@@ -244,7 +251,9 @@ def plot_terminal(series: list[IntervalSeries], console: Console, width: int | N
         return
     width = width or max(20, min(console.width - 14, 70))
     for one in series:
-        allowed = f"; their mean must lie in {one.band[0]:.3f}-{one.band[1]:.3f} s (the gridlines)" if one.band else ""
+        shown = "" if one.band is None else (f"{one.band[0] * 1000:.2f}-{one.band[1] * 1000:.2f} ms"
+                                             if one.band[1] < 0.1 else f"{one.band[0]:.3f}-{one.band[1]:.3f} s")
+        allowed = f"; their {one.band_of} must lie in {shown} (the gridlines)" if one.band else ""
         options: dict[str, Any] = {"lines": True, "width": width, "height": height, "x_unit": " s", "y_unit": " s",
                                    "title": f"{one.label}: interval between events{allowed}", "color": False}
         if one.band is not None:
@@ -271,10 +280,10 @@ def plot_png(series: list[IntervalSeries], path: Path) -> None:
     figure, axes = pyplot.subplots(len(series), 1, figsize=(8, 2.6 * len(series)), squeeze=False)
     for axis, one in zip(axes[:, 0], series):
         axis.plot(one.times, one.intervals, "o-", markersize=3, label="interval")
-        axis.axhline(sum(one.intervals) / len(one.intervals), color="tab:blue", linestyle="--", linewidth=1,
-                     label="mean interval")
+        judged = statistics.median(one.intervals) if one.band_of == "median" else statistics.fmean(one.intervals)
+        axis.axhline(judged, color="tab:blue", linestyle="--", linewidth=1, label=f"{one.band_of} interval")
         if one.band is not None:
-            axis.axhspan(one.band[0], one.band[1], color="tab:green", alpha=0.15, label="mean allowed")
+            axis.axhspan(one.band[0], one.band[1], color="tab:green", alpha=0.15, label=f"{one.band_of} allowed")
         axis.set_title(one.label, fontsize=9)
         axis.set_xlabel("t (s)")
         axis.set_ylabel("interval (s)")

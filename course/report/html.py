@@ -38,9 +38,9 @@ MAX_RECORDING_BYTES = 2_000_000
 MAX_STREAMS, MAX_POINTS = 3, 400
 #: Similar pairs listed.
 MAX_PAIRS = 50
-#: The rate band of a check's expected text ("mean period 0.500 s ± 15%": graders/kit/judge.py;
-#: "mean period 2.0 ms ± 15%": graders/kit/sas.py).
-RATE_BAND = re.compile(r"mean period ([0-9.]+) (s|ms) ± ([0-9.]+)\s*%")
+#: The rate band of a check's expected text ("mean period 0.500 s ± 15%" or "median period ...": kit/judge.py;
+#: "median period 2.0 ms ± 15%": graders/_sas.py, kit.rate(median=True)).
+RATE_BAND = re.compile(r"(mean|median) period ([0-9.]+) (s|ms) ± ([0-9.]+)\s*%")
 
 _STYLE = """
 body{font-family:sans-serif;margin:2em;max-width:1150px;color:#222}
@@ -244,13 +244,14 @@ def histogram_svg(fractions: list[float]) -> str:
     return _svg(figure)
 
 
-def rate_plot_svg(streams: dict[str, list[float]], period: float, tolerance: float) -> str:
+def rate_plot_svg(streams: dict[str, list[float]], period: float, tolerance: float, statistic: str = "mean") -> str:
     """Intervals between consecutive stamps of each stream, with the band the grader accepts.
 
     Args:
         streams: label -> stamps (seconds, oldest first, relative to the window's start).
-        period: the expected mean period, seconds.
-        tolerance: the accepted fraction of ``period`` on the mean (0.15 for ±15 %).
+        period: the expected period, seconds.
+        tolerance: the accepted fraction of ``period`` (0.15 for ±15 %).
+        statistic: what the band bounds: the intervals' ``"mean"`` or ``"median"`` (the check's expected text).
 
     A stream of more than :data:`MAX_POINTS` intervals is drawn as the longest interval of each
     group of consecutive ones (the SVG stays small; a late message still shows).
@@ -260,7 +261,7 @@ def rate_plot_svg(streams: dict[str, list[float]], period: float, tolerance: flo
     """
     figure = _figure(5.2, 2.2)
     axes = figure.add_subplot()
-    axes.axhspan(period * (1 - tolerance), period * (1 + tolerance), color="#cfc", label="accepted mean")
+    axes.axhspan(period * (1 - tolerance), period * (1 + tolerance), color="#cfc", label=f"accepted {statistic}")
     axes.axhline(period, color="#6a6", linewidth=0.8)
     for label, stamps in streams.items():
         points = [(b, b - a) for a, b in itertools.pairwise(stamps)]
@@ -336,12 +337,12 @@ def _recording(out_dir: Path, result: LessonResult) -> Path | None:
     return None
 
 
-def _plots(recording: Path, wanted: list[tuple[str, float, float]], vectors: list[str]
+def _plots(recording: Path, wanted: list[tuple[str, float, float, str]], vectors: list[str]
            ) -> tuple[list[dict[str, Any]], list[str]]:
     """(plots, notes) from one recording, read once.
 
     Args:
-        wanted: the rate checks to draw: [(check id, period s, tolerance)].
+        wanted: the rate checks to draw: [(check id, period s, tolerance, "mean" or "median")].
         vectors: the vector topics to draw as joint streams (:func:`ros2course.report.evidence.vector_topics`).
     """
     from ros2course.report.evidence import groups, read, within  # noqa: PLC0415 - mcap is only needed here
@@ -352,7 +353,7 @@ def _plots(recording: Path, wanted: list[tuple[str, float, float]], vectors: lis
         return [], [f"recording not readable: {exc}"]
     by_id = {window.check_id: window for window in windows}
     plots, notes = [], []
-    for check_id, period, tolerance in wanted:
+    for check_id, period, tolerance, statistic in wanted:
         window = by_id.get(check_id)
         if window is None:
             notes.append(f"{check_id}: the recording holds no window for this check")
@@ -365,9 +366,9 @@ def _plots(recording: Path, wanted: list[tuple[str, float, float]], vectors: lis
         if not streams:
             notes.append(f"{check_id}: fewer than two messages in its window, nothing to plot")
             continue
-        caption = (f"{check_id}: interval between messages ({', '.join(streams)}); green band: the mean period "
+        caption = (f"{check_id}: interval between messages ({', '.join(streams)}); green band: the {statistic} period "
                    f"{period:.3f} s ± {tolerance:.0%} the grader accepts; observed {window.observed}")
-        plots.append({"svg": rate_plot_svg(streams, period, tolerance), "caption": caption})
+        plots.append({"svg": rate_plot_svg(streams, period, tolerance, statistic), "caption": caption})
     origin = observations[0].stamp_ns if observations else 0
     for topic in vectors[:MAX_STREAMS]:
         items = [o for o in observations if o.topic == topic and o.values]
@@ -393,11 +394,11 @@ def _students(out_dir: Path, results: list[LessonResult], max_plots: int) -> lis
         for check in r.checks:
             band = RATE_BAND.search(check.expected or "")
             if band and not check.skipped:
-                period = float(band.group(1)) / (1000 if band.group(2) == "ms" else 1)
+                period = float(band.group(2)) / (1000 if band.group(3) == "ms" else 1)
                 candidates.append((check.passed, r.student, r.lesson, id(r), check.id, period,
-                                   float(band.group(3)) / 100))
+                                   float(band.group(4)) / 100, band.group(1)))
     candidates.sort(key=lambda c: c[:3])
-    chosen: dict[int, list[tuple[str, float, float]]] = collections.defaultdict(list)
+    chosen: dict[int, list[tuple[str, float, float, str]]] = collections.defaultdict(list)
     for candidate in candidates[:max_plots]:
         chosen[candidate[3]].append(candidate[4:])
     left_out = collections.Counter(c[3] for c in candidates[max_plots:])
