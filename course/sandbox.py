@@ -51,6 +51,7 @@ import time
 import uuid
 from pathlib import Path
 from typing import Any
+from xml.etree import ElementTree
 
 from ros2course.lesson.catalog import content_root
 from ros2course.ros import env as env_mod
@@ -86,24 +87,30 @@ def fastdds_profile_xml(name: str, udp_only: bool, announcement_period: float | 
     The one template of both profiles the engine writes: a batch job's (:data:`FASTDDS_UDP_ONLY`) and the
     grader's own (``ros2course.run.probes.grader_profile_xml``).
     """
-    transports = ("\n  <transport_descriptors>\n    <transport_descriptor>\n      <transport_id>ros2course_udp"
-                  "</transport_id>\n      <type>UDPv4</type>\n    </transport_descriptor>\n  </transport_descriptors>"
-                  if udp_only else "")
-    rtps = []
+    profiles = ElementTree.Element("profiles", xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles")
+    if udp_only:
+        descriptor = ElementTree.SubElement(ElementTree.SubElement(profiles, "transport_descriptors"),
+                                            "transport_descriptor")
+        ElementTree.SubElement(descriptor, "transport_id").text = _UDP_TRANSPORT
+        ElementTree.SubElement(descriptor, "type").text = "UDPv4"
+    participant = ElementTree.SubElement(profiles, "participant", profile_name=name, is_default_profile="true")
+    rtps = ElementTree.SubElement(participant, "rtps")
     if announcement_period is not None:
         seconds = int(announcement_period)
-        nanoseconds = round((announcement_period - seconds) * 1e9)
-        rtps.append("      <builtin>\n        <discovery_config>\n          <leaseAnnouncement>"
-                    f"<sec>{seconds}</sec><nanosec>{nanoseconds}</nanosec></leaseAnnouncement>\n"
-                    "        </discovery_config>\n      </builtin>")
+        lease = ElementTree.SubElement(ElementTree.SubElement(ElementTree.SubElement(rtps, "builtin"),
+                                                              "discovery_config"), "leaseAnnouncement")
+        ElementTree.SubElement(lease, "sec").text = str(seconds)
+        ElementTree.SubElement(lease, "nanosec").text = str(round((announcement_period - seconds) * 1e9))
     if udp_only:
-        rtps.append("      <userTransports><transport_id>ros2course_udp</transport_id></userTransports>\n"
-                    "      <useBuiltinTransports>false</useBuiltinTransports>")
-    note = f"\n<!-- {comment} -->" if comment else ""
-    return (f'<?xml version="1.0" encoding="UTF-8" ?>{note}\n'
-            f'<profiles xmlns="http://www.eprosima.com/XMLSchemas/fastRTPS_Profiles">{transports}\n'
-            f'  <participant profile_name="{name}" is_default_profile="true">\n'
-            "    <rtps>\n" + "\n".join(rtps) + "\n    </rtps>\n  </participant>\n</profiles>\n")
+        ElementTree.SubElement(ElementTree.SubElement(rtps, "userTransports"), "transport_id").text = _UDP_TRANSPORT
+        ElementTree.SubElement(rtps, "useBuiltinTransports").text = "false"
+    ElementTree.indent(profiles)
+    note = f"<!-- {comment} -->\n" if comment else ""
+    return f'<?xml version="1.0" encoding="UTF-8" ?>\n{note}{ElementTree.tostring(profiles, encoding="unicode")}\n'
+
+
+#: The id of the UDPv4 transport a UDP-only profile declares and makes its participant's only one.
+_UDP_TRANSPORT = "ros2course_udp"
 
 
 #: Fast DDS default participant profile for jobs with a submission uid: the UDPv4 transport

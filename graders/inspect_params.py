@@ -85,7 +85,7 @@ def grade(s: GradingSession) -> None:
     judge_late_node(s, path, scripts.late_by(run))
 
 
-def judge_late_node(s: GradingSession, path, delay: float = scripts.LATE_BY_MIN) -> None:
+def judge_late_node(s: GradingSession, path, delay: float) -> None:
     """Record ``waits_for_node``: run the script again in a fresh graph with no daemon; the node starts
     ``delay`` s (``kit.scripts.late_by``) after the script's first ``ros2`` command joined the graph; its quote must be
     printed. Run after :func:`judge_dump`: the file this run may write is not the one judged."""

@@ -75,7 +75,7 @@ def grade(s: GradingSession) -> None:
     judge_late_topic(s, path, msg_type, scripts.late_by(run))
 
 
-def judge_late_topic(s: GradingSession, path, msg_type, delay: float = scripts.LATE_BY_MIN) -> None:
+def judge_late_topic(s: GradingSession, path, msg_type, delay: float) -> None:
     """Record ``asks_again``: run the script again in a fresh graph with no daemon; the mystery node starts
     ``delay`` s (``kit.scripts.late_by``: as long as the first run took) after the script's first ``ros2``
     command joined the graph; its topic must be printed."""

@@ -240,3 +240,26 @@ def test_the_graders_random_draws_follow_the_files_not_their_times_or_modes(tmp_
     assert draws(tmp_path / "no-src") == draws(tmp_path / "no-src-either"), "no src/: the lesson alone seeds"
     (mine / "src" / "dangling").symlink_to(tmp_path / "nowhere")
     assert draws(mine) == draws(tmp_path / "no-src"), "a src/ that cannot be read whole: the lesson alone seeds"
+
+
+def test_a_built_lessons_draws_follow_its_packages_contents_as_the_build_read_them(tmp_path: Path) -> None:
+    """With packages, the seed is the build's content digest (no second scan): a copy with other modes keeps it."""
+    from ros2course.build.sources import scan_package  # noqa: PLC0415
+
+    lesson = load_catalog().get("actions-server")
+    pkg = tmp_path / "src" / "pkg"
+    pkg.mkdir(parents=True)
+    (pkg / "node.py").write_text("print('goal')\n", encoding="utf-8")
+    before = scan_package(tmp_path, pkg)
+    (pkg / "node.py").chmod(0o700)
+    after = scan_package(tmp_path, pkg)
+    assert before.digest != after.digest, "the build's own record keeps modes (an executable bit matters to it)"
+    assert before.content_digest == after.content_digest, "the seed does not"
+
+    def draws(digest: str) -> list[float]:
+        session = GradingSession(lesson, [Check("a", "a", 1)], tmp_path, tmp_path / "log", dict(os.environ),
+                                 sources_digest=digest)
+        return [session.random.random() for _ in range(3)]
+
+    assert draws(before.content_digest) == draws(after.content_digest)
+    assert draws(before.content_digest) != draws("0" * 64)

@@ -63,6 +63,8 @@ class BuildResult:
         excerpt: the relevant lines of a failed build, for the learner.
         repairs: one sentence per stale install state found and repaired by a clean
             rebuild of the package (:func:`stale_install`, :func:`stale_metadata`).
+        content_digest: sha256 over the built packages' folders and file contents (no times, no modes:
+            :attr:`~ros2course.build.sources.PackageSources.content_digest`), "" when no package was scanned.
     """
 
     ok: bool
@@ -72,6 +74,7 @@ class BuildResult:
     log_path: Path | None = None
     excerpt: str = ""
     repairs: list[str] = dataclasses.field(default_factory=list)
+    content_digest: str = ""
 
 
 # --- install states a learner's workspace gets into, which make a correct package fail ----------
@@ -322,10 +325,13 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
                        f"{'its' if len(orphans) == 1 else 'their'} build, so nothing imports or runs it by accident "
                        f"(in your terminal: `rm -rf {' '.join(f'build/{n} install/{n}' for n in orphans)}`)")
     sources = {name: scan_package(workspace_root, found[name][0]) for name in closure}
+    content = hashlib.sha256("".join(f"{name}\0{sources[name].folder}\0{sources[name].content_digest}\n"
+                                     for name in sorted(sources)).encode()).hexdigest()
     installed = all((workspace_root / "install" / name).is_dir() for name in closure)
     have_setup = (workspace_root / "install" / "setup.bash").is_file()
     if installed and have_setup and all(_up_to_date(records.get(name), sources[name]) for name in closure):
-        return BuildResult(True, packages, time.monotonic() - begin, cached=True, repairs=repairs)
+        return BuildResult(True, packages, time.monotonic() - begin, cached=True, repairs=repairs,
+                           content_digest=content)
     log_path.parent.mkdir(parents=True, exist_ok=True)
     repairs += stale_install(workspace_root, closure, found)
     repairs += _rebuild_from_clean(workspace_root, closure, found, records, sources)
@@ -350,9 +356,10 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
         records.save()
     text = log_path.read_text(encoding="utf-8", errors="replace")
     if outcome == "ok":
-        return BuildResult(True, packages, time.monotonic() - begin, cached=False, log_path=log_path, repairs=repairs)
+        return BuildResult(True, packages, time.monotonic() - begin, cached=False, log_path=log_path, repairs=repairs,
+                           content_digest=content)
     return BuildResult(False, packages, time.monotonic() - begin, cached=False, log_path=log_path,
-                       excerpt=build_log_excerpt(text), repairs=repairs)
+                       excerpt=build_log_excerpt(text), repairs=repairs, content_digest=content)
 
 
 def _names(names: list[str]) -> str:

@@ -66,6 +66,15 @@ class PackageSources:
         return h.hexdigest()
 
     @property
+    def content_digest(self) -> str:
+        """sha256 over every file's path and content hash: neither times nor permission bits, which a copy or a
+        hand-in changes (the seed of :attr:`ros2course.grade.session.GradingSession.random`)."""
+        h = hashlib.sha256()
+        for rel in sorted(self.files):
+            h.update(f"{rel}\0{self.files[rel].sha256}\n".encode())
+        return h.hexdigest()
+
+    @property
     def newest_ns(self) -> int:
         """The newest mtime among the files (ns), 0 for an empty package."""
         return max((f.mtime_ns for f in self.files.values()), default=0)

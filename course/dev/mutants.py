@@ -253,12 +253,19 @@ class Rule(BaseModel):
         if self.strings_only and (mutant.original == mutant.mutated or "\n" in mutant.original + mutant.mutated
                                   or _STRING.sub('""', mutant.original) != _STRING.sub('""', mutant.mutated)):
             return False
+        read: list[list[str]] = []  # the original file's lines, read once when a test below needs them
+
+        def whole_file() -> list[str]:
+            if not read:
+                read.append(original_lines(mutant, originals))
+            return read[0]
+
         if not mutant.original.strip() and mutant.line > 1:
-            above = original_lines(mutant, originals)[mutant.line - 2:mutant.line - 1]
+            above = whole_file()[mutant.line - 2:mutant.line - 1]
             if not above or above[0].rstrip().endswith("\\"):
                 return False  # the file is not known, or the line lands in a command continued from the line above
         if self.block is not None or self.not_block is not None:
-            lines = original_lines(mutant, originals)[:mutant.line - 1]
+            lines = whole_file()[:mutant.line - 1]
             if len(lines) < mutant.line - 1 or (not lines and mutant.line > 1):
                 return False  # the file is not known: no block can be judged
             # the changed line as it sits among the lines above: the original one, or for a line universalmutator
@@ -269,7 +276,7 @@ class Rule(BaseModel):
             if self.not_block is not None and in_block(lines, mutant.line, self.not_block, own=False):
                 return False
         if self.starter_line:
-            whole = original_lines(mutant, originals)
+            whole = whole_file()
             if not whole or not self._given(mutant.file, whole, mutant.line):
                 return False  # the file is not known, or the line is the learner's to write
         return True

@@ -154,6 +154,7 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
         base_env = build_mod.overlay_env(Path(underlay), base_env)
     timings: dict[str, float] = {}
     build_info: dict[str, Any] = {}
+    sources_digest = ""
 
     def not_gradable(message: str, hint: str) -> LessonResult:
         return LessonResult(lesson.id, 0.0, max_score, Status.NOT_GRADABLE, [], message, hint, timings,
@@ -165,12 +166,13 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
         except NotGradable as exc:
             return not_gradable(exc.message, exc.hint)
         timings["build"] = built.seconds
+        sources_digest = built.content_digest
         build_info = {"ok": built.ok, "cached": built.cached, "seconds": round(built.seconds, 3),
                       "log": str(built.log_path) if built.log_path else "", "repairs": built.repairs}
         if not built.ok:
             return not_gradable(f"colcon build failed for {', '.join(lesson.packages)}:\n{built.excerpt}",
                                 f"fix the build error; full log: {built.log_path}")
-    session = GradingSession(lesson, checks, workspace_root, log_dir, base_env, trusted_interfaces)
+    session = GradingSession(lesson, checks, workspace_root, log_dir, base_env, trusted_interfaces, sources_digest)
     if lesson.packages and "build" in session.checks:
         session.record("build", True, "colcon built " + ", ".join(lesson.packages)
                        + (" from clean, as every hand-in is (a build the submission brought is never used)"

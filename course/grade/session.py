@@ -57,6 +57,24 @@ GRAPH_FILE = "graph.json"
 DIAGNOSE_ENV = "ROS2COURSE_DIAGNOSE"
 
 
+@dataclasses.dataclass(frozen=True)
+class Band:
+    """The interval between events a verdict allowed, kept with its check's recording window.
+
+    Attributes:
+        low, high: seconds (a rate's period minus and plus its tolerance, kit.rate).
+        of: the statistic of the intervals the band bounded: ``"mean"`` or ``"median"``.
+    """
+
+    low: float
+    high: float
+    of: str = "mean"
+
+    def metadata(self) -> dict[str, Any]:
+        """The band's fields in the recording's check metadata (``ros2course evidence --plot`` reads them)."""
+        return {"band": [self.low, self.high], "band_of": self.of}
+
+
 @dataclasses.dataclass
 class _PartState:
     """What the engine keeps of one open :meth:`GradingSession.part` (one thread's stack of them).
@@ -92,8 +110,10 @@ class GradingSession:
     """
 
     def __init__(self, lesson: Lesson, checks: list[Check], workspace_root: Path, log_dir: Path,
-                 base_env: dict[str, str], trusted_interfaces: Path | None = None) -> None:
+                 base_env: dict[str, str], trusted_interfaces: Path | None = None, sources_digest: str = "") -> None:
         self.lesson = lesson
+        # the build's digest of the lesson's package contents (BuildResult.content_digest): seeds :attr:`random`
+        self._sources_digest = sources_digest
         check_dependencies(checks)
         self.checks = {c.id: c for c in checks}
         self._order = [c.id for c in checks]
@@ -130,17 +150,17 @@ class GradingSession:
         #: what the graph showed in each part that launched learner nodes (:meth:`_observe_graph`):
         #: ``{"part", "nodes", "ends"}``, written to ``graph.json`` by :meth:`close`.
         self.graph_snapshots: list[dict[str, Any]] = []
-        #: ``check id -> (low, high)`` seconds between events a verdict allowed (:meth:`record`'s ``band``).
-        self.bands: dict[str, tuple[float, float]] = {}
-        #: ``check id -> "mean" | "median"``: which statistic of the intervals its band bounded.
-        self.band_statistics: dict[str, str] = {}
+        #: ``check id -> Band``: the seconds between events a verdict allowed (:meth:`record`'s ``band``)
+        #: and which statistic of the intervals it bounded.
+        self.bands: dict[str, Band] = {}
         self._random: random.Random | None = None
 
     @property
     def random(self) -> random.Random:
         """The grader's random draws for this submission (a goal's direction, a value to send).
 
-        Seeded from the lesson id and the content of the workspace's ``src/`` (each file's path and
+        Seeded from the lesson id and the content of the lesson's packages as the build read them
+        (``sources_digest``), or of the whole ``src/`` for a lesson without packages (each file's path and
         bytes; never times or permission bits, which a copy or a hand-in changes): the same files get
         the same probes, through ``check`` and through ``grade``, run after run, so a partial verdict
         never changes between two runs on unchanged files, and other files get other probes. Values a
@@ -150,13 +170,16 @@ class GradingSession:
         """
         if self._random is None:
             seed = hashlib.sha256(f"{self.lesson.id}\n".encode())
-            src = self.workspace_root / "src"
-            try:
-                files = scan_package(self.workspace_root, src).files if src.is_dir() else {}
-            except NotGradable:  # a fifo or a broken link outside the lesson's packages: the build's concern, not ours
-                files = {}
-            for rel in sorted(files):
-                seed.update(f"{rel}\0{files[rel].sha256}\n".encode())
+            if self._sources_digest:  # the build already read every file of the lesson's packages
+                seed.update(self._sources_digest.encode())
+            else:  # a lesson without packages (a script in src/, a file to hand in): read src/ here
+                src = self.workspace_root / "src"
+                try:
+                    files = scan_package(self.workspace_root, src).files if src.is_dir() else {}
+                except NotGradable:  # a fifo or a broken link: the build's concern, not ours
+                    files = {}
+                for rel in sorted(files):
+                    seed.update(f"{rel}\0{files[rel].sha256}\n".encode())
             self._random = random.Random(seed.hexdigest())
         return self._random
 
@@ -228,8 +251,7 @@ class GradingSession:
         self._local.mark = now
         self.windows[check_id] = (int(window[0] * 1e9), int(window[1] * 1e9)) if window else (start, now)
         if band is not None:
-            self.bands[check_id] = (float(band[0]), float(band[1]))
-            self.band_statistics[check_id] = band_of
+            self.bands[check_id] = Band(float(band[0]), float(band[1]), band_of)
         fresh = self._observe_graph()
         self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
                                              passed, observed, expected,
@@ -683,9 +705,7 @@ class GradingSession:
             self.recorder.metadata(CHECKS_METADATA, {
                 check_id: json.dumps({"start_ns": start, "end_ns": end, "passed": self.results[check_id].passed,
                                       "observed": self.results[check_id].observed,
-                                      **({"band": list(self.bands[check_id]),
-                                          "band_of": self.band_statistics.get(check_id, "mean")}
-                                         if check_id in self.bands else {})})
+                                      **(self.bands[check_id].metadata() if check_id in self.bands else {})})
                 for check_id, (start, end) in self.windows.items() if check_id in self.results})
             self.recorder.close()
         if self.graph_snapshots:

@@ -174,31 +174,47 @@ class GoalClient:
         (its ``send_response`` waits only briefly for the match), or the request before the server's
         reader matched the grader's writer; CI saw a correct server's first goal "not answered".
         """
-        from rclpy.action.client import ClientGoalHandle  # noqa: PLC0415 - ROS modules only when grading
-
         goal = Goal(request=request, sent=time.time())
         record(self.graph, f"{self.name}/_action/send_goal/request", request)
         goal_id = _new_goal_id()
         future = self.client.send_goal_async(request, goal_uuid=goal_id)
-        if not wait_until(future.done, timeout, interval=0.005):
-            listed = wait_until(lambda: future.done() or self._listed(bytes(goal_id.uuid)), timeout, interval=0.01)
-            if listed and not future.done():
-                future.cancel()
-                response = self.action_type.Impl.SendGoalService.Response(accepted=True)
-                goal.handle = ClientGoalHandle(self.client, goal_id, response)
-                goal.accepted = True
-                goal.why = "its answer was lost, but the server's status topic lists it"
-                return goal
-            if not future.done():
-                future.cancel()
-                future = self.client.send_goal_async(request, goal_uuid=_new_goal_id())
-                if not wait_until(future.done, timeout, interval=0.005):
-                    future.cancel()
-                    goal.why = f"no answer to the goal within {timeout:.1f} s, nor to the same goal sent again"
-                    return goal
-                goal.why = f"no answer to the goal within {2 * timeout:.1f} s; the same goal sent again was answered"
+        if wait_until(future.done, timeout, interval=0.005):
+            return self._answered(goal, future)
+        wait_until(lambda: future.done() or self._listed(bytes(goal_id.uuid)), timeout, interval=0.01)
+        if future.done():
+            return self._answered(goal, future)
+        future.cancel()
+        if self._listed(bytes(goal_id.uuid)):
+            return self._accepted_unanswered(goal, goal_id)
+        return self._resend(goal, timeout)
+
+    def _answered(self, goal: Goal, future: Any, why: str = "") -> Goal:
+        """``goal`` as the server's answer (``future``, done) says: accepted or rejected."""
         goal.handle = future.result()
         goal.accepted = bool(goal.handle.accepted) if goal.handle is not None else None
+        goal.why = why
+        return goal
+
+    def _accepted_unanswered(self, goal: Goal, goal_id: Any) -> Goal:
+        """``goal`` accepted without an answer: the server's status topic lists ``goal_id`` (a
+        ``unique_identifier_msgs/UUID``). rclpy's own ``ClientGoalHandle`` is built for it, so its result
+        and cancel requests work as for an answered goal; the goal is never sent twice."""
+        from rclpy.action.client import ClientGoalHandle  # noqa: PLC0415 - ROS modules only when grading
+
+        response = self.action_type.Impl.SendGoalService.Response(accepted=True)
+        goal.handle = ClientGoalHandle(self.client, goal_id, response)
+        goal.accepted = True
+        goal.why = "its answer was lost, but the server's status topic lists it"
+        return goal
+
+    def _resend(self, goal: Goal, timeout: float) -> Goal:
+        """Send ``goal``'s request once more, under a new id, when neither its answer nor its status came."""
+        future = self.client.send_goal_async(goal.request, goal_uuid=_new_goal_id())
+        if wait_until(future.done, timeout, interval=0.005):
+            return self._answered(goal, future, f"no answer to the goal within {2 * timeout:.1f} s; "
+                                                "the same goal sent again was answered")
+        future.cancel()
+        goal.why = f"no answer to the goal within {timeout:.1f} s, nor to the same goal sent again"
         return goal
 
     def _listed(self, goal_id: bytes) -> bool:
