@@ -9,13 +9,16 @@ in a row, the point it simulates carrying over from one to the next:
    0.1 s with the distance falling at 1 m/s (a least-squares fit over the feedback messages' send
    stamps), ending at 0.0, the result the goal itself and the status SUCCEEDED;
 2. goals 3 m away along y and along x, one 2.6 m away across the origin, and goals with a NaN x
-   and a NaN y: all rejected;
+   and a NaN y: all rejected; then one 1.99 m away (just within the 2.0 m limit, straight away
+   from the origin): accepted, and canceled at once;
 3. a goal 1.6 m from where goal 1 ended, canceled after three feedback messages:
    its first feedback shows where the point started (the position is kept), the
    cancel is accepted, the goal ends CANCELED short of the goal and nothing moves
    after it;
 4. a goal 1.8 m away, then after three feedback messages a second goal: the first
-   ends ABORTED (one goal at a time), the second SUCCEEDED.
+   ends ABORTED (one goal at a time), the second SUCCEEDED;
+5. a goal 1.99 m away (just within the 2.0 m limit, straight away from the origin): accepted,
+   and canceled at once.
 
 Goals 3 and 4 are long (1.6 s and 1.8 s at the contract's speed) although the grader
 acts after their first 0.3 s: on a loaded machine the grader may see the third
@@ -61,6 +64,11 @@ GOAL_SLACK = 3.0
 #: 0.9997 m): the step before the last leaves just under 0.1 m, so the last step is a full one and
 #: every run judges the last feedback (0.0) and the landing (a server that skips either is 0.1 m off).
 FIRST_DISTANCE = 0.999
+#: Metres: the goal just within the limit that must be accepted (``accepts_within``). Not exactly
+#: MAX_DISTANCE: a correct server's point may sit a rounding error (1e-16 m) off a goal it landed on,
+#: and a goal exactly 2.0 m from where the grader believes the point is may then be 2.0 m and an ulp
+#: from the server's point, rightly rejected; a limit wrongly put anywhere below 1.99 m is caught.
+WITHIN_DISTANCE = 1.99
 #: Metres: goal 3 (canceled) and goal 4 (preempted) from where the point is (see the module docstring).
 CANCEL_DISTANCE = 1.6
 PREEMPT_DISTANCE = 1.8
@@ -120,6 +128,9 @@ CHECKS = [
     Check("preempted", "A new goal aborts the one executing (ABORTED), then succeeds itself", 2,
           "in handle_accepted_callback: if the previous goal handle is_active, call its abort(), then "
           "goal_handle.execute(); in the loop, stop when not goal_handle.is_active", needs=("goal_accepted",)),
+    Check("accepts_within", f"A goal {WITHIN_DISTANCE} m away (within {MAX_DISTANCE} m of the point) is accepted", 1,
+          f"reject only goals MORE than {MAX_DISTANCE} m from the point: if distance > {MAX_DISTANCE}: reject, "
+          "else accept (a smaller limit rejects goals the lesson says to accept)", needs=SERVED),
     Check("cli_script", f"{SCRIPT} exists and is valid bash", 1, part="cli", needs=SERVED),
     Check("cli_list", f"It lists the actions: {ACTION}", 1, "ros2 action list", part="cli", needs=("cli_script",)),
     Check("cli_info", f"It shows who serves {ACTION}", 1, f"ros2 action info {ACTION}", part="cli",
@@ -191,6 +202,9 @@ def grade(s: GradingSession) -> None:
         start = _rejects(s, action, client, start)
         stop = _cancel(s, action, client, node, start, heading)
         stuck = _preempt(s, action, client, node, stop)
+        # last of the server's goals: its point after the cancel is the server's own (a server that resets the
+        # point shows it on goal 3, which this one would hide by moving the point it reports)
+        stop = [_accepts_within(s, action, client, stop[0])]
     with s.part("cli"):
         unmet = s.unmet_need("cli_script")
         if unmet is not None:
@@ -198,7 +212,7 @@ def grade(s: GradingSession) -> None:
         if stuck:
             raise Unmet(f"the server still executes the goal(s) {', '.join(stuck)} and answers no cancel: "
                         "every thread of its executor is busy")
-        _cli(s, node, stop[0])  # goal 4's second goal took a correct server back to stop[0]
+        _cli(s, node, stop[0])  # where the last goal (accepts_within's, canceled) left the point
 
 
 #: What each package's package.xml must declare (<depend>: build, export and run), CONTRACT.md.
@@ -363,6 +377,30 @@ def _rejects(s: GradingSession, action: Any, client: act.GoalClient,
             wrong += 1
     s.record("rejects", wrong == 0, "; ".join(seen), "all rejected (GoalResponse.REJECT)",
              fraction=(len(cases) - wrong) / len(cases))
+    return start
+
+
+def _accepts_within(s: GradingSession, action: Any, client: act.GoalClient,
+                    start: tuple[float, float]) -> tuple[float, float]:
+    """Record ``accepts_within``: a goal WITHIN_DISTANCE from the point, straight away from the origin, is
+    accepted; the grader then cancels it at once (the point moves a step or two, not 2 m). Sent after
+    goal 4 (:func:`_preempt`), so the goals before it are placed as they always were.
+
+    Returns where the point is afterwards: the canceled goal's final_position (as :func:`_rejects`
+    does for a wrongly accepted goal), or ``start`` when the goal was not accepted.
+    """
+    norm = math.hypot(*start) or 1.0
+    target = (round(start[0] + WITHIN_DISTANCE * start[0] / norm, 3), round(start[1] + WITHIN_DISTANCE * start[1] / norm, 3))
+    goal = client.send(_goal(action, *target))
+    observed = (f"the goal {_show(target)}, {math.dist(target, start):.3f} m from the point {_show(start)}, was "
+                + {True: "accepted", False: "rejected", None: f"not answered ({goal.why})"}[goal.accepted])
+    s.record("accepts_within", bool(goal.accepted), observed, f"accepted: only goals more than {MAX_DISTANCE} m "
+             "away are rejected")
+    if goal.accepted:
+        client.cancel(goal)
+        client.wait_result(goal, 3.0 + WITHIN_DISTANCE / SPEED)
+        if goal.result is not None:
+            return _finite_or(_xy(goal.result.final_position), start)
     return start
 
 
