@@ -64,10 +64,23 @@ def _row(f, sample: int) -> str:
             f"{steadiness_text(load_catalog().get(f.lesson))} |")
 
 
+def _earlier_held_out(history: list[dict], fingerprint: str | None) -> list[str]:
+    """One phrase per earlier held-out sample (:func:`ros2course.dev.mutants.held_out_history`'s entries):
+    its seed, date and score, and whether it was graded under another grader than ``fingerprint``."""
+    return [f"seed {e.get('seed', '?')} ({e.get('date', '?')}): " + (
+        f"{_pct(e['score'])} of {e.get('counted')}" if e.get("score") is not None else "none counted")
+        + ("" if e.get("fingerprint") == fingerprint else " under an earlier grader")
+        for e in history]
+
+
 def _held_out_cell(row) -> str:
     """The held-out sample's figures (:attr:`ros2course.dev.mutants.RecordedScore.held_out`) in a cell."""
     held = row.held_out
     if held is None:
+        earlier = _earlier_held_out(row.data.get(mut.EARLIER_KEY, []), row.data.get("fingerprint"))
+        if earlier:  # a first sample measured again drops its held-out one: what the earlier ones scored still shows
+            return ("not drawn since the first sample was measured again; earlier held-out samples: "
+                    + ", ".join(earlier))
         return "not drawn"
     data = held.data
     if not data.get("graded"):  # nothing left to draw: the lesson's every mutant was shown by an earlier sample
@@ -81,10 +94,7 @@ def _held_out_cell(row) -> str:
         text += f" (too small to judge: {held.counted} < {mut.MIN_COUNTED})"
     if held.stale and not row.stale:
         text += f" **stale** ({data.get('date', '?')})"
-    earlier = [f"seed {e.get('seed', '?')} ({e.get('date', '?')}): " + (
-        f"{_pct(e['score'])} of {e.get('counted')}" if e.get("score") is not None else "none counted")
-        + ("" if e.get("fingerprint") == data.get("fingerprint") else " under an earlier grader")
-        for e in data.get("earlier", [])]
+    earlier = _earlier_held_out(data.get("earlier", []), data.get("fingerprint"))
     if earlier:
         text += "; earlier held-out samples: " + ", ".join(earlier)
     return text

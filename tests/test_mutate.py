@@ -400,7 +400,12 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
     assert module._held_out_cell(SimpleNamespace(held_out=small, stale="")) == (
         "100 % of 12 counted (raw 100 %; 12 graded of the 12 no earlier sample took, seed 2; 0 uncovered) "
         "(too small to judge: 12 < 20) **stale** (2026-11-20)")
-    assert module._held_out_cell(SimpleNamespace(held_out=None, stale="")) == "not drawn"
+    assert module._held_out_cell(SimpleNamespace(held_out=None, stale="", data={})) == "not drawn"
+    # a first sample measured again drops its held-out one; what the earlier held-out samples scored still shows
+    again = SimpleNamespace(held_out=None, stale="", data={"fingerprint": "f2", mut.EARLIER_KEY: [
+        {"seed": 2, "date": "2026-11-26", "fingerprint": "f1", "counted": 28, "score": 0.82}]})
+    assert module._held_out_cell(again) == ("not drawn since the first sample was measured again; earlier held-out "
+                                            "samples: seed 2 (2026-11-26): 82 % of 28 under an earlier grader")
     # a re-triage keeps the held-out sample as graded; a new first sample drops it
     mut.write_score(lesson, run(mutants[:30], 0, False), keep_held_out=True)
     assert mut.recorded_score(lesson).held_out is not None
