@@ -369,7 +369,8 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
         status = err.status(f"grading {lesson.id} in {ws.root} ...") if err.is_terminal else None
     with status or contextlib.nullcontext(), _ctrl_c_seen() as interrupted:
         progress = (lambda line: status.update(f"{lesson.id}: {line}")) if status is not None else None
-        result = grade_lesson(lesson, ws.root, progress=progress)
+        # the learner sees the visible checks only (issue 39): the others are graded when the work is handed in
+        result = grade_lesson(lesson, ws.root, progress=progress).for_learner()
     if interrupted:  # Ctrl+C came, and a layer below ended the check early instead of raising it
         raise KeyboardInterrupt
     if ws.initialised:
@@ -643,6 +644,7 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
              load: Annotated[int, typer.Option("--load", metavar="K", help="With --repeat: K gradings at once, each on its own copy (two learners on one machine).")] = 1,
              case: Annotated[Optional[list[str]], typer.Option("--case", metavar="CASE", help="With --repeat: only this case (reference, starter or a fixture's name; repeatable).")] = None,
              jobs: Annotated[int, typer.Option("--jobs", "-j", metavar="K", help="Wrong solutions graded K at once (each in a process of its own); references and full-marks cases are always graded alone.")] = 1,
+             until_settled: Annotated[bool, typer.Option("--until-settled", help="Stop grading a case once its verdict is settled: a wrong solution once the checks its fixture names are judged, the starter at its first lost point (the rest show 'not checked'; no 'also lost' notes). References are graded whole.")] = False,
              course: CourseOpt = None,
              ) -> None:
     """Grade every lesson's reference (full marks), starter (not full) and wrong solutions (named checks fail)."""
@@ -657,6 +659,9 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
     if repeat:
         if batch:
             raise CourseError("--repeat and --batch do not go together", "run them one after the other")
+        if until_settled:
+            raise CourseError("--repeat grades every check of a case: --until-settled does not go with it",
+                              "drop --until-settled")
         from ros2course.dev.repeat import render_steadiness, repeat_lessons  # noqa: PLC0415 - start time
 
         rows = repeat_lessons(lesson_ids or None, repeat, load, case or None, progress=stderr_console())
@@ -672,9 +677,10 @@ def validate(lesson_ids: Annotated[Optional[list[str]], typer.Argument(metavar="
     if batch:
         from ros2course.dev.parity import validate_with_batch  # noqa: PLC0415 - start time, see the imports
 
-        outcomes = validate_with_batch(lesson_ids or None, sample=sample, jobs=jobs, progress=stderr_console())
+        outcomes = validate_with_batch(lesson_ids or None, sample=sample, jobs=jobs, progress=stderr_console(),
+                                       until_settled=until_settled)
     else:
-        outcomes = validate_course(lesson_ids or None, progress=stderr_console(), jobs=jobs)
+        outcomes = validate_course(lesson_ids or None, progress=stderr_console(), jobs=jobs, until_settled=until_settled)
     if as_json:
         import json  # noqa: PLC0415 - start time, see the imports
 

@@ -367,11 +367,8 @@ def _rejects(s: GradingSession, action: Any, client: act.GoalClient,
         goal = client.send(_goal(action, *xy))
         if goal.accepted:
             wrong += 1
-            client.cancel(goal)  # a server that accepted it must not drive off: end it
-            client.wait_result(goal, 3.0 + 3.0 / SPEED)
-            if goal.result is not None:
-                start = _finite_or(_xy(goal.result.final_position), start)
-        verdict = {True: "accepted", False: "rejected", None: f"not answered ({goal.why})"}[goal.accepted]
+            start = _cancel_at_once(client, goal, 3.0, start)  # it must not drive off (none is over 3 m away)
+        verdict = _answer(goal)
         seen.append(f"{label}: {verdict}")
         if goal.accepted is None:
             wrong += 1
@@ -393,15 +390,24 @@ def _accepts_within(s: GradingSession, action: Any, client: act.GoalClient,
     target = (round(start[0] + WITHIN_DISTANCE * start[0] / norm, 3), round(start[1] + WITHIN_DISTANCE * start[1] / norm, 3))
     goal = client.send(_goal(action, *target))
     observed = (f"the goal {_show(target)}, {math.dist(target, start):.3f} m from the point {_show(start)}, was "
-                + {True: "accepted", False: "rejected", None: f"not answered ({goal.why})"}[goal.accepted])
+                + _answer(goal))
     s.record("accepts_within", bool(goal.accepted), observed, f"accepted: only goals more than {MAX_DISTANCE} m "
              "away are rejected")
-    if goal.accepted:
-        client.cancel(goal)
-        client.wait_result(goal, 3.0 + WITHIN_DISTANCE / SPEED)
-        if goal.result is not None:
-            return _finite_or(_xy(goal.result.final_position), start)
-    return start
+    return _cancel_at_once(client, goal, WITHIN_DISTANCE, start) if goal.accepted else start
+
+
+def _answer(goal: act.Goal) -> str:
+    """What the server answered to ``goal``: accepted, rejected or not answered (why)."""
+    return {True: "accepted", False: "rejected", None: f"not answered ({goal.why})"}[goal.accepted]
+
+
+def _cancel_at_once(client: act.GoalClient, goal: act.Goal, distance: float,
+                    start: tuple[float, float]) -> tuple[float, float]:
+    """Cancel the accepted ``goal`` (``distance`` metres from ``start``, where the point was) and wait for its
+    result; returns where the point stopped (its final_position), or ``start`` when no finite one came."""
+    client.cancel(goal)
+    client.wait_result(goal, 3.0 + distance / SPEED)
+    return _finite_or(_xy(goal.result.final_position), start) if goal.result is not None else start
 
 
 def _cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.StartedNode,

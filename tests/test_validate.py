@@ -16,8 +16,11 @@ from ros2course.lesson.catalog import load_catalog
 @pytest.mark.timeout(1500)
 @pytest.mark.parametrize("lesson_id", load_catalog().ids())
 def test_dev_validate(lesson_id, cli):
-    # --jobs 2: wrong solutions two at once (a hanging one waits for its deadline on no CPU), references alone
-    proc = cli("dev", "validate", lesson_id, "--json", "--batch", "--sample", "1", "--jobs", "2", timeout=1200)
+    # --jobs 2: wrong solutions two at once (a hanging one waits for its deadline on no CPU), references alone;
+    # --until-settled: a wrong solution is graded until the checks its fixture names are judged, the starter
+    # until its first lost point (the rest cannot change their verdicts); references whole
+    proc = cli("dev", "validate", lesson_id, "--json", "--batch", "--sample", "1", "--jobs", "2", "--until-settled",
+               timeout=1200)
     assert "Traceback" not in proc.stderr, proc.stderr
     # an error before the JSON (a one-line CourseError, a signal) must say itself in the failure
     assert proc.stdout.strip(), f"no JSON; exit status {proc.returncode}; stderr:\n{proc.stderr[-4000:]}"
@@ -112,7 +115,7 @@ def test_a_case_with_the_references_sources_is_graded_in_the_references_build(tm
     (built / "dump.yaml").write_text("written by the reference's grading\n")
     reference_src = validate._src_fingerprints(built)
     seen: list[set[str]] = []
-    monkeypatch.setattr(validate, "grade_lesson", lambda lesson, root, underlays=(): seen.append(
+    monkeypatch.setattr(validate, "grade_lesson", lambda lesson, root, underlays=(), stop_when=None: seen.append(
         {str(p.relative_to(root)) for p in Path(root).rglob("*")}) or "graded")
 
     def script_edited(root: Path) -> None:

@@ -207,11 +207,24 @@ def write_outputs(out_dir: Path, records: list[LessonResult], lessons: list[str]
                                     key=lambda x: (x not in lessons, lessons.index(x) if x in lessons else 0, x)))
     atomic_write_text(out_dir / "gradebook.csv", gradebook.gradebook_csv(latest.values(), columns))
     atomic_write_text(out_dir / "junit.xml", gradebook.junit_xml(latest.values()))
+    overrides = class_visibility(out_dir)
     for student in students:
-        mine = [r for (s, _), r in latest.items() if s == student]
+        mine = [r.with_visibility(overrides.get(r.lesson, {})) for (s, _), r in latest.items() if s == student]
         if mine:
             atomic_write_text(out_dir / student / "results.json",
                                    json.dumps(gradebook.gradescope_json(mine), indent=2) + "\n")
+
+
+def class_visibility(out_dir: Path) -> dict[str, dict[str, str]]:
+    """``class.yaml``'s ``visibility:`` (lesson id -> check id -> visibility) when OUTDIR holds one, else {}.
+
+    Raises:
+        CourseError: the class file is there but bad (:func:`ros2course.report.term.load_class`).
+    """
+    from ros2course.report.term import CLASS_FILE, load_class  # noqa: PLC0415 - pydantic models, only with a class file
+
+    path = out_dir / CLASS_FILE
+    return dict(load_class(path).visibility) if path.is_file() else {}
 
 
 def _refuse_bad_input(submissions: Path, out_dir: Path, lessons: list[str], jobs: int | None, timeout: float,
@@ -220,7 +233,7 @@ def _refuse_bad_input(submissions: Path, out_dir: Path, lessons: list[str], jobs
 
     Raises:
         CourseError: no such folder, OUTDIR inside SUBMISSIONS, no lesson, bad numbers, a lesson
-            whose grader does not load or whose interfaces the batch cannot build.
+            whose grader does not load or whose interfaces the batch cannot build, a bad OUTDIR/class.yaml.
         MissingRequirement: a lesson needs what is not installed.
     """
     if not submissions.is_dir():
@@ -240,6 +253,7 @@ def _refuse_bad_input(submissions: Path, out_dir: Path, lessons: list[str], jobs
         env_mod.require(catalog.get(lesson_id).requires, f"lesson {lesson_id}")
         lesson_checks(lesson_id)
     trusted_interface_packages([catalog.get(lesson_id) for lesson_id in lessons])  # refuses a lesson batch cannot grade
+    class_visibility(out_dir)  # a bad OUTDIR/class.yaml is refused now, not after the class is graded
 
 
 def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | None = None,

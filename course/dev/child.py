@@ -17,6 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+from ros2course.grade.checks import StopWhen
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import content_root, load_catalog
 
@@ -25,7 +26,7 @@ RUN_TIMEOUT = 600.0
 
 
 def grade_in_child(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_dir: Path,
-                   timeout: float = RUN_TIMEOUT) -> LessonResult:
+                   timeout: float = RUN_TIMEOUT, stop_when: StopWhen | None = None) -> LessonResult:
     """Grade the workspace ``root`` for ``lesson_id`` in a fresh child process.
 
     Args:
@@ -35,6 +36,8 @@ def grade_in_child(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_
         underlays: built workspaces sourced before building and running it.
         log_dir: where the grading writes its logs (made when missing).
         timeout: seconds before the child is killed and the grading counted as hung.
+        stop_when: when the grading may stop (``dev validate --until-settled``,
+            :func:`~ros2course.grade.engine.grade_lesson`); None: graded whole.
 
     Returns:
         The child's result; a ``grader error`` result (never an exception) when the child
@@ -43,6 +46,9 @@ def grade_in_child(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_
     argv = [sys.executable, "-m", "ros2course.dev.child", lesson_id, str(root), str(log_dir)]
     for underlay in underlays:
         argv += ["--underlay", str(underlay)]
+    if stop_when:
+        argv += [arg for check_id in sorted(stop_when.judged) for arg in ("--judged", check_id)]
+        argv += ["--any-loss"] if stop_when.any_loss else []
     env = {**os.environ, "ROS2COURSE_CONTENT": str(content_root())}
     try:
         proc = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, env=env,  # noqa: S603
@@ -57,7 +63,8 @@ def grade_in_child(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_
 
 
 def _main(argv: list[str]) -> int:
-    """The child: ``LESSON ROOT LOG_DIR [--underlay PATH]...``; prints its result's JSON record."""
+    """The child: ``LESSON ROOT LOG_DIR [--underlay PATH]... [--judged CHECK]... [--any-loss]`` (the last two: its
+    :class:`~ros2course.grade.checks.StopWhen`); prints its result's JSON record."""
     import argparse  # noqa: PLC0415
 
     from ros2course.grade.engine import grade_lesson  # noqa: PLC0415
@@ -68,11 +75,14 @@ def _main(argv: list[str]) -> int:
     parser.add_argument("root", type=Path)
     parser.add_argument("log_dir", type=Path)
     parser.add_argument("--underlay", type=Path, action="append", default=[])
+    parser.add_argument("--judged", action="append", default=[])
+    parser.add_argument("--any-loss", action="store_true")
     args = parser.parse_args(argv)
     env_mod.activate()
     lesson = load_catalog().get(args.lesson)
     args.log_dir.mkdir(parents=True, exist_ok=True)
-    result = grade_lesson(lesson, args.root, log_dir=args.log_dir, underlays=tuple(args.underlay))
+    result = grade_lesson(lesson, args.root, log_dir=args.log_dir, underlays=tuple(args.underlay),
+                          stop_when=StopWhen(frozenset(args.judged), args.any_loss))
     sys.stdout.write(json.dumps(result.to_record()) + "\n")
     sys.stdout.flush()
     return 0

@@ -253,12 +253,8 @@ class Rule(BaseModel):
         if self.strings_only and (mutant.original == mutant.mutated or "\n" in mutant.original + mutant.mutated
                                   or _STRING.sub('""', mutant.original) != _STRING.sub('""', mutant.mutated)):
             return False
-        read: list[list[str]] = []  # the original file's lines, read once when a test below needs them
-
-        def whole_file() -> list[str]:
-            if not read:
-                read.append(original_lines(mutant, originals))
-            return read[0]
+        # the original file's lines, read once when a test below needs them
+        whole_file = functools.cache(lambda: original_lines(mutant, originals))
 
         if not mutant.original.strip() and mutant.line > 1:
             above = whole_file()[mutant.line - 2:mutant.line - 1]

@@ -31,6 +31,7 @@ from ros2course.dev.validate import (
     apply_edits,
     load_fixtures,
     run_commands,
+    unjudged,
     validate_course,
 )
 from ros2course.lesson.catalog import Lesson, load_catalog
@@ -44,7 +45,8 @@ def sample_fixtures(lesson: Lesson, count: int, checked: list[Outcome] | None = 
 
     With ``checked`` (the lesson's ``dev validate`` outcomes), the sample is the
     wrong solutions ``check`` graded (status passed or failed: their checks ran,
-    so the batch's verdict is compared check by check) fastest: any one proves
+    so the batch's verdict is compared check by check) whole (not stopped by
+    ``--until-settled``) before the others, and fastest: any one proves
     that ``grade`` loses the points ``check`` lost, and the quick ones spare the
     batch a script's 25-s timeout. Without it, or when too few were graded, the
     names are spread evenly over the sorted fixtures.
@@ -54,11 +56,12 @@ def sample_fixtures(lesson: Lesson, count: int, checked: list[Outcome] | None = 
         return names
     if count <= 0:
         return []
-    # a wrong solution whose program died on its own (a `process` diagnosis) last: what was observed of
-    # it depends on how far it got before it died (its node name is seen or not), a race, not parity
+    # one graded whole first (not stopped by --until-settled): its every check is compared, and its time is
+    # the batch's; a wrong solution whose program died on its own (a `process` diagnosis) last: what was
+    # observed of it depends on how far it got before it died (its node name is seen or not), a race, not parity
     graded = sorted((o for o in checked or [] if o.lesson == lesson.id and o.case in names
                      and o.result is not None and o.result.status.graded),
-                    key=lambda o: (_died_on_its_own(o), o.seconds))
+                    key=lambda o: (bool(unjudged(o.result)), _died_on_its_own(o), o.seconds))
     if len(graded) >= count:
         return [o.case for o in graded[:count]]
     step = len(names) / count
@@ -94,6 +97,21 @@ def case_workspace(lesson: Lesson, case: str, dest: Path) -> Path:
 
 def _verdict(result: LessonResult) -> tuple[str, float, tuple[str, ...]]:
     return str(result.status), round(result.score, 6), tuple(sorted(result.failed_checks()))
+
+
+def same_verdicts(checked: LessonResult, batch: LessonResult) -> bool:
+    """``grade``'s result gives ``check``'s verdicts: the same status, score and failed checks; or, when
+    ``check`` stopped early (``dev validate --until-settled``: checks "not checked: " +
+    :data:`~ros2course.grade.checks.STOPPED_SETTLED`), the same status and, check by check, the same
+    points, pass and skip on every check ``check`` judged (the batch grades its hand-ins whole)."""
+    cut = unjudged(checked)
+    if not cut:
+        return _verdict(batch) == _verdict(checked)
+
+    def judged(result: LessonResult) -> list[tuple[str, float, bool, bool]]:
+        return [(c.id, round(c.points, 6), c.passed, c.skipped) for c in result.checks if c.id not in cut]
+
+    return batch.status == checked.status and judged(batch) == judged(checked)
 
 
 def _describe(result: LessonResult) -> str:
@@ -142,7 +160,7 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
         for student, checked_case in names.items():
             want = checked_case.result
             got = graded.get((student, checked_case.lesson))
-            ok = got is not None and _verdict(got) == _verdict(want)
+            ok = got is not None and same_verdicts(want, got)
             outcome = Outcome(checked_case.lesson, checked_case.case + BATCH_CASE, ok, "as check: " + _describe(want),
                               _describe(got) if got is not None else "no result from the batch",
                               float(got.timings.get("total", 0.0)) if got is not None else 0.0, got)
@@ -155,19 +173,22 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
         shutil.rmtree(root, ignore_errors=True)
 
 
-def validate_with_batch(lesson_ids: list[str] | None, sample: int = 2, jobs: int = 1, progress=None) -> list[Outcome]:
+def validate_with_batch(lesson_ids: list[str] | None, sample: int = 2, jobs: int = 1, progress=None,
+                        until_settled: bool = False) -> list[Outcome]:
     """``dev validate --batch``: every case through ``check`` (:func:`ros2course.dev.validate.validate_course`),
     then the reference and ``sample`` fixtures of each lesson through ``grade`` in one batch
     (:func:`batch_parity`); the outcomes of both, the batch's last. ``jobs``: wrong solutions
     graded at once by ``check`` (:func:`~ros2course.dev.validate.validate_lesson`); the batch
     grades one submission at a time (a reference's full marks are judged with nothing beside it).
+    ``until_settled``: ``check`` grades each wrong solution only until its named checks are judged
+    (``--until-settled``); the batch's verdicts are compared on those checks (:func:`same_verdicts`).
 
     Raises:
         UnknownLesson: a lesson id is not in the catalog.  CourseError: the batch refuses a lesson.
     """
     catalog = load_catalog()
     lessons = [catalog.get(i) for i in lesson_ids] if lesson_ids else catalog.lessons
-    outcomes = validate_course([lesson.id for lesson in lessons], progress=progress, jobs=jobs)
+    outcomes = validate_course([lesson.id for lesson in lessons], progress=progress, jobs=jobs, until_settled=until_settled)
     picks = {lesson.id: {"reference", *sample_fixtures(lesson, sample, outcomes)} for lesson in lessons}
     checked = [o for o in outcomes if o.case in picks.get(o.lesson, ())]
     if progress is not None:

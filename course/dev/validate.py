@@ -28,6 +28,14 @@ under ``skips:``, and must be not checked::
 
 Any other check the fixture lost, or that was not checked, is reported on
 its line of ``dev validate`` ("also lost: ..."), not a failure.
+
+``--until-settled`` (the test suite's way) stops grading a case at the grader's next step once its
+verdict can no longer change (:class:`~ros2course.grade.checks.StopWhen`): a wrong solution once every
+check its fixture names (``fails``, ``skips``, ``says`` and its diagnoses' checks) is judged, which
+leaves a third of a lesson's checks on average (a wrong solution waiting for a topic that never comes
+is most of the time); a starter at its first lost point. Their other checks then show "not checked"
+(:data:`~ros2course.grade.checks.STOPPED_SETTLED`) and no "also lost" note is made. References and
+``expect: full_marks`` fixtures are graded whole.
 """
 
 from __future__ import annotations
@@ -61,7 +69,8 @@ from ros2course.dev.child import grade_in_child
 from ros2course.dev.coverage import lesson_coverage
 from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.dev.mutants import describe_score, score_text, triage_problems
-from ros2course.grade.results import LessonResult, Status
+from ros2course.grade.checks import STOPPED_SETTLED, StopWhen
+from ros2course.grade.results import NOT_CHECKED, LessonResult, Status
 from ros2course.dev.strength import steadiness_text
 from ros2course.lesson.catalog import Lesson, content_root, load_catalog
 from ros2course.lesson.schema import format_validation_error
@@ -144,6 +153,14 @@ class Fixture(BaseModel):
             raise ValueError(f"{', '.join(both)} cannot be in both 'fails' (judged and lost) and 'skips' "
                              "(not checked): keep each check in one list")
         return self
+
+    def judged_by(self) -> tuple[str, ...]:
+        """The checks whose verdicts decide this fixture (``fails``, ``skips``, ``says``' and diagnoses'
+        checks), in that order; () when grading must run to its end: a fixture expecting full marks,
+        or one expecting a diagnosis of any failed check (``check: ""``)."""
+        if self.expect != "fail" or any(not d.check for d in self.diagnosis):
+            return ()
+        return tuple(dict.fromkeys([*self.fails, *self.skips, *self.says, *(d.check for d in self.diagnosis)]))
 
 
 def fixtures_dir(lesson_id: str) -> Path:
@@ -285,9 +302,18 @@ def contract_outcome(lesson: Lesson) -> Outcome | None:
                    f"{len(contract.not_graded)} not graded", time.monotonic() - begin)
 
 
+def unjudged(result: LessonResult) -> set[str]:
+    """Ids of the checks a grading stopped by ``--until-settled`` left unjudged
+    ("not checked: " + :data:`~ros2course.grade.checks.STOPPED_SETTLED`); empty for a whole grading."""
+    return {c.id for c in result.checks if c.skipped and c.observed == NOT_CHECKED + STOPPED_SETTLED}
+
+
 def _describe(result: LessonResult) -> str:
-    failed = ", ".join(result.failed_checks()) or "none"
+    cut = unjudged(result)
+    failed = ", ".join(c for c in result.failed_checks() if c not in cut) or "none"
     text = f"{result.status} {result.score:g}/{result.max_score:g}; failed: {failed}"
+    if cut:
+        text += f"; {len(cut)} not judged (--until-settled)"
     if result.message and result.status != Status.PASSED:
         text += f"; {result.message.splitlines()[0]}"
     return text
@@ -297,9 +323,11 @@ def _describe(result: LessonResult) -> str:
 Grade = Callable[[Lesson, Path, tuple[Path, ...]], LessonResult]
 
 
-def grade_here(lesson: Lesson, root: Path, underlays: tuple[Path, ...]) -> LessonResult:
-    """Grade ``root`` in this process (:func:`~ros2course.grade.engine.grade_lesson`)."""
-    return grade_lesson(lesson, root, underlays=underlays)
+def grade_here(lesson: Lesson, root: Path, underlays: tuple[Path, ...], stop_when: StopWhen | None = None
+               ) -> LessonResult:
+    """Grade ``root`` in this process (:func:`~ros2course.grade.engine.grade_lesson`; ``stop_when``: its
+    ``--until-settled`` stop, None for a whole grading)."""
+    return grade_lesson(lesson, root, underlays=underlays, stop_when=stop_when)
 
 
 def grade_case(lesson: Lesson, case: str, prepare, keep: bool = False,
@@ -316,15 +344,17 @@ def grade_case(lesson: Lesson, case: str, prepare, keep: bool = False,
             shutil.rmtree(root, ignore_errors=True)
 
 
-def validate_lesson(lesson: Lesson, jobs: int = 1) -> list[Outcome]:
+def validate_lesson(lesson: Lesson, jobs: int = 1, until_settled: bool = False) -> list[Outcome]:
     """Validate one lesson: reference, starter, fixtures (see module docstring).
 
     Args:
         jobs: wrong solutions graded at once (see :func:`_validate_lesson`).
+        until_settled: grade each wrong solution and the starter only until their verdicts are settled
+            (``--until-settled``).
     """
     underlay = build_underlay(lesson)
     try:
-        return _validate_lesson(lesson, underlay.path if underlay is not None else None, jobs)
+        return _validate_lesson(lesson, underlay.path if underlay is not None else None, jobs, until_settled)
     finally:
         if underlay is not None:
             underlay.discard()
@@ -344,6 +374,8 @@ class Case:
             with ``--jobs``, it is graded with nothing of the validation beside it, since a timing
             check must hold under a normal load, not beside gradings of its own making.
         note: ``note(result)`` -> what else the result showed, not a failure (:attr:`Outcome.note`); None: nothing.
+        stop_when: with ``--until-settled``, when its grading may stop (a wrong solution: its named checks
+            judged, :meth:`Fixture.judged_by`; the starter: its first lost point); None: graded whole.
     """
 
     lesson: Lesson
@@ -353,13 +385,22 @@ class Case:
     judge: Callable[[LessonResult], tuple[bool, str]]
     alone: bool = False
     note: Callable[[LessonResult], str] | None = None
+    stop_when: StopWhen | None = None
+
+    def grade_with(self, grade: Grade) -> Grade:
+        """``grade`` with this case's ``stop_when`` (a whole grading when it has none)."""
+        if not self.stop_when:
+            return grade
+        return lambda lesson, root, underlays: grade(lesson, root, underlays, stop_when=self.stop_when)
 
 
-def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
+def lesson_cases(lesson: Lesson, underlay: Path | None, until_settled: bool = False) -> list[Case]:
     """The lesson's reference, starter and wrong solutions (``tests/fixtures/<lesson>``) as cases.
 
     Args:
         underlay: the lesson's dependencies built once (:func:`build_underlay`), or None.
+        until_settled: each wrong solution and the starter are graded only until their verdict is settled
+            (:attr:`Case.stop_when`; ``dev validate --until-settled``).
 
     Raises:
         LessonFormatError: a fixture file is malformed.
@@ -383,7 +424,8 @@ def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
         return result.status != Status.PASSED and result.score < result.max_score, "not full marks"
 
     cases = [Case(lesson, "reference", reference, underlays, full_marks, alone=True),
-             Case(lesson, "starter", starter, underlays, not_full)]
+             Case(lesson, "starter", starter, underlays, not_full,
+                  stop_when=StopWhen(any_loss=True) if until_settled else None)]
     for fixture in load_fixtures(lesson.id):
         # a fixture that edits a dependency builds everything itself, without the underlay
         touched = {Path(e.file or e.delete or "").parts[1:2] for e in fixture.edits}
@@ -402,9 +444,11 @@ def lesson_cases(lesson: Lesson, underlay: Path | None) -> list[Case]:
         def noted(result: LessonResult, fixture: Fixture = fixture) -> str:
             return fixture_note(fixture.fails, fixture.skips, result)
 
+        judged_by = frozenset(fixture.judged_by()) if until_settled else frozenset()
         cases.append(Case(lesson, fixture.name, wrong, underlays if uses_underlay else (), judged,
                           alone=fixture.expect == "full_marks",
-                          note=noted if fixture.expect == "fail" else None))
+                          note=noted if fixture.expect == "fail" and not judged_by else None,
+                          stop_when=StopWhen(judged_by) if judged_by else None))
     return cases
 
 
@@ -453,7 +497,8 @@ def grade_in_built(lesson: Lesson, case: Case, built: Path, reference_src: dict[
         shutil.rmtree(scratch, ignore_errors=True)
 
 
-def _validate_lesson(lesson: Lesson, underlay: Path | None, jobs: int = 1) -> list[Outcome]:
+def _validate_lesson(lesson: Lesson, underlay: Path | None, jobs: int = 1,
+                     until_settled: bool = False) -> list[Outcome]:
     """Grade every case; the reference's built workspace is reused by cases with the reference's ``src/``.
 
     With ``jobs`` > 1 the cases that expect full marks (:attr:`Case.alone`) are graded first,
@@ -464,7 +509,7 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None, jobs: int = 1) -> li
     ``jobs`` slots keeps a built copy of the reference (the first case it grades builds it).
     Outcomes keep the cases' order.
     """
-    cases = lesson_cases(lesson, underlay)
+    cases = lesson_cases(lesson, underlay, until_settled)
     scratch = Path(tempfile.mkdtemp(prefix=f"ros2course-validate-{lesson.id}-"))
     built = scratch / "built"
     built.mkdir()
@@ -482,6 +527,7 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None, jobs: int = 1) -> li
                                   time.monotonic() - begin)
 
         def grade_one(case: Case, slot: Path, grade: Grade) -> tuple[LessonResult, float]:
+            grade = case.grade_with(grade)
             found = None
             if case.underlays == reference.underlays:
                 found = grade_in_built(lesson, case, slot, reference_src, grade)
@@ -500,8 +546,10 @@ def _validate_lesson(lesson: Lesson, underlay: Path | None, jobs: int = 1) -> li
                 slot.mkdir(exist_ok=True)
                 slots.put(slot)
 
-            def in_child(case_lesson: Lesson, root: Path, underlays: tuple[Path, ...]) -> LessonResult:
-                return grade_in_child(case_lesson.id, root, underlays, Path(tempfile.mkdtemp(dir=logs)))
+            def in_child(case_lesson: Lesson, root: Path, underlays: tuple[Path, ...],
+                         stop_when: StopWhen | None = None) -> LessonResult:
+                return grade_in_child(case_lesson.id, root, underlays, Path(tempfile.mkdtemp(dir=logs)),
+                                      stop_when=stop_when)
 
             def in_a_slot(case: Case) -> tuple[LessonResult, float]:
                 slot = slots.get()
@@ -617,11 +665,13 @@ def _folders(packages: list[str]) -> set[str]:
 
 
 def validate_course(lesson_ids: list[str] | None = None, progress: Console | None = None,
-                    jobs: int = 1) -> list[Outcome]:
+                    jobs: int = 1, until_settled: bool = False) -> list[Outcome]:
     """Validate the given lessons (default: all), printing one line per case on ``progress``.
 
     Args:
         jobs: wrong solutions of a lesson graded at once (:func:`validate_lesson`); 1: one at a time.
+        until_settled: grade each wrong solution and the starter only until their verdicts are settled
+            (``--until-settled``).
 
     Raises:
         CourseError: ``jobs`` < 1.  UnknownLesson: a lesson id is not in the catalog.
@@ -646,7 +696,7 @@ def validate_course(lesson_ids: list[str] | None = None, progress: Console | Non
                 progress.print(f"  {mark} {contract.case}: {escape(contract.got)}")
                 for problem in contract.problems:
                     progress.print(f"    {problem}", markup=False, soft_wrap=True)
-        for outcome in validate_lesson(lesson, jobs):
+        for outcome in validate_lesson(lesson, jobs, until_settled):
             outcomes.append(outcome)
             if progress is not None:
                 mark = "[green]ok[/]" if outcome.ok else "[red]WRONG[/]"

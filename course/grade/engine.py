@@ -36,7 +36,7 @@ from ros2course.run.process import sweep_stale_fastdds_shm
 
 
 
-from ros2course.grade.checks import Check
+from ros2course.grade.checks import STOPPED_SETTLED, Check, StopWhen, VerdictSettled
 from ros2course.grade.session import GradingSession
 
 
@@ -116,7 +116,8 @@ def new_log_dir(workspace_root: Path, lesson_id: str) -> Path:
 
 def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = None,
                  underlays: tuple[Path, ...] | list[Path] = (), trusted_interfaces: Path | None = None,
-                 progress: Any = None, build_also: Sequence[str] | None = None, hand_in: bool = False) -> LessonResult:
+                 progress: Any = None, build_also: Sequence[str] | None = None, hand_in: bool = False,
+                 stop_when: StopWhen | None = None) -> LessonResult:
     """Build the lesson's packages in ``workspace_root``, run its grader, return the result.
 
     ``underlays`` are built workspaces sourced before building and running the
@@ -137,6 +138,10 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     ``hand_in`` (batch grading): the workspace is a submission unpacked by ``grade``, whose
     build the engine never trusts (:func:`ros2course.batch.archive.prepare` drops its build
     record, so its packages are built from clean); the build check says so.
+
+    ``stop_when`` (``dev validate --until-settled``, never a learner's or a class's grading): grading
+    stops once the verdicts recorded settle the case (:class:`~ros2course.grade.checks.StopWhen`); the
+    checks left show "not checked: " + :data:`~ros2course.grade.checks.STOPPED_SETTLED`.
 
     Never raises for problems of the submission (they become the result);
     raises :class:`~ros2course.errors.MissingRequirement` when the machine lacks
@@ -172,7 +177,8 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
         if not built.ok:
             return not_gradable(f"colcon build failed for {', '.join(lesson.packages)}:\n{built.excerpt}",
                                 f"fix the build error; full log: {built.log_path}")
-    session = GradingSession(lesson, checks, workspace_root, log_dir, base_env, trusted_interfaces, sources_digest)
+    session = GradingSession(lesson, checks, workspace_root, log_dir, base_env, trusted_interfaces, sources_digest,
+                             stop_when)
     if lesson.packages and "build" in session.checks:
         session.record("build", True, "colcon built " + ", ".join(lesson.packages)
                        + (" from clean, as every hand-in is (a build the submission brought is never used)"
@@ -240,6 +246,8 @@ def _run_grader(module: Any, session: GradingSession, timings: dict[str, float])
             timings.update(session.timings)
     except NotGradable:
         raise
+    except VerdictSettled:  # dev validate --until-settled: nothing after this can change the case's verdict
+        session.leave_unjudged(STOPPED_SETTLED)
     except Exception as exc:  # noqa: BLE001 - any grader crash becomes a visible "grader error"
         trace_file = session.log_dir / "grader-error.txt"
         trace_file.write_text(traceback.format_exc(), encoding="utf-8")

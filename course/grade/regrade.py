@@ -82,7 +82,7 @@ def regrade(lessons: Sequence[Lesson], workspace_root: Path, progress: Progress,
     out = []
     for lesson in lessons:
         record = progress.lessons.get(lesson.id)
-        item = Regrade(lesson, record.best_score if record else None, grade_lesson(lesson, workspace_root))
+        item = Regrade(lesson, record.best_score if record else None, grade_lesson(lesson, workspace_root).for_learner())
         out.append(item)
         if on_result is not None:
             on_result(item)

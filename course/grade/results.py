@@ -25,7 +25,8 @@ from __future__ import annotations
 import dataclasses
 import enum
 import xml.etree.ElementTree as ET
-from typing import Any
+from collections.abc import Mapping
+from typing import Any, Literal
 
 from ros2course.run.diagnose import Diagnosis
 
@@ -59,6 +60,15 @@ GRADED = "graded"
 #: How the engine's "not checked" verdicts begin (a check whose need failed, or whose part stopped).
 NOT_CHECKED = "not checked: "
 
+#: Who sees a check's verdict (issue 39): ``visible`` (the default: ``check`` shows it), ``after_due`` (graded when
+#: the work is handed in, shown to the learner once the deadline has passed) or ``hidden`` (graded at hand-in, never
+#: shown). Declared on the grader's :class:`~ros2course.grade.checks.Check`, overridden per class by ``class.yaml``'s
+#: ``visibility:`` (:func:`with_visibility`).
+Visibility = Literal["visible", "hidden", "after_due"]
+VISIBILITIES: tuple[str, ...] = ("visible", "hidden", "after_due")
+#: Gradescope's ``visibility`` of a test for each of ours (Gradescope's autograder specification).
+GRADESCOPE_VISIBILITY = {"visible": "visible", "after_due": "after_due_date", "hidden": "hidden"}
+
 
 @dataclasses.dataclass
 class CheckResult:
@@ -81,11 +91,16 @@ class CheckResult:
     #: what the graph showed when a check that watched it failed (:class:`~ros2course.run.diagnose.Diagnosis`,
     #: made by the engine, never by a grader); in the JSON of failed checks only, when not empty.
     diagnosis: list[Diagnosis] = dataclasses.field(default_factory=list)
+    #: who sees the verdict (:data:`Visibility`); in the JSON only when not ``visible``.
+    visibility: str = "visible"
 
     def to_dict(self) -> dict[str, Any]:
-        """The documented JSON fields (plus ``evidence`` and ``diagnosis`` on a failed check that has them)."""
+        """The documented JSON fields (plus ``evidence`` and ``diagnosis`` on a failed check that has them, and
+        ``visibility`` when it is not ``visible``)."""
         out = dataclasses.asdict(self)
         out.pop("skipped")
+        if self.visibility == "visible":
+            out.pop("visibility")
         if self.passed or self.skipped or not self.evidence:
             out.pop("evidence")
         if self.passed or self.skipped or not self.diagnosis:
@@ -107,7 +122,8 @@ class CheckResult:
                    skipped=not data.get("passed") and observed.startswith(NOT_CHECKED),
                    evidence=dict(evidence) if isinstance(evidence, dict) else None,
                    diagnosis=[Diagnosis.from_dict(d) for d in diagnosis if isinstance(d, dict)]
-                   if isinstance(diagnosis, list) else [])
+                   if isinstance(diagnosis, list) else [],
+                   visibility=str(data.get("visibility") or "visible"))
 
     def output_text(self) -> str:
         """``observed: ...`` / ``expected: ...`` / ``hint: ...`` / ``why: ...`` (Gradescope output, JUnit failure text).
@@ -159,6 +175,8 @@ class LessonResult:
         isolation: the protections the submission ran under (batch; see :mod:`ros2course.sandbox`).
         peak_rss: peak memory of the grading job, bytes (batch).
         seconds: wall time of this lesson in the worker, seconds (batch; None when unknown).
+        withheld: checks left out of what the learner is shown (:meth:`for_learner`): graded when the work
+            is handed in; 0 in every whole result.
     """
 
     lesson: str
@@ -176,9 +194,34 @@ class LessonResult:
     isolation: dict[str, Any] = dataclasses.field(default_factory=dict)
     peak_rss: int = 0
     seconds: float | None = None
+    withheld: int = 0
 
     def __post_init__(self) -> None:
         self.status = Status(self.status)
+
+    def for_learner(self) -> LessonResult:
+        """What ``ros2course check`` shows the learner: the ``visible`` checks only, scored over them, with
+        :attr:`withheld` counting the others (graded when the work is handed in, issue 39); ``self`` when
+        every check is visible. The status follows the visible checks (a learner who passed every check
+        they can see has passed what ``check`` judges; ``next`` moves on)."""
+        shown = [c for c in self.checks if c.visibility == "visible"]
+        if len(shown) == len(self.checks):
+            return self
+        score = round(sum(c.points for c in shown), 3)
+        maximum = round(sum(c.max_points for c in shown), 3)
+        status = self.status
+        if status.graded:
+            status = Status.PASSED if score >= maximum else Status.FAILED
+        return dataclasses.replace(self, checks=shown, score=score, max_score=maximum, status=status,
+                                   withheld=len(self.checks) - len(shown))
+
+    def with_visibility(self, overrides: Mapping[str, str]) -> LessonResult:
+        """This result with the visibility of the checks ``overrides`` names (check id -> :data:`Visibility`,
+        a class file's ``visibility:`` for this lesson) replaced; ids it does not grade are ignored."""
+        if not overrides:
+            return self
+        return dataclasses.replace(self, checks=[dataclasses.replace(c, visibility=overrides.get(c.id, c.visibility))
+                                                 for c in self.checks])
 
     @classmethod
     def unfinished(cls, lesson: str, status: Status, message: str, hint: str = "", max_score: float = 0.0,
@@ -196,6 +239,8 @@ class LessonResult:
         }
         if self.message:
             out["message"] = self.message
+        if self.withheld:
+            out["withheld"] = self.withheld
         return out
 
     def to_record(self) -> dict[str, Any]:
@@ -270,7 +315,8 @@ class LessonResult:
             return [{"name": f"{self.lesson}: {self.status.value}", "score": 0.0, "max_score": self.max_score,
                      "output": self.message, "visibility": "visible", "status": "failed"}]
         return [{"name": f"{self.lesson}: {c.name}" if prefix else c.name, "score": c.points,
-                 "max_score": c.max_points, "output": c.output_text(), "visibility": "visible",
+                 "max_score": c.max_points, "output": c.output_text(),
+                 "visibility": GRADESCOPE_VISIBILITY.get(c.visibility, "hidden"),
                  "status": "passed" if c.passed else "failed"} for c in self.checks]
 
     def junit_suite(self, parent: ET.Element) -> dict[str, int]:

@@ -48,7 +48,7 @@ from ros2course.run.recording import FILE_NAME as RECORDING_FILE
 
 
 
-from ros2course.grade.checks import Check, Unmet, check_dependencies
+from ros2course.grade.checks import Check, StopWhen, Unmet, VerdictSettled, check_dependencies
 
 
 #: What the learner's nodes showed in the graph, per part, in a check's log folder (``ros2course graph``).
@@ -107,11 +107,18 @@ class GradingSession:
         log_dir: this check's log folder (node stdout/stderr go here).
         ros: the :class:`~ros2course.run.probes.RosSession` (private domain), started on first use.
         base_env: the ROS install's environment (no workspace overlay).
+
+    ``stop_when`` (``dev validate --until-settled`` only): grading stops at the grader's next step once
+    the verdicts recorded settle the case (:meth:`_stop_if_settled`); None for every real grading.
     """
 
     def __init__(self, lesson: Lesson, checks: list[Check], workspace_root: Path, log_dir: Path,
-                 base_env: dict[str, str], trusted_interfaces: Path | None = None, sources_digest: str = "") -> None:
+                 base_env: dict[str, str], trusted_interfaces: Path | None = None, sources_digest: str = "",
+                 stop_when: StopWhen | None = None) -> None:
         self.lesson = lesson
+        # dev validate --until-settled: stop grading once the case's verdict is settled (see _stop_if_settled)
+        self._stop_when = stop_when
+        self._grading_thread = threading.current_thread()
         # the build's digest of the lesson's package contents (BuildResult.content_digest): seeds :attr:`random`
         self._sources_digest = sources_digest
         check_dependencies(checks)
@@ -174,12 +181,9 @@ class GradingSession:
                 seed.update(self._sources_digest.encode())
             else:  # a lesson without packages (a script in src/, a file to hand in): read src/ here
                 src = self.workspace_root / "src"
-                try:
-                    files = scan_package(self.workspace_root, src).files if src.is_dir() else {}
-                except NotGradable:  # a fifo or a broken link: the build's concern, not ours
-                    files = {}
-                for rel in sorted(files):
-                    seed.update(f"{rel}\0{files[rel].sha256}\n".encode())
+                with contextlib.suppress(NotGradable):  # a fifo or a broken link: the build's concern, not ours
+                    if src.is_dir():
+                        seed.update(scan_package(self.workspace_root, src).content_digest.encode())
             self._random = random.Random(seed.hexdigest())
         return self._random
 
@@ -237,6 +241,7 @@ class GradingSession:
         Raises:
             KeyError: ``check_id`` is not declared in the grader's ``CHECKS``.
         """
+        self._stop_if_settled()
         check = self.checks[check_id]
         blocker = self.unmet_need(check_id)
         if blocker is not None:
@@ -256,7 +261,8 @@ class GradingSession:
         self.results[check_id] = CheckResult(check.id, check.name, round(check.points * share, 3), check.points,
                                              passed, observed, expected,
                                              "" if passed else (hint if hint is not None else check.hint),
-                                             diagnosis=[] if passed else self._diagnosis(check, fresh))
+                                             diagnosis=[] if passed else self._diagnosis(check, fresh),
+                                             visibility=check.visibility)
         return passed
 
     def _part_graph(self) -> tuple[_PartState, Any] | None:
@@ -370,11 +376,24 @@ class GradingSession:
                 return blocked
         return None
 
+    def _stop_if_settled(self) -> None:
+        """Raise :class:`~ros2course.grade.checks.VerdictSettled` when the verdicts recorded so far settle
+        ``stop_when``, on the thread that runs ``grade()`` (a worker thread's half runs on until it ends).
+
+        Called as the grader takes its next step (records another check, requires one, opens a part,
+        reaches for a graph, starts a process), never by :meth:`amend`: a verdict's own amendment, made
+        right after it, is kept. Raises once: it disarms itself.
+        """
+        if (self._stop_when and threading.current_thread() is self._grading_thread
+                and self._stop_when.reached(self.results)):
+            self._stop_when = None
+            raise VerdictSettled
+
     def _not_checked(self, check_id: str, reason: str) -> None:
         check = self.checks[check_id]
         self.results[check_id] = CheckResult(check.id, check.name, 0.0, check.points, False,
                                              f"{NOT_CHECKED}{reason}", "(depends on the failed check above)",
-                                             check.hint, skipped=True)
+                                             check.hint, skipped=True, visibility=check.visibility)
 
     def require(self, *check_ids: str) -> None:
         """Go on only if every check in ``check_ids`` passed.
@@ -382,6 +401,7 @@ class GradingSession:
         Raises:
             Unmet: one of them failed or is not recorded; the current :meth:`part` ends.
         """
+        self._stop_if_settled()
         for check_id in check_ids:
             result = self.results.get(check_id)
             if result is None or not result.passed:
@@ -401,6 +421,7 @@ class GradingSession:
                 :attr:`graph`, and so every kit step and :meth:`launch` inside it,
                 use that graph without a ``graph=`` argument.
         """
+        self._stop_if_settled()
         self._closers.append([])
         self._part_states.append(_PartState(name, own_graph=self.new_graph() if own_graph else None))
         self._local.mark = time.time_ns()
@@ -429,6 +450,15 @@ class GradingSession:
         for check_id in self._order:
             if check_id not in self.results and (not name or self.checks[check_id].part == name):
                 self._not_checked(check_id, self.unmet_need(check_id) or reason)
+        self._stop_if_settled()
+
+    def leave_unjudged(self, reason: str) -> None:
+        """Record every check not recorded yet as not checked because of ``reason``, whatever its needs: the
+        end of a grading stopped early (``dev validate --until-settled``), where no check after the stop was judged.
+        """
+        for check_id in self._order:
+            if check_id not in self.results:
+                self._not_checked(check_id, reason)
 
     def on_close(self, action: Any) -> None:
         """Run ``action()`` when the current :meth:`part` (or ``grade()``) ends, even after :class:`Unmet`."""
@@ -605,6 +635,7 @@ class GradingSession:
     def graph(self) -> Any:
         """The graph the calling thread's steps observe: the innermost open part's own graph
         (``part(..., own_graph=True)``), else :attr:`ros` (a :class:`~ros2course.run.probes.RosSession`)."""
+        self._stop_if_settled()
         own = next((state.own_graph for state in reversed(self._part_states) if state.own_graph is not None), None)
         return own if own is not None else self.ros
 
@@ -619,6 +650,7 @@ class GradingSession:
         Pass it as ``graph=`` to the kit steps and :meth:`launch`, or open the part
         with ``part(name, own_graph=True)``, which makes one and uses it by default.
         """
+        self._stop_if_settled()
         with self._making:
             return self._stack.enter_context(RosSession(recorder=self._recording(), domain_holder=self._domains))
 
@@ -631,6 +663,7 @@ class GradingSession:
             args: extra arguments (e.g. ``["--ros-args", "-r", "__node:=x"]``).
             graph: the :class:`~ros2course.run.probes.RosSession` to run in (default :attr:`graph`).
         """
+        self._stop_if_settled()
         graph = graph or self.graph
         env = graph.learner_env(self.overlay())
         if self._part_states:  # the graph a failed check of this part is diagnosed in (see _diagnosis)
@@ -656,6 +689,7 @@ class GradingSession:
             env: its whole environment (default: the ROS install's, without the workspace overlay).
             cwd: working directory (default: the workspace root).
         """
+        self._stop_if_settled()
         proc = LearnerProcess(list(argv), dict(self.base_env if env is None else env), self.log_dir, label,
                               cwd=cwd or self.workspace_root, deadline=deadline)
         self._processes.append(proc)
@@ -679,6 +713,7 @@ class GradingSession:
         Raises:
             subprocess.TimeoutExpired: colcon ran longer than ``timeout``.
         """
+        self._stop_if_settled()
         return sandbox.run([*build_mod.colcon_command(self.base_env), *args], cwd=self.workspace_root,
                            env=dict(self.base_env), capture_output=True, text=True, timeout=timeout, check=False,
                            stdin=subprocess.DEVNULL)

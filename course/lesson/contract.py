@@ -347,10 +347,12 @@ def implements(requirement: Requirement, rel: str, text: str) -> str | None:
 
 def _term_in(term: str, text: str) -> bool:
     """Whether ``text`` holds ``term`` as a whole (``0.1`` is not in ``0.0.1``, ``spin`` not in ``spin_once``); a
-    call ``f()`` is also found with arguments (``rclpy.init()`` in ``rclpy.init(args=args)``)."""
+    call ``f()`` is also found with arguments (``rclpy.init()`` in ``rclpy.init(args=args)``), and a name after
+    a dot (``distance_to_goal`` in ``feedback.distance_to_goal``: an attribute is the name, as used)."""
     forms = [term] + ([term[:-1]] if term.endswith("()") else [])
     for form in forms:
-        before = r"(?<![\w.])" if re.match(r"[\w.]", form) else ""
+        # a number must not continue one (0.1 in 0.0.1); a name may follow a dot (attribute access)
+        before = r"(?<![\w.])" if re.match(r"[\d.]", form) else r"(?<!\w)" if re.match(r"\w", form) else ""
         after = r"(?!\w)" if re.search(r"\w$", form) else ""
         if re.search(before + re.escape(form) + after, text):
             return True

@@ -50,12 +50,12 @@ import json
 import math
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any, Literal, Optional
+from typing import Any, Optional
 
 from pydantic import AwareDatetime, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from ros2course.errors import CourseError
-from ros2course.grade.results import LessonResult
+from ros2course.grade.results import LessonResult, Visibility
 
 #: The name of the class file inside a grading OUTDIR (``ros2course report`` and ``export`` look for it there).
 CLASS_FILE = "class.yaml"
@@ -130,7 +130,6 @@ class LatePolicy(_Strict):
         return self
 
 
-Visibility = Literal["visible", "hidden", "after_due"]
 
 
 class ClassFile(_Strict):
@@ -141,8 +140,9 @@ class ClassFile(_Strict):
         students: the class list (optional); when given, every extension must name one of them.
         extensions: student -> (lesson id or ``"*"``) -> :class:`Extension`.
         late_policy: :class:`LatePolicy`; None: lateness is reported, never penalised.
-        visibility: lesson id -> check id -> ``visible | hidden | after_due``. Only parsed and
-            validated here; the check visibility work consumes it (check ids are kept as given).
+        visibility: lesson id -> check id -> ``visible | hidden | after_due``, over the grader's own
+            (:meth:`~ros2course.grade.results.LessonResult.with_visibility`): Gradescope's per-test
+            visibility follows it (check ids are kept as given).
     """
 
     lessons: dict[str, LessonTerm]

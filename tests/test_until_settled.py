@@ -1,0 +1,145 @@
+"""``dev validate --until-settled``: a case's grading stops once its verdict is settled (a wrong solution's named
+checks judged, a starter's first lost point), and nothing it judged changes (no ROS: a grader of plain records,
+run by the engine's own loop)."""
+
+from __future__ import annotations
+
+import threading
+import types
+
+import pytest
+
+from ros2course.dev.parity import same_verdicts
+from ros2course.dev.validate import Fixture
+from ros2course.grade.checks import STOPPED_SETTLED, Check, StopWhen, VerdictSettled
+from ros2course.grade.engine import _run_grader
+from ros2course.grade.results import NOT_CHECKED, CheckResult, LessonResult, Status
+from ros2course.grade.session import GradingSession
+
+CHECKS = [Check("exists", "e", 1), Check("rate", "r", 2, needs=("exists",)), Check("log", "l", 1),
+          Check("ctrl_c", "c", 1, needs=("log",))]
+
+
+def session(tmp_path, until=(), any_loss=False) -> GradingSession:
+    return GradingSession(None, list(CHECKS), tmp_path, tmp_path / "log", {},
+                          stop_when=StopWhen(frozenset(until), any_loss))
+
+
+def run(s: GradingSession, grade) -> tuple[Status | None, dict[str, CheckResult], list[str]]:
+    status, _, _ = _run_grader(types.SimpleNamespace(grade=grade), s, {})
+    return status, {r.id: r for r in s.ordered_results()}, s.notes
+
+
+def test_grading_stops_at_the_step_after_the_last_named_verdict_and_keeps_its_amendment(tmp_path):
+    steps = []
+
+    def grade(s):
+        s.record("exists", True, "found", "an executable")
+        s.record("rate", False, "1 Hz", "2 Hz")
+        s.amend("rate", hint="the timer period is in seconds")  # the verdict's own amendment stays
+        steps.append("amended")
+        s.require("exists")  # the grader's next step: stopped here
+        steps.append("went on")
+        s.record("log", True, "", "")
+
+    status, results, _ = run(session(tmp_path, ("rate",)), grade)
+    assert status is None and steps == ["amended"]
+    assert results["rate"].hint == "the timer period is in seconds" and results["rate"].points == 0
+    assert results["exists"].passed
+    for left in ("log", "ctrl_c"):
+        assert results[left].skipped and results[left].observed == NOT_CHECKED + STOPPED_SETTLED
+
+
+def test_a_named_check_not_checked_stops_grading_when_its_part_ends(tmp_path):
+    checks = [Check("exists", "e", 1, part="talker"), Check("rate", "r", 2, needs=("exists",), part="talker"),
+              Check("log", "l", 1, part="listener")]
+    s = GradingSession(None, checks, tmp_path, tmp_path / "log", {}, stop_when=StopWhen(frozenset({"exists", "rate"})))
+    steps = []
+
+    def grade(s):
+        with s.part("talker"):
+            s.record("exists", False, "no executable", "an executable")
+            s.require("exists")
+        steps.append("listener")
+        s.record("log", True, "", "")
+
+    _, results, _ = run(s, grade)
+    assert results["rate"].skipped and "'e' failed" in results["rate"].observed  # its own reason, not the stop
+    assert steps == [] and results["log"].observed == NOT_CHECKED + STOPPED_SETTLED
+
+
+def test_a_verdict_on_a_worker_thread_stops_grading_on_the_grading_thread_only(tmp_path):
+    seen = []
+
+    def grade(s):
+        def half():
+            s.record("rate", False, "1 Hz", "2 Hz")
+            s.record("log", True, "", "")  # the worker's half runs on to its end
+            seen.append("worker done")
+        worker = threading.Thread(target=half)
+        worker.start()
+        worker.join()
+        s.record("ctrl_c", True, "", "")
+
+    _, results, _ = run(session(tmp_path, ("rate",)), grade)
+    assert seen == ["worker done"] and results["log"].passed
+    assert results["ctrl_c"].observed == NOT_CHECKED + STOPPED_SETTLED
+
+
+def test_without_stop_when_nothing_stops_and_a_graders_except_exception_cannot_swallow_the_stop(tmp_path):
+    def grade(s):
+        for check_id in ("exists", "rate", "log", "ctrl_c"):
+            try:
+                s.record(check_id, check_id != "rate", "", "")
+            except Exception:  # noqa: BLE001 - a careless grader
+                pass
+
+    _, whole, _ = run(session(tmp_path), grade)
+    assert all(not r.skipped for r in whole.values())
+    _, cut, _ = run(session(tmp_path, ("rate",)), grade)
+    assert cut["log"].observed == NOT_CHECKED + STOPPED_SETTLED
+    assert issubclass(VerdictSettled, BaseException) and not issubclass(VerdictSettled, Exception)
+
+
+def test_a_fixture_is_judged_by_its_named_checks_unless_it_expects_any_checks_diagnosis():
+    fixture = Fixture(description="d", fails=["rate", "log"], skips=["ctrl_c"], says={"rate": ["Hz"], "exists": ["x"]},
+                      diagnosis=[{"kind": "silent", "check": "log"}])
+    assert fixture.judged_by() == ("rate", "log", "ctrl_c", "exists")
+    assert Fixture(description="d", fails=["rate"], diagnosis=[{"kind": "silent"}]).judged_by() == ()
+    assert Fixture(description="d", expect="full_marks").judged_by() == ()
+
+
+def test_grades_batch_verdicts_are_compared_on_the_checks_check_judged():
+    def result(*checks: CheckResult) -> LessonResult:
+        return LessonResult("l", sum(c.points for c in checks), 5.0, Status.FAILED, list(checks))
+
+    exists, rate = CheckResult("exists", "e", 1, 1, True, "", "", ""), CheckResult("rate", "r", 0, 2, False, "", "", "")
+    stopped = CheckResult("log", "l", 0, 1, False, NOT_CHECKED + STOPPED_SETTLED, "", "", skipped=True)
+    checked = result(exists, rate, stopped)
+    assert same_verdicts(checked, result(exists, rate, CheckResult("log", "l", 1, 1, True, "", "", "")))
+    assert not same_verdicts(checked, result(exists, CheckResult("rate", "r", 2, 2, True, "", "", ""),
+                                             CheckResult("log", "l", 1, 1, True, "", "", "")))
+    whole = result(exists, rate, CheckResult("log", "l", 0, 1, False, "", "", ""))
+    assert not same_verdicts(whole, result(exists, rate, CheckResult("log", "l", 1, 1, True, "", "", "")))
+
+
+def test_the_stop_is_raised_at_the_next_step_once_and_only_on_the_grading_thread(tmp_path):
+    s = session(tmp_path, ("exists",))
+    s.record("exists", True, "", "")  # the last named verdict itself never raises (the engine's build check)
+    with pytest.raises(VerdictSettled):
+        s.record("rate", True, "", "")
+    assert "rate" not in s.results
+    s.record("rate", True, "", "")  # disarmed: the engine records what is left
+    assert s.results["rate"].passed
+
+
+def test_a_starter_stops_at_its_first_lost_point_on_any_check(tmp_path):
+    def grade(s):
+        s.record("exists", True, "found", "an executable")
+        s.record("rate", True, "1.9 Hz", "2 Hz", fraction=0.5)  # a partial verdict loses points too
+        s.record("log", False, "", "")
+
+    _, results, _ = run(session(tmp_path, any_loss=True), grade)
+    assert results["exists"].passed and results["rate"].points == 1.0
+    assert results["log"].observed == NOT_CHECKED + STOPPED_SETTLED
+    assert not StopWhen() and StopWhen(any_loss=True) and StopWhen(frozenset({"a"}))
