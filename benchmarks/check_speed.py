@@ -402,7 +402,7 @@ def measure_source_digest(runs: int) -> dict[str, Any]:
     largest package set a check reads), as a warm check computes it; milliseconds, median of ``runs``."""
     from ros2course.build.sources import scan_package  # noqa: PLC0415
     from ros2course.lesson import content_root  # noqa: PLC0415
-    from ros2course.ros.packages import find_packages  # noqa: PLC0415
+    from ros2course.ros.manifests import find_packages  # noqa: PLC0415
 
     src = content_root() / "solutions" / "src"
     found = find_packages(src)

@@ -19,7 +19,7 @@ import pytest
 
 from ros2course.build.reference import trusted_interface_packages
 from ros2course.errors import CourseError
-from ros2course.grade.checks import Check
+from ros2course.grade.checklist import Check
 from ros2course.grade.engine import load_grader
 from ros2course.grade.session import GradingSession
 from ros2course.lesson.catalog import load_catalog

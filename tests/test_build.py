@@ -17,7 +17,7 @@ import pytest
 from ros2course.build.colcon import build_log_excerpt, build_packages, overlay_env
 from ros2course.errors import NotGradable
 from ros2course.ros import env as env_mod
-from ros2course.ros.packages import find_packages
+from ros2course.ros.manifests import find_packages
 
 DATA = Path(__file__).parent / "data"
 

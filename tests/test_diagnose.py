@@ -386,7 +386,7 @@ def test_engine_diagnoses_the_first_failed_check_of_a_part(tmp_path, monkeypatch
     with ROS2COURSE_DIAGNOSE=0 there is none, and every verdict and point is the same."""
     monkeypatch.setenv("ROS2COURSE_DIAGNOSE", diagnose)
     pytest.importorskip("rclpy")
-    from ros2course.grade.checks import Check  # noqa: PLC0415
+    from ros2course.grade.checklist import Check  # noqa: PLC0415
     from ros2course.grade.session import GradingSession  # noqa: PLC0415
     from ros2course.ros import env as env_mod  # noqa: PLC0415
     from ros2course.run.probes import wait_until  # noqa: PLC0415
@@ -513,7 +513,7 @@ def test_a_learner_process_that_ends_is_diagnosed(tmp_path, how, words):
     """A node that dies on its own: the engine's ``process`` finding says how (code or signal, seconds
     after start) and why (last traceback line, else last ERROR record); kit.process_state says the same."""
     pytest.importorskip("rclpy")
-    from ros2course.grade.checks import Check  # noqa: PLC0415
+    from ros2course.grade.checklist import Check  # noqa: PLC0415
     from ros2course.kit import process_state  # noqa: PLC0415
     from ros2course.run.probes import wait_until  # noqa: PLC0415
 
@@ -543,7 +543,7 @@ def test_a_learner_process_that_ends_is_diagnosed(tmp_path, how, words):
 def test_a_node_stopped_by_the_grader_is_not_a_process_finding(tmp_path):
     """Ctrl+C from the grader ends the process: that exit is not the learner's crash."""
     pytest.importorskip("rclpy")
-    from ros2course.grade.checks import Check  # noqa: PLC0415
+    from ros2course.grade.checklist import Check  # noqa: PLC0415
     from ros2course.run.probes import wait_until  # noqa: PLC0415
 
     script = tmp_path / "talker.py"
@@ -647,7 +647,7 @@ def test_a_node_that_never_spins_is_silent(tmp_path, spins):
     pytest.importorskip("rclpy")
     from std_msgs.msg import String  # noqa: PLC0415
 
-    from ros2course.grade.checks import Check  # noqa: PLC0415
+    from ros2course.grade.checklist import Check  # noqa: PLC0415
     from ros2course.run.diagnose import SILENT_AFTER  # noqa: PLC0415
     from ros2course.run.probes import wait_until  # noqa: PLC0415
 
@@ -680,7 +680,7 @@ def test_a_node_that_never_spins_is_silent(tmp_path, spins):
 def test_a_part_opened_with_its_own_graph_gives_it_to_every_step_inside(tmp_path):
     """``s.part(name, own_graph=True)``: ``s.graph`` and ``s.launch`` use the part's private graph (issue 23:
     no ``graph=`` threaded through the steps); outside it, and in a part without one, ``s.graph`` is ``s.ros``."""
-    from ros2course.grade.checks import Check  # noqa: PLC0415
+    from ros2course.grade.checklist import Check  # noqa: PLC0415
     from ros2course.run.probes import wait_until  # noqa: PLC0415
 
     script = tmp_path / "learner.py"

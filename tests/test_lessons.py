@@ -15,7 +15,7 @@ import pytest
 import yaml
 
 from ros2course.errors import LessonFormatError
-from ros2course.grade.checks import Check
+from ros2course.grade.checklist import Check
 from ros2course.grade.engine import load_grader
 from ros2course.dev.validate import (
     apply_edits,
@@ -25,7 +25,7 @@ from ros2course.dev.validate import (
 )
 from ros2course.lesson.catalog import content_root, load_catalog, load_lesson
 from ros2course.lesson.starter import copy_starter, starter_files, starter_sources
-from ros2course.ros.packages import find_packages
+from ros2course.ros.manifests import find_packages
 
 ROOT = content_root()
 CATALOG = load_catalog()

@@ -13,7 +13,7 @@ from types import SimpleNamespace
 
 import pytest
 
-from ros2course.grade.checks import Unmet, check_dependencies
+from ros2course.grade.checklist import Unmet, check_dependencies
 
 from ros2course.grade.engine import load_grader
 

@@ -1,4 +1,4 @@
-"""Package discovery (ros2course.ros.packages): what catkin_pkg reads, kept by content (issue 36)."""
+"""Package discovery (ros2course.ros.manifests): what catkin_pkg reads, kept by content (issue 36)."""
 
 from __future__ import annotations
 
@@ -13,8 +13,8 @@ from catkin_pkg.packages import find_packages as catkin_find
 
 from ros2course.errors import NotGradable
 from ros2course.lesson import content_root
-from ros2course.ros import packages as packages_mod
-from ros2course.ros.packages import Manifest, find_packages
+from ros2course.ros import manifests as packages_mod
+from ros2course.ros.manifests import Manifest, find_packages
 
 MANIFEST = ('<?xml version="1.0"?>\n<package format="3">\n  <name>{name}</name>\n  <version>0.0.0</version>\n'
             '  <description>d</description>\n  <maintainer email="a@example.com">a</maintainer>\n'
@@ -58,7 +58,7 @@ def test_a_kept_manifest_spares_the_parser_import(tmp_path):
     src = tmp_path / "src"
     _package(src, "a", "pkg_a")
     find_packages(src)  # keeps it
-    code = ("import sys; from pathlib import Path; from ros2course.ros.packages import find_packages; "
+    code = ("import sys; from pathlib import Path; from ros2course.ros.manifests import find_packages; "
             f"found = find_packages(Path({str(src)!r})); "
             "print(sorted(found), 'pyparsing' in sys.modules, 'catkin_pkg.package' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True,

@@ -459,7 +459,7 @@ def test_parts_graded_at_once_share_one_check_graph(ros_env, tmp_path):
     import threading  # noqa: PLC0415
     import time  # noqa: PLC0415
 
-    from ros2course.grade.checks import Check  # noqa: PLC0415
+    from ros2course.grade.checklist import Check  # noqa: PLC0415
     from ros2course.grade.session import GradingSession  # noqa: PLC0415
     from ros2course.kit import parts  # noqa: PLC0415
     from ros2course.lesson.catalog import load_catalog  # noqa: PLC0415

@@ -9,7 +9,7 @@ import math
 import pytest
 from rich.console import Console
 
-from ros2course.grade.checks import Check
+from ros2course.grade.checklist import Check
 from ros2course.grade.session import GradingSession
 from ros2course.grade.results import CheckResult, LessonResult, Plot
 from ros2course.report.table import render_result, result_json, sparkline

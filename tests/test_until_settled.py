@@ -11,7 +11,7 @@ import pytest
 
 from ros2course.dev.parity import same_verdicts
 from ros2course.dev.validate import Fixture
-from ros2course.grade.checks import STOPPED_SETTLED, Check, StopWhen, VerdictSettled
+from ros2course.grade.checklist import STOPPED_SETTLED, Check, StopWhen, VerdictSettled
 from ros2course.grade.engine import _run_grader
 from ros2course.grade.results import NOT_CHECKED, CheckResult, LessonResult, Status
 from ros2course.grade.session import GradingSession

@@ -11,7 +11,7 @@ from rich.console import Console
 
 from ros2course.batch.runner import class_visibility, write_outputs
 from ros2course.errors import CourseError
-from ros2course.grade.checks import Check, check_dependencies
+from ros2course.grade.checklist import Check, check_dependencies
 from ros2course.grade.results import CheckResult, LessonResult, Status
 from ros2course.grade.session import GradingSession
 from ros2course.report.table import render_result

@@ -1,7 +1,7 @@
 """Building a lesson's packages with colcon, and the workspace's overlay environment.
 
 * Packages are found as colcon finds them, their ``package.xml`` read with
-  ``catkin_pkg`` (the library colcon-ros itself uses; :mod:`ros2course.ros.packages`,
+  ``catkin_pkg`` (the library colcon-ros itself uses; :mod:`ros2course.ros.manifests`,
   which keeps what it read by content), built with ``colcon build --packages-up-to``.
 * The engine records, per package it builds, what it built by content (every
   source file's bytes and mode; :mod:`ros2course.build.sources`) in
@@ -39,7 +39,7 @@ from ros2course.files import atomic_write_text
 from ros2course.ros.colcon_log import BuildProgress
 from ros2course.ros.compiler_cache import with_compiler_cache
 from ros2course.build.sources import PackageRecord, PackageSources, rebuild_reason, scan_package
-from ros2course.ros.packages import IGNORE_MARKERS, Manifest, dependency_closure, find_packages
+from ros2course.ros.manifests import IGNORE_MARKERS, Manifest, dependency_closure, find_packages
 
 #: The engine's record of what it built (:class:`BuildRecords`), beside colcon's own state in ``build/``.
 RECORDS = ".ros2course-builds.json"

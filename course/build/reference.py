@@ -22,11 +22,11 @@ from ros2course.build.colcon import COLCON_ARGS, build_packages
 from ros2course.errors import CourseError, ValidationFailed
 from ros2course.lesson.catalog import Lesson, content_root
 from ros2course.ros import env as env_mod
-from ros2course.ros.packages import Manifest, dependency_closure, find_packages
+from ros2course.ros.manifests import Manifest, dependency_closure, find_packages
 
 
 def solution_packages() -> dict[str, tuple[Path, Manifest]]:
-    """Every package under ``solutions/src``: name -> (folder, its :class:`~ros2course.ros.packages.Manifest`)."""
+    """Every package under ``solutions/src``: name -> (folder, its :class:`~ros2course.ros.manifests.Manifest`)."""
     return find_packages(content_root() / "solutions" / "src")
 
 

@@ -17,7 +17,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from ros2course.grade.checks import StopWhen
+from ros2course.grade.checklist import StopWhen
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import content_root, load_catalog
 
@@ -64,7 +64,7 @@ def grade_in_child(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_
 
 def _main(argv: list[str]) -> int:
     """The child: ``LESSON ROOT LOG_DIR [--underlay PATH]... [--judged CHECK]... [--any-loss]`` (the last two: its
-    :class:`~ros2course.grade.checks.StopWhen`); prints its result's JSON record."""
+    :class:`~ros2course.grade.checklist.StopWhen`); prints its result's JSON record."""
     import argparse  # noqa: PLC0415
 
     from ros2course.grade.engine import grade_lesson  # noqa: PLC0415

@@ -102,7 +102,7 @@ def _verdict(result: LessonResult) -> tuple[str, float, tuple[str, ...]]:
 def same_verdicts(checked: LessonResult, batch: LessonResult) -> bool:
     """``grade``'s result gives ``check``'s verdicts: the same status, score and failed checks; or, when
     ``check`` stopped early (``dev validate --until-settled``: checks "not checked: " +
-    :data:`~ros2course.grade.checks.STOPPED_SETTLED`), the same status and, check by check, the same
+    :data:`~ros2course.grade.checklist.STOPPED_SETTLED`), the same status and, check by check, the same
     points, pass and skip on every check ``check`` judged (the batch grades its hand-ins whole)."""
     cut = unjudged(checked)
     if not cut:

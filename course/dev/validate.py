@@ -30,11 +30,11 @@ Any other check the fixture lost, or that was not checked, is reported on
 its line of ``dev validate`` ("also lost: ..."), not a failure.
 
 ``--until-settled`` (the test suite's way) stops grading a case at the grader's next step once its
-verdict can no longer change (:class:`~ros2course.grade.checks.StopWhen`): a wrong solution once every
+verdict can no longer change (:class:`~ros2course.grade.checklist.StopWhen`): a wrong solution once every
 check its fixture names (``fails``, ``skips``, ``says`` and its diagnoses' checks) is judged, which
 leaves a third of a lesson's checks on average (a wrong solution waiting for a topic that never comes
 is most of the time); a starter at its first lost point. Their other checks then show "not checked"
-(:data:`~ros2course.grade.checks.STOPPED_SETTLED`) and no "also lost" note is made. References and
+(:data:`~ros2course.grade.checklist.STOPPED_SETTLED`) and no "also lost" note is made. References and
 ``expect: full_marks`` fixtures are graded whole.
 """
 
@@ -69,7 +69,7 @@ from ros2course.dev.child import grade_in_child
 from ros2course.dev.coverage import lesson_coverage
 from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.dev.mutants import describe_score, score_text, triage_problems
-from ros2course.grade.checks import STOPPED_SETTLED, StopWhen
+from ros2course.grade.checklist import STOPPED_SETTLED, StopWhen
 from ros2course.grade.results import NOT_CHECKED, LessonResult, Status
 from ros2course.dev.strength import steadiness_text
 from ros2course.lesson.catalog import Lesson, content_root, load_catalog
@@ -77,7 +77,7 @@ from ros2course.lesson.schema import format_validation_error
 from ros2course.lesson.courses import course_fixtures
 from ros2course.lesson.starter import copy_starter
 from ros2course.ros import env as env_mod
-from ros2course.ros.packages import find_packages
+from ros2course.ros.manifests import find_packages
 
 
 class Edit(BaseModel):
@@ -304,7 +304,7 @@ def contract_outcome(lesson: Lesson) -> Outcome | None:
 
 def unjudged(result: LessonResult) -> set[str]:
     """Ids of the checks a grading stopped by ``--until-settled`` left unjudged
-    ("not checked: " + :data:`~ros2course.grade.checks.STOPPED_SETTLED`); empty for a whole grading."""
+    ("not checked: " + :data:`~ros2course.grade.checklist.STOPPED_SETTLED`); empty for a whole grading."""
     return {c.id for c in result.checks if c.skipped and c.observed == NOT_CHECKED + STOPPED_SETTLED}
 
 

@@ -1,7 +1,7 @@
 """The grading engine: build, launch, observe, judge, tear down.
 
 A grader module (``graders/<name>.py``) declares ``CHECKS`` (a list of
-:class:`~ros2course.grade.checks.Check`) and a function
+:class:`~ros2course.grade.checklist.Check`) and a function
 ``grade(session: GradingSession) -> None`` that composes probes and calls
 :meth:`~ros2course.grade.session.GradingSession.record` for each check.
 :func:`grade_lesson` builds the lesson's packages, loads the grader (:func:`load_grader`)
@@ -36,7 +36,7 @@ from ros2course.run.process import sweep_stale_fastdds_shm
 
 
 
-from ros2course.grade.checks import STOPPED_SETTLED, Check, StopWhen, VerdictSettled
+from ros2course.grade.checklist import STOPPED_SETTLED, Check, StopWhen, VerdictSettled
 from ros2course.grade.session import GradingSession
 
 
@@ -140,8 +140,8 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     record, so its packages are built from clean); the build check says so.
 
     ``stop_when`` (``dev validate --until-settled``, never a learner's or a class's grading): grading
-    stops once the verdicts recorded settle the case (:class:`~ros2course.grade.checks.StopWhen`); the
-    checks left show "not checked: " + :data:`~ros2course.grade.checks.STOPPED_SETTLED`.
+    stops once the verdicts recorded settle the case (:class:`~ros2course.grade.checklist.StopWhen`); the
+    checks left show "not checked: " + :data:`~ros2course.grade.checklist.STOPPED_SETTLED`.
 
     Never raises for problems of the submission (they become the result);
     raises :class:`~ros2course.errors.MissingRequirement` when the machine lacks

@@ -29,10 +29,10 @@ from pathlib import Path
 
 from ros2course.lesson import content_root
 from ros2course.lesson.catalog import Lesson
-from ros2course.ros.packages import dependency_closure, find_packages
+from ros2course.ros.manifests import dependency_closure, find_packages
 
 #: The engine modules (relative to the ``ros2course`` package) whose code every grader runs on.
-ENGINE_PARTS = ("kit", "run", "grade/engine.py", "grade/session.py", "grade/checks.py", "grade/results.py")
+ENGINE_PARTS = ("kit", "run", "grade/engine.py", "grade/session.py", "grade/checklist.py", "grade/results.py")
 
 
 def _files(root: Path) -> list[Path]:

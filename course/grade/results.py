@@ -62,7 +62,7 @@ NOT_CHECKED = "not checked: "
 
 #: Who sees a check's verdict (issue 39): ``visible`` (the default: ``check`` shows it), ``after_due`` (graded when
 #: the work is handed in, shown to the learner once the deadline has passed) or ``hidden`` (graded at hand-in, never
-#: shown). Declared on the grader's :class:`~ros2course.grade.checks.Check`, overridden per class by ``class.yaml``'s
+#: shown). Declared on the grader's :class:`~ros2course.grade.checklist.Check`, overridden per class by ``class.yaml``'s
 #: ``visibility:`` (:func:`with_visibility`).
 Visibility = Literal["visible", "hidden", "after_due"]
 VISIBILITIES: tuple[str, ...] = ("visible", "hidden", "after_due")

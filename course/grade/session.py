@@ -30,7 +30,7 @@ from ros2course.grade.results import NOT_CHECKED, CheckResult, Plot
 from ros2course.lesson.catalog import Lesson, content_root
 from ros2course.ros import index as ament_index
 from ros2course.ros.interfaces import workspace_type
-from ros2course.ros.packages import find_packages
+from ros2course.ros.manifests import find_packages
 from ros2course import sandbox
 from ros2course.run.diagnose import (
     MAX_FINDINGS,
@@ -48,7 +48,7 @@ from ros2course.run.recording import FILE_NAME as RECORDING_FILE
 
 
 
-from ros2course.grade.checks import Check, StopWhen, Unmet, VerdictSettled, check_dependencies
+from ros2course.grade.checklist import Check, StopWhen, Unmet, VerdictSettled, check_dependencies
 
 
 #: What the learner's nodes showed in the graph, per part, in a check's log folder (``ros2course graph``).
@@ -377,7 +377,7 @@ class GradingSession:
         return None
 
     def _stop_if_settled(self) -> None:
-        """Raise :class:`~ros2course.grade.checks.VerdictSettled` when the verdicts recorded so far settle
+        """Raise :class:`~ros2course.grade.checklist.VerdictSettled` when the verdicts recorded so far settle
         ``stop_when``, on the thread that runs ``grade()`` (a worker thread's half runs on until it ends).
 
         Called as the grader takes its next step (records another check, requires one, opens a part,

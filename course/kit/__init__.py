@@ -42,7 +42,7 @@ the service lessons' steps), imported with ``from . import _<name>``.
 """
 
 from ros2course.errors import NotGradable
-from ros2course.grade.checks import Check, Unmet
+from ros2course.grade.checklist import Check, Unmet
 from ros2course.grade.session import GradingSession
 from ros2course.kit_version import API_VERSION
 from ros2course.ros.env import foreign_python_prefix

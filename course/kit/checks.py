@@ -1,6 +1,6 @@
 """Check declarations that several graders share, worded the same in every lesson.
 
-Each returns :class:`~ros2course.grade.checks.Check` objects for a grader's
+Each returns :class:`~ros2course.grade.checklist.Check` objects for a grader's
 ``CHECKS``: the learner's executable found by ``ros2 run``, its node's name,
 its Ctrl+C exit (tutorial ch. 13), the interface lessons' dependencies
 (seed ch. 18.1). Keyword arguments ``needs`` and ``part`` are the Check's.
@@ -8,7 +8,7 @@ its Ctrl+C exit (tutorial ch. 13), the interface lessons' dependencies
 
 from __future__ import annotations
 
-from ros2course.grade.checks import Check
+from ros2course.grade.checklist import Check
 
 #: The fix for a node that ends with a traceback on Ctrl+C (Jazzy: ``rclpy.spin()`` may raise
 #: ``ExternalShutdownException``; shared/ROS_ENV.md).

@@ -30,7 +30,7 @@ from typing import Any
 
 import yaml
 
-from ros2course.grade.checks import Unmet
+from ros2course.grade.checklist import Unmet
 from ros2course.ros.env import probe_requirement, require
 from ros2course.kit.nodes import process_state
 

@@ -2,7 +2,7 @@
 
 Each step records its own check and returns a value the grader goes on
 with; when the value does not exist (no executable, the process died) the
-step raises :class:`ros2course.grade.checks.Unmet` and the engine marks the checks
+step raises :class:`ros2course.grade.checklist.Unmet` and the engine marks the checks
 that need it "not checked".
 """
 
@@ -14,7 +14,7 @@ from collections.abc import Iterable
 from pathlib import Path
 from typing import Any
 
-from ros2course.grade.checks import Unmet
+from ros2course.grade.checklist import Unmet
 from ros2course.grade.session import GradingSession
 from ros2course.kit.programs import ProgramRun, judge_interrupted_run
 from ros2course.run.probes import wait_until

@@ -5,9 +5,9 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ros2course.grade.checks import Unmet
+from ros2course.grade.checklist import Unmet
 from ros2course.grade.session import GradingSession
-from ros2course.ros.packages import find_packages
+from ros2course.ros.manifests import find_packages
 
 
 def source_package(s: GradingSession, name: str) -> tuple[Any, Any] | None:

@@ -20,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.build.colcon import colcon_command
-from ros2course.grade.checks import Unmet
+from ros2course.grade.checklist import Unmet
 from ros2course.grade.session import GradingSession
 from ros2course.ros import index as ament_index
 from ros2course import sandbox

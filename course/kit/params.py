@@ -4,7 +4,7 @@
 ``list_parameters``, ``get_parameters``, ``describe_parameters`` and
 ``set_parameters`` services with rclpy's ``AsyncParameterClient``; so does
 :class:`NodeParameters`, from the grader's own node in the session's private
-graph. Every call that gets no answer raises :class:`ros2course.grade.checks.Unmet`:
+graph. Every call that gets no answer raises :class:`ros2course.grade.checklist.Unmet`:
 the checks that needed the answer become "not checked" with the reason.
 """
 
@@ -17,7 +17,7 @@ from typing import Any
 
 import yaml
 
-from ros2course.grade.checks import Unmet
+from ros2course.grade.checklist import Unmet
 from ros2course.grade.session import GradingSession
 from ros2course.lesson.catalog import yaml_error_text
 from ros2course.run.probes import wait_future, wait_until

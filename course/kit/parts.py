@@ -19,7 +19,7 @@ def at_once(s: GradingSession, background: str, grade_background: Callable[[], N
     as long as the longer half. Processes started from the main thread get
     the parent-death signal (course/run/process.py), so start there the half
     whose programs run longest. ``s.part`` keeps each thread's closing actions
-    (Ctrl+C checks) apart; an :class:`~ros2course.grade.checks.Unmet` ends only its
+    (Ctrl+C checks) apart; an :class:`~ros2course.grade.checklist.Unmet` ends only its
     own part. A grader fault (any other exception) of the background half is
     raised here once both are done. ``own_graphs``: the names of the halves
     opened with ``s.part(name, own_graph=True)`` (each then observes its own

@@ -17,7 +17,7 @@ import re
 import sys
 from pathlib import Path
 
-from ros2course.grade.checks import Unmet
+from ros2course.grade.checklist import Unmet
 from ros2course.grade.session import GradingSession
 from ros2course.kit.programs import ProgramRun, last_line, run_program
 

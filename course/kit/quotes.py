@@ -13,7 +13,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ros2course.grade.checks import Unmet
+from ros2course.grade.checklist import Unmet
 from ros2course.grade.session import GradingSession
 from ros2course.run.probes import LATE_DELIVERY, wait_until
 from ros2course.kit.judge import topics_seen

@@ -35,7 +35,7 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
-from ros2course.grade.checks import Unmet
+from ros2course.grade.checklist import Unmet
 from ros2course.grade.session import GradingSession
 from ros2course.kit.programs import ProgramRun, interrupt_after, run_program
 from ros2course.run.probes import wait_until

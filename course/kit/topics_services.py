@@ -19,7 +19,7 @@ from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 from ros2course.errors import NotGradable
-from ros2course.grade.checks import Unmet
+from ros2course.grade.checklist import Unmet
 from ros2course.grade.session import GradingSession
 from ros2course import sandbox
 from ros2course.run.probes import RateStats, wait_until

@@ -40,7 +40,7 @@ class GraphNode:
 
     Attributes:
         name: fully qualified, e.g. ``/amazing_quote_publisher_node``.
-        part: the grader's part (:attr:`ros2course.grade.checks.Check.part`) whose graph holds it; "" for every part.
+        part: the grader's part (:attr:`ros2course.grade.checklist.Check.part`) whose graph holds it; "" for every part.
     """
 
     name: str

@@ -21,7 +21,7 @@ from ros2course.ros import compiler_cache
 from ros2course.ros import env as env_mod
 from ros2course.ros import underlay as _underlay
 from ros2course.ros import underlay_build
-from ros2course.ros.packages import dependency_closure, find_packages
+from ros2course.ros.manifests import dependency_closure, find_packages
 from ros2course.ros.requirements import KNOWN_REQUIREMENTS
 from ros2course.ros.underlay_pins import JAZZY
 
