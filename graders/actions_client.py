@@ -1,4 +1,4 @@
-"""Grader for ``actions-client`` (contract in chapters/29-actions-client/CONTRACT.md).
+"""Grader for ``actions-client`` (contract in chapters/actions-client/CONTRACT.md).
 
 The grader plays the action server (:class:`ros2course.kit.actions.StandInActionServer`)
 and judges the learner's client from its /rosout records and how its process ends.

@@ -1,4 +1,4 @@
-"""Grader for ``actions-server`` (contract in chapters/29-actions-server/CONTRACT.md).
+"""Grader for ``actions-server`` (contract in chapters/actions-server/CONTRACT.md).
 
 Black-box, as ``ros2 action send_goal`` would: the grader's own action client
 (:class:`ros2course.kit.actions.GoalClient`) sends the learner's server four goals

@@ -1,4 +1,4 @@
-"""Grader for ``lifecycle-node`` (a managed node; contract in chapters/28-lifecycle-node/CONTRACT.md).
+"""Grader for ``lifecycle-node`` (a managed node; contract in chapters/lifecycle-node/CONTRACT.md).
 
 Black-box, as ``ros2 lifecycle`` would drive it: the grader calls the node's
 ``/<node>/change_state`` and ``/<node>/get_state`` services (lifecycle_msgs)

@@ -1,4 +1,4 @@
-"""Grader for ``qos`` (issue 20; contract in chapters/27-qos/CONTRACT.md).
+"""Grader for ``qos`` (issue 20; contract in chapters/qos/CONTRACT.md).
 
 Black-box, on the graph's own QoS information (what ``ros2 topic info --verbose``
 prints, judged with ``rclpy.qos.qos_check_compatible``) and on what the

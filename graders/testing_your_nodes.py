@@ -1,4 +1,4 @@
-"""Grader for ``testing-your-nodes`` (issue 20; contract in chapters/29-testing-your-nodes/CONTRACT.md).
+"""Grader for ``testing-your-nodes`` (issue 20; contract in chapters/testing-your-nodes/CONTRACT.md).
 
 The learner writes tests: pytest unit tests of the library of lesson 14
 (``src/python_package_with_a_library/test/``) and a ``launch_testing`` test of the

@@ -1,4 +1,4 @@
-"""Grader for ``tf2-broadcaster`` (issue 20; contract in chapters/46-tf2-broadcaster/CONTRACT.md).
+"""Grader for ``tf2-broadcaster`` (issue 20; contract in chapters/tf2-broadcaster/CONTRACT.md).
 
 Black-box, on the ``tf2_msgs/msg/TFMessage`` streams the learner's node publishes:
 

@@ -1,4 +1,4 @@
-"""Grader for ``tf2-listener`` (issue 20; contract in chapters/47-tf2-listener/CONTRACT.md).
+"""Grader for ``tf2-listener`` (issue 20; contract in chapters/tf2-listener/CONTRACT.md).
 
 Black-box, on the node's ``/rosout`` records while the grader itself is the tf2 tree:
 

@@ -111,8 +111,8 @@ def test_grader_strength_retriage_applies_todays_triage_to_the_last_runs_outcome
     monkeypatch.setenv("ROS2COURSE_CONTENT", str(course))
     node = "src/python_package_with_a_node/python_package_with_a_node/print_forever_node.py"
     for record in ("mutation-score.json", "mutation-outcomes.json"):  # no committed run: OUT's is the last one
-        (course / "chapters" / "13-print-forever-node" / record).unlink()
-    (course / "chapters" / "13-print-forever-node" / "mutation.yaml").write_text(
+        (course / "chapters" / "print-forever-node" / record).unlink()
+    (course / "chapters" / "print-forever-node" / "mutation.yaml").write_text(
         f"survivors:\n  - file: {node}\n    line: 3\n    original: 'x = 1'\n    mutated: 'x = 2'\n"
         "    reason: a line nothing reads\n",
         encoding="utf-8")
@@ -128,10 +128,10 @@ def test_grader_strength_retriage_applies_todays_triage_to_the_last_runs_outcome
     spec.loader.exec_module(module)
     [found] = module.retriage(["print-forever-node"], out)
     assert (found.count("killed"), found.count("survived"), found.triaged, found.score) == (1, 2, 1, 0.5)
-    record = json.loads((course / "chapters" / "13-print-forever-node" / "mutation-score.json").read_text())
+    record = json.loads((course / "chapters" / "print-forever-node" / "mutation-score.json").read_text())
     assert (record["triaged"], record["score"], record["generated"]) == (1, 0.5, 9), record
     # once committed, the lesson's own outcomes are the record: a run folder's older run no longer counts
-    outcomes = course / "chapters" / "13-print-forever-node" / "mutation-outcomes.json"
+    outcomes = course / "chapters" / "print-forever-node" / "mutation-outcomes.json"
     committed = json.loads(outcomes.read_text())
     for row in committed["mutants"]:
         row["outcome"], row["lost"] = "killed", ["rate"]

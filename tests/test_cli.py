@@ -99,9 +99,10 @@ def row_of(listing: str, lesson_id: str) -> str:
 
 
 def copy_course(dest: Path) -> Path:
-    """A private copy of the course content, for ROS2COURSE_CONTENT."""
+    """A private copy of the course content, for ROS2COURSE_CONTENT (course.yaml too: it alone orders the lessons)."""
     for part in ("chapters", "graders", "solutions", "tests/fixtures"):
         shutil.copytree(ROOT / part, dest / part, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+    shutil.copy2(ROOT / "course.yaml", dest / "course.yaml")
     return dest
 
 

@@ -85,9 +85,9 @@ def test_new_lesson_scaffolds_a_complete_lesson_and_never_overwrites(tmp_path: P
     course = tmp_path / "my-course"
     written = new_lesson(course, "first-node", "My first node")
     names = {p.relative_to(course).as_posix() for p in written}
-    assert {"course.yaml", "graders/__init__.py", "graders/first_node.py", "chapters/10-first-node/lesson.yaml",
+    assert {"course.yaml", "graders/__init__.py", "graders/first_node.py", "chapters/first-node/lesson.yaml",
             "fixtures/first-node/never-registered.yaml", "solutions/src/first_node_pkg/setup.py",
-            "chapters/10-first-node/starter/src/first_node_pkg/first_node_pkg/first_node.py"} <= names
+            "chapters/first-node/starter/src/first_node_pkg/first_node_pkg/first_node.py"} <= names
     new_lesson(course, "second-step")
     assert load_manifest(course).lessons == ["first-node", "second-step"]
     assert Catalog(course / "chapters").ids() == ["first-node", "second-step"]

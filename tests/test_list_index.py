@@ -62,7 +62,7 @@ def test_a_changed_title_is_seen_at_once(tmp_path, monkeypatch):
     course = copy_course(tmp_path / "c")
     chapters = course / "chapters"
     first = load_catalog(course).lessons[0].title  # kept
-    path = chapters / sorted(p.name for p in chapters.iterdir())[0] / "lesson.yaml"  # 01-: the first lesson
+    path = chapters / "terminal-basics" / "lesson.yaml"  # course.yaml's first lesson
     data = yaml.safe_load(path.read_text(encoding="utf-8"))
     data["title"] = "A title the kept catalog has never seen"
     path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
@@ -75,7 +75,7 @@ def test_list_reports_a_lesson_broken_after_the_catalog_was_kept(tmp_path, learn
     env = {"ROS2COURSE_CONTENT": str(course), "ROS2COURSE_CACHE_DIR": str(tmp_path / "cache")}
     assert cli("list", cwd=learner_ws, env=env).returncode == 0
     assert any((tmp_path / "cache").iterdir())
-    path = course / "chapters" / sorted(p.name for p in (course / "chapters").iterdir())[0] / "lesson.yaml"
+    path = course / "chapters" / "terminal-basics" / "lesson.yaml"  # course.yaml's first lesson
     data = yaml.safe_load(path.read_text(encoding="utf-8"))
     data["hints"] = data["hints"][:1]
     path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
@@ -163,11 +163,11 @@ def test_the_kept_catalog_is_keyed_by_content_not_file_times(tmp_path, monkeypat
     kept = catalog_mod._cached_catalog(chapters, key)
     assert kept is not None and kept.ids() == first.ids()
     lesson = kept.get("print-forever-node")
-    assert lesson == first.get("print-forever-node") and lesson.folder == chapters / "13-print-forever-node"
+    assert lesson == first.get("print-forever-node") and lesson.folder == chapters / "print-forever-node"
     assert [p.name for p in kept.get("launch-files").starter_layers] == [
         p.name for p in first.get("launch-files").starter_layers]
 
-    path = chapters / "13-print-forever-node" / "lesson.yaml"
+    path = chapters / "print-forever-node" / "lesson.yaml"
     text, stat = path.read_text(encoding="utf-8"), path.stat()
     title = first.get("print-forever-node").title
     changed = text.replace(title, title[::-1], 1)

@@ -46,7 +46,7 @@ def _course(dest: Path, triage: str) -> Path:
     for part in ("chapters", "graders", "solutions", "tests/fixtures"):
         shutil.copytree(ROOT / part, dest / part, ignore=shutil.ignore_patterns(
             "__pycache__", "*.egg-info", "build", "install", "log"))
-    (dest / "chapters" / "13-print-forever-node" / "mutation.yaml").write_text(triage, encoding="utf-8")
+    (dest / "chapters" / "print-forever-node" / "mutation.yaml").write_text(triage, encoding="utf-8")
     return dest
 
 
@@ -130,7 +130,7 @@ def test_dev_mutate_smoke(cli, tmp_path: Path) -> None:
     assert f"--- a/{NODE_FILE}" in diff and "+if __name__ < '__main__':" in diff
     assert json.loads((out / "mutation.json").read_text())["lessons"][LESSON]["score"] == pytest.approx(0.75)
     # the score lives with the lesson, for dev validate and the course's readers
-    record = json.loads((course / "chapters" / "13-print-forever-node" / mut.SCORE_FILE).read_text())
+    record = json.loads((course / "chapters" / "print-forever-node" / mut.SCORE_FILE).read_text())
     assert (record["score"], record["killed"], record["triaged"]) == (pytest.approx(0.75), 3, 1), record
     assert record["survivors"] == [f"{survivor['file']}:{survivor['line']} ({survivor['key']})"]
 

@@ -27,7 +27,7 @@ from ros2course.report.similarity import similar_pairs
 
 LESSON = "workspace-setup"
 MINIMALIST = "python-minimalist-package"
-STARTER = content_root() / "chapters" / "02-python-minimalist-package" / "starter" / "python" / "minimalist_package"
+STARTER = content_root() / "chapters" / "python-minimalist-package" / "starter" / "python" / "minimalist_package"
 REFERENCE = content_root() / "solutions" / "python" / "minimalist_package"
 #: What a hostile node prints: it would retitle the page and write a marker into the DOM if it ran.
 INJECTED = "<script>document.title='PWNED';document.write('INJECTED-RAN')</script><img src=x onerror=alert(1)>"

@@ -184,7 +184,7 @@ def _create_packages(specs: list[tuple[Path, str, str, list[str]]]) -> None:
                              env=env, capture_output=True, text=True, timeout=120)
         assert run.returncode == 0, run.stdout + run.stderr
         return
-    given = content_root() / "chapters" / "12-python-node-template" / "starter" / "src" / "python_package_with_a_node"
+    given = content_root() / "chapters" / "python-node-template" / "starter" / "src" / "python_package_with_a_node"
     for destination, _package, _maintainer, _dependencies in specs:
         shutil.copytree(given, destination / given.name)
         for linter in ("copyright", "flake8", "pep257"):

@@ -60,7 +60,7 @@ def test_the_wheel_holds_only_ros2course_and_the_bundled_course(wheel: Path) -> 
     top = {name.split("/")[0] for name in names}
     assert top == {"ros2course", wheel.name.split("-py3")[0] + ".dist-info"}, top
     course = "ros2course/_courses/tutorial/"
-    for part in ("course.yaml", "chapters/13-print-forever-node/lesson.yaml", "graders/print_forever_node.py",
+    for part in ("course.yaml", "chapters/print-forever-node/lesson.yaml", "graders/print_forever_node.py",
                  "solutions/src/python_package_with_a_node/setup.py", "tests/fixtures/print-forever-node/"):
         assert any(name.startswith(course + part) for name in names), part
     assert "ros2course/kit/__init__.py" in names

@@ -1,7 +1,7 @@
 """``ros2course dev new-lesson``: a new lesson that ``dev validate`` passes at once (issue 18).
 
 Writes, in a course folder (made with its ``course.yaml`` when it does not exist):
-the lesson's ``chapters/NN-<id>/lesson.yaml`` with every field commented, a starter
+the lesson's ``chapters/<id>/lesson.yaml`` with every field commented, a starter
 (an ``ament_python`` package whose node is not registered yet), a grader on the
 engine's public kit (:mod:`ros2course.kit`) with two checks besides the build, the
 reference solution under ``solutions/src`` and one wrong-solution fixture. The
@@ -221,8 +221,8 @@ def new_lesson(course_root: Path, lesson_id: str, title: str | None = None) -> l
     if lesson_id in lessons:
         raise CourseError(f"{manifest_path}: lessons: {lesson_id!r} exists already", "choose another id")
     chapters = course_root / "chapters"
-    number = 10 * (len(lessons) + 1)
-    folder = chapters / f"{number:02d}-{lesson_id}"
+    folder = chapters / lesson_id  # named by its id: its place in the course is course.yaml's lessons: order
+
     files[folder / "lesson.yaml"] = _LESSON_YAML.format(**names)
     files.update(_package_files(folder / "starter" / "src", names, registered=False))
     files.update(_package_files(course_root / "solutions" / "src", names, registered=True))

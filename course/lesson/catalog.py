@@ -1,11 +1,12 @@
-"""Lessons: one ``chapters/NN-<id>/lesson.yaml`` each, validated when loaded.
+"""Lessons: one ``chapters/<id>/lesson.yaml`` each, validated when loaded.
 
 A :class:`Lesson` and its parts are plain dataclasses; the schema that validates
 a ``lesson.yaml`` (pydantic models, so a malformed lesson is reported as
 ``<file>: <field>: <what is wrong>``) is :mod:`ros2course.lesson.schema`, imported
 only when lessons are validated: a warm ``check`` loads the kept catalog without
-pydantic or PyYAML (issue 36). The catalog's order is ``course.yaml``'s, else the
-folders' numeric prefix order, like rustlings' single manifest but one file per lesson.
+pydantic or PyYAML (issue 36). The catalog's order is ``course.yaml``'s (a course's folders are
+named by lesson id, so nothing else can claim an order); a folder of lessons without a
+``course.yaml`` (tests, a draft) is ordered by an optional numeric ``NN-`` prefix of its folders.
 """
 
 from __future__ import annotations
@@ -236,7 +237,7 @@ def load_lesson(path: Path) -> Lesson:
     folder_id = re.sub(r"^\d+-", "", path.parent.name)
     if folder_id != lesson.id:
         raise LessonFormatError(f"{path}: id: {lesson.id!r} does not match its folder name {path.parent.name!r}",
-                                "name the folder NN-<id>")
+                                "name the folder after the lesson id (NN-<id> only in a folder without course.yaml)")
     return lesson
 
 
@@ -244,7 +245,7 @@ class Catalog:
     """Every lesson of the course, in order.
 
     Args:
-        chapters_dir: folder of ``NN-<id>/lesson.yaml`` folders.
+        chapters_dir: folder of ``<id>/lesson.yaml`` folders (``NN-<id>`` without a ``course.yaml``).
     """
 
     def __init__(self, chapters_dir: Path) -> None:
