@@ -360,7 +360,7 @@ def check(lesson_id: Annotated[Optional[str], typer.Argument(metavar="LESSON", h
 
 def _grade(ws: Workspace, lesson, quiet: bool = False):
     """Grade ``lesson`` in ``ws`` (building SmartArmStack first where its packages need it) and record the attempt."""
-    from ros2course.grade.engine import grade_lesson  # noqa: PLC0415 - start time, see the imports
+    from ros2course.grade.engine import check_lesson  # noqa: PLC0415 - start time, see the imports
 
     _ensure_components(ws, lesson.packages)
     status = None
@@ -370,7 +370,7 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
     with status or contextlib.nullcontext(), _ctrl_c_seen() as interrupted:
         progress = (lambda line: status.update(f"{lesson.id}: {line}")) if status is not None else None
         # the learner sees the visible checks only (issue 39): the others are graded when the work is handed in
-        result = grade_lesson(lesson, ws.root, progress=progress).for_learner()
+        result = check_lesson(lesson, ws.root, progress=progress)
     if interrupted:  # Ctrl+C came, and a layer below ended the check early instead of raising it
         raise KeyboardInterrupt
     if ws.initialised:

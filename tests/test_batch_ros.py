@@ -120,6 +120,25 @@ def test_cross_talk_two_at_once(tmp_path: Path) -> None:
         pytest.skip(f"graded without network namespaces: {report.isolation.get('reason')}")
 
 
+def test_an_unchanged_interface_package_is_taken_from_the_courses_build(tmp_path: Path) -> None:
+    """parameters builds on custom-interfaces' package_with_interfaces: a hand-in holding it exactly as the
+    course has it is built against the course's build of it (rosidl is most of a hand-in's build); one
+    byte changed there (a comment in the message file) and the hand-in's own copy is built. Same verdicts."""
+    subs = tmp_path / "subs"
+    make_submission("parameters", subs / "alice")
+    bob = make_submission("parameters", subs / "bob")
+    msg = bob / "src/package_with_interfaces/msg/AmazingQuote.msg"
+    msg.write_text(msg.read_text() + "# bob was here\n")
+    report = run_batch(subs, ["parameters"], tmp_path / "out", jobs=2)
+    by = {r.student: r for r in report.records}
+    assert [(by[s].status, by[s].score) for s in ("alice", "bob")] == [("passed", by["alice"].max_score)] * 2, by
+    assert by["alice"].build.get("prebuilt") == ["package_with_interfaces"], by["alice"].build
+    assert "prebuilt" not in by["bob"].build, by["bob"].build
+    bob_log = Path(by["bob"].build["log"]).read_text()
+    assert "Finished <<< package_with_interfaces" in bob_log
+    assert "Starting >>> package_with_interfaces" not in Path(by["alice"].build["log"]).read_text()
+
+
 HOSTILE = '''
 import os, signal, sys, time
 

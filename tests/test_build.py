@@ -339,3 +339,40 @@ def test_overlay_is_sourced_once_whatever_order_the_wheels_give_ld_library_path(
     monkeypatch.setattr(colcon_mod, "_overlay_cache", {})
     other = overlay_env(root, dict(base, PATH="/usr/bin:/bin"))  # another environment: sourced anew
     assert count.read_text().count("x") == 2 and other["PATH"] == "/usr/bin:/bin"
+
+
+def _package(root: Path, name: str, files: dict[str, str]) -> Path:
+    folder = root / "src" / name
+    (folder / "msg").mkdir(parents=True)
+    (folder / "package.xml").write_text(f"<package format='3'><name>{name}</name><version>0.0.1</version>"
+                                         "<description>d</description><maintainer email='a@example.com'>a</maintainer>"
+                                         "<license>MIT</license></package>")
+    for rel, text in files.items():
+        (folder / rel).write_text(text)
+    return folder
+
+
+def test_only_a_package_with_exactly_the_courses_files_is_taken_from_its_build(tmp_path):
+    """same_as_prebuilt (batch grading: a hand-in's unchanged package of an earlier lesson is not built again)
+    names a package only when path, permission bits and bytes of every file equal the course's copy, and the
+    course's build installed it."""
+    from ros2course.build.colcon import same_as_prebuilt
+    from ros2course.build.sources import scan_package
+
+    course, hand_in = tmp_path / "course", tmp_path / "hand_in"
+    msg = {"msg/Quote.msg": "string quote\nint64 id\n"}
+    for name in ("pkg_a", "pkg_b", "pkg_c", "pkg_not_installed"):
+        _package(course, name, msg)
+        _package(hand_in, name, msg)
+        if name != "pkg_not_installed":
+            (course / "install" / name).mkdir(parents=True)
+    (hand_in / "src/pkg_b/msg/Quote.msg").write_text("string quote\nint32 id\n")  # one byte differs
+    (hand_in / "src/pkg_c/msg/Quote.msg").chmod(0o755)  # same bytes, other permission bits
+    _package(hand_in, "pkg_d", msg)  # the course has no such package
+
+    def sources(name: str):
+        return scan_package(hand_in, hand_in / "src" / name)
+
+    names = ["pkg_a", "pkg_b", "pkg_c", "pkg_d", "pkg_not_installed"]
+    assert same_as_prebuilt(course, {name: sources(name) for name in names}) == ["pkg_a"]
+    assert same_as_prebuilt(tmp_path / "nowhere", {"pkg_a": sources("pkg_a")}) == []

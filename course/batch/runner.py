@@ -67,6 +67,7 @@ from ros2course.batch.job import (
 )
 from ros2course.build.reference import (
     ReferenceBuild,
+    lesson_dependencies,
     shared_reference_build,
     trusted_interface_packages,
 )
@@ -116,25 +117,31 @@ def refuse_without_isolation(isolate: bool = True) -> None:
 
 
 def build_trusted_interfaces(lessons: list[Any]) -> ReferenceBuild | None:
-    """The course's own builds of the interface packages the lessons' graders import.
+    """The course's own builds of the interface packages the lessons' graders import, and of the earlier
+    lessons' packages the lessons build on.
 
     The grader imports generated message types in its own process; a
     submission's build of them is code the submission controls, so under
     isolation the grader imports these reference builds instead (same
     definitions as the contract in shared/LESSONS.md, so the same wire types).
     Which packages: each lesson's ``interfaces`` and ``references`` (lesson.yaml) and their
-    dependencies (:func:`ros2course.build.reference.trusted_interface_packages`).
+    dependencies (:func:`ros2course.build.reference.trusted_interface_packages`), and the reference
+    packages its own depend on (:func:`ros2course.build.reference.lesson_dependencies`): a hand-in that
+    holds one of those unchanged is built against this build of it rather than building it again
+    (``prebuilt`` of :func:`ros2course.build.colcon.build_packages`).
     Built once and shared while their files and the ROS install stay the same
     (:func:`ros2course.build.reference.shared_reference_build`); call ``discard()`` when done.
 
     Returns:
-        the build (``path``: a workspace with ``install/``), or None when no grader imports interface types.
+        the build (``path``: a workspace with ``install/``), or None when no grader imports interface types
+        and no lesson builds on an earlier one.
 
     Raises:
         CourseError: a lesson declares an interface the course has no package for, or the reference
             packages do not build (a fault of the course or machine).
     """
-    packages = trusted_interface_packages(lessons)
+    packages = sorted({*trusted_interface_packages(lessons),
+                       *(name for lesson in lessons for name in lesson_dependencies(lesson))})
     if not packages:
         return None
     return shared_reference_build(lessons[0], packages, "build.log")
@@ -200,14 +207,17 @@ def _check_columns(lessons: list[str]) -> dict[str, list[str]]:
     return {lesson: lesson_checks(lesson)[1] for lesson in lessons}
 
 
-def write_outputs(out_dir: Path, records: list[LessonResult], lessons: list[str], students: list[str]) -> None:
-    """Rewrite ``gradebook.csv``, ``junit.xml`` and ``<student>/results.json`` of ``students`` (atomically)."""
+def write_outputs(out_dir: Path, records: list[LessonResult], lessons: list[str], students: list[str],
+                  visibility: dict[str, dict[str, str]] | None = None) -> None:
+    """Rewrite ``gradebook.csv``, ``junit.xml`` and ``<student>/results.json`` of ``students`` (atomically).
+
+    ``visibility``: the class file's overrides (:func:`class_visibility`, read once per batch); None reads them."""
     latest = gradebook.latest(records)
     columns = _check_columns(sorted({r.lesson for r in latest.values()} | set(lessons),
                                     key=lambda x: (x not in lessons, lessons.index(x) if x in lessons else 0, x)))
     atomic_write_text(out_dir / "gradebook.csv", gradebook.gradebook_csv(latest.values(), columns))
     atomic_write_text(out_dir / "junit.xml", gradebook.junit_xml(latest.values()))
-    overrides = class_visibility(out_dir)
+    overrides = class_visibility(out_dir) if visibility is None else visibility
     for student in students:
         mine = [r.with_visibility(overrides.get(r.lesson, {})) for (s, _), r in latest.items() if s == student]
         if mine:
@@ -228,8 +238,9 @@ def class_visibility(out_dir: Path) -> dict[str, dict[str, str]]:
 
 
 def _refuse_bad_input(submissions: Path, out_dir: Path, lessons: list[str], jobs: int | None, timeout: float,
-                      pids_limit: int) -> None:
-    """Refuse a batch before anything is graded (see :func:`run_batch`'s arguments).
+                      pids_limit: int) -> dict[str, dict[str, str]]:
+    """Refuse a batch before anything is graded (see :func:`run_batch`'s arguments); return the class file's
+    visibility overrides (:func:`class_visibility`).
 
     Raises:
         CourseError: no such folder, OUTDIR inside SUBMISSIONS, no lesson, bad numbers, a lesson
@@ -253,7 +264,7 @@ def _refuse_bad_input(submissions: Path, out_dir: Path, lessons: list[str], jobs
         env_mod.require(catalog.get(lesson_id).requires, f"lesson {lesson_id}")
         lesson_checks(lesson_id)
     trusted_interface_packages([catalog.get(lesson_id) for lesson_id in lessons])  # refuses a lesson batch cannot grade
-    class_visibility(out_dir)  # a bad OUTDIR/class.yaml is refused now, not after the class is graded
+    return class_visibility(out_dir)  # a bad OUTDIR/class.yaml is refused now, not after the class is graded
 
 
 def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | None = None,
@@ -300,7 +311,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     begin = time.monotonic()
     submissions = submissions.absolute()
     out_dir = out_dir.absolute()
-    _refuse_bad_input(submissions, out_dir, lessons, jobs, timeout, pids_limit)
+    visibility = _refuse_bad_input(submissions, out_dir, lessons, jobs, timeout, pids_limit)
     if require_isolation:
         refuse_without_isolation(isolate)
     catalog = load_catalog()
@@ -368,7 +379,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
             gradebook.append_record(results_path, row, provenance.graded_with(graders[lesson], "not-taken"))
             records.append(row)
     if existing or not_taken:
-        write_outputs(out_dir, records, lessons, sorted({r.student for r in records}))
+        write_outputs(out_dir, records, lessons, sorted({r.student for r in records}), visibility)
     client = None
     own_executor = executor is None
     if own_executor:
@@ -398,7 +409,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
                     provenance.append_changes(out_dir, changes[logged:])
                     logged = len(changes)
                 if outcome.records:
-                    write_outputs(out_dir, records, lessons, [job.student])
+                    write_outputs(out_dir, records, lessons, [job.student], visibility)
                     if outcome.isolation is not None:  # a job that raised tells nothing of the walls
                         isolation = outcome.isolation.to_json()
                     peaks.append(outcome.peak_rss)

@@ -75,6 +75,7 @@ class BuildResult:
     excerpt: str = ""
     repairs: list[str] = dataclasses.field(default_factory=list)
     content_digest: str = ""
+    prebuilt: list[str] = dataclasses.field(default_factory=list)
 
 
 # --- install states a learner's workspace gets into, which make a correct package fail ----------
@@ -279,7 +280,7 @@ def build_log_excerpt(text: str, limit: int = 25) -> str:
 
 def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str], log_path: Path,
                    timeout: float = BUILD_TIMEOUT, progress: Callable[[str], None] | None = None,
-                   also: list[str] | tuple[str, ...] = ()) -> BuildResult:
+                   also: list[str] | tuple[str, ...] = (), prebuilt: Path | None = None) -> BuildResult:
     """Build ``packages`` (and their workspace dependencies) with colcon, unless unchanged.
 
     Args:
@@ -296,11 +297,19 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
         timeout: seconds before the build is stopped and reported as failed.
         progress: called with a short line as colcon starts and finishes each package
             (:class:`BuildProgress`); None for no progress display (``--json``, batch grading).
+        prebuilt: a built workspace of the course's own packages (batch grading's trusted interfaces,
+            :func:`ros2course.batch.runner.build_trusted_interfaces`). A package of ``also`` or of the
+            dependency closure, never one of ``packages``, whose files in ``src/`` are exactly those of its
+            copy there (:func:`same_as_prebuilt`) is not built again: colcon skips it and builds the rest
+            against that install (``BuildResult.prebuilt`` names them). Building the same files on the same
+            machine gives the same install, so the verdict is unchanged; what it saves is rosidl's ~30 s per
+            hand-in of ``package_with_interfaces``, which every learner of the later lessons hands in unchanged.
 
     Raises:
         NotGradable: a required package is not in ``src/`` (names the ones that are).
     """
     begin = time.monotonic()
+    required = list(packages)
     found = find_packages(workspace_root / "src")
     missing = [name for name in packages if name not in found]
     if missing:
@@ -327,11 +336,16 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
     sources = {name: scan_package(workspace_root, found[name][0]) for name in closure}
     content = hashlib.sha256("".join(f"{name}\0{sources[name].folder}\0{sources[name].content_digest}\n"
                                      for name in sorted(sources)).encode()).hexdigest()
+    reused = (same_as_prebuilt(prebuilt, {name: sources[name] for name in closure if name not in required})
+              if prebuilt is not None else [])
+    if reused:  # built against the course's install of them, which the grading environment overlays too
+        closure = [name for name in closure if name not in reused]
+        env = overlay_env(prebuilt, env)
     installed = all((workspace_root / "install" / name).is_dir() for name in closure)
     have_setup = (workspace_root / "install" / "setup.bash").is_file()
     if installed and have_setup and all(_up_to_date(records.get(name), sources[name]) for name in closure):
         return BuildResult(True, packages, time.monotonic() - begin, cached=True, repairs=repairs,
-                           content_digest=content)
+                           content_digest=content, prebuilt=reused)
     log_path.parent.mkdir(parents=True, exist_ok=True)
     repairs += stale_install(workspace_root, closure, found)
     repairs += _rebuild_from_clean(workspace_root, closure, found, records, sources)
@@ -339,7 +353,8 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
         if records.get(name) is not None:
             records.get(name).complete = False
     records.save()
-    outcome = _colcon(workspace_root, packages, closure, env, log_path, timeout, progress, "wb")
+    packages = [name for name in packages if name not in reused]
+    outcome = _colcon(workspace_root, packages, closure, env, log_path, timeout, progress, "wb", skip=reused)
     stale = stale_metadata(workspace_root, closure) if outcome == "ok" else {}
     if stale:
         _clean(workspace_root, list(stale))
@@ -347,7 +362,7 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
                     "setup.py leaves the old .egg-info behind, and Python may read the old entry points): rebuilt "
                     f"{name} cleanly (in your terminal: `rm -rf build/{name} install/{name}`)"
                     for name, versions in stale.items()]
-        outcome = _colcon(workspace_root, packages, closure, env, log_path, timeout, progress, "ab")
+        outcome = _colcon(workspace_root, packages, closure, env, log_path, timeout, progress, "ab", skip=reused)
     if outcome != "stopped":
         # colcon ended: its build tree reflects these sources, or holds outputs older than them (make, build_py
         # and the install steps redo those); a failed build is never taken as up to date
@@ -357,9 +372,30 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
     text = log_path.read_text(encoding="utf-8", errors="replace")
     if outcome == "ok":
         return BuildResult(True, packages, time.monotonic() - begin, cached=False, log_path=log_path, repairs=repairs,
-                           content_digest=content)
+                           content_digest=content, prebuilt=reused)
     return BuildResult(False, packages, time.monotonic() - begin, cached=False, log_path=log_path,
-                       excerpt=build_log_excerpt(text), repairs=repairs, content_digest=content)
+                       excerpt=build_log_excerpt(text), repairs=repairs, content_digest=content, prebuilt=reused)
+
+
+def same_as_prebuilt(prebuilt: Path, sources: dict[str, PackageSources]) -> list[str]:
+    """The packages of ``sources`` (name -> the workspace's files now) whose files are exactly those of the
+    package of that name in ``prebuilt/src`` (paths, permission bits and contents:
+    :attr:`~ros2course.build.sources.PackageSources.digest`) and that ``prebuilt/install`` holds, sorted.
+    A package that differs in one byte, or that ``prebuilt`` lacks or cannot be read, is not among them."""
+    try:
+        theirs = find_packages(prebuilt / "src")
+    except (OSError, NotGradable):
+        return []
+    same = []
+    for name, mine in sources.items():
+        if name not in theirs or not (prebuilt / "install" / name).is_dir():
+            continue
+        try:
+            if scan_package(prebuilt, theirs[name][0]).digest == mine.digest:
+                same.append(name)
+        except NotGradable:
+            continue
+    return sorted(same)
 
 
 def _names(names: list[str]) -> str:
@@ -398,13 +434,16 @@ def _rebuild_from_clean(workspace_root: Path, closure: list[str], found: dict[st
 
 
 def _colcon(workspace_root: Path, packages: list[str], closure: list[str], env: dict[str, str], log_path: Path,
-            timeout: float, progress: Callable[[str], None] | None, mode: str) -> str:
-    """One ``colcon build --packages-up-to`` into ``log_path`` (``mode`` "wb" or "ab").
+            timeout: float, progress: Callable[[str], None] | None, mode: str, skip: list[str] = ()) -> str:
+    """One ``colcon build --packages-up-to`` into ``log_path`` (``mode`` "wb" or "ab"), ``skip``: packages
+    found in an underlay instead (``--packages-skip``).
 
     Returns:
         "ok" (colcon succeeded), "failed" (colcon ended with an error) or "stopped" (stopped at ``timeout``).
     """
     command = [*colcon_command(env), "build", "--packages-up-to", *packages, *COLCON_ARGS]
+    if skip:
+        command += ["--packages-skip", *skip]
     if sandbox.current() is None:  # never a cache shared between a batch's submissions (see the module)
         env = with_compiler_cache(env, workspace_root)
     with open(log_path, mode) as log:

@@ -11,7 +11,7 @@ import dataclasses
 from collections.abc import Mapping, Sequence
 
 from ros2course.errors import CourseError
-from ros2course.grade.results import VISIBILITIES, CheckResult
+from ros2course.grade.results import VISIBILITIES, CheckResult, Visibility
 
 
 @dataclasses.dataclass(frozen=True)
@@ -40,7 +40,7 @@ class Check:
     hint: str = ""
     needs: tuple[str, ...] = ()
     part: str = ""
-    visibility: str = "visible"
+    visibility: Visibility = "visible"
 
 
 class Unmet(Exception):  # noqa: N818 - a grading outcome, not an error of the course

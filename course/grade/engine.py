@@ -167,13 +167,16 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
 
     if lesson.packages:
         try:
-            built = _build(lesson, workspace_root, base_env, log_dir, progress, build_also)
+            built = _build(lesson, workspace_root, base_env, log_dir, progress, build_also, trusted_interfaces)
+            if built.prebuilt and trusted_interfaces is not None:  # the learner's nodes run against that install
+                base_env = build_mod.overlay_env(Path(trusted_interfaces), base_env)
         except NotGradable as exc:
             return not_gradable(exc.message, exc.hint)
         timings["build"] = built.seconds
         sources_digest = built.content_digest
         build_info = {"ok": built.ok, "cached": built.cached, "seconds": round(built.seconds, 3),
-                      "log": str(built.log_path) if built.log_path else "", "repairs": built.repairs}
+                      "log": str(built.log_path) if built.log_path else "", "repairs": built.repairs,
+                      **({"prebuilt": built.prebuilt} if built.prebuilt else {})}
         if not built.ok:
             return not_gradable(f"colcon build failed for {', '.join(lesson.packages)}:\n{built.excerpt}",
                                 f"fix the build error; full log: {built.log_path}")
@@ -201,8 +204,16 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     return result
 
 
+def check_lesson(lesson: Lesson, workspace_root: Path, progress: Any = None) -> LessonResult:
+    """A learner's own ``ros2course check`` (and ``check --all``'s regrade): :func:`grade_lesson` of the
+    workspace, shown as the learner may see it (:meth:`~ros2course.grade.results.LessonResult.for_learner`:
+    the visible checks only, and how many more are graded at hand-in; issue 39). ``progress`` as for
+    :func:`grade_lesson`. Raises what :func:`grade_lesson` raises."""
+    return grade_lesson(lesson, workspace_root, progress=progress).for_learner()
+
+
 def _build(lesson: Lesson, workspace_root: Path, base_env: dict[str, str], log_dir: Path, progress: Any,
-           build_also: Sequence[str] | None) -> build_mod.BuildResult:
+           build_also: Sequence[str] | None, trusted_interfaces: Path | None = None) -> build_mod.BuildResult:
     """:func:`grade_lesson`'s colcon build of the lesson's packages (``log_dir/build.log``).
 
     The lesson's interfaces and the earlier lessons' packages its reference depends on are built
@@ -210,12 +221,17 @@ def _build(lesson: Lesson, workspace_root: Path, base_env: dict[str, str], log_d
     check on its dependencies, in a fresh hand-in (``grade``) as in a learner's workspace built
     lesson by lesson.
 
+    With ``trusted_interfaces`` (batch grading), a package of an earlier lesson that the hand-in holds
+    unchanged from the course's copy is not built again: the course's build of it is used
+    (:func:`ros2course.build.colcon.build_packages`' ``prebuilt``); the lesson's own packages always are.
+
     Raises:
         NotGradable: colcon could not be run on the workspace.
     """
     also = [*lesson.interfaces, *(lesson_dependencies(lesson) if build_also is None else build_also)]
     built = build_mod.build_packages(workspace_root, lesson.packages, base_env, log_dir / "build.log",
-                                     progress=progress, also=also)
+                                     progress=progress, also=also,
+                                     prebuilt=Path(trusted_interfaces) if trusted_interfaces else None)
     if progress is not None:
         for repair in built.repairs:
             progress(f"repaired the build: {repair}")

@@ -16,7 +16,7 @@ from pathlib import Path
 
 from ros2course.build import colcon as build_mod
 from ros2course.errors import NotGradable
-from ros2course.grade.engine import grade_lesson, new_log_dir
+from ros2course.grade.engine import check_lesson, new_log_dir
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import Lesson
 from ros2course.lesson.progress import Progress
@@ -82,7 +82,7 @@ def regrade(lessons: Sequence[Lesson], workspace_root: Path, progress: Progress,
     out = []
     for lesson in lessons:
         record = progress.lessons.get(lesson.id)
-        item = Regrade(lesson, record.best_score if record else None, grade_lesson(lesson, workspace_root).for_learner())
+        item = Regrade(lesson, record.best_score if record else None, check_lesson(lesson, workspace_root))
         out.append(item)
         if on_result is not None:
             on_result(item)

@@ -70,6 +70,13 @@ VISIBILITIES: tuple[str, ...] = ("visible", "hidden", "after_due")
 GRADESCOPE_VISIBILITY = {"visible": "visible", "after_due": "after_due_date", "hidden": "hidden"}
 
 
+def _visibility(value: object) -> Visibility:
+    """A results file's ``visibility`` (absent: ``visible``); a value it should not hold is ``hidden``, never shown."""
+    if value is None or value == "":
+        return "visible"
+    return value if value in VISIBILITIES else "hidden"  # type: ignore[return-value]
+
+
 @dataclasses.dataclass
 class CheckResult:
     """The verdict on one check (the JSON shape of ``check --json``'s ``checks``)."""
@@ -92,7 +99,7 @@ class CheckResult:
     #: made by the engine, never by a grader); in the JSON of failed checks only, when not empty.
     diagnosis: list[Diagnosis] = dataclasses.field(default_factory=list)
     #: who sees the verdict (:data:`Visibility`); in the JSON only when not ``visible``.
-    visibility: str = "visible"
+    visibility: Visibility = "visible"
 
     def to_dict(self) -> dict[str, Any]:
         """The documented JSON fields (plus ``evidence`` and ``diagnosis`` on a failed check that has them, and
@@ -123,7 +130,7 @@ class CheckResult:
                    evidence=dict(evidence) if isinstance(evidence, dict) else None,
                    diagnosis=[Diagnosis.from_dict(d) for d in diagnosis if isinstance(d, dict)]
                    if isinstance(diagnosis, list) else [],
-                   visibility=str(data.get("visibility") or "visible"))
+                   visibility=_visibility(data.get("visibility")))
 
     def output_text(self) -> str:
         """``observed: ...`` / ``expected: ...`` / ``hint: ...`` / ``why: ...`` (Gradescope output, JUnit failure text).
@@ -215,7 +222,7 @@ class LessonResult:
         return dataclasses.replace(self, checks=shown, score=score, max_score=maximum, status=status,
                                    withheld=len(self.checks) - len(shown))
 
-    def with_visibility(self, overrides: Mapping[str, str]) -> LessonResult:
+    def with_visibility(self, overrides: Mapping[str, Visibility]) -> LessonResult:
         """This result with the visibility of the checks ``overrides`` names (check id -> :data:`Visibility`,
         a class file's ``visibility:`` for this lesson) replaced; ids it does not grade are ignored."""
         if not overrides:
