@@ -140,13 +140,13 @@ def _choose_course(ws: Workspace | None, course: str | None = None) -> None:
         if record is None:
             return  # the bundled tutorial course
         recorded = Path(record.get("path") or "")
-        if record.get("path") and (recorded / MANIFEST).is_file():
+        if record.get("path") and (recorded / MANIFEST).is_file() and not _extends(recorded / MANIFEST):
             use_course(recorded)  # no pydantic here: `list` stays fast
             return
         from ros2course.lesson.courses import find_course  # noqa: PLC0415 - start time, see the imports
 
         try:
-            root = find_course(record["id"])
+            root = find_course(str(recorded) if record.get("path") and (recorded / MANIFEST).is_file() else record["id"])
         except CourseError as exc:
             raise CourseError(f"{ws.root} follows course {record['id']} {record.get('version', '?')}, which is not at "
                               f"{record.get('path')} any more and is not installed",
@@ -164,6 +164,15 @@ def _choose_course(ws: Workspace | None, course: str | None = None) -> None:
                           f"not {manifest.id} {manifest.version} ({root})",
                           "drop --course, or make another workspace: ros2course init --course ... DIR")
     use_course(root)
+
+
+def _extends(manifest: Path) -> bool:
+    """Whether a course.yaml has an ``extends:`` line (then :func:`ros2course.lesson.courses.find_course` merges
+    it with the course it extends); read as text, so ``list`` of an ordinary course never loads pydantic."""
+    try:
+        return any(line.startswith("extends:") for line in manifest.read_text(encoding="utf-8").splitlines())
+    except OSError:
+        return False
 
 
 def _env():

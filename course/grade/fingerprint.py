@@ -51,10 +51,15 @@ def _course_imports(module: Path, graders: Path) -> list[Path]:
     except (OSError, SyntaxError, ValueError):
         return []
     out = []
+    here = module.parent if module.parent.is_relative_to(graders) else graders
     for node in ast.walk(tree):
         if isinstance(node, ast.ImportFrom) and node.level == 1:
-            names = [node.module] if node.module else [alias.name for alias in node.names]
-            out += [graders / f"{name.split('.')[0]}.py" for name in names]
+            if node.module:  # from .x import y, from .parent.x import y (a merged course's extended graders)
+                parts = node.module.split(".")
+                out += [here.joinpath(*parts[:-1], f"{parts[-1]}.py"), here.joinpath(*parts, "__init__.py")]
+                out += [here.joinpath(*parts, f"{alias.name}.py") for alias in node.names]
+            else:
+                out += [here / f"{alias.name}.py" for alias in node.names]
     return [path for path in out if path.is_file()]
 
 

@@ -1,0 +1,1 @@
+"""The private course's graders: the public ones with hidden checks added."""
