@@ -118,3 +118,38 @@ def test_check_on_the_private_course_withholds_what_it_hides(cli, tmp_path: Path
     assert proc.returncode == 0, proc.stdout[-2000:] + proc.stderr[-2000:]
     assert "All 3 visible checks passed; 2 more check(s) are graded when you hand in your work." in proc.stdout
     assert "license" not in proc.stdout.lower() and "maintainer" not in proc.stdout.lower()
+
+
+def test_a_merged_course_unused_for_two_weeks_is_deleted_when_another_is_made(tmp_path: Path) -> None:
+    import os
+    import time
+
+    from ros2course.lesson.courses import MERGED_MAX_AGE
+
+    shutil.copytree(PUBLIC, tmp_path / "lab_course")
+    shutil.copytree(PRIVATE, tmp_path / "private_course")
+    old = find_course(str(tmp_path / "private_course"))
+    then = time.time() - MERGED_MAX_AGE - 60
+    os.utime(old / "course.yaml", (then, then))
+    grader = tmp_path / "private_course/graders/hello_node.py"
+    grader.write_text(grader.read_text() + "\n# edited\n")
+    new = find_course(str(tmp_path / "private_course"))
+    assert new.is_dir() and not old.exists()
+
+
+def test_batch_grading_hides_the_private_course_and_the_public_solutions(tmp_path: Path) -> None:
+    """A submission never sees the folders the merged course was made from: the private course whole (its graders
+    name the hidden checks), the public course's solutions and fixtures; nor the merged course's own."""
+    from ros2course.batch.runner import default_hidden
+    from ros2course.lesson.courses import course_sources
+
+    root = find_course(str(PRIVATE))
+    assert course_sources(root) == [PRIVATE.resolve(), PUBLIC.resolve()]
+    use_course(root)
+    try:
+        hidden = default_hidden(tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
+    finally:
+        use_course(None)
+    for folder in (PRIVATE, PUBLIC / "solutions", PUBLIC / "fixtures", root / "solutions", root / "fixtures"):
+        assert str(folder.resolve()) in hidden, (folder, hidden)
+    assert str((root / "graders").resolve()) not in hidden  # the worker grades with them

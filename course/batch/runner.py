@@ -76,7 +76,7 @@ from ros2course.files import atomic_write_text
 from ros2course.grade.fingerprint import grader_fingerprint
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import content_root, load_catalog
-from ros2course.lesson.courses import course_fixtures
+from ros2course.lesson.courses import course_fixtures, course_sources
 from ros2course.report import gradebook
 from ros2course.ros import env as env_mod
 from ros2course import sandbox
@@ -92,8 +92,17 @@ def _hideable(folder: Path) -> bool:
 
 
 def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
-    """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions."""
-    candidates = [scratch_root, submissions, out_dir, content_root() / "solutions", course_fixtures(content_root())]
+    """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions
+    and wrong ones; for a course merged from a private one (:func:`ros2course.lesson.courses.course_folder`), the
+    folders it was made from too: the private course whole, the solutions and fixtures of the one it extends."""
+    root = content_root()
+    candidates = [scratch_root, submissions, out_dir, root / "solutions", course_fixtures(root)]
+    sources = course_sources(root)
+    for index, source in enumerate(sources):
+        if index == 0:
+            candidates.append(source)  # the private course: its graders and fixtures name the hidden checks
+        else:
+            candidates += [source / "solutions", course_fixtures(source)]
     out: list[str] = []
     for folder in candidates:
         folder = folder.resolve()

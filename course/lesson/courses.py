@@ -10,6 +10,7 @@ a malformed one is reported as ``<file>: <field>: <what is wrong>`` with a hint.
 from __future__ import annotations
 
 import atexit
+import contextlib
 import functools
 import hashlib
 import importlib
@@ -18,6 +19,7 @@ import os
 import shutil
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import Annotated
 
@@ -220,14 +222,17 @@ def course_folder(root: Path, _seen: tuple[Path, ...] = ()) -> Path:
         raise CourseError(f"{root / MANIFEST}: extends: {exc.message}", exc.hint) from exc
     parent_manifest = load_manifest(parent)
     parts = [*_parts(parent, parent_manifest, parent_manifest.fixtures), *_parts(root, manifest, parent_manifest.fixtures)]
-    digest = hashlib.sha256(f"{root}\0{parent}\0".encode())
+    digest = hashlib.sha256(f"{_MERGE_FORMAT}\0{root}\0{parent}\0".encode())
     for source, rel in parts:
         digest.update(f"{rel}\0".encode() + _tree_digest(source))
     key = digest.hexdigest()[:24]
     cache = _merged_cache()
     target = cache / key
     if (target / MANIFEST).is_file():
+        with contextlib.suppress(OSError):
+            os.utime(target / MANIFEST)  # in use: kept by _prune_merged
         return target
+    _prune_merged(cache)
     staging = Path(tempfile.mkdtemp(prefix=f".{key}-", dir=cache))
     try:
         merged = staging / "course"
@@ -237,6 +242,8 @@ def course_folder(root: Path, _seen: tuple[Path, ...] = ()) -> Path:
         for source, rel in parts:  # the extended course's parts, then this one's over them
             shutil.copytree(source, merged / rel, ignore=_NOT_COURSE, dirs_exist_ok=True)
         _write_merged_manifest(merged / MANIFEST, parent_manifest, manifest)
+        sources = [root, *(course_sources(parent) or [parent])]  # raw folders, never a merged one
+        (merged / SOURCES_FILE).write_text("".join(f"{folder}\n" for folder in sources), encoding="utf-8")
         for folder, _dirs, files in os.walk(merged):  # every user reads it: a batch's worker runs as another uid
             os.chmod(folder, 0o755)
             for name in files:
@@ -302,6 +309,36 @@ def _tree_digest(root: Path) -> bytes:
             digest.update(f"{path.relative_to(root)}\0".encode())
             digest.update(hashlib.sha256(path.read_bytes()).digest())
     return digest.digest()
+
+
+#: What a merged course holds, by version: a merged folder made by another version of this code is made again.
+_MERGE_FORMAT = "2"
+#: In a merged course: the folders it was made from, one per line, the private course first.
+SOURCES_FILE = ".ros2course-sources"
+
+
+def course_sources(root: Path) -> list[Path]:
+    """The course folders a merged course (:func:`course_folder`) was made from, the extending one first; [] for
+    a course that extends nothing. Batch grading hides them from submissions (their solutions, fixtures, and
+    the private course whole), as it hides the merged course's own solutions and fixtures."""
+    try:
+        return [Path(line) for line in (root / SOURCES_FILE).read_text(encoding="utf-8").splitlines() if line]
+    except OSError:
+        return []
+
+
+#: A merged course unused for this long is deleted when another is made, seconds (the reference builds' rule).
+MERGED_MAX_AGE = 14 * 24 * 3600.0
+
+
+def _prune_merged(cache: Path) -> None:
+    """Delete the merged courses of ``cache`` unused for :data:`MERGED_MAX_AGE` (a private course edited
+    many times leaves one per content)."""
+    now = time.time()
+    for manifest in cache.glob(f"*/{MANIFEST}"):
+        with contextlib.suppress(OSError):
+            if now - manifest.stat().st_mtime > MERGED_MAX_AGE:
+                shutil.rmtree(manifest.parent, ignore_errors=True)
 
 
 def _merged_cache() -> Path:
