@@ -12,6 +12,7 @@ from __future__ import annotations
 import concurrent.futures as cf
 import csv
 import io
+import json
 import os
 import subprocess
 import tempfile
@@ -46,7 +47,7 @@ class FakeGrader:
                 self.graded.append((job.student, lesson))
                 points = float((ws / "points" / lesson).read_text()) if (ws / "points" / lesson).is_file() else 0.0
                 checks = [CheckResult("builds", "builds", 1.0, 1.0, True, "", "", ""),
-                          CheckResult("works", "works", points, 2.0, points == 2.0, "", "", "")]
+                          CheckResult("works", "works", points, 2.0, points == 2.0, "", "", "", visibility="hidden")]
                 result = LessonResult(lesson, 1.0 + points, 3.0, Status.PASSED if points == 2 else Status.FAILED, checks)
                 result.student = job.student
                 results.append(result)
@@ -146,7 +147,8 @@ def test_a_term_from_the_lms_download_to_the_lms_gradebook(tmp_path: Path, grade
     (canvas_out / "class.yaml").write_text(
         "lessons:\n  print-forever-node: {due: '2026-02-15T23:59:00+01:00'}\n"
         "  publisher-subscriber: {due: '2026-02-22T23:59:00+01:00'}\n"
-        "late_policy: {penalty_per_day: 10, cap: 50}\n")
+        "late_policy: {penalty_per_day: 10, cap: 50}\n"
+        "visibility:\n  print-forever-node: {builds: after_due}\n")
     canvas_book = term.adjust_out_dir(canvas_out)
     flagged = [a for a in canvas_book.adjusted if a.student == "1005"]
     assert flagged and all(a.score == a.raw_score for a in flagged) and all("late" in a.reason.lower() for a in flagged)
@@ -169,6 +171,12 @@ def test_a_term_from_the_lms_download_to_the_lms_gradebook(tmp_path: Path, grade
     assert sorted(grader.graded) == sorted((f"{1001 + i}", "publisher-subscriber") for i in range(6))
     assert {c.lesson for c in report.regrades} == {"publisher-subscriber"} and len(report.regrades) == 6
     assert len(gradebook.latest(gradebook.read_results(canvas_out / "results.jsonl"))) == 12
+
+    # --- visibility: a hidden check (the grader's) and an after-due one (the class file's) reach Gradescope as such
+    tests = json.loads((canvas_out / "1001" / "results.json").read_text(encoding="utf-8"))["tests"]
+    assert sorted((t["name"].split(":")[0], t["name"].split(":")[-1].strip(), t["visibility"]) for t in tests) == [
+        ("print-forever-node", "builds", "after_due_date"), ("print-forever-node", "works", "hidden"),
+        ("publisher-subscriber", "builds", "visible"), ("publisher-subscriber", "works", "hidden")], tests
 
 
 def test_a_member_the_lms_naming_cannot_map_gets_a_row_saying_why(tmp_path: Path, grader) -> None:
