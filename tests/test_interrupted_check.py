@@ -55,14 +55,12 @@ def _signal_state(pid: int) -> str:
     return ", ".join(f"{name} {'yes' if mask & bit else 'no'}" for name, mask in sorted(masks.items()))
 
 
-#: What each try saw when it signalled (seconds after the start, SIGINT state): shown when every try finished first.
-SEEN: list[str] = []
-
-
-def _interrupt_once(ws, sig) -> int:
+def _interrupt_once(ws, sig, seen: list[str]) -> int:
     """Start `ros2course check`, send ``sig`` to it as soon as the learner's node started; return its exit code.
 
     Only ros2course itself gets the signal, not its process group; every learner node must be gone after it.
+    ``seen`` gets what this try saw when it signalled (seconds after the start, SIGINT state), shown when every
+    try finished first.
     """
     began = time.monotonic()
     # as a terminal starts it: SIGINT at its default action. A test run started as a background job of a
@@ -79,7 +77,7 @@ def _interrupt_once(ws, sig) -> int:
         # check starts last (its Ctrl+C check), moments before the check ends by itself
         assert _wait_for(lambda: _node_children(cli.pid), 120, interval=0.01), "the learner node never started"
         nodes = _node_children(cli.pid)
-        SEEN.append(f"node seen after {time.monotonic() - began:.1f} s, ros2course SIGINT {_signal_state(cli.pid)}")
+        seen.append(f"node seen after {time.monotonic() - began:.1f} s, ros2course SIGINT {_signal_state(cli.pid)}")
         os.kill(cli.pid, sig)
         cli.wait(timeout=30)
         gone, alive = psutil.wait_procs(nodes, timeout=15)
@@ -96,8 +94,9 @@ def _interrupt_once(ws, sig) -> int:
 def test_check_killed_mid_way(solution_workspace, sig):
     ws = solution_workspace
     before = ws.progress_path.read_bytes()
+    seen: list[str] = []
     for _ in range(TRIES):
-        code = _interrupt_once(ws, sig)
+        code = _interrupt_once(ws, sig, seen)
         # Ctrl+C ends a check with 130 (cli: "interrupted"). Any other code means the check had finished
         # grading before the signal came (the test process saw the node late on a loaded machine): then a
         # recorded attempt is right, and the premise is tried again on the file as it was.
@@ -106,7 +105,7 @@ def test_check_killed_mid_way(solution_workspace, sig):
         ws.progress_path.write_bytes(before)
     else:
         pytest.fail(f"in {TRIES} tries the check always finished before Ctrl+C reached it (exit code {code}); "
-                    + "; ".join(SEEN[-TRIES:]))
+                    + "; ".join(seen))
     # the progress file is intact: the interrupted check was simply not recorded
     assert ws.progress_path.read_bytes() == before
     json.loads(ws.progress_path.read_text())
