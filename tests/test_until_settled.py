@@ -4,6 +4,7 @@ run by the engine's own loop)."""
 
 from __future__ import annotations
 
+import json
 import threading
 import types
 
@@ -143,3 +144,24 @@ def test_a_starter_stops_at_its_first_lost_point_on_any_check(tmp_path):
     assert results["exists"].passed and results["rate"].points == 1.0
     assert results["log"].observed == NOT_CHECKED + STOPPED_SETTLED
     assert not StopWhen() and StopWhen(any_loss=True) and StopWhen(frozenset({"a"}))
+
+
+def test_a_grading_process_that_crashes_once_is_graded_again(monkeypatch, tmp_path) -> None:
+    """dev validate's child killed by a signal with no output (a crash of the grading process, not a verdict) is run
+    once more; a second crash, or a plain failure, is a grader error that names the exit status."""
+    import subprocess
+
+    from ros2course.dev import child
+    from ros2course.grade.results import LessonResult, Status
+
+    record = json.dumps(LessonResult("print-forever-node", 1.0, 1.0, Status.PASSED, []).to_record())
+    answers = [subprocess.CompletedProcess([], -11, "", ""), subprocess.CompletedProcess([], 0, record + "\n", "")]
+    monkeypatch.setattr(child.subprocess, "run", lambda *a, **k: answers.pop(0))
+    result = child.grade_in_child("print-forever-node", tmp_path, (), tmp_path / "log")
+    assert result.status == Status.PASSED and not answers
+    answers[:] = [subprocess.CompletedProcess([], -11, "", "")] * 2
+    again = child.grade_in_child("print-forever-node", tmp_path, (), tmp_path / "log")
+    assert again.status == Status.GRADER_ERROR and "exit -11, twice" in again.message and not answers
+    answers[:] = [subprocess.CompletedProcess([], 1, "", "Boom"), subprocess.CompletedProcess([], 0, record, "")]
+    failed = child.grade_in_child("print-forever-node", tmp_path, (), tmp_path / "log")
+    assert failed.status == Status.GRADER_ERROR and failed.message.endswith("Boom (exit 1)") and len(answers) == 1

@@ -50,16 +50,23 @@ def grade_in_child(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_
         argv += [arg for check_id in sorted(stop_when.judged) for arg in ("--judged", check_id)]
         argv += ["--any-loss"] if stop_when.any_loss else []
     env = {**os.environ, "ROS2COURSE_CONTENT": str(content_root())}
-    try:
-        proc = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, env=env,  # noqa: S603
-                              stdin=subprocess.DEVNULL, check=False)
-    except subprocess.TimeoutExpired:
-        return LessonResult.unfinished(lesson_id, Status.GRADER_ERROR, f"the grading ran past {timeout:.0f} s")
-    lines = [line for line in proc.stdout.splitlines() if line.startswith("{")]
-    if proc.returncode != 0 or not lines:
-        tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
-        return LessonResult.unfinished(lesson_id, Status.GRADER_ERROR, f"the grading process failed: {tail}")
-    return LessonResult.from_record(json.loads(lines[-1]))
+    for attempt in (1, 2):
+        try:
+            proc = subprocess.run(argv, capture_output=True, text=True, timeout=timeout, env=env,  # noqa: S603
+                                  stdin=subprocess.DEVNULL, check=False)
+        except subprocess.TimeoutExpired:
+            return LessonResult.unfinished(lesson_id, Status.GRADER_ERROR, f"the grading ran past {timeout:.0f} s")
+        lines = [line for line in proc.stdout.splitlines() if line.startswith("{")]
+        if proc.returncode == 0 and lines:
+            return LessonResult.from_record(json.loads(lines[-1]))
+        # killed by a signal with nothing printed: the grading process itself crashed (Fast DDS 2.14 can segfault
+        # while a grader's participant is destroyed beside killed peers; GradingSession.close), not a verdict of
+        # the grader: graded once more, and said so if it crashes again
+        if not (proc.returncode < 0 and not lines and attempt == 1):
+            break
+    tail = (proc.stderr.strip().splitlines() or ["no output"])[-1]
+    crashed = f" (exit {proc.returncode}, twice)" if proc.returncode < 0 else f" (exit {proc.returncode})"
+    return LessonResult.unfinished(lesson_id, Status.GRADER_ERROR, f"the grading process failed: {tail}{crashed}")
 
 
 def _main(argv: list[str]) -> int:
