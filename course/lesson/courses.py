@@ -256,34 +256,6 @@ def course_folder(root: Path, _seen: tuple[Path, ...] = ()) -> Path:
     finally:
         shutil.rmtree(staging, ignore_errors=True)
     return target
-    staging = Path(tempfile.mkdtemp(prefix=f".{key}-", dir=cache))
-    try:
-        merged = staging / "course"
-        shutil.copytree(parent, merged, ignore=_NOT_COURSE, symlinks=False)
-        if (parent / "graders").is_dir():
-            shutil.copytree(parent / "graders", merged / "graders" / PARENT_GRADERS, ignore=_NOT_COURSE)
-        fixtures = load_manifest(parent).fixtures
-        for entry in sorted(root.iterdir()):
-            if entry.name == MANIFEST or _NOT_COURSE(str(root), [entry.name]):
-                continue
-            dest = merged / (fixtures if entry.name == manifest.fixtures else entry.name)
-            if entry.is_dir():
-                shutil.copytree(entry, dest, ignore=_NOT_COURSE, dirs_exist_ok=True)
-            else:
-                shutil.copy2(entry, dest)
-        _write_merged_manifest(merged / MANIFEST, load_manifest(parent), manifest)
-        for folder, dirs, files in os.walk(merged):  # every user reads it: a batch's worker runs as another uid
-            os.chmod(folder, 0o755)
-            for name in files:
-                os.chmod(os.path.join(folder, name), 0o644)
-        try:
-            os.rename(merged, target)
-        except OSError:  # another process made it meanwhile: the same content
-            if not (target / MANIFEST).is_file():
-                raise
-    finally:
-        shutil.rmtree(staging, ignore_errors=True)
-    return target
 
 
 #: The folders of a course (setup.py's COURSE_PARTS, course.yaml and the fixtures aside): a source checkout's
