@@ -6,13 +6,18 @@ launch`` runs it (see :mod:`ros2course.kit.launch`; on the PyPI install launch_r
 comes from the source-built underlay). Then the graph is watched, black-box:
 node name, topic, rate and message contents. The file is also read statically,
 only to say which ``Node(...)`` actions it holds when launch started too little.
+
+The values must come from the launch file, not from the node's code: the executable is then started
+alone (``ros2 run``, no launch file, a graph of its own), and its parameters must still hold the
+parameters lesson's defaults (``defaults_kept``; a node whose defaults were edited to the launch file's
+values publishes the same messages when launched).
 """
 
 from __future__ import annotations
 
 from ros2course.kit import LATE_DELIVERY
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, quotes
+from ros2course.kit import Check, GradingSession, Unmet, params, quotes
 from ros2course.kit.launch import installed_launch_file, launched_node, start_launch_file
 from ros2course.kit.quotes import LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_TOPIC
 
@@ -39,11 +44,17 @@ CHECKS = [
     Check("contents", "The messages carry the ch. 22.9 quote and philosopher Tyler", 2,
           "'quote' and 'philosopher_name': 'Tyler' in the parameters dict; adjacent string literals are glued "
           "without a space, so mind the spaces at the ends of the pieces", needs=("topic",)),
+    Check("defaults_kept", "The values come from the launch file: the node's own defaults are unchanged", 2,
+          "leave amazing_quote_configurable_publisher_node.py as the parameters lesson made it (defaults quote "
+          "'Use the force, Pikachu!', philosopher_name 'Uncle Ben', topic_name 'amazing_quote', period 0.5) and "
+          "pass the new values as parameters=[{...}] of Node(...) in the launch file", part="defaults"),
 ]
 
 
 def grade(s: GradingSession) -> None:
     """Start the launch file, then watch the node, its topic, rate and messages."""
+    with s.part("defaults", own_graph=True):  # first: a launch file that is missing ends the grading's main part
+        _defaults_kept(s)
     launch_file = installed_launch_file(s, "launch_installed", quotes.PACKAGE, LAUNCH_FILE, quotes.package_source(s))
     probe = s.ros.topic(f"/{LAUNCH_TOPIC}", quotes.amazing_quote(s))
     with s.phase("start"):
@@ -62,3 +73,36 @@ def grade(s: GradingSession) -> None:
     with s.phase("stop"):
         for proc in run.processes:
             proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
+
+
+def _defaults_kept(s: GradingSession) -> None:
+    """Record ``defaults_kept``: the executable started alone (no launch file, no ``-p``) declares the
+    parameters lesson's defaults (:data:`ros2course.kit.quotes.DEFAULTS`), read through its parameter
+    services (``ros2 param get``).
+
+    Raises:
+        Unmet: no executable, or its parameter services never answered.
+    """
+    path, why = s.find_executable(quotes.PACKAGE, quotes.EXECUTABLE)
+    if path is None:
+        raise Unmet(why)
+    proc = s.launch(path, f"{quotes.EXECUTABLE}.alone")
+    services = params.connect(s, quotes.NODE, proc=proc, timeout=NODE_TIMEOUT)
+    values = services.get(list(quotes.DEFAULTS))
+    changed = {name: value for name, (_, value) in values.items() if value != quotes.DEFAULTS[name]}
+    launch_values = {"topic_name": LAUNCH_TOPIC, "period": LAUNCH_PERIOD, "quote": quotes.LAUNCH_QUOTE,
+                     "philosopher_name": quotes.LAUNCH_PHILOSOPHER}
+    observed = ("started alone, it declares the parameters lesson's defaults" if not changed else
+                "started alone, its defaults are " + "; ".join(
+                    f"{name} {_show(value)}" + (" (the launch file's value)"
+                                                              if value == launch_values[name] else "")
+                    for name, value in changed.items()) + ": the node's code was changed")
+    s.record("defaults_kept", not changed, observed, "started alone (no launch file): " + ", ".join(
+        f"{name} {_show(value)}" for name, value in quotes.DEFAULTS.items()))
+    proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
+
+
+def _show(value) -> str:
+    """A parameter value as ros2 param get shows it: text quoted and shortened, numbers as they are."""
+    return repr(quotes.short(value)) if isinstance(value, str) else repr(value)
+

@@ -6,12 +6,20 @@ r2 = rz(pi), r12 = r1 r2), then it ends by itself. Expected values: nottf2's own
 when the grader can import it, always cross-checked against the closed forms (:func:`closed_forms`). Compared
 component by component, not up to sign: q and -q are one rotation, but for phi = pi r1 and its inverse are
 that pair, and so are r1 r2 and r2 r1.
+
+Then the program runs once more with a stand-in of ``marinholab.nottf2`` first on ``PYTHONPATH``
+(:data:`STAND_IN`): the same functions, each returning its true result negated (the same rotation). Through
+the chapter's chain a program that calls nottf2 prints -r1, conj(r1), -r2 and -(r1 r2); one that computes a
+quaternion itself (math.sin and math.cos, a hand-written conjugate or product) prints another value there
+(``uses_nottf2``, judged for each quantity whose value was right in the first run).
 """
 
 from __future__ import annotations
 
 import math
 import re
+import shutil
+from pathlib import Path
 
 from ros2course.kit import Check, GradingSession, NotGradable, depends, source_package
 from ros2course.kit.packaging import ros2_run_executable, setup_py_arguments
@@ -24,6 +32,9 @@ TOLERANCE = 1e-9  # per component, absolute: float rounding of cos(pi/2) is 6.1e
 EXIT_TIMEOUT = 10.0  # seconds: four lines; the interpreter and numpy start well within it
 #: The program prints and exits: nothing is watched over time.
 WINDOW = 0.0
+#: The stand-in of marinholab.nottf2, copied as ``marinholab/nottf2/__init__.py`` into a folder first on
+#: PYTHONPATH (``marinholab`` is a namespace package: the first ``marinholab/nottf2`` on sys.path wins).
+STAND_IN = Path(__file__).parent / "data" / "nottf2" / "stand_in_nottf2.py"
 
 _VALUE = "print each with print(f'...{name}={q}'), shown as name=geometry_msgs.msg.Quaternion(x=..., ...)"
 CHECKS = [
@@ -46,6 +57,10 @@ CHECKS = [
           needs=("executable",)),
     Check("exit_code", "It ends by itself with exit code 0 and no traceback", 2,
           "main() prints the four lines and returns: no spin, no loop, no input()", needs=("executable",)),
+    Check("uses_nottf2", "The four quaternions come from nottf2's functions", 2,
+          "compute each with nottf2 (import marinholab.nottf2 as nottf2): rx, rotation_inverse, rz, "
+          "quaternion_multiply; do not build them yourself from sin and cos or write your own product",
+          needs=("executable",)),
 ]
 
 Q = tuple[float, float, float, float]  # (x, y, z, w), the field order of geometry_msgs/msg/Quaternion
@@ -177,3 +192,43 @@ def grade(s: GradingSession) -> None:
         record_value(s, check_id, name, what, printed, want, source, run)
     expected = f"exit code 0 within {EXIT_TIMEOUT:.0f} s, no traceback"
     s.record("exit_code", not run.timed_out and run.returncode == 0 and not run.traceback, run.describe(), expected)
+    right = [name for check_id, name in (("rx_pi", "r1"), ("inverse", "r1_conj"), ("rz_pi", "r2"), ("product", "r12"))
+             if s.results[check_id].passed]
+    uses_nottf2(s, path, right)
+
+
+def uses_nottf2(s: GradingSession, path, names: list[str]) -> bool:
+    """Record ``uses_nottf2``: run the program again with :data:`STAND_IN` first on PYTHONPATH; each of ``names``
+    (the quantities it printed right) must now be the stand-in's value (its chain: -r1, conj(r1), -r2,
+    -(r1 r2)). ``path``: the executable. Fraction: the share of ``names`` that are."""
+    expected = ("with a stand-in of marinholab.nottf2 whose functions return their result negated (the same "
+                "rotation), the values the stand-in gives: " + ", ".join(
+                    f"{n}={_show(q)}" for n, q in _stand_in_chain().items() if n in names))
+    if not names:
+        return s.record("uses_nottf2", False, "no quaternion was right in the first run: nothing to compare",
+                        expected)
+
+    def fill(folder) -> None:
+        (folder / "marinholab" / "nottf2").mkdir(parents=True)
+        shutil.copyfile(STAND_IN, folder / "marinholab" / "nottf2" / "__init__.py")
+
+    stand_in = s.submission_folder("nottf2-stand-in", fill)
+    env = s.overlay()
+    env = {**env, "PYTHONPATH": ":".join(p for p in (str(stand_in), env.get("PYTHONPATH", "")) if p)}
+    run = run_program(s, [str(path)], f"{EXECUTABLE}.stand-in", timeout=EXIT_TIMEOUT, env=env)
+    printed, want = parse(run.stdout + "\n" + run.stderr), _stand_in_chain()
+    got = {n: printed[n][0] for n in names if printed.get(n) and not isinstance(printed[n][0], str)}
+    own = [n for n in names if n not in got or not _close(got[n], want[n])]
+    observed = "; ".join(f"{n}={_show(got[n])}" if n in got else f"{n}: not printed ({run.describe()})"
+                         for n in names)
+    if own:
+        observed += f": {', '.join(own)} not the stand-in's (computed without nottf2?)"
+    return s.record("uses_nottf2", not own, observed, expected, fraction=(len(names) - len(own)) / len(names))
+
+
+def _stand_in_chain() -> dict[str, Q]:
+    """What the chapter's chain prints through :data:`STAND_IN`: -r1, conj(-r1) negated, -r2, -((-r1)(-r2))."""
+    forms = closed_forms()
+    r1, r2 = tuple(-v for v in forms["r1"]), tuple(-v for v in forms["r2"])
+    conj = (r1[0], r1[1], r1[2], -r1[3])  # -(conjugate of r1'): x, y, z kept, w negated
+    return {"r1": r1, "r1_conj": conj, "r2": r2, "r12": tuple(-v for v in _mul(r1, r2))}

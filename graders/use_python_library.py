@@ -9,6 +9,12 @@ letters). Numbers are parsed however the node formats them; c is compared with
 Only ``package.xml`` is read, for the dependency on the library the contract names.
 The node's parameter services are asked once: a timer and ``rclpy.spin()``, not a
 ``while`` loop (``spins``, graders/print_forever_node.py).
+
+Then the node runs once more, in a graph of its own, with a stand-in of the library first on
+``PYTHONPATH`` (the same modules as the lesson's library, whose function returns (a+b)**2 +
+:data:`WITNESS_OFFSET` and whose ``SampleClass.get_name()`` returns ``Witness`` + the name): a node that
+uses the library logs those values (``uses_library``); one that computes c or keeps the name itself, or
+reaches the library's sources in ``src/`` with a ``sys.path`` trick, does not.
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ from ros2course.kit import Check, GradingSession, checks
 from ros2course.kit.packaging import (
     classify,
     name_lines,
+    parse_name_line,
     parse_square_line,
     ros2_run_executable,
     shorten,
@@ -39,6 +46,23 @@ NAME_FORMAT = "sample_class_with_random_name.get_name() returned NAME."
 
 #: Seconds of observation the contract needs: first record after one period, then 5 intervals.
 WINDOW = SAMPLES * PERIOD
+#: What the stand-in library's function adds to (a+b)**2, and what its get_name() puts before the name.
+WITNESS_OFFSET = 1000.0
+WITNESS_PREFIX = "Witness"
+#: The stand-in library: the lesson's public module and its two private ones (seed ch. 14), so a node that
+#: imports either way finds them; values no node computes by itself.
+WITNESS_FILES = {
+    "__init__.py": "",
+    "sample_python_library/__init__.py":
+        "from python_package_with_a_library.sample_python_library._sample_class import SampleClass\n"
+        "from python_package_with_a_library.sample_python_library._sample_function import "
+        "sample_function_for_square_of_sum\n__all__ = ['SampleClass', 'sample_function_for_square_of_sum']\n",
+    "sample_python_library/_sample_class.py":
+        "class SampleClass:\n    def __init__(self, name):\n        self._name = name\n\n"
+        f"    def get_name(self):\n        return '{WITNESS_PREFIX}' + self._name\n",
+    "sample_python_library/_sample_function.py":
+        f"def sample_function_for_square_of_sum(a, b):\n    return (a + b) ** 2 + {WITNESS_OFFSET}\n",
+}
 
 CHECKS = [
     Check("build", "The package and the library build with colcon", 1),
@@ -73,6 +97,11 @@ CHECKS = [
           "in Jazzy rclpy.spin() may raise ExternalShutdownException on Ctrl+C: catch it together with "
           "KeyboardInterrupt", needs=("executable",)),
     spins_check(),
+    Check("uses_library", "c comes from the library's function and the name from SampleClass.get_name()", 2,
+          "import them (from python_package_with_a_library.sample_python_library import SampleClass, "
+          "sample_function_for_square_of_sum), log c = sample_function_for_square_of_sum(a, b) and "
+          "SampleClass(name=...).get_name(); never compute them yourself or add src/ to sys.path",
+          needs=("square_log",)),
 ]
 
 
@@ -139,3 +168,55 @@ def grade(s: GradingSession) -> None:
     kit.rate(s, "rate", [stamp_seconds(r.stamp) for r in mine], period=PERIOD, needed=SAMPLES, waited=waited,
              noun="record", source="the records' stamps")
     record_spins(s, "spins", started)
+    _uses_library(s, path)
+
+
+def _uses_library(s: GradingSession, path) -> None:
+    """Record ``uses_library``: the node run once more, in a graph of its own, with the stand-in library
+    (:data:`WITNESS_FILES`) first on PYTHONPATH, logs the stand-in's c (over WITNESS_OFFSET) and get_name()
+    (starting with WITNESS_PREFIX): half the points each. ``path``: the node's executable."""
+    def fill(folder) -> None:
+        for rel, text in WITNESS_FILES.items():
+            (folder / LIBRARY / rel).parent.mkdir(parents=True, exist_ok=True)
+            (folder / LIBRARY / rel).write_text(text)
+
+    witness = s.submission_folder("witness-library", fill)
+    env = s.overlay()
+    env = {**env, "PYTHONPATH": ":".join(p for p in (str(witness), env.get("PYTHONPATH", "")) if p)}
+    graph = s.new_graph()
+    rosout = graph.rosout()
+    proc = s.start_program([str(path)], f"{EXECUTABLE}.witness", env=graph.learner_env(env))
+
+    def records(kind: str) -> list:
+        return rosout.records(level=INFO, match=lambda text: classify(text) == kind)
+
+    with s.phase("observe"):
+        wait_until(lambda: bool(records("square")) and bool(records("name")), 4 * PERIOD + 6.0,
+                   abort=lambda: proc.poll() is not None)
+    squares = [line for line in map(parse_square_line, (r.msg for r in records("square"))) if line]
+    names = [name for name in map(parse_name_line, (r.msg for r in records("name"))) if name]
+    proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
+    expected = (f"with a stand-in of the library first on PYTHONPATH (its function returns (a+b)**2 + "
+                f"{WITNESS_OFFSET:g}, its get_name() '{WITNESS_PREFIX}' + the name), the node logs what they return")
+    if not squares and not names:
+        s.record("uses_library", False, f"no records from the node run against the stand-in library; "
+                 f"{kit.process_state(proc)}", expected)
+        return
+    # the stand-in's c is over WITNESS_OFFSET whatever a and b the node passes; a node's own is (a+b)**2 < 10
+    function = bool(squares) and squares[0].c > WITNESS_OFFSET / 2
+    named = bool(names) and names[0].startswith(WITNESS_PREFIX)
+    seen = []
+    if squares:
+        line = squares[0]
+        seen.append(f"c = {line.c:g} for a = {line.a:g}, b = {line.b:g}" + (
+            " (the stand-in's value)" if function else f", not the stand-in's value ({WITNESS_OFFSET:g} more than "
+            "(a+b)**2): computed without the library's function, or the library not imported from PYTHONPATH?"))
+    else:
+        seen.append("no square-of-sum record")
+    if names:
+        seen.append(f"the name {shorten(names[0])}" + ("" if named else f", without the stand-in's "
+                                                              f"'{WITNESS_PREFIX}' (not from SampleClass.get_name()?)"))
+    else:
+        seen.append("no name record")
+    s.record("uses_library", function and named, "; ".join(seen), expected, fraction=(function + named) / 2)
+

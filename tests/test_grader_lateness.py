@@ -25,8 +25,8 @@ pytestmark = [pytest.mark.ros, pytest.mark.timeout(600)]
 
 def test_actions_server_grader_late_for_the_cancel_tries_again(tmp_path, monkeypatch):
     lesson = load_catalog().get("actions-server")
-    grader = load_grader(lesson.grader)
-    original = grader._wait_feedback
+    steps = load_grader(lesson.grader).steps  # graders/_actions_server.py, the lesson's steps
+    original = steps._wait_feedback
     late = []
 
     def wait_past_the_end(s, client, goal, count, node, timeout):
@@ -35,10 +35,10 @@ def test_actions_server_grader_late_for_the_cancel_tries_again(tmp_path, monkeyp
         if count == 3:
             late.append(goal)
             wait_until(lambda: goal.result_future is not None and goal.result_future.done(),
-                       grader.CANCEL_DISTANCE / grader.SPEED + grader.GOAL_SLACK)
+                       steps.CANCEL_DISTANCE / steps.SPEED + steps.GOAL_SLACK)
         return seen
 
-    monkeypatch.setattr(grader, "_wait_feedback", wait_past_the_end)
+    monkeypatch.setattr(steps, "_wait_feedback", wait_past_the_end)
     result = grade_lesson(lesson, reference_workspace(lesson, tmp_path / "ws"), log_dir=tmp_path / "log")
     assert len(late) == 2, "the cancel and the preemption waited for three feedback messages"
     assert result.status == Status.PASSED, [(c.id, c.observed) for c in result.checks if not c.passed] or result.message

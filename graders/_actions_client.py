@@ -1,0 +1,267 @@
+"""The steps of the ``actions-client`` grader (graders/actions_client.py): one function per run of the learner's
+client (goal, aborted, rejected, interrupted), and the lesson's contract values they and the grader's ``CHECKS``
+share (chapters/actions-client/CONTRACT.md). A helper of one lesson (the placement rule in ``ros2course.kit``'s
+docstring): the grader plays the action server (:class:`ros2course.kit.actions.StandInActionServer`) and judges
+the client from its /rosout records and how its process ends.
+
+Goal coordinates are metres, times seconds.
+"""
+
+from __future__ import annotations
+
+import re
+import time
+from collections.abc import Callable
+from typing import Any
+
+from ros2course import kit
+from ros2course.kit import GradingSession, Unmet
+from ros2course.kit import actions as act
+from ros2course.kit.topics_services import numbers_in
+
+from . import _services
+
+PACKAGE = "python_package_that_uses_the_actions"
+EXECUTABLE = "move_straight_in_2d_action_client_node"
+NODE = "move_straight_in_2d_action_client"
+ACTION = "/move_straight_in_2d"
+#: Seconds the client runs without a server before the grader's appears.
+WAIT_WINDOW = 3.0
+#: Seconds the server stays missing after the client's first "waiting" record: time for a client that
+#: says so at most once a second to say it three times (a client that says it at every 0.2 s tick: 13).
+THROTTLE_WINDOW = 2.5
+#: Seconds between two "waiting" records (the lesson: at most once a second); a record or two more than
+#: THROTTLE_WINDOW / WAIT_PERIOD + 1 is forgiven (a timer that catches up after a late tick).
+WAIT_PERIOD = 1.0
+#: Seconds a client may take to end by itself once its goal has ended.
+END_TIMEOUT = 3.0
+#: Seconds for the log records the grader looks for (one goal lasts under a second).
+LOG_TIMEOUT = 5.0
+#: Metres: a logged number matches a value the grader sent when it is this close (3 decimals printed).
+NUMBER_TOLERANCE = 0.0006
+PERIOD = 0.1  # seconds between the grader's feedback messages
+#: What a record pretending a rejected goal ended says (a status, a result).
+PRETENDS = re.compile(r"succe|abort|cancel|unknown|status|final|result", re.IGNORECASE)
+
+
+def _goal_xy(s: GradingSession) -> tuple[float, float]:
+    """A goal for the learner's client to send: x in [0.3, 0.9], y in [-0.9, -0.3] m (GradingSession.random)."""
+    return round(s.random.uniform(0.3, 0.9), 3), round(s.random.uniform(-0.9, -0.3), 3)
+
+
+def _params(xy: tuple[float, float]) -> list[str]:
+    return ["--ros-args", "-p", f"x:={xy[0]}", "-p", f"y:={xy[1]}"]
+
+
+def _gone(proc: kit.LearnerProcess) -> Callable[[], bool]:
+    """True once ``proc`` has been dead for :data:`kit.LATE_DELIVERY` s: the records it logged just before
+    exiting are still on their way to the grader until then."""
+    def gone() -> bool:
+        return proc.poll() is not None and time.monotonic() - (proc.ended_at or 0.0) > kit.LATE_DELIVERY
+
+    return gone
+
+
+def _has(text: str, value: float) -> bool:
+    return any(abs(number - value) <= NUMBER_TOLERANCE for number in numbers_in(text))
+
+
+def _records(rosout: Any) -> list[str]:
+    """The client's log records (its node's logger), oldest first, on one line each."""
+    return [" ".join(r.msg.split()) for r in rosout.records(node=NODE)]
+
+
+def _last(rosout: Any, count: int = 3) -> str:
+    return " | ".join(text[:80] for text in _records(rosout)[-count:]) or "no log records"
+
+
+def _result_script(action: Any, final: tuple[float, float], distances: list[float], status: int) -> act.Script:
+    feedback = []
+    for distance in distances:
+        message = action.Feedback()
+        message.distance_to_goal = distance
+        feedback.append(message)
+    result = action.Result()
+    result.final_position.x, result.final_position.y = final
+    return act.Script(accept=True, feedback=feedback, result=result, status=status, period=PERIOD)
+
+
+def interrupted_run(s: GradingSession, path: Any) -> None:
+    """sigint_exit: Ctrl+C while the client waits for a server that never comes (judged as the part ends)."""
+    rosout = s.graph.rosout()
+    proc = _started(s, path, _goal_xy(s), f"{EXECUTABLE}.interrupted")
+    s.on_close(lambda: kit.sigint_exit(s, "sigint_exit", proc))
+    with s.phase("observe"):  # Ctrl+C once it says it waits (what a learner sees before pressing it)
+        kit.wait_until(lambda: bool(_records(rosout)), 2 * WAIT_WINDOW, abort=lambda: proc.poll() is not None)
+
+
+def goal_run(s: GradingSession, action: Any, path: Any) -> None:
+    """waits, goal_sent, logs_feedback, logs_result, ends."""
+    xy = _goal_xy(s)
+    distances = sorted((round(s.random.uniform(0.05, 0.95), 3) for _ in range(4)), reverse=True) + [0.0]
+    # x at least 2 mm off the goal's: the record of the goal sent (x, y) never holds the final position
+    final = (round(xy[0] + s.random.choice((-1, 1)) * s.random.uniform(0.002, 0.004), 3),
+             round(xy[1] + s.random.uniform(-0.004, 0.004), 3))
+    server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
+        action, final, distances, act.SUCCEEDED))
+    rosout = s.graph.rosout()
+    node = kit.start_node(s, "node_name", path, NODE, args=_params(xy), label=EXECUTABLE)
+    if _services.says_it_waits(s, "waits", rosout, node, ACTION, timeout=WAIT_WINDOW, what="action server"):
+        _throttled(s, rosout, node)
+    server.offer()
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(server.goals), LOG_TIMEOUT, abort=node.ended)
+    expected = f"one goal, desired_position ({xy[0]}, {xy[1]}) (the parameters x and y)"
+    if not server.goals:
+        s.record("goal_sent", False, f"no goal in {LOG_TIMEOUT:.0f} s after the server appeared; "
+                 f"last log records: {_last(rosout)}; {kit.process_state(node.proc)}", expected)
+        s.require("goal_sent")
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(server.ended), len(distances) * PERIOD + 2.0, abort=node.ended)
+        kit.wait_until(lambda: any(_has(text, final[0]) and _has(text, final[1]) for text in _records(rosout)),
+                       LOG_TIMEOUT, abort=_gone(node.proc))
+    # counted once the goal has ended: a client that sends again at every tick has sent several by now
+    sent = [(g.desired_position.x, g.desired_position.y) for _, g in server.goals]
+    shown = ", ".join(f"({x:g}, {y:g})" for x, y in sent[:3]) + (", ..." if len(sent) > 3 else "")
+    s.record("goal_sent", len(sent) == 1 and abs(sent[0][0] - xy[0]) < 1e-9 and abs(sent[0][1] - xy[1]) < 1e-9,
+             f"{len(sent)} goal(s) by the time the first had ended: {shown}", expected)
+    records = _records(rosout)
+    found = _feedback_records(records, distances, final)
+    anywhere = [d for d in distances if any(_has(text, d) for text in records)]
+    s.record("logs_feedback", len(found) == len(distances),
+             f"{len(found)} of the {len(distances)} distances sent ({', '.join(f'{d:.3f}' for d in distances)}) "
+             "found in the log, each in a record of its own, in the order sent, before the result"
+             + ("" if len(anywhere) == len(found) else
+                f" ({len(anywhere)} written somewhere: several in one record, out of order, or only with the result)")
+             + ("" if found else f"; last log records: {_last(rosout)}"),
+             "each distance_to_goal in a log record of its own as it arrives (the logger, not print())",
+             fraction=len(found) / len(distances))
+    shown = [text for text in records if _has(text, final[0]) and _has(text, final[1])]
+    said = [text for text in shown if re.search(r"succe", text, re.IGNORECASE)]
+    expected = f"a log record with the final position ({final[0]}, {final[1]}) and SUCCEEDED"
+    if said:
+        s.record("logs_result", True, f"'{said[0][:120]}'", expected)
+    elif shown:
+        s.record("logs_result", False, f"'{shown[0][:120]}': the position, but not the status", expected)
+    else:
+        s.record("logs_result", False, f"no record with ({final[0]}, {final[1]}); last log records: {_last(rosout)}",
+                 expected)
+    _ends(s, "ends", node.proc, "once its goal had SUCCEEDED")
+
+
+def _throttled(s: GradingSession, rosout: Any, node: kit.StartedNode) -> None:
+    """Record ``waits_throttled``: with the server missing THROTTLE_WINDOW s more, the client's "waiting"
+    records (their own stamps) come at most once every WAIT_PERIOD s (one or two more are forgiven)."""
+    def waiting() -> list[float]:
+        return [r.stamp.sec + r.stamp.nanosec * 1e-9
+                for r in rosout.records(node=NODE, match=lambda text: _services.WAITING.search(text) is not None)]
+
+    with s.phase("observe"):
+        kit.wait_until(lambda: False, THROTTLE_WINDOW, abort=node.ended)
+    stamps = sorted(waiting())
+    if not stamps:  # the record said it waits under another logger name: nothing to time
+        stamps = sorted(r.stamp.sec + r.stamp.nanosec * 1e-9 for r in rosout.records(
+            match=lambda text: _services.WAITING.search(text) is not None))
+    span = stamps[-1] - stamps[0] if stamps else 0.0
+    allowed = int(span / WAIT_PERIOD) + 2
+    gaps = [b - a for a, b in zip(stamps, stamps[1:])]
+    s.record("waits_throttled", len(stamps) <= allowed,
+             f"{len(stamps)} 'waiting' record(s) in {span:.1f} s without the server"
+             + (f", {min(gaps):.2f} s apart at the closest" if gaps else ""),
+             f"at most one every {WAIT_PERIOD:.0f} s (at most {allowed} in {span:.1f} s; throttle_duration_sec=1.0)")
+
+
+def _feedback_records(records: list[str], distances: list[float], final: tuple[float, float]) -> list[float]:
+    """The distances logged as the feedback arrived: each in a record of its own (one record matches one
+    distance), in the order sent, not in a record holding the final position (the result's: a client that
+    logs the Point (x, y, z=0.0) would show the last distance, 0.0, there)."""
+    found: list[float] = []
+    for text in records:
+        if len(found) == len(distances):
+            break
+        if _has(text, final[0]) and _has(text, final[1]):
+            break  # the result is logged: the feedback came before it
+        if _has(text, distances[len(found)]):
+            found.append(distances[len(found)])
+    return found
+
+
+def _ends(s: GradingSession, check_id: str, proc: kit.LearnerProcess, when: str) -> bool:
+    """Record ``check_id``: ``proc`` ends by itself within :data:`END_TIMEOUT` s, exit code 0, no traceback."""
+    with s.phase("observe"):
+        kit.wait_until(lambda: proc.poll() is not None, END_TIMEOUT)
+    expected = f"the process ends by itself within {END_TIMEOUT:.0f} s, exit code 0, no traceback"
+    ended = proc.exit_state()
+    if ended is None:
+        return s.record(check_id, False, f"still running {END_TIMEOUT:.0f} s {when}", expected)
+    traceback = "Traceback (most recent call last)" in proc.stderr() + proc.stdout()
+    ok = ended.returncode == 0 and not traceback
+    return s.record(check_id, ok, f"{when}, the process {ended.describe()}"
+                    + (f" ({ended.last_line})" if ended.last_line and not ok else ""), expected)
+
+
+def _started(s: GradingSession, path: Any, xy: tuple[float, float], label: str) -> kit.LearnerProcess:
+    """Start the client with goal ``xy`` (the server is already there); it may end before the graph shows it."""
+    return s.launch(path, label, _params(xy))
+
+
+def aborted_run(s: GradingSession, action: Any, path: Any) -> None:
+    """logs_aborted: the grader's server aborts the goal after two feedback messages."""
+    xy = _goal_xy(s)
+    final = (round(xy[0] / 2, 3), round(xy[1] / 2, 3))
+    server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
+        action, final, [0.6, 0.5], act.ABORTED))
+    rosout = s.graph.rosout()
+    server.offer()
+    proc = _started(s, path, xy, f"{EXECUTABLE}.aborted")
+    with s.phase("observe"):
+        kit.wait_until(lambda: any(re.search(r"abort", text, re.IGNORECASE) for text in _records(rosout)),
+                       2 * LOG_TIMEOUT, abort=_gone(proc))
+    with s.phase("observe"):  # the position may be in a record of its own, just after
+        kit.wait_until(lambda: any(_has(text, final[0]) and _has(text, final[1]) for text in _records(rosout)),
+                       LOG_TIMEOUT, abort=_gone(proc))
+    said = [text for text in _records(rosout) if re.search(r"abort", text, re.IGNORECASE)]
+    where = [text for text in _records(rosout) if _has(text, final[0]) and _has(text, final[1])]
+    expected = f"a log record naming the status ABORTED, and the final position ({final[0]}, {final[1]})"
+    if not server.goals:
+        raise Unmet(f"no goal reached the server; last log records: {_last(rosout)}; {kit.process_state(proc)}")
+    s.record("logs_aborted", bool(said and where),
+             (f"'{said[0][:120]}'" + ("" if said[0] in where else f"; '{where[0][:120]}'" if where else
+                                     f": no record with the final position ({final[0]}, {final[1]})"))
+             if said else f"the goal was aborted; its log: {_last(rosout)}", expected)
+
+
+def rejected_run(s: GradingSession, action: Any, path: Any) -> None:
+    """handles_rejection: the grader's server rejects the goal."""
+    xy = _goal_xy(s)
+    server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: act.Script(accept=False))
+    rosout = s.graph.rosout()
+    server.offer()
+    proc = _started(s, path, xy, f"{EXECUTABLE}.rejected")
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(server.goals), 2 * LOG_TIMEOUT, abort=lambda: proc.poll() is not None)
+        if not server.goals:
+            raise Unmet(f"no goal reached the server; last log records: {_last(rosout)}; {kit.process_state(proc)}")
+        kit.wait_until(lambda: any(re.search(r"reject", text, re.IGNORECASE) for text in _records(rosout))
+                       and proc.poll() is not None, END_TIMEOUT, abort=_gone(proc))
+        if proc.poll() is not None:  # what it logged just before exiting may still be on its way
+            kit.wait_until(lambda: False, 0.5)
+    records = _records(rosout)
+    said = [text for text in records if re.search(r"reject", text, re.IGNORECASE)]
+    after = records[records.index(said[0]) + 1:] if said else []
+    pretends = [text for text in after if PRETENDS.search(text) and not re.search(r"reject", text, re.IGNORECASE)]
+    ended = proc.exit_state()
+    traceback = "Traceback (most recent call last)" in proc.stderr() + proc.stdout()
+    problems = []
+    if not said:
+        problems.append(f"no log record says the goal was rejected (last records: {_last(rosout)})")
+    if ended is None:
+        problems.append(f"still running {END_TIMEOUT:.0f} s after the rejection")
+    elif ended.returncode != 0 or traceback:
+        problems.append(f"the process {ended.describe()}" + (f" ({ended.last_line})" if ended.last_line else ""))
+    if pretends:
+        problems.append(f"after the rejection, a record that pretends the goal ended: '{pretends[0][:120]}' (a rejected "
+                        "goal has no result: do not ask for it)")
+    s.record("handles_rejection", not problems, "; ".join(problems) or f"'{said[0][:120]}', then the process "
+             f"{ended.describe()}", "a log record saying the goal was rejected, no status or result logged after it, then exit code 0, "
+             "no traceback")
