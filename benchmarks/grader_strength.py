@@ -84,9 +84,11 @@ def _held_out_cell(row) -> str:
         return "not drawn"
     data = held.data
     if not data.get("graded"):  # nothing left to draw: the lesson's every mutant was shown by an earlier sample
+        earlier = _earlier_held_out(data.get("earlier", []), data.get("fingerprint"))
         return (f"none left to draw: all the mutants the first sample left were shown by earlier held-out samples "
-                f"(seed {data.get('seed', '?')} drew 0), so any new figure would be tuned; the lesson has too few "
-                "mutants for a held-out score")
+                f"(seed {data.get('seed', '?')} drew 0), so any new figure would be tuned"
+                + ("; what they scored: " + ", ".join(earlier) if earlier else
+                   "; the lesson has too few mutants for a held-out score"))
     uncovered = len(data.get("survivors", []))
     text = (f"{_pct(held.tuned)} of {held.counted} counted (raw {_pct(held.raw)}; {data['graded']} graded of the "
             f"{data.get('pool', '?')} no earlier sample took, seed {data.get('seed', '?')}; {uncovered} uncovered)")
