@@ -1,4 +1,6 @@
-"""The qos lesson's grader-side endpoints: probes of chosen QoS profiles, offered/requested QoS, a feed.
+"""The qos lesson's helper: one function per part of graders/qos.py (sensor, config, monitor, cli), each
+recording that part's checks, and the grader-side endpoints they use: probes of chosen QoS profiles,
+offered/requested QoS, a feed, an oracle.
 
 What the kit lacks for this lesson (and would offer in ``ros2course.kit`` if a
 second lesson needed it): a topic probe with a QoS profile of the grader's
@@ -22,12 +24,17 @@ is also loaded for its CHECKS alone (``ros2course list``, ``hint``), where ROS i
 from __future__ import annotations
 
 import copy
+import math
 import random
+import re
 import threading
 from collections.abc import Callable, Iterable
 from typing import Any
 
-from ros2course.kit import GradingSession, wait_until
+from ros2course import kit
+from ros2course.kit import LATE_DELIVERY, GradingSession, Unmet, scripts, wait_until
+from ros2course.kit import params as kit_params
+from ros2course.kit import topics_services as ts
 
 _RANDOM = random.SystemRandom()
 
@@ -283,3 +290,298 @@ class Oracle:
 def wait_for(predicate: Callable[[], bool], timeout: float, abort: Callable[[], bool] | None = None) -> bool:
     """Wait until ``predicate()`` (or ``timeout`` seconds, or ``abort()``); returns ``predicate()`` then."""
     return _wait(predicate, timeout, abort)
+
+
+# --- the lesson's parts, one function each (graders/qos.py calls them in order) ------------
+
+def message_types() -> tuple[type, type]:
+    """The generated classes ``(sensor_msgs/msg/Temperature, std_msgs/msg/String)``, imported only when grading."""
+    from sensor_msgs.msg import Temperature  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+    from std_msgs.msg import String  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+
+    return Temperature, String
+
+
+def grade_sensor(s: GradingSession, temperature: type, package: str, executable: str, node_name: str, *,
+                 topic: str, type_name: str, frame_id: str, period: float, samples: int, warm_up: int,
+                 start_timeout: float) -> None:
+    """Grade the sensor publisher in the part's own graph (``s.graph``).
+
+    Records ``sensor_executable``, ``sensor_node_name`` and the part's Ctrl+C check through the kit, then
+    ``sensor_topic``, ``sensor_best_effort`` (a RELIABLE probe made before the node starts never matches it),
+    ``sensor_volatile``, ``sensor_stream`` and ``sensor_rate`` (judged on the readings' send stamps).
+
+    Args:
+        temperature: the generated sensor_msgs/msg/Temperature class.
+        package, executable, node_name: what ``ros2 run`` starts and the node's expected name.
+        topic: the readings' topic (``/temperature``); type_name: its type as ``ros2 topic`` prints it.
+        frame_id: the ``header.frame_id`` every reading must carry.
+        period: seconds between readings (0.1: 10 Hz); samples: readings whose send stamps are judged, after
+            ``warm_up`` first readings left out; start_timeout: seconds from the node appearing to its first reading.
+
+    Raises:
+        Unmet: no executable, no publisher of ``type_name``, or no reading reached a BEST_EFFORT subscription.
+    """
+    path = kit.executable(s, "sensor_executable", package, executable)
+    graph = s.graph  # the part's own
+    # both probes exist before the node starts: no reading is missed, and the RELIABLE one would match at once
+    best_effort = graph.topic(topic, temperature, sensor_qos())
+    reliable = Probe(graph, topic, temperature, profile(reliable=True, transient_local=False, depth=10))
+    node = kit.start_node(s, "sensor_node_name", path, node_name, sigint_check="sensor_sigint_exit",
+                          need_node=False)
+    target, where = ts.own_endpoint(s, "sensor_topic", node, "publishers", topic, type_name,
+                                    none=f"no {type_name} topic published to listen to", where="on")
+    if target != topic:  # grade what flows where it is published
+        best_effort = graph.topic(target, temperature, sensor_qos())
+        reliable = Probe(graph, target, temperature, reliable.qos)
+    with s.phase("observe"):
+        window = best_effort.observe(warm_up + samples, period, start_timeout, abort=node.ended)
+    readings = best_effort.messages()[:warm_up + samples]
+
+    profiles = wait_endpoint_qos(graph, target, node.name, "publishers")
+    verdicts = [compatible(p, reliable.qos) for p in profiles]
+    incompatible = bool(profiles) and not any(ok for ok, _ in verdicts)
+    received = len(reliable.messages())
+    offered = ", ".join(f"({describe(p)})" for p in profiles) or "no publisher in the graph"
+    reason = next((r for ok, r in verdicts if not ok), "")
+    s.record("sensor_best_effort", incompatible and received == 0,
+             f"it offers {offered}{where}; a RELIABLE subscription "
+             + (f"cannot match ({reason})" if incompatible else "matches it")
+             + f"; the grader's RELIABLE probe received {received} reading(s)"
+             + ("" if not reliable.incompatible.is_set() else " and got the incompatible-QoS event"),
+             "BEST_EFFORT offered: qos_check_compatible(offered, RELIABLE request) is ERROR and the RELIABLE probe "
+             "receives nothing")
+
+    volatile = bool(profiles) and all(word(p.durability) == "VOLATILE" for p in profiles)
+    s.record("sensor_volatile", volatile, f"it offers {offered}{where}",
+             "VOLATILE (qos_profile_sensor_data: no reading is kept for subscriptions that join later)")
+
+    if not readings:
+        raise Unmet(f"no reading reached a BEST_EFFORT subscription on {target} in {window:.1f} s; "
+                    f"{kit.process_state(node.proc)}")
+    frames = sorted({m.header.frame_id for m in readings})
+    good = [m for m in readings if m.header.frame_id == frame_id and math.isfinite(m.temperature)]
+    s.record("sensor_stream", len(good) == len(readings),
+             f"{len(readings)} reading(s) received by a BEST_EFFORT (qos_profile_sensor_data) subscription{where}, "
+             f"frame_id {', '.join(map(repr, frames))}, e.g. temperature {readings[0].temperature:.2f}",
+             f"readings with header.frame_id {frame_id!r} and a finite temperature",
+             fraction=len(good) / len(readings))
+    kit.rate(s, "sensor_rate", best_effort.send_stamps(warm_up + samples)[warm_up:], period=period, needed=samples,
+             waited=window, noun="reading", source="the readings' send stamps, the first one left out", where=where)
+
+
+def grade_config(s: GradingSession, string: type, package: str, executable: str, node_name: str, *,
+                 topic: str, type_name: str, default_units: str) -> None:
+    """Grade the configuration publisher in the session's graph (``s.ros``: the kit's parameter client asks there).
+
+    Records ``config_executable``, ``config_node_name`` and the part's Ctrl+C check through the kit, then
+    ``config_topic``, ``config_initial`` (``units: <default_units>`` replayed to a TRANSIENT_LOCAL subscription
+    made after start), ``config_republish`` (``ros2 param set`` of a random unit, tried twice), and for a
+    late-joining TRANSIENT_LOCAL subscription ``config_late_joiner`` and ``config_depth``, then ``config_latched``.
+
+    Args:
+        string: the generated std_msgs/msg/String class.
+        package, executable, node_name: what ``ros2 run`` starts and the node's expected name.
+        topic: the configuration's topic (``/sensor_config``); type_name: its type as ``ros2 topic`` prints it.
+        default_units: the ``units`` parameter's default (``celsius``).
+
+    Raises:
+        Unmet: no executable, no publisher of ``type_name``, or the node's parameter services do not answer.
+    """
+    path = kit.executable(s, "config_executable", package, executable)
+    node = kit.start_node(s, "config_node_name", path, node_name, sigint_check="config_sigint_exit",
+                          need_node=False)
+    target, where = ts.own_endpoint(s, "config_topic", node, "publishers", topic, type_name,
+                                    none=f"no {type_name} topic published", where="on")
+    profiles = wait_endpoint_qos(s.ros, target, node.name, "publishers")
+    # a VOLATILE listener of whatever reliability is offered: it sees the change whatever the
+    # durability and reliability (those are judged by the late joiner and config_latched)
+    reliable = bool(profiles) and all(word(p.reliability) == "RELIABLE" for p in profiles)
+    early = Probe(s.ros, target, string, profile(reliable=reliable, transient_local=False, depth=10))
+    # a RELIABLE, TRANSIENT_LOCAL subscription made after the node started, before units is set: what the
+    # node published at start is replayed to it (a VOLATILE offer cannot match it: nothing to wait for)
+    start = Probe(s.ros, target, string, profile(reliable=True, transient_local=True, depth=10))
+    start_can_match = any(compatible(p, start.qos)[0] for p in profiles)
+
+    # the configuration changes once: with depth 1 only the new one is kept for late joiners
+    services = kit_params.connect(s, node.name, proc=node.proc)
+    with s.phase("observe"):
+        wait_for(lambda: early.matched() > 0, 3.0, abort=node.ended)  # else the new configuration is missed
+        if start_can_match:  # before units is set: the first message replayed is the one of the start
+            wait_for(lambda: bool(start.messages()), LATE_DELIVERY, abort=node.ended)
+    initial = [m.data for m in start.messages()]
+    wanted = f"units: {default_units}"
+    s.record("config_initial", initial[:1] == [wanted],
+             "a RELIABLE, TRANSIENT_LOCAL subscription made after the node started, before units was set, received "
+             + (", ".join(map(repr, initial[:3])) or "nothing")
+             + ("" if start_can_match or not profiles else
+                f" (it cannot match the publisher's {', '.join(f'({describe(p)})' for p in profiles)})"),
+             f"{wanted!r}, published at start and kept for subscriptions that join later")
+    with s.phase("observe"):
+        # The listener has matched the publisher; the publisher may learn of the listener a moment
+        # later (discovery runs both ways) and a VOLATILE listener misses what is sent before: a
+        # second change, to another unit, is the retry. The late joiner's verdicts use the last one.
+        units, tried = "", []
+        for patience in (1.5, LATE_DELIVERY):
+            units = random_units(other_than=tried)
+            tried.append(units)
+            answers = services.set({"units": units})
+            if wait_for(lambda u=units: any(m.data == f"units: {u}" for m in early.messages()), patience,
+                        abort=node.ended):
+                break
+        latest = f"units: {units}"
+    seen = [m.data for m in early.messages()]
+    refused = [a.line() for a in answers if not a.successful]
+    s.record("config_republish", latest in seen,
+             f"after `ros2 param set /{node.name} units {units}`"
+             + (f" ({'; '.join(refused)})" if refused else "")
+             + f" the grader received {', '.join(map(repr, seen[-3:])) or 'nothing'} on {target}",
+             f"{latest!r} published after the parameter changed")
+
+    late = Probe(s.ros, target, string, profile(reliable=True, transient_local=True, depth=10))
+    verdicts = [compatible(p, late.qos) for p in profiles]
+    can_match = any(ok for ok, _ in verdicts)
+    reason = next((r for ok, r in verdicts if not ok), "no publisher in the graph")
+    offered = ", ".join(f"({describe(p)})" for p in profiles) or "no publisher"
+    if can_match:
+        with s.phase("observe"):
+            wait_for(lambda: bool(late.messages()), LATE_DELIVERY, abort=node.ended)
+            first = late.messages()[:1]
+            if first and first[0].data != latest and latest in seen:  # an outdated one first: the rest follows
+                wait_for(lambda: any(m.data == latest for m in late.messages()), 1.0)
+    got = [m.data for m in late.messages()]
+    shown = ", ".join(map(repr, got[:4])) + (" ..." if len(got) > 4 else "")
+    s.record("config_late_joiner", bool(got),
+             f"a TRANSIENT_LOCAL subscription made after the configuration was published received "
+             f"{len(got)} message(s){': ' + shown if got else ''}"
+             + ("" if can_match else f" (it cannot match the publisher's {offered}: {reason})") + where,
+             "the configuration replayed to the late joiner (publisher TRANSIENT_LOCAL)")
+    s.record("config_depth", got == [latest],
+             f"the late joiner received {len(got)} message(s): {shown}",
+             f"only the current configuration, {latest!r} (KEEP_LAST, depth 1)")
+    latched = bool(profiles) and all(word(p.reliability) == "RELIABLE"
+                                     and word(p.durability) == "TRANSIENT_LOCAL" for p in profiles)
+    s.record("config_latched", latched, f"it offers {offered} on {target}", "RELIABLE, TRANSIENT_LOCAL")
+
+
+def matching(readings: list[float], text: str) -> list[float]:
+    """The readings ``text`` logs as the lesson asks: ``Temperature: <value with two decimals>``."""
+    return [r for r in readings if re.search(rf"Temperature: {r:.2f}(?![0-9])", text)]
+
+
+def grade_monitor(s: GradingSession, temperature: type, string: type, package: str, executable: str,
+                  node_name: str, *, sensor_topic: str, sensor_type_name: str, config_topic: str,
+                  config_type_name: str, period: float, logged: int) -> None:
+    """Grade the monitor in the part's own graph (``s.graph``), fed by the grader's :class:`Feed`.
+
+    The grader's latched configuration is published before the monitor starts (it joins late) and its
+    BEST_EFFORT readings every ``period`` seconds. Records ``monitor_executable``, ``monitor_node_name`` and
+    the part's Ctrl+C check through the kit, then ``monitor_topics``, ``monitor_sensor_qos``,
+    ``monitor_config_qos``, ``monitor_logs_config`` and ``monitor_logs_sensor`` (from the node's /rosout).
+
+    Args:
+        temperature, string: the generated sensor_msgs/msg/Temperature and std_msgs/msg/String classes.
+        package, executable, node_name: what ``ros2 run`` starts and the node's expected name.
+        sensor_topic, sensor_type_name, config_topic, config_type_name: the topics the monitor must subscribe
+            to and their types as ``ros2 topic`` prints them.
+        period: seconds between the grader's readings; logged: how many of them the monitor must log.
+
+    Raises:
+        Unmet: no executable, or no node to inspect.
+    """
+    path = kit.executable(s, "monitor_executable", package, executable)
+    graph = s.graph  # the part's own
+    # the configuration is published before the monitor exists: it is a late joiner
+    feed = Feed(s, graph, temperature, string, sensor_topic=sensor_topic, config_topic=config_topic, period=period)
+    rosout = graph.rosout()
+    node = kit.start_node(s, "monitor_node_name", path, node_name, sigint_check="monitor_sigint_exit",
+                          need_node=False)
+    found: dict[str, list[str]] = {}
+
+    def both() -> bool:
+        found.clear()
+        found.update(ts.endpoints(graph, node.name, "subscriptions"))
+        return sensor_topic in found and config_topic in found
+
+    with s.phase("start"):
+        wait_for(both, 3.0, abort=node.ended)
+    s.record("monitor_topics",
+             sensor_type_name in found.get(sensor_topic, []) and config_type_name in found.get(config_topic, []),
+             f"{node.name or 'the node'} subscribes to: {ts.describe_endpoints(found)}",
+             f"{sensor_topic} [{sensor_type_name}] and {config_topic} [{config_type_name}]")
+    if node.name is None:
+        raise Unmet(f"no node to inspect; {kit.process_state(node.proc)}")
+
+    requested = wait_endpoint_qos(graph, sensor_topic, node.name, "subscriptions", 1.0)
+    verdicts = [compatible(feed.sensor_offered, p) for p in requested]
+    ok = bool(requested) and all(v for v, _ in verdicts)
+    asked = ", ".join(f"({describe(p)})" for p in requested) or f"no subscription on {sensor_topic}"
+    reason = next((r for v, r in verdicts if not v), "")
+    s.record("monitor_sensor_qos", ok, f"it requests {asked}" + (f": {reason}" if reason else ""),
+             f"a request a BEST_EFFORT publisher ({describe(feed.sensor_offered)}) satisfies")
+    requested = wait_endpoint_qos(graph, config_topic, node.name, "subscriptions", 1.0)
+    asked = ", ".join(f"({describe(p)})" for p in requested) or f"no subscription on {config_topic}"
+    latched = bool(requested) and all(word(p.durability) == "TRANSIENT_LOCAL"
+                                      and word(p.reliability) == "RELIABLE"
+                                      and compatible(feed.config_offered, p)[0] for p in requested)
+    s.record("monitor_config_qos", latched, f"it requests {asked}",
+             "the latched profile: RELIABLE, TRANSIENT_LOCAL (as the configuration publisher offers)")
+
+    def records() -> list[str]:
+        return [r.msg for r in rosout.records(node=node.name)]
+
+    def logged_readings() -> list[float]:
+        published = feed.published()
+        return sorted({r for text in records() for r in matching(published, text)})
+
+    with s.phase("observe"):
+        wait_for(lambda: any(f"Config: {feed.config}" in t for t in records())
+                 and len(logged_readings()) >= logged, LATE_DELIVERY, abort=node.ended)
+    texts = records()
+    recent = " | ".join(t.strip()[:60] for t in texts[-2:]) or "no log records"
+    config_logged = any(f"Config: {feed.config}" in t for t in texts)
+    unlabelled = not config_logged and any(feed.config in t for t in texts)
+    on_stdout = feed.config in node.proc.stdout()
+    s.record("monitor_logs_config", config_logged,
+             f"the grader published {feed.config!r} on {config_topic} before the node started; "
+             + ("it is in the node's log" if config_logged else
+                "the node logged it without the label 'Config: '" if unlabelled else
+                f"not in the node's log (last records: {recent})")
+             + ("; it appeared on stdout only (print() instead of the logger?)" if on_stdout and not config_logged
+                else ""),
+             f"a log record containing 'Config: {feed.config}'")
+    readings = logged_readings()
+    s.record("monitor_logs_sensor", len(readings) >= logged,
+             f"{len(readings)} of the grader's {len(feed.published())} readings found in the node's log"
+             + (f", e.g. {readings[0]:.2f}" if readings else f" (last records: {recent})"),
+             f"at least {logged} of the grader's random temperatures logged as 'Temperature: <value with "
+             "two decimals>'",
+             fraction=min(1.0, len(readings) / logged))
+
+
+def grade_cli(s: GradingSession, temperature: type, string: type, script: str, *, timeout: float,
+              sensor_topic: str, config_topic: str) -> None:
+    """Grade the learner's ``ros2 topic info --verbose`` script in the part's own graph (``s.graph``).
+
+    Runs it (up to ``timeout`` seconds) against an :class:`Oracle`'s two publishers of random names, on
+    ``sensor_topic`` and ``config_topic``; records ``cli_script``, ``cli_ends``, ``cli_sensor_qos`` and
+    ``cli_config_qos``.
+
+    Args:
+        temperature, string: the generated sensor_msgs/msg/Temperature and std_msgs/msg/String classes.
+        script: the script's path from the workspace root (``cli/qos_topic_info.sh``).
+
+    Raises:
+        Unmet: the script is missing or not valid bash.
+    """
+    path = scripts.script(s, "cli_script", script)
+    graph = s.graph  # the part's own
+    oracle = Oracle(s, graph, temperature, string, sensor_topic=sensor_topic, config_topic=config_topic)
+    run = scripts.run_script(s, path, timeout=timeout,
+                             daemon_sees=[sensor_topic, config_topic, f"/{oracle.sensor_node}",
+                                          f"/{oracle.config_node}"])
+    scripts.ended(s, "cli_ends", run, "it ends by itself with exit code 0")
+    scripts.printed(s, "cli_sensor_qos", run, [f"Node name: {oracle.sensor_node}", "Reliability: BEST_EFFORT"],
+                    f"the QoS of the publisher of {sensor_topic}", f"ros2 topic info --verbose {sensor_topic}")
+    scripts.printed(s, "cli_config_qos", run, [f"Node name: {oracle.config_node}", "Durability: TRANSIENT_LOCAL"],
+                    f"the QoS of the publisher of {config_topic}", f"ros2 topic info --verbose {config_topic}")

@@ -14,21 +14,16 @@ grader's probes of chosen profiles receive:
 * **cli**: the learner's ``cli/qos_topic_info.sh`` runs against two grader nodes of
   random names and must print their QoS (``ros2 topic info --verbose``).
 
-Each executable is a part of its own (partial credit), ending with its Ctrl+C check.
-
-rclpy and the message packages are imported inside the functions that grade: a grader module
-is also loaded for its CHECKS alone (``ros2course list``, ``hint``), where ROS is not needed.
+Each executable is a part of its own (partial credit), ending with its Ctrl+C check. Each part's
+procedure is a function of the lesson's helper, graders/_qos.py, which imports rclpy and the message
+packages inside its functions: a grader module is also loaded for its CHECKS alone (``ros2course list``,
+``hint``), where ROS is not needed.
 """
 
 from __future__ import annotations
 
-import math
-import re
-
 from ros2course import kit
-from ros2course.kit import LATE_DELIVERY, Check, GradingSession, Unmet, checks, scripts
-from ros2course.kit import params as kit_params
-from ros2course.kit import topics_services as ts
+from ros2course.kit import Check, GradingSession, checks
 
 from . import _qos
 
@@ -127,239 +122,21 @@ CHECKS = [
 ]
 
 
-def _types() -> tuple[type, type]:
-    from sensor_msgs.msg import Temperature  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
-    from std_msgs.msg import String  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
-
-    return Temperature, String
-
-
-def _grade_sensor(s: GradingSession, temperature: type) -> None:
-    path = kit.executable(s, "sensor_executable", PACKAGE, SENSOR_EXE)
-    graph = s.graph  # the part's own
-    # both probes exist before the node starts: no reading is missed, and the RELIABLE one would match at once
-    best_effort = graph.topic(SENSOR_TOPIC, temperature, _qos.sensor_qos())
-    reliable = _qos.Probe(graph, SENSOR_TOPIC, temperature, _qos.profile(reliable=True, transient_local=False,
-                                                                         depth=10))
-    node = kit.start_node(s, "sensor_node_name", path, SENSOR_NODE, sigint_check="sensor_sigint_exit",
-                          need_node=False)
-    target, where = ts.own_endpoint(s, "sensor_topic", node, "publishers", SENSOR_TOPIC, SENSOR_TYPE,
-                                    none=f"no {SENSOR_TYPE} topic published to listen to", where="on")
-    if target != SENSOR_TOPIC:  # grade what flows where it is published
-        best_effort = graph.topic(target, temperature, _qos.sensor_qos())
-        reliable = _qos.Probe(graph, target, temperature, reliable.qos)
-    with s.phase("observe"):
-        window = best_effort.observe(WARM_UP + SAMPLES, PERIOD, START_TIMEOUT, abort=node.ended)
-    readings = best_effort.messages()[:WARM_UP + SAMPLES]
-
-    profiles = _qos.wait_endpoint_qos(graph, target, node.name, "publishers")
-    verdicts = [_qos.compatible(p, reliable.qos) for p in profiles]
-    incompatible = bool(profiles) and not any(ok for ok, _ in verdicts)
-    received = len(reliable.messages())
-    offered = ", ".join(f"({_qos.describe(p)})" for p in profiles) or "no publisher in the graph"
-    reason = next((r for ok, r in verdicts if not ok), "")
-    s.record("sensor_best_effort", incompatible and received == 0,
-             f"it offers {offered}{where}; a RELIABLE subscription "
-             + (f"cannot match ({reason})" if incompatible else "matches it")
-             + f"; the grader's RELIABLE probe received {received} reading(s)"
-             + ("" if not reliable.incompatible.is_set() else " and got the incompatible-QoS event"),
-             "BEST_EFFORT offered: qos_check_compatible(offered, RELIABLE request) is ERROR and the RELIABLE probe "
-             "receives nothing")
-
-    volatile = bool(profiles) and all(_qos.word(p.durability) == "VOLATILE" for p in profiles)
-    s.record("sensor_volatile", volatile, f"it offers {offered}{where}",
-             "VOLATILE (qos_profile_sensor_data: no reading is kept for subscriptions that join later)")
-
-    if not readings:
-        raise Unmet(f"no reading reached a BEST_EFFORT subscription on {target} in {window:.1f} s; "
-                    f"{kit.process_state(node.proc)}")
-    frames = sorted({m.header.frame_id for m in readings})
-    good = [m for m in readings if m.header.frame_id == FRAME_ID and math.isfinite(m.temperature)]
-    s.record("sensor_stream", len(good) == len(readings),
-             f"{len(readings)} reading(s) received by a BEST_EFFORT (qos_profile_sensor_data) subscription{where}, "
-             f"frame_id {', '.join(map(repr, frames))}, e.g. temperature {readings[0].temperature:.2f}",
-             f"readings with header.frame_id {FRAME_ID!r} and a finite temperature",
-             fraction=len(good) / len(readings))
-    kit.rate(s, "sensor_rate", best_effort.send_stamps(WARM_UP + SAMPLES)[WARM_UP:], period=PERIOD, needed=SAMPLES,
-             waited=window, noun="reading", source="the readings' send stamps, the first one left out", where=where)
-
-
-def _grade_config(s: GradingSession, string: type) -> None:
-    path = kit.executable(s, "config_executable", PACKAGE, CONFIG_EXE)
-    node = kit.start_node(s, "config_node_name", path, CONFIG_NODE, sigint_check="config_sigint_exit",
-                          need_node=False)
-    target, where = ts.own_endpoint(s, "config_topic", node, "publishers", CONFIG_TOPIC, CONFIG_TYPE,
-                                    none=f"no {CONFIG_TYPE} topic published", where="on")
-    profiles = _qos.wait_endpoint_qos(s.ros, target, node.name, "publishers")
-    # a VOLATILE listener of whatever reliability is offered: it sees the change whatever the
-    # durability and reliability (those are judged by the late joiner and config_latched)
-    reliable = bool(profiles) and all(_qos.word(p.reliability) == "RELIABLE" for p in profiles)
-    early = _qos.Probe(s.ros, target, string, _qos.profile(reliable=reliable, transient_local=False, depth=10))
-    # a RELIABLE, TRANSIENT_LOCAL subscription made after the node started, before units is set: what the
-    # node published at start is replayed to it (a VOLATILE offer cannot match it: nothing to wait for)
-    start = _qos.Probe(s.ros, target, string, _qos.profile(reliable=True, transient_local=True, depth=10))
-    start_can_match = any(_qos.compatible(p, start.qos)[0] for p in profiles)
-
-    # the configuration changes once: with depth 1 only the new one is kept for late joiners
-    services = kit_params.connect(s, node.name, proc=node.proc)
-    with s.phase("observe"):
-        _qos.wait_for(lambda: early.matched() > 0, 3.0, abort=node.ended)  # else the new configuration is missed
-        if start_can_match:  # before units is set: the first message replayed is the one of the start
-            _qos.wait_for(lambda: bool(start.messages()), LATE_DELIVERY, abort=node.ended)
-    initial = [m.data for m in start.messages()]
-    wanted = f"units: {DEFAULT_UNITS}"
-    s.record("config_initial", initial[:1] == [wanted],
-             "a RELIABLE, TRANSIENT_LOCAL subscription made after the node started, before units was set, received "
-             + (", ".join(map(repr, initial[:3])) or "nothing")
-             + ("" if start_can_match or not profiles else
-                f" (it cannot match the publisher's {', '.join(f'({_qos.describe(p)})' for p in profiles)})"),
-             f"{wanted!r}, published at start and kept for subscriptions that join later")
-    with s.phase("observe"):
-        # The listener has matched the publisher; the publisher may learn of the listener a moment
-        # later (discovery runs both ways) and a VOLATILE listener misses what is sent before: a
-        # second change, to another unit, is the retry. The late joiner's verdicts use the last one.
-        units, tried = "", []
-        for patience in (1.5, LATE_DELIVERY):
-            units = _qos.random_units(other_than=tried)
-            tried.append(units)
-            answers = services.set({"units": units})
-            if _qos.wait_for(lambda u=units: any(m.data == f"units: {u}" for m in early.messages()), patience,
-                             abort=node.ended):
-                break
-        latest = f"units: {units}"
-    seen = [m.data for m in early.messages()]
-    refused = [a.line() for a in answers if not a.successful]
-    s.record("config_republish", latest in seen,
-             f"after `ros2 param set /{node.name} units {units}`"
-             + (f" ({'; '.join(refused)})" if refused else "")
-             + f" the grader received {', '.join(map(repr, seen[-3:])) or 'nothing'} on {target}",
-             f"{latest!r} published after the parameter changed")
-
-    late = _qos.Probe(s.ros, target, string, _qos.profile(reliable=True, transient_local=True, depth=10))
-    verdicts = [_qos.compatible(p, late.qos) for p in profiles]
-    can_match = any(ok for ok, _ in verdicts)
-    reason = next((r for ok, r in verdicts if not ok), "no publisher in the graph")
-    offered = ", ".join(f"({_qos.describe(p)})" for p in profiles) or "no publisher"
-    if can_match:
-        with s.phase("observe"):
-            _qos.wait_for(lambda: bool(late.messages()), LATE_DELIVERY, abort=node.ended)
-            first = late.messages()[:1]
-            if first and first[0].data != latest and latest in seen:  # an outdated one first: the rest follows
-                _qos.wait_for(lambda: any(m.data == latest for m in late.messages()), 1.0)
-    got = [m.data for m in late.messages()]
-    shown = ", ".join(map(repr, got[:4])) + (" ..." if len(got) > 4 else "")
-    s.record("config_late_joiner", bool(got),
-             f"a TRANSIENT_LOCAL subscription made after the configuration was published received "
-             f"{len(got)} message(s){': ' + shown if got else ''}"
-             + ("" if can_match else f" (it cannot match the publisher's {offered}: {reason})") + where,
-             "the configuration replayed to the late joiner (publisher TRANSIENT_LOCAL)")
-    s.record("config_depth", got == [latest],
-             f"the late joiner received {len(got)} message(s): {shown}",
-             f"only the current configuration, {latest!r} (KEEP_LAST, depth 1)")
-    latched = bool(profiles) and all(_qos.word(p.reliability) == "RELIABLE"
-                                     and _qos.word(p.durability) == "TRANSIENT_LOCAL" for p in profiles)
-    s.record("config_latched", latched, f"it offers {offered} on {target}", "RELIABLE, TRANSIENT_LOCAL")
-
-
-def _matching(readings: list[float], text: str) -> list[float]:
-    """The readings ``text`` logs as the lesson asks: ``Temperature: <value with two decimals>``."""
-    return [r for r in readings if re.search(rf"Temperature: {r:.2f}(?![0-9])", text)]
-
-
-def _grade_monitor(s: GradingSession, temperature: type, string: type) -> None:
-    path = kit.executable(s, "monitor_executable", PACKAGE, MONITOR_EXE)
-    graph = s.graph  # the part's own
-    # the configuration is published before the monitor exists: it is a late joiner
-    feed = _qos.Feed(s, graph, temperature, string, sensor_topic=SENSOR_TOPIC, config_topic=CONFIG_TOPIC,
-                     period=PERIOD)
-    rosout = graph.rosout()
-    node = kit.start_node(s, "monitor_node_name", path, MONITOR_NODE, sigint_check="monitor_sigint_exit",
-                          need_node=False)
-    found: dict[str, list[str]] = {}
-
-    def both() -> bool:
-        found.clear()
-        found.update(ts.endpoints(graph, node.name, "subscriptions"))
-        return SENSOR_TOPIC in found and CONFIG_TOPIC in found
-
-    with s.phase("start"):
-        _qos.wait_for(both, 3.0, abort=node.ended)
-    s.record("monitor_topics", SENSOR_TYPE in found.get(SENSOR_TOPIC, []) and CONFIG_TYPE in found.get(CONFIG_TOPIC, []),
-             f"{node.name or 'the node'} subscribes to: {ts.describe_endpoints(found)}",
-             f"{SENSOR_TOPIC} [{SENSOR_TYPE}] and {CONFIG_TOPIC} [{CONFIG_TYPE}]")
-    if node.name is None:
-        raise Unmet(f"no node to inspect; {kit.process_state(node.proc)}")
-
-    requested = _qos.wait_endpoint_qos(graph, SENSOR_TOPIC, node.name, "subscriptions", 1.0)
-    verdicts = [_qos.compatible(feed.sensor_offered, p) for p in requested]
-    ok = bool(requested) and all(v for v, _ in verdicts)
-    asked = ", ".join(f"({_qos.describe(p)})" for p in requested) or f"no subscription on {SENSOR_TOPIC}"
-    reason = next((r for v, r in verdicts if not v), "")
-    s.record("monitor_sensor_qos", ok, f"it requests {asked}" + (f": {reason}" if reason else ""),
-             f"a request a BEST_EFFORT publisher ({_qos.describe(feed.sensor_offered)}) satisfies")
-    requested = _qos.wait_endpoint_qos(graph, CONFIG_TOPIC, node.name, "subscriptions", 1.0)
-    asked = ", ".join(f"({_qos.describe(p)})" for p in requested) or f"no subscription on {CONFIG_TOPIC}"
-    latched = bool(requested) and all(_qos.word(p.durability) == "TRANSIENT_LOCAL"
-                                      and _qos.word(p.reliability) == "RELIABLE"
-                                      and _qos.compatible(feed.config_offered, p)[0] for p in requested)
-    s.record("monitor_config_qos", latched, f"it requests {asked}",
-             "the latched profile: RELIABLE, TRANSIENT_LOCAL (as the configuration publisher offers)")
-
-    def records() -> list[str]:
-        return [r.msg for r in rosout.records(node=node.name)]
-
-    def logged_readings() -> list[float]:
-        published = feed.published()
-        return sorted({r for text in records() for r in _matching(published, text)})
-
-    with s.phase("observe"):
-        _qos.wait_for(lambda: any(f"Config: {feed.config}" in t for t in records())
-                      and len(logged_readings()) >= LOGGED_READINGS, LATE_DELIVERY, abort=node.ended)
-    texts = records()
-    recent = " | ".join(t.strip()[:60] for t in texts[-2:]) or "no log records"
-    config_logged = any(f"Config: {feed.config}" in t for t in texts)
-    unlabelled = not config_logged and any(feed.config in t for t in texts)
-    on_stdout = feed.config in node.proc.stdout()
-    s.record("monitor_logs_config", config_logged,
-             f"the grader published {feed.config!r} on {CONFIG_TOPIC} before the node started; "
-             + ("it is in the node's log" if config_logged else
-                "the node logged it without the label 'Config: '" if unlabelled else
-                f"not in the node's log (last records: {recent})")
-             + ("; it appeared on stdout only (print() instead of the logger?)" if on_stdout and not config_logged
-                else ""),
-             f"a log record containing 'Config: {feed.config}'")
-    readings = logged_readings()
-    s.record("monitor_logs_sensor", len(readings) >= LOGGED_READINGS,
-             f"{len(readings)} of the grader's {len(feed.published())} readings found in the node's log"
-             + (f", e.g. {readings[0]:.2f}" if readings else f" (last records: {recent})"),
-             f"at least {LOGGED_READINGS} of the grader's random temperatures logged as 'Temperature: <value with "
-             "two decimals>'",
-             fraction=min(1.0, len(readings) / LOGGED_READINGS))
-
-
-def _grade_cli(s: GradingSession, temperature: type, string: type) -> None:
-    path = scripts.script(s, "cli_script", SCRIPT)
-    graph = s.graph  # the part's own
-    oracle = _qos.Oracle(s, graph, temperature, string, sensor_topic=SENSOR_TOPIC, config_topic=CONFIG_TOPIC)
-    run = scripts.run_script(s, path, timeout=SCRIPT_TIMEOUT,
-                             daemon_sees=[SENSOR_TOPIC, CONFIG_TOPIC, f"/{oracle.sensor_node}",
-                                          f"/{oracle.config_node}"])
-    scripts.ended(s, "cli_ends", run, "it ends by itself with exit code 0")
-    scripts.printed(s, "cli_sensor_qos", run, [f"Node name: {oracle.sensor_node}", "Reliability: BEST_EFFORT"],
-                    f"the QoS of the publisher of {SENSOR_TOPIC}", f"ros2 topic info --verbose {SENSOR_TOPIC}")
-    scripts.printed(s, "cli_config_qos", run, [f"Node name: {oracle.config_node}", "Durability: TRANSIENT_LOCAL"],
-                    f"the QoS of the publisher of {CONFIG_TOPIC}", f"ros2 topic info --verbose {CONFIG_TOPIC}")
-
-
 def grade(s: GradingSession) -> None:
     """Grade the three nodes and the script, each a part of its own (see the module docstring)."""
     kit.depends(s, "depends", PACKAGE, ("rclpy", "std_msgs", "sensor_msgs"))
-    temperature, string = _types()
+    temperature, string = _qos.message_types()
     with s.part("config"):  # first, in s.ros: the parameter client of the kit asks there
-        _grade_config(s, string)
+        _qos.grade_config(s, string, PACKAGE, CONFIG_EXE, CONFIG_NODE, topic=CONFIG_TOPIC, type_name=CONFIG_TYPE,
+                          default_units=DEFAULT_UNITS)
     with s.part("sensor", own_graph=True):
-        _grade_sensor(s, temperature)
+        _qos.grade_sensor(s, temperature, PACKAGE, SENSOR_EXE, SENSOR_NODE, topic=SENSOR_TOPIC, type_name=SENSOR_TYPE,
+                          frame_id=FRAME_ID, period=PERIOD, samples=SAMPLES, warm_up=WARM_UP,
+                          start_timeout=START_TIMEOUT)
     with s.part("monitor", own_graph=True):
-        _grade_monitor(s, temperature, string)
+        _qos.grade_monitor(s, temperature, string, PACKAGE, MONITOR_EXE, MONITOR_NODE, sensor_topic=SENSOR_TOPIC,
+                           sensor_type_name=SENSOR_TYPE, config_topic=CONFIG_TOPIC, config_type_name=CONFIG_TYPE,
+                           period=PERIOD, logged=LOGGED_READINGS)
     with s.part("cli", own_graph=True):
-        _grade_cli(s, temperature, string)
+        _qos.grade_cli(s, temperature, string, SCRIPT, timeout=SCRIPT_TIMEOUT, sensor_topic=SENSOR_TOPIC,
+                       config_topic=CONFIG_TOPIC)
