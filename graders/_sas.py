@@ -252,17 +252,19 @@ def start_driver(s: GradingSession, check_id: str, driver: SasDriver, *, sigint_
 
 
 def _driver_sigint(s: GradingSession, check_id: str, run: DriverRun) -> None:
-    """Ctrl+C the driver; if it had ended cleanly (exit code 0), Ctrl+C a fresh instance instead."""
-    if run.proc.poll() != 0:
-        sigint_exit(s, check_id, run.proc)
-        return
-    before = run.probe.count()
-    proc, reason = start_node_action(s, run.driver.action(), run.driver.executable + ".second")
-    if proc is None:
-        raise Unmet(reason)
-    with s.phase("start"):
-        run.probe.wait_for(lambda got: len(got) > before, 10.0, abort=lambda: proc.poll() is not None)
-    sigint_exit(s, check_id, proc)
+    """Ctrl+C the driver; if it had ended cleanly (exit code 0), Ctrl+C a fresh instance instead (and a fresh
+    one again when a Ctrl+C hit rclpy's own shutdown race, :func:`~ros2course.kit.nodes.sigint_exit`)."""
+    def fresh(label: str = ".second") -> Any:
+        before = run.probe.count()
+        proc, reason = start_node_action(s, run.driver.action(), run.driver.executable + label)
+        if proc is None:
+            raise Unmet(reason)
+        with s.phase("start"):
+            run.probe.wait_for(lambda got: len(got) > before, 10.0, abort=lambda: proc.poll() is not None)
+        return proc
+
+    first = run.proc if run.proc.poll() != 0 else fresh()
+    sigint_exit(s, check_id, first, again=lambda: fresh(".again"))
 
 
 def interface(s: GradingSession, check_id: str, run: DriverRun, timeout: float = 1.0) -> bool:
@@ -534,6 +536,19 @@ class ClientRun:
     initial: list[float]
     enabled_at: float = 0.0
     sigint_check: str | None = None
+    relaunch: Any = None  # () -> a new process of the client in the stand-in's graph
+
+    def _again(self) -> Any:
+        """A fresh client for a second Ctrl+C (:func:`~ros2course.kit.nodes.sigint_exit`), once its targets reach
+        the still-enabled stand-in (it is in its loop); None without :attr:`relaunch` or when it died."""
+        if self.relaunch is None:
+            return None
+        before = self.stand_in.targets.count()
+        fresh = self.relaunch()
+        self.proc = fresh  # close() stops the process it judged last
+        self.stand_in.targets.wait_for(lambda got: len(got) > before + 10, 10.0,
+                                       abort=lambda: fresh.poll() is not None)
+        return fresh if fresh.poll() is None else None
 
     def ended(self) -> bool:
         """True once the process exited."""
@@ -545,7 +560,7 @@ class ClientRun:
         stand-in; a client still running (no check given, or it survived) is stopped with SIGINT/SIGTERM.
         """
         if self.sigint_check is not None:
-            sigint_exit(s, self.sigint_check, self.proc)
+            sigint_exit(s, self.sigint_check, self.proc, again=self._again)
         self.stand_in.stop()
         with s.phase("stop"):
             self.proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
@@ -576,9 +591,13 @@ def start_client(s: GradingSession, check_id: str, driver: SasDriver, executable
     graph = s.new_graph()
     stand_in = StandInDriver(graph, driver, initial, period)
     interpreter = foreign_python_prefix(path)
-    proc = (s.launch(Path(interpreter[0]), executable, [str(path)], graph=graph) if interpreter
-            else s.launch(path, executable, graph=graph))
-    return ClientRun(proc, stand_in, list(initial), sigint_check=sigint_check)
+
+    def launch(label: str = executable) -> Any:
+        return (s.launch(Path(interpreter[0]), label, [str(path)], graph=graph) if interpreter
+                else s.launch(path, label, graph=graph))
+
+    return ClientRun(launch(), stand_in, list(initial), sigint_check=sigint_check,
+                     relaunch=lambda: launch(executable + ".again"))
 
 
 def client_waits(s: GradingSession, check_id: str, run: ClientRun, disabled: float) -> bool:

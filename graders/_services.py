@@ -202,14 +202,17 @@ def ask(s: GradingSession, srv_type: type, service: str, request: Any, node: Sta
 
 
 def quote_to_point(s: GradingSession, srv_type: type, service: str, node: StartedNode, *, total: float,
-                   tolerance: float) -> Callable[[tuple[str, str, bool, int]], tuple[bool, str]]:
+                   tolerance: float, repeats: int = 1) -> Callable[[tuple[str, str, bool, int]], tuple[bool, str]]:
     """An ``ask`` for :func:`answers` on a service that takes a quote and returns a point (seed ch. 20's
     ``WhatIsThePoint``: ``request.quote.{id, quote, philosopher_name}``, ``response.point.{x, y, z}``).
 
     A case is ``(quote, philosopher, should the coordinates sum to total, quote id)``; it is answered as
-    expected when ``|x + y + z - total| <= tolerance`` is what the case says.
+    expected when ``|x + y + z - total| <= tolerance`` is what the case says, in each of ``repeats`` calls:
+    the seed's server draws x and y at random, so one call can hide a rule that holds only for some draws
+    (``z = 42 % (x + y)`` sums to 42 whenever 21 < x + y < 42). Observed shows the first answer that was
+    wrong, else the first answer.
     """
-    def call(case: tuple[str, str, bool, int]) -> tuple[bool, str]:
+    def once(case: tuple[str, str, bool, int]) -> tuple[bool, str]:
         text, philosopher, hits, quote_id = case
         request = srv_type.Request()
         request.quote.id, request.quote.quote, request.quote.philosopher_name = quote_id, text, philosopher
@@ -220,5 +223,16 @@ def quote_to_point(s: GradingSession, srv_type: type, service: str, node: Starte
         got = point.x + point.y + point.z
         return (abs(got - total) <= tolerance) == hits, (
             f"'{text}' -- {philosopher}: point ({point.x:.6g}, {point.y:.6g}, {point.z:.6g}), sum {got:.9g}")
+
+    def call(case: tuple[str, str, bool, int]) -> tuple[bool, str]:
+        answers = []
+        for _ in range(repeats):
+            answers.append(once(case))
+            if not answers[-1][0]:
+                break
+        ok, text = answers[-1] if not answers[-1][0] else answers[0]
+        if repeats > 1:
+            text += f" (call {len(answers)} of {repeats})" if not ok else f" (and {repeats - 1} more calls alike)"
+        return ok, text
 
     return call

@@ -34,6 +34,11 @@ PERIOD = 0.5  # seconds between calls, seed ch. 20.5.6
 CALLS = 6  # calls -> 5 intervals, the minimum LESSONS.md asks for
 SUM_TOLERANCE = 1e-6  # |x + y + z - 42|
 LATE_ANSWER = 1.0  # seconds: twice the call period, so a blocked client halves its rate
+#: Calls per quote. The seed's server draws x and y at random, so a rule right for most draws passes one call:
+#: ``z = 42 % (x + y)`` sums to 42 whenever x + y > 21, 85 % of the reference's draws; 50 calls leave it
+#: unseen 0.03 % of the time. The other quotes, 5 calls each (a point that sums to 42 only sometimes).
+SUM_REPEATS = 50
+REPEATS = 5
 
 #: (quote, philosopher, does the quote contain "life" in any case?, the quote's id)
 LOWERCASE_LIFE = ("what is the meaning of life, then?", "Monty Python", True, 4201)
@@ -100,9 +105,11 @@ def _grade_server(s: GradingSession, srv_type: type) -> None:
     target, where = ts.own_endpoint(s, "service_name_type", node, "services", SERVICE, SRV_TYPE,
                                     none=f"no service of type {SRV_TYPE} to call", where="called at")
 
-    ask = services.quote_to_point(s, srv_type, target, node, total=42.0, tolerance=SUM_TOLERANCE)
+    ask = services.quote_to_point(s, srv_type, target, node, total=42.0, tolerance=SUM_TOLERANCE, repeats=REPEATS)
+    ask_sum = services.quote_to_point(s, srv_type, target, node, total=42.0, tolerance=SUM_TOLERANCE,
+                                      repeats=SUM_REPEATS)
     with s.phase("observe"):
-        services.answers(s, "life_sum_42", ask, [LOWERCASE_LIFE], "coordinates summing to 42 (± 1e-6)", where)
+        services.answers(s, "life_sum_42", ask_sum, [LOWERCASE_LIFE], "coordinates summing to 42 (± 1e-6)", where)
         services.answers(s, "life_any_case", ask, OTHER_CASES, "each point sums to 42 (± 1e-6): 'life' in any case",
                          where)
         services.answers(s, "no_life_not_42", ask, NO_LIFE, "no point sums to 42 (the quote text has no 'life')",

@@ -185,3 +185,47 @@ def test_sas_driver_topics_and_limits_follow_the_seed():
     assert abs(limits[DRIVER.limits_max][5] - 4 * 3.141592653589793) < 1e-12
     action = DRIVER.action()
     assert action.name == "myrobot_1" and action.parameters == [DRIVER.parameters]
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(90)
+def test_probe_keeps_recording_after_an_error_inside_its_wait(ros_env, tmp_path):
+    """A spin_once that raises (rclpy's InvalidHandle when first_messages destroys its subscriptions under the
+    probe's wait) ends that wait, not the recording: in CI the probe's thread once died that way and a correct
+    driver's stream "stopped" after 10 messages. Errors are injected here; first_messages runs too."""
+    from std_msgs.msg import Float64MultiArray  # noqa: PLC0415
+
+    from ros2course.run.probes import RosSession  # noqa: PLC0415
+    from ros2course.run.process import LearnerProcess, sweep_stale_fastdds_shm  # noqa: PLC0415
+    JointStreamProbe = _lesson_module("_joint_stream").JointStreamProbe
+
+    script = tmp_path / "known_500hz_publisher.py"
+    script.write_text(textwrap.dedent(PUBLISHER), encoding="utf-8")
+    with RosSession() as session:
+        probe = JointStreamProbe(session.context, "/myrobot_1/get/joint_states")
+        proc = LearnerProcess([PY, str(script)], session.learner_env(ros_env), tmp_path / "logs", "publisher",
+                              ros_sigint=True)
+        try:
+            proc.start()
+            assert probe.wait_for(lambda got: len(got) > 0, 20.0, abort=lambda: proc.poll() is not None)
+            spin_once = probe._executor.spin_once
+            failures = [3]
+
+            def failing(timeout_sec=None):
+                if failures[0]:
+                    failures[0] -= 1
+                    raise RuntimeError("Destroyable is being destroyed (injected)")
+                return spin_once(timeout_sec=timeout_sec)
+
+            probe._executor.spin_once = failing
+            for _ in range(20):  # subscriptions made and destroyed from this thread while the probe spins
+                probe.first_messages(["/nobody/publishes/this"], Float64MultiArray, 0.01)
+            assert probe.wait_for(lambda got: not failures[0], 5.0)
+            before = probe.count()
+            assert probe.wait_for(lambda got: len(got) >= before + 100, 10.0, abort=lambda: proc.poll() is not None), \
+                f"the probe stopped recording at {probe.count()} messages"
+            assert probe.errors >= 3
+        finally:
+            proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
+            probe.close()
+    sweep_stale_fastdds_shm()

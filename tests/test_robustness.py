@@ -267,3 +267,38 @@ def test_reference_grading_is_deterministic(lesson, tmp_path):
     assert verdicts[0][1] == 15.0
     assert verdicts[1] == verdicts[0]
     assert verdicts[2] == verdicts[0]
+
+
+RACE_ONCE = '''    except (KeyboardInterrupt, ExternalShutdownException):
+        import pathlib
+        import sys
+        first = pathlib.Path({marker!r})
+        if not first.exists():  # the first run ends as rclpy's own shutdown race does (its traceback, exit 1)
+            first.write_text("raced")
+            sys.stderr.write(
+                "Traceback (most recent call last):\\n"
+                '  File "/x/print_forever_node.py", line 33, in main\\n'
+                "    rclpy.spin(node)\\n"
+                '  File "/x/site-packages/rclpy/executors.py", line 740, in _wait_for_ready_callbacks\\n'
+                "    wait_set = _rclpy.WaitSet(\\n"
+                "rclpy._rclpy_pybind11.RCLError: failed to initialize wait set: the given context is not valid, "
+                "at ./src/rcl/wait.c:82\\n")
+            sys.exit(1)
+        {then}
+'''
+
+
+@pytest.mark.parametrize("then, passes", [("pass", True), ("raise", False)], ids=["then-clean", "then-traceback"])
+def test_a_ctrl_c_in_rclpys_race_is_judged_on_a_second_run(lesson, tmp_path, then, passes):
+    """The first Ctrl+C ends the node as rclpy's shutdown race does (a traceback that says nothing about the
+    program): kit.start_node starts the executable again, waits for its node, presses Ctrl+C once more and
+    judges that run, so a node that would have ended with its own traceback loses the points."""
+    marker = tmp_path / "raced-once"
+    root = workspace_with(lesson, tmp_path / "ws", [
+        Edit(file=NODE_FILE, replace="    except (KeyboardInterrupt, ExternalShutdownException):\n        pass\n",
+             with_=RACE_ONCE.format(marker=str(marker), then=then))])
+    result = grade(lesson, root)
+    passed, observed = checks(result)["sigint_exit"]
+    assert marker.exists(), describe(result)
+    assert passed == passes, describe(result)
+    assert "a second run" in observed and ("exit code 0" if passes else "with a traceback") in observed, observed

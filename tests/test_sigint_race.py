@@ -1,0 +1,91 @@
+"""kit.nodes.sigint_exit: a Ctrl+C that hits rclpy's own shutdown race judges a fresh run, not the program.
+
+rclpy (Jazzy 7.1) can raise ``RCLError: failed to initialize wait set: the
+given context is not valid`` from inside its executor when SIGINT lands while
+it builds a wait set. The reference node (which catches KeyboardInterrupt and
+ExternalShutdownException) and a node that catches only KeyboardInterrupt end
+the same way in that run, so that exit cannot be a verdict: in CI it once gave
+sas-robot-driver's ``client-traceback-on-ctrl-c`` wrong solution full marks.
+These tests drive the step with stand-in processes (no ROS): what each run
+printed is given, the verdict is the step's.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from ros2course.grade.session import GradingSession
+from ros2course.kit import Check
+from ros2course.kit.nodes import sigint_exit
+from ros2course.run.process import ExitReport
+
+RACE = """Traceback (most recent call last):
+  File "/x/joint_interface_example.py", line 40, in main
+    rclpy.spin_once(node, timeout_sec=0.0)
+  File "/x/site-packages/rclpy/executors.py", line 740, in _wait_for_ready_callbacks
+    wait_set = _rclpy.WaitSet(
+rclpy._rclpy_pybind11.RCLError: failed to initialize wait set: the given context is not valid, at ./src/rcl/wait.c:82
+"""
+SHUTDOWN = """Traceback (most recent call last):
+  File "/x/joint_interface_example.py", line 40, in main
+    rclpy.spin_once(node, timeout_sec=0.0)
+  File "/x/site-packages/rclpy/executors.py", line 712, in _wait_for_ready_callbacks
+    raise ExternalShutdownException()
+rclpy.executors.ExternalShutdownException
+"""
+
+
+class StandInProcess:
+    """A process that exits on its first interrupt with ``returncode`` and ``traceback``."""
+
+    def __init__(self, returncode: int, traceback: str = "") -> None:
+        self.returncode, self.traceback = returncode, traceback
+        self.running = True
+        self.interrupts = 0
+
+    def poll(self):
+        return None if self.running else self.returncode
+
+    def interrupt(self) -> bool:
+        self.interrupts += 1
+        self.running = False
+        return True
+
+    def stop(self, sigint_timeout: float = 5.0, sigterm_timeout: float = 2.0) -> ExitReport:
+        return ExitReport(self.returncode, None, 0.0, self.traceback)
+
+
+@pytest.fixture
+def s(tmp_path):
+    return GradingSession(None, [Check("sigint_exit", "Ctrl+C", 1)], tmp_path, tmp_path / "log", {})
+
+
+def test_the_race_then_a_shutdown_traceback_fails(s):
+    """Only KeyboardInterrupt caught: the second run shows ExternalShutdownException, so the check fails."""
+    fresh = StandInProcess(1, SHUTDOWN)
+    assert not sigint_exit(s, "sigint_exit", StandInProcess(1, RACE), again=lambda: fresh)
+    result = s.results["sigint_exit"]
+    assert not result.passed and fresh.interrupts == 1
+    assert "ExternalShutdownException" in result.observed and "a second run" in result.observed, result.observed
+
+
+def test_the_race_then_a_clean_exit_passes(s):
+    """The reference: its second run ends with exit code 0."""
+    assert sigint_exit(s, "sigint_exit", StandInProcess(1, RACE), again=lambda: StandInProcess(0))
+    result = s.results["sigint_exit"]
+    assert result.passed and "exit code 0" in result.observed and "a second run" in result.observed
+
+
+def test_the_race_twice_or_without_a_second_run_counts_as_clean(s):
+    """No way to start it again (or the race again, about 1 in 10,000): rclpy's race is not the learner's."""
+    assert sigint_exit(s, "sigint_exit", StandInProcess(1, RACE))
+    assert "shutdown race" in s.results["sigint_exit"].observed
+    assert sigint_exit(s, "sigint_exit", StandInProcess(1, RACE), again=lambda: StandInProcess(1, RACE))
+    assert sigint_exit(s, "sigint_exit", StandInProcess(1, RACE), again=lambda: None)
+
+
+def test_no_second_run_without_the_race(s):
+    """A plain traceback is judged at once; the fresh instance is never started."""
+    started = []
+    assert not sigint_exit(s, "sigint_exit", StandInProcess(1, SHUTDOWN), again=lambda: started.append(1))
+    assert not started and "a second run" not in s.results["sigint_exit"].observed
