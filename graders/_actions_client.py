@@ -15,11 +15,11 @@ from collections.abc import Callable
 from typing import Any
 
 from ros2course import kit
-from ros2course.kit import GradingSession, Unmet
+from ros2course.kit import Session, Unmet
 from ros2course.kit import actions as act
 from ros2course.kit.topics_services import numbers_in
 
-from . import _services
+from ros2course.kit import services
 
 PACKAGE = "python_package_that_uses_the_actions"
 EXECUTABLE = "move_straight_in_2d_action_client_node"
@@ -44,8 +44,8 @@ PERIOD = 0.1  # seconds between the grader's feedback messages
 PRETENDS = re.compile(r"succe|abort|cancel|unknown|status|final|result", re.IGNORECASE)
 
 
-def _goal_xy(s: GradingSession) -> tuple[float, float]:
-    """A goal for the learner's client to send: x in [0.3, 0.9], y in [-0.9, -0.3] m (GradingSession.random)."""
+def _goal_xy(s: Session) -> tuple[float, float]:
+    """A goal for the learner's client to send: x in [0.3, 0.9], y in [-0.9, -0.3] m (Session.random)."""
     return round(s.random.uniform(0.3, 0.9), 3), round(s.random.uniform(-0.9, -0.3), 3)
 
 
@@ -86,7 +86,7 @@ def _result_script(action: Any, final: tuple[float, float], distances: list[floa
     return act.Script(accept=True, feedback=feedback, result=result, status=status, period=PERIOD)
 
 
-def interrupted_run(s: GradingSession, path: Any) -> None:
+def interrupted_run(s: Session, path: Any) -> None:
     """sigint_exit: Ctrl+C while the client waits for a server that never comes (judged as the part ends)."""
     rosout = s.graph.rosout()
     proc = _started(s, path, _goal_xy(s), f"{EXECUTABLE}.interrupted")
@@ -95,7 +95,7 @@ def interrupted_run(s: GradingSession, path: Any) -> None:
         kit.wait_until(lambda: bool(_records(rosout)), 2 * WAIT_WINDOW, abort=lambda: proc.poll() is not None)
 
 
-def goal_run(s: GradingSession, action: Any, path: Any) -> None:
+def goal_run(s: Session, action: Any, path: Any) -> None:
     """waits, goal_sent, logs_feedback, logs_result, ends."""
     xy = _goal_xy(s)
     distances = sorted((round(s.random.uniform(0.05, 0.95), 3) for _ in range(4)), reverse=True) + [0.0]
@@ -106,7 +106,7 @@ def goal_run(s: GradingSession, action: Any, path: Any) -> None:
         action, final, distances, act.SUCCEEDED))
     rosout = s.graph.rosout()
     node = kit.start_node(s, "node_name", path, NODE, args=_params(xy), label=EXECUTABLE)
-    if _services.says_it_waits(s, "waits", rosout, node, ACTION, timeout=WAIT_WINDOW, what="action server"):
+    if services.says_it_waits(s, "waits", rosout, node, ACTION, timeout=WAIT_WINDOW, what="action server"):
         _throttled(s, rosout, node)
     server.offer()
     with s.phase("observe"):
@@ -149,19 +149,19 @@ def goal_run(s: GradingSession, action: Any, path: Any) -> None:
     _ends(s, "ends", node.proc, "once its goal had SUCCEEDED")
 
 
-def _throttled(s: GradingSession, rosout: Any, node: kit.StartedNode) -> None:
+def _throttled(s: Session, rosout: Any, node: kit.StartedNode) -> None:
     """Record ``waits_throttled``: with the server missing THROTTLE_WINDOW s more, the client's "waiting"
     records (their own stamps) come at most once every WAIT_PERIOD s (one or two more are forgiven)."""
     def waiting() -> list[float]:
         return [r.stamp.sec + r.stamp.nanosec * 1e-9
-                for r in rosout.records(node=NODE, match=lambda text: _services.WAITING.search(text) is not None)]
+                for r in rosout.records(node=NODE, match=lambda text: services.WAITING.search(text) is not None)]
 
     with s.phase("observe"):
         kit.wait_until(lambda: False, THROTTLE_WINDOW, abort=node.ended)
     stamps = sorted(waiting())
     if not stamps:  # the record said it waits under another logger name: nothing to time
         stamps = sorted(r.stamp.sec + r.stamp.nanosec * 1e-9 for r in rosout.records(
-            match=lambda text: _services.WAITING.search(text) is not None))
+            match=lambda text: services.WAITING.search(text) is not None))
     span = stamps[-1] - stamps[0] if stamps else 0.0
     allowed = int(span / WAIT_PERIOD) + 2
     gaps = [b - a for a, b in zip(stamps, stamps[1:])]
@@ -186,7 +186,7 @@ def _feedback_records(records: list[str], distances: list[float], final: tuple[f
     return found
 
 
-def _ends(s: GradingSession, check_id: str, proc: kit.LearnerProcess, when: str) -> bool:
+def _ends(s: Session, check_id: str, proc: kit.LearnerProcess, when: str) -> bool:
     """Record ``check_id``: ``proc`` ends by itself within :data:`END_TIMEOUT` s, exit code 0, no traceback."""
     with s.phase("observe"):
         kit.wait_until(lambda: proc.poll() is not None, END_TIMEOUT)
@@ -200,12 +200,12 @@ def _ends(s: GradingSession, check_id: str, proc: kit.LearnerProcess, when: str)
                     + (f" ({ended.last_line})" if ended.last_line and not ok else ""), expected)
 
 
-def _started(s: GradingSession, path: Any, xy: tuple[float, float], label: str) -> kit.LearnerProcess:
+def _started(s: Session, path: Any, xy: tuple[float, float], label: str) -> kit.LearnerProcess:
     """Start the client with goal ``xy`` (the server is already there); it may end before the graph shows it."""
     return s.launch(path, label, _params(xy))
 
 
-def aborted_run(s: GradingSession, action: Any, path: Any) -> None:
+def aborted_run(s: Session, action: Any, path: Any) -> None:
     """logs_aborted: the grader's server aborts the goal after two feedback messages."""
     xy = _goal_xy(s)
     final = (round(xy[0] / 2, 3), round(xy[1] / 2, 3))
@@ -231,7 +231,7 @@ def aborted_run(s: GradingSession, action: Any, path: Any) -> None:
              if said else f"the goal was aborted; its log: {_last(rosout)}", expected)
 
 
-def rejected_run(s: GradingSession, action: Any, path: Any) -> None:
+def rejected_run(s: Session, action: Any, path: Any) -> None:
     """handles_rejection: the grader's server rejects the goal."""
     xy = _goal_xy(s)
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: act.Script(accept=False))

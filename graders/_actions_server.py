@@ -16,7 +16,7 @@ import time
 from typing import Any
 
 from ros2course import kit
-from ros2course.kit import GradingSession, Unmet, scripts
+from ros2course.kit import Session, Unmet, scripts
 from ros2course.kit import actions as act
 
 PACKAGE = "python_package_that_uses_the_actions"
@@ -87,7 +87,7 @@ def _distances(client: act.GoalClient, goal: act.Goal) -> list[tuple[float, floa
     return [(stamp, feedback.distance_to_goal) for stamp, feedback in client.feedback(goal)]
 
 
-def _wait_feedback(s: GradingSession, client: act.GoalClient, goal: act.Goal, count: int, node: kit.StartedNode,
+def _wait_feedback(s: Session, client: act.GoalClient, goal: act.Goal, count: int, node: kit.StartedNode,
                    timeout: float) -> list[tuple[float, float]]:
     with s.phase("observe"):
         kit.wait_until(lambda: len(_distances(client, goal)) >= count or goal.result_future is not None
@@ -100,7 +100,7 @@ DEPENDENCIES = {"package_with_interfaces": ("action_msgs",),
                 PACKAGE: ("rclpy", "action_msgs", "package_with_interfaces")}
 
 
-def depends(s: GradingSession) -> None:
+def depends(s: Session) -> None:
     """Record ``depends``: both package.xml declare what the lesson and its contract list (partial credit per name)."""
     seen, missing = [], []
     total = sum(len(needed) for needed in DEPENDENCIES.values())
@@ -126,7 +126,7 @@ def depends(s: GradingSession) -> None:
              fraction=max(0, total - len(missing)) / total)
 
 
-def served(s: GradingSession, client: act.GoalClient, node: kit.StartedNode) -> None:
+def served(s: Session, client: act.GoalClient, node: kit.StartedNode) -> None:
     """Record ``action_served``: the node lists the action and the grader's client reaches it."""
     found = act.wait_for_action(s, node.name, "servers", ACTION, 5.0, abort=node.ended)
     ready = ACTION_TYPE in found.get(ACTION, []) and client.wait_for_server(3.0, abort=node.ended)
@@ -139,13 +139,13 @@ def served(s: GradingSession, client: act.GoalClient, node: kit.StartedNode) -> 
     s.require("action_served")
 
 
-def first_goal(s: GradingSession, action: Any, client: act.GoalClient,
+def first_goal(s: Session, action: Any, client: act.GoalClient,
                 node: kit.StartedNode) -> tuple[tuple[float, float], float]:
     """Goal 1 (FIRST_DISTANCE from the origin): goal_accepted, feedback, feedback_rate, speed, result.
 
     Returns where the point is believed to be afterwards, and the goal's direction (radians).
     """
-    angle = s.random.uniform(0.0, 2.0 * math.pi)  # the same files get the same goals (GradingSession.random)
+    angle = s.random.uniform(0.0, 2.0 * math.pi)  # the same files get the same goals (Session.random)
     target = (round(FIRST_DISTANCE * math.cos(angle), 3), round(FIRST_DISTANCE * math.sin(angle), 3))
     distance = math.hypot(*target)
     goal = client.send(_goal(action, *target))
@@ -168,7 +168,7 @@ def first_goal(s: GradingSession, action: Any, client: act.GoalClient,
     return target, angle  # where a correct server put the point (the result itself is judged above)
 
 
-def _judge_feedback(s: GradingSession, client: act.GoalClient, goal: act.Goal, distance: float, waited: float) -> None:
+def _judge_feedback(s: Session, client: act.GoalClient, goal: act.Goal, distance: float, waited: float) -> None:
     """Record ``feedback``, ``feedback_rate`` and ``speed`` from goal 1's feedback messages."""
     with s.phase("observe"):  # the last feedback may arrive just after the result
         kit.wait_until(lambda: any(d <= POSITION_TOLERANCE for _, d in _distances(client, goal)), kit.LATE_DELIVERY)
@@ -219,7 +219,7 @@ def _slope(points: list[tuple[float, float]]) -> float:
     return sum((t - mean_t) * (v - mean_v) for t, v in points) / spread if spread else 0.0
 
 
-def rejects(s: GradingSession, action: Any, client: act.GoalClient,
+def rejects(s: Session, action: Any, client: act.GoalClient,
              start: tuple[float, float]) -> tuple[float, float]:
     """Record ``rejects``: goals 3 m from the point along y and along x, one 2.6 m from it across the
     origin (only 1.6 m from the origin: a server measuring from (0, 0) instead of from the point accepts
@@ -257,7 +257,7 @@ def rejects(s: GradingSession, action: Any, client: act.GoalClient,
     return start
 
 
-def accepts_within(s: GradingSession, action: Any, client: act.GoalClient,
+def accepts_within(s: Session, action: Any, client: act.GoalClient,
                     start: tuple[float, float]) -> tuple[float, float]:
     """Record ``accepts_within``: a goal WITHIN_DISTANCE from the point, straight away from the origin, is
     accepted; the grader then cancels it at once (the point moves a step or two, not 2 m). Sent after
@@ -290,7 +290,7 @@ def _cancel_at_once(client: act.GoalClient, goal: act.Goal, distance: float,
     return _finite_or(_xy(goal.result.final_position), start) if goal.result is not None else start
 
 
-def cancel(s: GradingSession, action: Any, client: act.GoalClient, node: kit.StartedNode,
+def cancel(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNode,
             start: tuple[float, float], heading: float) -> list[tuple[float, float]]:
     """Goal 2, canceled after three feedback messages: position_kept, cancel_accepted, canceled.
 
@@ -371,7 +371,7 @@ def _tried(late_tries: list[str]) -> str:
     return f" (tried again after: {'; '.join(late_tries)})" if late_tries else ""
 
 
-def _position_kept(s: GradingSession, first: list[tuple[float, float]], d: float, start: tuple[float, float],
+def _position_kept(s: Session, first: list[tuple[float, float]], d: float, start: tuple[float, float],
                    target: tuple[float, float]) -> None:
     """Record ``position_kept`` from the ``(stamp, distance_to_goal)`` feedback of a goal ``d`` metres from
     ``start``, where the last goal ended: its first distance is at most ``d`` (a server that reset the point
@@ -406,7 +406,7 @@ def _away_from(rng: random.Random, places: list[tuple[float, float]], distance: 
     return round(a[0] + distance * math.cos(angle), 3), round(a[1] + distance * math.sin(angle), 3)
 
 
-def preempt(s: GradingSession, action: Any, client: act.GoalClient, node: kit.StartedNode,
+def preempt(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNode,
              places: list[tuple[float, float]]) -> list[str]:
     """Record ``preempted``: a goal PREEMPT_DISTANCE away is aborted by a goal back to the start, which succeeds.
 
@@ -465,7 +465,7 @@ def preempt(s: GradingSession, action: Any, client: act.GoalClient, node: kit.St
     return stuck
 
 
-def cli(s: GradingSession, node: kit.StartedNode, start: tuple[float, float]) -> None:
+def cli(s: Session, node: kit.StartedNode, start: tuple[float, float]) -> None:
     """Run the learner's script with a goal 0.5 m from the point; judge what it printed."""
     path = scripts.script(s, "cli_script", SCRIPT)
     if node.ended():
@@ -486,7 +486,7 @@ def cli(s: GradingSession, node: kit.StartedNode, start: tuple[float, float]) ->
         _sequence(s, run)
 
 
-def _sequence(s: GradingSession, run: Any) -> None:
+def _sequence(s: Session, run: Any) -> None:
     """Record ``cli_sequence``: the outputs of list, info and send_goal come in that order, and the script
     ended by itself before its deadline."""
     lines = [line.rstrip() for line in run.stdout.splitlines()]

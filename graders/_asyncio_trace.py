@@ -22,7 +22,7 @@ import re
 import sys
 from pathlib import Path
 
-from ros2course.kit import GradingSession
+from ros2course.kit import Session
 from ros2course.kit.programs import ProgramRun, run_program
 from ros2course.kit.python_programs import python_env
 
@@ -94,11 +94,11 @@ class Trace:
         return next((e for e in part if e[0] in ("result", "error")), None), Trace(part)
 
 
-def run_traced(s: GradingSession, wrapper: Path, mode: str, target: str, plans: list[list[float]], label: str, *,
+def run_traced(s: Session, wrapper: Path, mode: str, target: str, plans: list[list[float]], label: str, *,
                cwd: Path, timeout: float = 20.0) -> tuple[ProgramRun, Trace]:
     """Run ``python <wrapper> <trace> <mode> <target> <plans>`` in ``cwd``; return the run and its trace.
 
-    The trace file is written into ``<log_dir>/<label>.trace/`` (a :meth:`GradingSession.submission_folder`:
+    The trace file is written into ``<log_dir>/<label>.trace/`` (a :meth:`Session.submission_folder`:
     the program runs as the submission; never the learner's folder); a run that wrote none (it crashed
     before) comes back with an empty trace.
     """

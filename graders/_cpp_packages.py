@@ -21,7 +21,7 @@ import re
 import shutil
 from pathlib import Path
 
-from ros2course.kit import GradingSession, Unmet
+from ros2course.kit import Session, Unmet
 from ros2course.kit import package_prefix
 from ros2course.kit.programs import compile_errors, run_program
 
@@ -35,7 +35,7 @@ LEAKY_VARIABLES = ("CPATH", "C_INCLUDE_PATH", "CPLUS_INCLUDE_PATH", "LIBRARY_PAT
 _CONFIGURE_OPTIONS = ["-DCMAKE_FIND_USE_PACKAGE_REGISTRY=OFF", "-DCMAKE_FIND_USE_SYSTEM_PACKAGE_REGISTRY=OFF"]
 
 
-def consumer_env(s: GradingSession, package: str) -> dict[str, str]:
+def consumer_env(s: Session, package: str) -> dict[str, str]:
     """The workspace overlay (``source install/setup.bash``) without :data:`LEAKY_VARIABLES` and ``<package>_DIR``."""
     drop = {*LEAKY_VARIABLES, f"{package}_DIR", f"{package}_ROOT"}
     return {k: v for k, v in s.overlay().items() if k not in drop}
@@ -60,7 +60,7 @@ def _errors(run, paths: dict[str, str]) -> str:
     return "\n".join(kept)
 
 
-def build_consumer(s: GradingSession, configure_check: str, build_check: str, template: Path, package: str,
+def build_consumer(s: Session, configure_check: str, build_check: str, template: Path, package: str,
                    library_file: str) -> Path:
     """Configure and build the CMake project ``template`` against the learner's install of ``package``.
 
@@ -116,7 +116,7 @@ def build_consumer(s: GradingSession, configure_check: str, build_check: str, te
     return build
 
 
-def installed_library(s: GradingSession, check_ids: tuple[str, str, str], package: str, library_file: str,
+def installed_library(s: Session, check_ids: tuple[str, str, str], package: str, library_file: str,
                       header: str, target: str) -> None:
     """Record three checks on the install prefix of ``package`` (ament index): library file, header, export.
 
@@ -148,7 +148,7 @@ def installed_library(s: GradingSession, check_ids: tuple[str, str, str], packag
              f"share/{package}/cmake/export_{package}Export.cmake defining {target}")
 
 
-def needed_libraries(s: GradingSession, executable: Path) -> list[str] | None:
+def needed_libraries(s: Session, executable: Path) -> list[str] | None:
     """The ``NEEDED`` entries of ``executable``'s dynamic section (``readelf -d``); None when unreadable."""
     run = run_program(s, ["readelf", "-d", str(executable)], "readelf", timeout=20.0)
     if run.returncode != 0:
@@ -156,7 +156,7 @@ def needed_libraries(s: GradingSession, executable: Path) -> list[str] | None:
     return re.findall(r"\(NEEDED\)\s+Shared library: \[([^\]]+)\]", run.stdout)
 
 
-def defined_functions(s: GradingSession, executable: Path, prefix: str) -> list[str] | None:
+def defined_functions(s: Session, executable: Path, prefix: str) -> list[str] | None:
     """Functions whose demangled names start with ``prefix`` (e.g. ``SampleClass::``) that ``executable``
     defines itself (``nm -C --defined-only``, types T/t: compiled into it, not inline copies); None when unreadable.
     """
@@ -167,7 +167,7 @@ def defined_functions(s: GradingSession, executable: Path, prefix: str) -> list[
     return sorted({name for name in found if name.startswith(prefix)})
 
 
-def uses_library(s: GradingSession, check_id: str, executable: Path, library_file: str, class_prefix: str) -> bool:
+def uses_library(s: Session, check_id: str, executable: Path, library_file: str, class_prefix: str) -> bool:
     """Record ``check_id``: ``executable`` loads ``library_file`` and compiles none of ``class_prefix``'s functions.
 
     The rule is the library's reason to exist (seed ch. 27.3: the local node

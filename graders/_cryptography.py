@@ -21,9 +21,9 @@ import subprocess
 import tempfile
 from pathlib import Path
 
-from ros2course.kit import GradingSession, NotGradable, Unmet
+from ros2course.kit import Session, NotGradable, Unmet
 from ros2course.kit.programs import ProgramRun, run_program
-from . import _files as files
+from ros2course.kit import learner_files as files
 
 AGE_HEADERS = (b"age-encryption.org/v1\n", b"-----BEGIN AGE ENCRYPTED FILE-----")  # age(1): binary, or -a armored
 #: nss_wrapper (cwrap.org, Debian/Ubuntu package libnss-wrapper): an LD_PRELOAD library that answers
@@ -59,7 +59,7 @@ def require_tools() -> None:
                           "sudo apt install age openssh-client (Ubuntu 24.04), then check again")
 
 
-def crypto_folder(s: GradingSession, check_id: str, folder: str) -> Path:
+def crypto_folder(s: Session, check_id: str, folder: str) -> Path:
     """``check_id``: ``folder`` is a folder (not a link) in the workspace; returns its resolved path.
 
     Raises:
@@ -73,7 +73,7 @@ def crypto_folder(s: GradingSession, check_id: str, folder: str) -> Path:
     return Path(os.path.realpath(path))
 
 
-def record(s: GradingSession, names: dict[str, str], found: Found) -> None:
+def record(s: Session, names: dict[str, str], found: Found) -> None:
     """Record each judgement of ``found``, expecting what the check's name (``names``: id -> name) says."""
     for check_id, (passed, observed) in found.items():
         s.record(check_id, passed, observed, names[check_id])
@@ -184,7 +184,7 @@ def fill(folder: str, script_name: str, trusted: dict[str, Path], script: Path, 
         (where / folder / "my_key").chmod(0o600)
 
 
-def run_script(s: GradingSession, where: Path, label: str, script: str) -> ProgramRun:
+def run_script(s: Session, where: Path, label: str, script: str) -> ProgramRun:
     """``bash <script>`` (``script``: its path from ``where``) in ``where`` as the submission (30 s at most),
     through SCRIPT_WRAPPER.
 
@@ -202,7 +202,7 @@ def run_script(s: GradingSession, where: Path, label: str, script: str) -> Progr
     return run
 
 
-def script_made(s: GradingSession, names: dict[str, str], where: Path, folder: str, script: str,
+def script_made(s: Session, names: dict[str, str], where: Path, folder: str, script: str,
                 message: str, key: Path, handed_in: dict[str, str]) -> None:
     """script_runs, then script_decrypts, script_keeps_key, script_encrypts: run ``folder/script`` in ``where``
     (filled with the ``handed_in`` pair, name -> text) and judge what it made as the files were judged (``message``: the
@@ -223,7 +223,7 @@ def script_made(s: GradingSession, names: dict[str, str], where: Path, folder: s
         s.record(check_id, not failed, "; ".join(failed or [o for _, o in found.values()]), names[check_id])
 
 
-def script_makes_key(s: GradingSession, names: dict[str, str], fresh: Path, folder: str, script: str,
+def script_makes_key(s: Session, names: dict[str, str], fresh: Path, folder: str, script: str,
                      tmp: Path) -> None:
     """script_makes_key: run ``folder/script`` in ``fresh`` (filled without my_key): step 2 of the script must
     make the pair (no question asked), judged as the handed-in pair is (:func:`pair`, copies in ``tmp``)."""

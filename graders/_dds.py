@@ -35,7 +35,7 @@ from typing import Any
 
 import yaml
 
-from ros2course.kit import GradingSession
+from ros2course.kit import Session
 from ros2course.kit import wait_until
 
 #: The variable Jazzy's Fast DDS reads, and Fast DDS 3's name for it (set both for the children).
@@ -103,7 +103,7 @@ def xml_errors(text: str) -> list[str]:
     return found
 
 
-def exchange(s: GradingSession, profile: Path, seconds: float = 3.0) -> DdsRun:
+def exchange(s: Session, profile: Path, seconds: float = 3.0) -> DdsRun:
     """Run a talker and a listener (child processes) with ``profile`` as their Fast DDS default profile.
 
     Args:
@@ -111,7 +111,7 @@ def exchange(s: GradingSession, profile: Path, seconds: float = 3.0) -> DdsRun:
         seconds: how long the talker publishes (every 0.1 s); the listener waits ``seconds + 3`` s at most.
 
     They join the check's domain (``s.ros.domain_id``) on a random topic, each in
-    its own process group with a deadline (:meth:`GradingSession.start_program`).
+    its own process group with a deadline (:meth:`Session.start_program`).
     """
     topic = f"/udp_check_{random.SystemRandom().randrange(10000, 100000)}"
     env = dict(s.base_env)

@@ -20,11 +20,11 @@ from dataclasses import dataclass
 from typing import Any
 
 from ros2course import kit
-from ros2course.kit import GradingSession, call_service, wait_until
+from ros2course.kit import Session, call_service, wait_until
 from ros2course.kit.nodes import StartedNode
 from ros2course.kit import topics_services as ts
 
-from . import _services
+from ros2course.kit import services
 
 #: lifecycle_msgs/msg/State primary state ids (lifecycle_msgs/msg/State.msg).
 UNCONFIGURED, INACTIVE, ACTIVE, FINALIZED = 1, 2, 3, 4
@@ -75,10 +75,10 @@ class Lifecycle:
     Args:
         node: the started node (its ``name`` is the node the services belong to).
         graph: the graph to call from (a :class:`~ros2course.run.probes.RosSession`); None for the session's
-            own (``s.ros``, through ``_services.ask``).
+            own (``s.ros``, through ``services.ask``).
     """
 
-    def __init__(self, s: GradingSession, node: kit.StartedNode, graph: Any = None) -> None:
+    def __init__(self, s: Session, node: kit.StartedNode, graph: Any = None) -> None:
         # lifecycle_msgs is a wheel of the venv, not a course package (no s.interface_type); imported
         # here because graders load for CHECKS without ROS
         from lifecycle_msgs.srv import ChangeState, GetState  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
@@ -103,10 +103,10 @@ class Lifecycle:
         return (None, why) if response is None else (bool(response.success), "")
 
     def _ask(self, srv_type: type, service: str, request: Any) -> tuple[Any, str]:
-        """One call from the node's graph (``_services.ask`` when it is the session's own), waiting up to
+        """One call from the node's graph (``services.ask`` when it is the session's own), waiting up to
         :data:`ANSWER_TIMEOUT` seconds."""
         if self.graph is None:
-            return _services.ask(self.s, srv_type, service, request, self.node, timeout=ANSWER_TIMEOUT)
+            return services.ask(self.s, srv_type, service, request, self.node, timeout=ANSWER_TIMEOUT)
         if self.node.ended():
             return None, f"not asked, {kit.process_state(self.node.proc)}"
         try:
@@ -115,7 +115,7 @@ class Lifecycle:
             return None, f"{exc}; {kit.process_state(self.node.proc)}"
 
 
-def shutdown_any_state(s: GradingSession, path: Any, executable: str, name: str) -> None:
+def shutdown_any_state(s: Session, path: Any, executable: str, name: str) -> None:
     """Record ``shutdown_any_state``: two more runs of the node, each in a graph of its own, started at once.
 
     One is shut down straight from unconfigured (its ``on_shutdown`` runs before any ``on_configure``:
@@ -169,7 +169,7 @@ def shutdown_any_state(s: GradingSession, path: Any, executable: str, name: str)
              "(a node just started) and from inactive (after configure)")
 
 
-def managed(s: GradingSession, life: Lifecycle) -> float:
+def managed(s: Session, life: Lifecycle) -> float:
     """Record ``managed``: get_state answers and says unconfigured; returns when that was known (wall clock).
 
     Raises:
@@ -188,7 +188,7 @@ def managed(s: GradingSession, life: Lifecycle) -> float:
     return time.time()
 
 
-def transition(s: GradingSession, check_id: str, life: Lifecycle, transition: int, target: int) -> float:
+def transition(s: Session, check_id: str, life: Lifecycle, transition: int, target: int) -> float:
     """Record ``check_id``: ``transition`` (a Transition id: :data:`CONFIGURE`, :data:`CLEANUP`, :data:`ACTIVATE`
     or :data:`DEACTIVATE`) succeeds and get_state then says ``target`` (a State id); returns when it was asked
     (wall clock seconds).
@@ -219,7 +219,7 @@ def sent_in(probe: Any, since: float, until: float | None = None) -> list[tuple[
     return [(t, m) for t, m in zip(stamps, messages) if t >= since and (until is None or t < until)]
 
 
-def quiet(s: GradingSession, check_id: str, stream: Stream, node: kit.StartedNode, since: float, state: str) -> bool:
+def quiet(s: Session, check_id: str, stream: Stream, node: kit.StartedNode, since: float, state: str) -> bool:
     """Record ``check_id``: no message sent on the stream's topic for ``stream.quiet`` seconds from ``since``
     (wall clock) while the node is in ``state`` (a phrase: ``inactive (after configure)``).
 
@@ -238,7 +238,7 @@ def quiet(s: GradingSession, check_id: str, stream: Stream, node: kit.StartedNod
                     window=(since, until))
 
 
-def heartbeats(s: GradingSession, stream: Stream, node: kit.StartedNode, since: float) -> tuple[list[float], float]:
+def heartbeats(s: Session, stream: Stream, node: kit.StartedNode, since: float) -> tuple[list[float], float]:
     """Wait for ``stream.samples`` messages sent after ``since`` (wall clock); ``(their send stamps, seconds
     waited)``."""
     begin = time.monotonic()
@@ -248,7 +248,7 @@ def heartbeats(s: GradingSession, stream: Stream, node: kit.StartedNode, since: 
     return [t for t, _ in sent_in(stream.probe, since)][:stream.samples], time.monotonic() - begin
 
 
-def active(s: GradingSession, stream: Stream, node: kit.StartedNode, since: float) -> None:
+def active(s: Session, stream: Stream, node: kit.StartedNode, since: float) -> None:
     """Record ``active_messages`` and ``active_rate`` from the messages sent after activate (``since``, wall
     clock): 'Heartbeat N' counting up by one, one every ``stream.period`` seconds."""
     stamps, waited = heartbeats(s, stream, node, since)
@@ -270,7 +270,7 @@ def active(s: GradingSession, stream: Stream, node: kit.StartedNode, since: floa
              source="the messages' send stamps")
 
 
-def cleanup(s: GradingSession, life: Lifecycle, topic: str) -> None:
+def cleanup(s: Session, life: Lifecycle, topic: str) -> None:
     """Record ``cleanup``: the transition succeeds, the node is unconfigured and publishes ``topic`` no more
     (waited for up to :data:`GONE_TIMEOUT` seconds).
 
@@ -299,7 +299,7 @@ def cleanup(s: GradingSession, life: Lifecycle, topic: str) -> None:
              expected)
 
 
-def reconfigure(s: GradingSession, life: Lifecycle, stream: Stream) -> None:
+def reconfigure(s: Session, life: Lifecycle, stream: Stream) -> None:
     """Record ``reconfigure``: configure and activate succeed again, and messages come every ``stream.period``
     seconds.
 
@@ -333,7 +333,7 @@ def reconfigure(s: GradingSession, life: Lifecycle, stream: Stream) -> None:
              expected, window=(stamps[0], stamps[-1]))
 
 
-def shutdown(s: GradingSession, life: Lifecycle, stream: Stream) -> None:
+def shutdown(s: Session, life: Lifecycle, stream: Stream) -> None:
     """Record ``shutdown``: from the current state (active when all went well) to finalized, then nothing sent
     for ``stream.quiet`` seconds."""
     state, label = life.state()

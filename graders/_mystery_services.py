@@ -25,7 +25,7 @@ import random
 import threading
 from typing import Any
 
-from ros2course.kit import GradingSession
+from ros2course.kit import Session
 from ros2course.kit.mystery import MysteryNode
 
 _RANDOM = random.SystemRandom()
@@ -93,7 +93,7 @@ class PointOracle(MysteryNode):
             show in ``ros2 service list``).
     """
 
-    def __init__(self, s: GradingSession, srv_type: type) -> None:
+    def __init__(self, s: Session, srv_type: type) -> None:
         self.name = f"point_oracle_{_RANDOM.randrange(100, 1000)}"
         super().__init__(s, self.name, parameter_services=True)
         self._lock = threading.Lock()

@@ -13,14 +13,14 @@ import threading
 import time
 from typing import Any
 
-from ros2course.kit import GradingSession
+from ros2course.kit import Session
 
 
 class NodeWatch:
     """Record the nodes of ``graph`` every ``interval`` seconds until :meth:`stop` (or the part ends).
 
     Args:
-        s: the grading session; the watch stops when the current part ends (:meth:`GradingSession.on_close`).
+        s: the grading session; the watch stops when the current part ends (:meth:`Session.on_close`).
         graph: the :class:`~ros2course.run.probes.RosSession` to watch (default ``s.ros``).
         interval: seconds between two looks at the graph.
 
@@ -29,7 +29,7 @@ class NodeWatch:
             when it was first listed.
     """
 
-    def __init__(self, s: GradingSession, graph: Any = None, interval: float = 0.1) -> None:
+    def __init__(self, s: Session, graph: Any = None, interval: float = 0.1) -> None:
         self._graph = graph or s.ros
         self._interval = interval
         self._begin = time.monotonic()
@@ -64,7 +64,7 @@ class NodeWatch:
         return self.seen()
 
 
-def node_appeared(s: GradingSession, check_id: str, watch: NodeWatch, node: str, command: str,
+def node_appeared(s: Session, check_id: str, watch: NodeWatch, node: str, command: str,
                   before: float | None = None) -> bool:
     """Record ``check_id``: ``node`` (fully qualified, ``/print_forever``) was in the graph while the script ran.
 

@@ -22,7 +22,7 @@ import sys
 import zipfile
 from pathlib import Path
 
-from ros2course.kit import GradingSession
+from ros2course.kit import Session
 from ros2course.kit.programs import ProgramRun, run_program
 from ros2course.kit.python_programs import python_env
 
@@ -70,7 +70,7 @@ def _link_installed(name: str, dest: Path) -> str | None:
     return dist.version if linked else None
 
 
-def _wheel_file(name: str, s: GradingSession) -> Path | None:
+def _wheel_file(name: str, s: Session) -> Path | None:
     """The newest local ``<name>-*.whl``: in ``ROS2COURSE_WHEELHOUSE``, pip's find-links, :data:`WHEELHOUSES`."""
     folders = [p for p in s.base_env.get("ROS2COURSE_WHEELHOUSE", "").split(":") if p]
     folders += [p for p in re.split(r"[\s:]+", s.base_env.get("PIP_FIND_LINKS", "")) if p.startswith("/")]
@@ -79,7 +79,7 @@ def _wheel_file(name: str, s: GradingSession) -> Path | None:
     return max(found, key=lambda w: version_tuple(w.name.split("-")[1]), default=None)
 
 
-def tools_folder(s: GradingSession) -> Path:
+def tools_folder(s: Session) -> Path:
     """A folder (under ``s.log_dir``) holding pip and setuptools, and ``wheel`` if setuptools needs it, for
     ``PYTHONPATH``.
 
@@ -109,10 +109,10 @@ def tools_folder(s: GradingSession) -> Path:
     return dest
 
 
-def fresh_venv(s: GradingSession, name: str = "fresh_venv") -> Path:
+def fresh_venv(s: Session, name: str = "fresh_venv") -> Path:
     """A new, empty venv ``<log_dir>/<name>/venv`` (``--without-pip``) made from the grader's interpreter; its python.
 
-    Made by the submission (it installs into it) in a :meth:`GradingSession.submission_folder`.
+    Made by the submission (it installs into it) in a :meth:`Session.submission_folder`.
 
     Raises:
         RuntimeError: ``python -m venv`` failed (a fault of the course's machine, not the learner's).
@@ -127,7 +127,7 @@ def fresh_venv(s: GradingSession, name: str = "fresh_venv") -> Path:
     return python
 
 
-def venv_copy(s: GradingSession, python: Path, name: str) -> Path:
+def venv_copy(s: Session, python: Path, name: str) -> Path:
     """A copy of ``python``'s venv in ``<log_dir>/<name>/venv`` (a submission folder); the copy's python.
 
     For judging ``pip uninstall`` while the original venv's command still
@@ -142,7 +142,7 @@ def venv_copy(s: GradingSession, python: Path, name: str) -> Path:
     return folder / "venv" / "bin" / python.name
 
 
-def pip(s: GradingSession, python: Path, tools: Path, args: list[str], label: str, *, cwd: Path) -> ProgramRun:
+def pip(s: Session, python: Path, tools: Path, args: list[str], label: str, *, cwd: Path) -> ProgramRun:
     """Run ``<python> -m pip <args>`` offline with ``tools`` (:func:`tools_folder`) on PYTHONPATH; never asks or
     downloads."""
     env = python_env(s, PYTHONPATH=str(tools), PIP_NO_INPUT="1", PIP_NO_CACHE_DIR="1",

@@ -32,7 +32,7 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from ros2course import kit
-from ros2course.kit import LATE_DELIVERY, GradingSession, Unmet, scripts, wait_until
+from ros2course.kit import LATE_DELIVERY, Session, Unmet, scripts, wait_until
 from ros2course.kit import params as kit_params
 from ros2course.kit import topics_services as ts
 
@@ -205,7 +205,7 @@ class Feed:
         sensor_offered, config_offered: the profiles offered.
     """
 
-    def __init__(self, s: GradingSession, graph: Any, sensor_type: type, config_type: type, *,
+    def __init__(self, s: Session, graph: Any, sensor_type: type, config_type: type, *,
                  sensor_topic: str, config_topic: str, period: float) -> None:
         self.sensor_offered = sensor_qos()
         self.config_offered = profile(reliable=True, transient_local=True, depth=1)
@@ -265,7 +265,7 @@ class Oracle:
         sensor_node, config_node: their names (no leading ``/``), e.g. ``thermometer_4821``.
     """
 
-    def __init__(self, s: GradingSession, graph: Any, sensor_type: type, config_type: type, *,
+    def __init__(self, s: Session, graph: Any, sensor_type: type, config_type: type, *,
                  sensor_topic: str, config_topic: str) -> None:
         import rclpy  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
 
@@ -302,7 +302,7 @@ def message_types() -> tuple[type, type]:
     return Temperature, String
 
 
-def grade_sensor(s: GradingSession, temperature: type, package: str, executable: str, node_name: str, *,
+def grade_sensor(s: Session, temperature: type, package: str, executable: str, node_name: str, *,
                  topic: str, type_name: str, frame_id: str, period: float, samples: int, warm_up: int,
                  start_timeout: float) -> None:
     """Grade the sensor publisher in the part's own graph (``s.graph``).
@@ -370,7 +370,7 @@ def grade_sensor(s: GradingSession, temperature: type, package: str, executable:
              waited=window, noun="reading", source="the readings' send stamps, the first one left out", where=where)
 
 
-def grade_config(s: GradingSession, string: type, package: str, executable: str, node_name: str, *,
+def grade_config(s: Session, string: type, package: str, executable: str, node_name: str, *,
                  topic: str, type_name: str, default_units: str) -> None:
     """Grade the configuration publisher in the session's graph (``s.ros``: the kit's parameter client asks there).
 
@@ -469,7 +469,7 @@ def matching(readings: list[float], text: str) -> list[float]:
     return [r for r in readings if re.search(rf"Temperature: {r:.2f}(?![0-9])", text)]
 
 
-def grade_monitor(s: GradingSession, temperature: type, string: type, package: str, executable: str,
+def grade_monitor(s: Session, temperature: type, string: type, package: str, executable: str,
                   node_name: str, *, sensor_topic: str, sensor_type_name: str, config_topic: str,
                   config_type_name: str, period: float, logged: int) -> None:
     """Grade the monitor in the part's own graph (``s.graph``), fed by the grader's :class:`Feed`.
@@ -559,7 +559,7 @@ def grade_monitor(s: GradingSession, temperature: type, string: type, package: s
              fraction=min(1.0, len(readings) / logged))
 
 
-def grade_cli(s: GradingSession, temperature: type, string: type, script: str, *, timeout: float,
+def grade_cli(s: Session, temperature: type, string: type, script: str, *, timeout: float,
               sensor_topic: str, config_topic: str) -> None:
     """Grade the learner's ``ros2 topic info --verbose`` script in the part's own graph (``s.graph``).
 

@@ -32,7 +32,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ros2course.kit import GradingSession, Unmet
+from ros2course.kit import Session, Unmet
 from ros2course.kit import foreign_python_prefix
 from ros2course.kit import wait_until
 from ._joint_stream import (
@@ -116,7 +116,7 @@ def same(a: Sequence[float], b: Sequence[float], tol: float = SAME) -> bool:
     return len(a) == len(b) and all(abs(x - y) <= tol for x, y in zip(a, b))
 
 
-def add_plot(s: GradingSession, title: str, times: list[float], series: dict[str, list[float]],
+def add_plot(s: Session, title: str, times: list[float], series: dict[str, list[float]],
              unit: str, points: int = 60) -> None:
     """Hand ``check`` a downsampled plot (~``points`` samples; ``times`` in seconds); never costs a grade."""
     if len(times) < 2:
@@ -132,7 +132,7 @@ def add_plot(s: GradingSession, title: str, times: list[float], series: dict[str
 # --- the launch file -----------------------------------------------------------------------------
 
 
-def launch_file(s: GradingSession, check_id: str, driver: SasDriver, name: str) -> bool:
+def launch_file(s: Session, check_id: str, driver: SasDriver, name: str) -> bool:
     """Record ``check_id``: ``share/<package>/launch/<name>`` is installed and its Node action is the seed's.
 
     The file is read statically (:func:`ros2course.kit.launch.read_launch_file`),
@@ -212,7 +212,7 @@ class DriverRun:
         """True once the process exited (an ``abort=`` for waits)."""
         return self.proc.poll() is not None
 
-    def publish_target(self, s: GradingSession, values: Sequence[float]) -> None:
+    def publish_target(self, s: Session, values: Sequence[float]) -> None:
         """Publish ``values`` (radians) on the driver's target topic (publisher made on first use)."""
         from std_msgs.msg import Float64MultiArray  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
@@ -223,7 +223,7 @@ class DriverRun:
         self._publisher.publish(Float64MultiArray(data=[float(x) for x in values]))
 
 
-def start_driver(s: GradingSession, check_id: str, driver: SasDriver, *, sigint_check: str,
+def start_driver(s: Session, check_id: str, driver: SasDriver, *, sigint_check: str,
                  first_message: float = 3.0) -> DriverRun:
     """Start the driver as launch_ros starts its ``Node`` action; record ``check_id`` on its node name.
 
@@ -251,7 +251,7 @@ def start_driver(s: GradingSession, check_id: str, driver: SasDriver, *, sigint_
     return run
 
 
-def _driver_sigint(s: GradingSession, check_id: str, run: DriverRun) -> None:
+def _driver_sigint(s: Session, check_id: str, run: DriverRun) -> None:
     """Ctrl+C the driver; if it had ended cleanly (exit code 0), Ctrl+C a fresh instance instead (and a fresh
     one again when a Ctrl+C hit rclpy's own shutdown race, :func:`~ros2course.kit.nodes.sigint_exit`)."""
     def fresh(label: str = ".second") -> Any:
@@ -267,7 +267,7 @@ def _driver_sigint(s: GradingSession, check_id: str, run: DriverRun) -> None:
     sigint_exit(s, check_id, first, again=lambda: fresh(".again"))
 
 
-def interface(s: GradingSession, check_id: str, run: DriverRun, timeout: float = 1.0) -> bool:
+def interface(s: Session, check_id: str, run: DriverRun, timeout: float = 1.0) -> bool:
     """Record ``check_id``: publishers of the three ``get/`` topics and a subscription on ``set/target...``.
 
     Types as sas declares them (ROS_ENV.md); waits up to ``timeout`` seconds for the graph.
@@ -297,7 +297,7 @@ def interface(s: GradingSession, check_id: str, run: DriverRun, timeout: float =
     return s.record(check_id, True, "all four sas topics are there with the right types", expected)
 
 
-def limits(s: GradingSession, published_id: str, radians_id: str, run: DriverRun, timeout: float = 1.0) -> None:
+def limits(s: Session, published_id: str, radians_id: str, run: DriverRun, timeout: float = 1.0) -> None:
     """Record ``published_id`` (a message with ``joints`` values on both limits topics within ``timeout`` s)
     and ``radians_id`` (they equal the parameters, given in degrees, in radians).
 
@@ -329,7 +329,7 @@ def limits(s: GradingSession, published_id: str, radians_id: str, run: DriverRun
              expected)
 
 
-def span_rate(s: GradingSession, check_id: str, samples: list[JointSample], *, period: float, span: float,
+def span_rate(s: Session, check_id: str, samples: list[JointSample], *, period: float, span: float,
               noun: str, extra: str = "", few_note: str = "", median: bool = False) -> bool:
     """Record ``check_id`` on the rate of ``samples`` over their DDS source timestamps: the kit's rate
     judgement (:func:`ros2course.kit.judge.rate`) over at least 90 % of ``span`` seconds, messages the
@@ -343,7 +343,7 @@ def span_rate(s: GradingSession, check_id: str, samples: list[JointSample], *, p
                 where=f"; ros2 topic hz (arrival times) would show {hz.rate_hz:.1f} Hz" if hz else "")
 
 
-def stream(s: GradingSession, rate_id: str, shape_id: str, zeros_id: str, run: DriverRun, span: float = 1.0) -> None:
+def stream(s: Session, rate_id: str, shape_id: str, zeros_id: str, run: DriverRun, span: float = 1.0) -> None:
     """Record the joint-state stream's ``rate_id`` (every ``thread_sampling_time_sec``, :func:`span_rate`),
     ``shape_id`` (``joints`` positions, increasing header stamps) and ``zeros_id`` (all zeros before any
     target: ``connect()`` sets them, seed ch. 31) over its first ``span`` seconds.
@@ -382,7 +382,7 @@ def stream(s: GradingSession, rate_id: str, shape_id: str, zeros_id: str, run: D
              "target are zeros", f"{d.joints} zeros until a target arrives (connect() sets the positions to zeros)")
 
 
-def tracking(s: GradingSession, check_id: str, run: DriverRun, targets: list[list[float]], *, latency: float,
+def tracking(s: Session, check_id: str, run: DriverRun, targets: list[list[float]], *, latency: float,
              give_up: float, resend: float) -> list[float] | None:
     """Send each of ``targets`` (radians) in turn; record ``check_id``: the stream shows each within ``latency`` s.
 
@@ -426,7 +426,7 @@ def tracking(s: GradingSession, check_id: str, run: DriverRun, targets: list[lis
     return last_followed
 
 
-def wrong_size(s: GradingSession, check_id: str, run: DriverRun, target: list[float], previous: list[float] | None,
+def wrong_size(s: Session, check_id: str, run: DriverRun, target: list[float], previous: list[float] | None,
                *, watch: float, resend: float) -> bool:
     """Send ``target`` (not ``joints`` values) three times; record ``check_id`` after ``watch`` seconds.
 
@@ -465,7 +465,7 @@ def wrong_size(s: GradingSession, check_id: str, run: DriverRun, target: list[fl
                     f"logged: {errors[0].msg}", expected)
 
 
-def plot_stream(s: GradingSession, run: DriverRun) -> None:
+def plot_stream(s: Session, run: DriverRun) -> None:
     """Attach the streamed joint positions (degrees) of the whole run to the result."""
     good = [x for x in run.probe.samples() if len(x.positions) == run.driver.joints]
     if good:
@@ -554,7 +554,7 @@ class ClientRun:
         """True once the process exited."""
         return self.proc.poll() is not None
 
-    def close(self, s: GradingSession) -> None:
+    def close(self, s: Session) -> None:
         """Ctrl+C the client while the stand-in still plays the driver (judged as :attr:`sigint_check` by
         :func:`~ros2course.kit.nodes.sigint_exit`, as a learner stops it with the driver running), then stop the
         stand-in; a client still running (no check given, or it survived) is stopped with SIGINT/SIGTERM.
@@ -566,7 +566,7 @@ class ClientRun:
             self.proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
 
 
-def start_client(s: GradingSession, check_id: str, driver: SasDriver, executable: str, *,
+def start_client(s: Session, check_id: str, driver: SasDriver, executable: str, *,
                  initial: Sequence[float], period: float, sigint_check: str | None = None) -> ClientRun:
     """Record ``check_id`` (``ros2 run`` finds ``executable``, or ``executable.py`` as the seed installs it,
     LESSONS.md); start it in a graph of its own with a :class:`StandInDriver` (not publishing yet).
@@ -600,7 +600,7 @@ def start_client(s: GradingSession, check_id: str, driver: SasDriver, executable
                      relaunch=lambda: launch(executable + ".again"))
 
 
-def client_waits(s: GradingSession, check_id: str, run: ClientRun, disabled: float) -> bool:
+def client_waits(s: Session, check_id: str, run: ClientRun, disabled: float) -> bool:
     """Once the client subscribes to joint states, send them without limits for ``disabled`` seconds; record
     ``check_id``: no target came (the client is not enabled yet, seed ch. 31.9); then enable the stand-in.
 
@@ -630,7 +630,7 @@ def client_waits(s: GradingSession, check_id: str, run: ClientRun, disabled: flo
                     f"nothing sent during {disabled:.1f} s of joint states without limits", expected)
 
 
-def client_targets(s: GradingSession, check_id: str, run: ClientRun, window: float) -> list[JointSample]:
+def client_targets(s: Session, check_id: str, run: ClientRun, window: float) -> list[JointSample]:
     """Record ``check_id``: targets (Float64MultiArray) come from exactly one publisher; return ``window`` s of them.
 
     Waits until the targets since the stand-in was enabled span ``window``
@@ -662,7 +662,7 @@ def client_targets(s: GradingSession, check_id: str, run: ClientRun, window: flo
     return got
 
 
-def client_offsets(s: GradingSession, targets_id: str, moves_id: str, run: ClientRun, got: list[JointSample], *,
+def client_offsets(s: Session, targets_id: str, moves_id: str, run: ClientRun, got: list[JointSample], *,
                    amplitude: float, min_swing: float, window: float, label: str) -> None:
     """Record ``targets_id`` (``joints`` values each, within ``amplitude`` radians of the initial positions)
     and ``moves_id`` (every joint swings at least ``min_swing`` radians over the ``window`` s); plot them.

@@ -22,7 +22,7 @@ import math
 from typing import Any
 
 from ros2course import kit
-from ros2course.kit import LATE_DELIVERY, GradingSession
+from ros2course.kit import LATE_DELIVERY, Session
 
 
 @dataclasses.dataclass(frozen=True)
@@ -79,7 +79,7 @@ def yaw(q) -> float:
     return math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
 
 
-def frames(s: GradingSession, c: Circle, tf, node) -> tuple[bool, list, float]:
+def frames(s: Session, c: Circle, tf, node) -> tuple[bool, list, float]:
     """tf_frames: observe ``c.warm_up + c.samples`` messages on the /tf probe ``tf`` (a TopicProbe made before
     ``node``, a :class:`~ros2course.kit.StartedNode`, started) and judge whether ``parent -> child`` is among them.
 
@@ -100,7 +100,7 @@ def frames(s: GradingSession, c: Circle, tf, node) -> tuple[bool, list, float]:
     return found, ours, window
 
 
-def motion(s: GradingSession, c: Circle, ours: list, window: float, launched: float) -> None:
+def motion(s: Session, c: Circle, ours: list, window: float, launched: float) -> None:
     """tf_rate, radius, unit_quaternion, angular_speed, heading, starts_at_zero, stamps over ``ours``.
 
     ``ours``: (send stamp, transform) pairs from :func:`frames`, at least one; ``window``: the seconds observed;
@@ -142,7 +142,7 @@ def motion(s: GradingSession, c: Circle, ours: list, window: float, launched: fl
              f"increasing stamps, each within {c.stamp_tolerance} s of when its message was sent")
 
 
-def origin(s: GradingSession, c: Circle, sent: float, angle: float, launched: float) -> None:
+def origin(s: Session, c: Circle, sent: float, angle: float, launched: float) -> None:
     """starts_at_zero: angle = 0.5 rad/s * seconds since the node started, so at the first transform (sent at
     ``sent``, at ``angle`` = atan2(y, x)) it lies between 0 (the node started just before) and 0.5 * (sent -
     ``launched``) (the node started as the process did): a clock's own seconds, or an offset, land elsewhere.
@@ -156,7 +156,7 @@ def origin(s: GradingSession, c: Circle, sent: float, angle: float, launched: fl
              "has run, which are fewer than the process has): the robot starts at (1, 0)")
 
 
-def static_latched(s: GradingSession, c: Circle, tf, node, tf_message: type) -> bool:
+def static_latched(s: Session, c: Circle, tf, node, tf_message: type) -> bool:
     """static_latched: a late TRANSIENT_LOCAL subscription gets ``child -> camera`` at ``c.camera_offset``, no
     rotation (``tf``: the /tf probe, to say when the camera came on /tf instead; ``node``: the started node;
     ``tf_message``: ``tf2_msgs/msg/TFMessage``). Waits up to LATE_DELIVERY + 1 s; returns the verdict."""
@@ -184,7 +184,7 @@ def static_latched(s: GradingSession, c: Circle, tf, node, tf_message: type) -> 
                     expected)
 
 
-def static_once(s: GradingSession, c: Circle, early) -> None:
+def static_once(s: Session, c: Circle, early) -> None:
     """static_once: the node's /tf_static messages carrying ``child -> camera``, from its start to now, on the
     probe ``early`` (made before the node started, :func:`static_qos`): one."""
     carrying = [m for m in early.messages()
@@ -195,7 +195,7 @@ def static_once(s: GradingSession, c: Circle, early) -> None:
              "one message: the static transform is sent once (TRANSIENT_LOCAL keeps it for later listeners)")
 
 
-def broadcast_static(s: GradingSession, tf_message: type, parent: str, child: str,
+def broadcast_static(s: Session, tf_message: type, parent: str, child: str,
                      offset: tuple[float, float, float]) -> None:
     """Send ``parent -> child`` at ``offset`` (metres), no rotation, stamped now, from the grader's node of
     ``s.graph``: what tf2_ros.StaticTransformBroadcaster does (tf2_ros/static_transform_broadcaster.py), one

@@ -25,7 +25,7 @@ given as the parameters ``x`` and ``y``:
 from __future__ import annotations
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks
+from ros2course.kit import Check, Session, checks
 
 from . import _actions_client as steps
 from ._actions_client import ACTION, EXECUTABLE, NODE, PACKAGE, PERIOD, THROTTLE_WINDOW
@@ -72,7 +72,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Three runs of the client against the grader's own server (see the module docstring)."""
     action = s.interface_type("package_with_interfaces", "action", "MoveStraightIn2D")
     path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)

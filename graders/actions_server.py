@@ -36,7 +36,7 @@ grader knows.
 from __future__ import annotations
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, Unmet, checks
+from ros2course.kit import Check, Session, Unmet, checks
 from ros2course.kit import actions as act
 
 from . import _actions_server as steps
@@ -112,7 +112,7 @@ CHECKS = [
 
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Start the server, send it four goals, then run the learner's script against it."""
     steps.depends(s)
     action = s.interface_type("package_with_interfaces", "action", "MoveStraightIn2D")

@@ -21,7 +21,7 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import Check, Session, Unmet
 from ros2course.kit import cmake as ck
 from ros2course.kit.programs import run_program
 
@@ -76,7 +76,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Judge the sources and the learner's prefix, then rebuild library and app under ``s.log_dir`` and run the app."""
     root = s.workspace_root
     missing = [str(f / "CMakeLists.txt") for f in (LIBRARY, APP) if not (root / f / "CMakeLists.txt").is_file()]
@@ -121,7 +121,7 @@ def grade(s: GradingSession) -> None:
              f"printed {out[:200]!r}, {run.describe()}", f"prints exactly {EXPECTED_OUTPUT!r}, exit code 0")
 
 
-def _judge_sources(s: GradingSession) -> None:
+def _judge_sources(s: Session) -> None:
     """``no_hardcoded_paths``: scan the two projects' CMake files (and the app must not reach into the library)."""
     root = s.workspace_root
     problems = [f"{path.relative_to(root)}: {found}" for folder in (LIBRARY, APP) for path in ck.cmake_files(root / folder)
@@ -136,7 +136,7 @@ def _judge_sources(s: GradingSession) -> None:
              "${CMAKE_CURRENT_SOURCE_DIR} / GNUInstallDirs")
 
 
-def _judge_learner_prefix(s: GradingSession) -> None:
+def _judge_learner_prefix(s: Session) -> None:
     """``learner_prefix``: the library is installed in cmake/prefix, and every build of it installs in the workspace.
 
     Only builds of the library count (their CMAKE_HOME_DIRECTORY is the library's folder): the app's default

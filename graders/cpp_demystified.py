@@ -27,7 +27,7 @@ from pathlib import Path
 import yaml
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import Check, Session, Unmet
 from ros2course.kit import cmake as ck
 from ros2course.kit.parts import at_once
 from ros2course.kit.programs import last_line, run_program, verdict_test
@@ -78,14 +78,14 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Check the files, build and run the learner's CMake project, then run the test harness on their functions."""
     project = kit.project_files(s, "layout", PROJECT, FILES)
     # two single-threaded compiles on 2 cores: the parts run at the same time (own scratch folders each)
     at_once(s, "cmake", lambda: _judge_cmake(s, project), "harness", lambda: _judge_harness(s, project))
 
 
-def _judge_cmake(s: GradingSession, project: Path) -> None:
+def _judge_cmake(s: Session, project: Path) -> None:
     """Configure and build the learner's CMakeLists.txt under log_dir, then run the demo once."""
     cmake, build = ck.tool(s.base_env, "cmake"), s.submission_folder("cmake-build")
     expected = f"cmake configures the project and builds {DEMO}"
@@ -107,7 +107,7 @@ def _judge_cmake(s: GradingSession, project: Path) -> None:
              f"exit code 0 within {RUN_TIMEOUT:.0f} s")
 
 
-def _scratch_copy(s: GradingSession, project: Path) -> Path:
+def _scratch_copy(s: Session, project: Path) -> Path:
     """A submission folder ``<log_dir>/harness`` with the learner's include/ and src/demystified.cpp, the
     course's potato.hpp in place of theirs, and harness.cpp (the compile runs as the submission)."""
 
@@ -124,7 +124,7 @@ def _scratch_copy(s: GradingSession, project: Path) -> Path:
     return s.submission_folder("harness", fill)
 
 
-def _judge_harness(s: GradingSession, project: Path) -> None:
+def _judge_harness(s: Session, project: Path) -> None:
     """Compile src/demystified.cpp with the harness (one g++ call, -O0), then run each test in its own process."""
     if not (project / SOURCE).is_file():
         s.record("harness_compiles", False, f"there is no {PROJECT}/{SOURCE}", f"{SOURCE} with the four functions")

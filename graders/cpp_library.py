@@ -22,7 +22,7 @@ from pathlib import Path
 
 from ros2course.kit import LATE_DELIVERY, stamp_seconds, wait_until
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks
+from ros2course.kit import Check, Session, checks
 from . import _cpp_packages as cpp
 from ros2course.kit.parts import at_once
 from ros2course.kit.programs import run_program
@@ -86,7 +86,7 @@ CHECKS = [
 ]
 
 
-def judge_consumer(s: GradingSession) -> None:
+def judge_consumer(s: Session) -> None:
     """Build the grader's consumer package against the install and compare what its program prints."""
     build = cpp.build_consumer(s, "consumer_configures", "consumer_builds", CONSUMER, PACKAGE, LIBRARY_FILE)
     run = run_program(s, [str(build / "cpp_library_consumer")], "consumer-run", timeout=10.0,
@@ -104,7 +104,7 @@ def judge_consumer(s: GradingSession) -> None:
                                                                               LIBRARY_FACTS.items()))
 
 
-def judge_logs(s: GradingSession, rosout, started) -> None:
+def judge_logs(s: Session, rosout, started) -> None:
     """``node_logs``, ``log_values``, ``rate`` on the node's /rosout records."""
     def mine() -> list:
         return [r for r in rosout.records(level=INFO) if r.name == (started.name or NODE)]
@@ -136,7 +136,7 @@ def judge_logs(s: GradingSession, rosout, started) -> None:
              noun="tick", source="the stamps of the 'N times.' records")
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """package.xml, then the library part (install + consumer package, CPU-bound) on a worker thread while
     the node part (mostly waiting for its 3 s of ticks) runs here (kit.parts.at_once)."""
     kit.depends(s, "depends", PACKAGE, DEPENDENCIES)

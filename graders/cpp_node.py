@@ -11,7 +11,7 @@ tutorial's own listing names it), logging
 
 from __future__ import annotations
 
-from ros2course.kit import GradingSession
+from ros2course.kit import Session
 from . import print_forever_node
 from .print_forever_node import grade_node, make_checks
 
@@ -26,6 +26,6 @@ WINDOW = print_forever_node.WINDOW
 CHECKS = make_checks("rclcpp", PACKAGE, NODE)
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Run the C++ print_forever_node, read its /rosout records, then Ctrl+C it."""
     grade_node(s, PACKAGE, NODE, "rclcpp", ALIASES)

@@ -18,9 +18,9 @@ import functools
 import tempfile
 from pathlib import Path
 
-from ros2course.kit import Check, GradingSession
+from ros2course.kit import Check, Session
 from . import _cryptography as crypto
-from . import _files as files
+from ros2course.kit import learner_files as files
 
 WINDOW = 0.0  # no ROS program is observed
 FOLDER, SCRIPT = "crypto", "cryptography.sh"
@@ -58,7 +58,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Judge crypto/'s files, then run the learner's script in a fresh folder and judge what it made."""
     crypto.require_tools()
     real = crypto.crypto_folder(s, "crypto_folder", FOLDER)

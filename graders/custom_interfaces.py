@@ -13,7 +13,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession
+from ros2course.kit import Check, Session
 from ros2course.kit.topics_services import fields, generated_fields
 
 PACKAGE = "package_with_interfaces"
@@ -52,7 +52,7 @@ CHECKS = [
 ]
 
 
-def _check_manifest(s: GradingSession) -> None:
+def _check_manifest(s: Session) -> None:
     found = kit.source_package(s, PACKAGE)
     if found is None:
         s.record("ament_cmake", False, f"no package {PACKAGE} in src/", "<build_type>ament_cmake</build_type>")
@@ -72,7 +72,7 @@ def _check_manifest(s: GradingSession) -> None:
              ", ".join(MANIFEST.values()), fraction=(len(MANIFEST) - len(missing)) / len(MANIFEST))
 
 
-def _check_index(s: GradingSession) -> None:
+def _check_index(s: Session) -> None:
     prefix = None
     for entry in s.overlay().get("AMENT_PREFIX_PATH", "").split(":"):
         if entry and Path(entry, "share", "ament_index", "resource_index", "packages", PACKAGE).is_file():
@@ -91,7 +91,7 @@ def _check_index(s: GradingSession) -> None:
              fraction=(len(INDEXED) - len(missing)) / len(INDEXED))
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Read package.xml and the ament index, then import the generated types in a fresh interpreter."""
     _check_manifest(s)
     _check_index(s)

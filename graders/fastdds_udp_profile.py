@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import PurePosixPath
 
-from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import Check, Session, Unmet
 from . import _dds as dds
 
 PROFILE = "docker/fastrtps_profile.xml"
@@ -46,7 +46,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     with s.part("profile"):
         profile = s.workspace_root / PROFILE
         if not s.record("profile_file", profile.is_file(), f"{PROFILE} " + ("found" if profile.is_file() else "is missing"),
@@ -66,7 +66,7 @@ def grade(s: GradingSession) -> None:
     grade_compose(s)
 
 
-def grade_compose(s: GradingSession) -> None:
+def grade_compose(s: Session) -> None:
     """Record the three compose checks on ``docker/compose.yml`` (read with pyyaml, never run)."""
     services, error = dds.read_compose(s.workspace_root / COMPOSE)
     images = {name: service.get("image") for name, service in services.items()}

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ros2course.kit import Check, GradingSession, Unmet, scripts
+from ros2course.kit import Check, Session, Unmet, scripts
 
 SCRIPT = "cli/inspect_interfaces.sh"
 PACKAGE = "package_with_interfaces"
@@ -38,7 +38,7 @@ CHECKS = [
 ]
 
 
-def definition_file(s: GradingSession, name: str) -> Path | None:
+def definition_file(s: Session, name: str) -> Path | None:
     """The installed ``.msg``/``.srv`` file of ``pkg/kind/Name`` (``share/pkg/kind/Name.kind``), or None.
 
     ``ros2 interface show`` prints this file (rosidl_runtime_py ``get_interface_path``).
@@ -55,7 +55,7 @@ def field_lines(path: Path) -> list[str]:
     return [line for line in lines if line]
 
 
-def package_types(s: GradingSession) -> list[str]:
+def package_types(s: Session) -> list[str]:
     """``package_with_interfaces/msg/AmazingQuote``... for every interface file the build installed.
 
     Raises:
@@ -68,7 +68,7 @@ def package_types(s: GradingSession) -> list[str]:
                   for p in (share / kind).glob(f"*.{kind}"))
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     path = scripts.script(s, "script", SCRIPT)
     run = scripts.run_script(s, path, timeout=TIMEOUT)
     scripts.ended(s, "ends", run, "it ends by itself with exit code 0")

@@ -20,7 +20,7 @@ from typing import Any
 
 import yaml
 
-from ros2course.kit import Check, GradingSession, params, scripts
+from ros2course.kit import Check, Session, params, scripts
 from ros2course.kit.mystery import (
     CONFIGURABLE_NODE,
     CONFIGURABLE_PERIOD,
@@ -66,7 +66,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     node = ConfigurableQuotePublisher(s, amazing_quote(s))
     path = scripts.script(s, "script", SCRIPT)
     dump = s.workspace_root / DUMP
@@ -85,7 +85,7 @@ def grade(s: GradingSession) -> None:
     judge_late_node(s, path, scripts.late_by(run))
 
 
-def judge_late_node(s: GradingSession, path, delay: float) -> None:
+def judge_late_node(s: Session, path, delay: float) -> None:
     """Record ``waits_for_node``: run the script again in a fresh graph with no daemon; the node starts
     ``delay`` s (``kit.scripts.late_by``) after the script's first ``ros2`` command joined the graph; its quote must be
     printed. Run after :func:`judge_dump`: the file this run may write is not the one judged."""
@@ -107,7 +107,7 @@ def judge_late_node(s: GradingSession, path, delay: float) -> None:
                  "its first run took), and prints its quote (ros2 param get)")
 
 
-def judge_set(s: GradingSession, node: ConfigurableQuotePublisher, run: Any) -> None:
+def judge_set(s: Session, node: ConfigurableQuotePublisher, run: Any) -> None:
     """Record ``set``: the node accepted quote = NEW_QUOTE and the next messages (send stamps) carry it."""
     expected = f"after your `ros2 param set`, /{CONFIGURABLE_TOPIC} carries the quote {NEW_QUOTE!r}"
     since = node.change_time("quote", NEW_QUOTE)
@@ -126,7 +126,7 @@ def judge_set(s: GradingSession, node: ConfigurableQuotePublisher, run: Any) -> 
              if quotes else "the node accepted the new quote but sent no message after it", expected)
 
 
-def judge_dump(s: GradingSession, dump, started: float, current: dict[str, Any]) -> None:
+def judge_dump(s: Session, dump, started: float, current: dict[str, Any]) -> None:
     """Record ``dump_file`` (written by this run, the dump format, every parameter of the node with its current
     value, ``quote`` aside) and ``dump_after_set``.
 

@@ -14,7 +14,7 @@ it, a list that listens the default 0.5 s cannot.
 
 from __future__ import annotations
 
-from ros2course.kit import Check, GradingSession, scripts
+from ros2course.kit import Check, Session, scripts
 from ._mystery_services import SERVICE, SERVICE_TYPE, PointOracle
 from ros2course.kit.topics_services import workspace_types
 
@@ -58,7 +58,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     path = scripts.script(s, "script", SCRIPT)
     srv_type = workspace_types(s, "srv", "WhatIsThePoint")
     oracle = PointOracle(s, srv_type)
@@ -87,7 +87,7 @@ def grade(s: GradingSession) -> None:
     judge_late_list(s, path, srv_type)
 
 
-def judge_late_list(s: GradingSession, path, srv_type) -> None:
+def judge_late_list(s: Session, path, srv_type) -> None:
     """Record ``listed_late``: run the script again in a fresh graph with no daemon; the oracle starts
     :data:`LATE_BY` s after the script's first ``ros2`` command joined the graph; its services must be listed."""
     if (blocker := s.unmet_need("listed_late")) is not None:

@@ -15,7 +15,7 @@ up finds it, one that looks once does not.
 from __future__ import annotations
 
 from ros2course.kit import wait_until
-from ros2course.kit import Check, GradingSession, scripts
+from ros2course.kit import Check, Session, scripts
 from ros2course.kit.mystery import INBOX_TOPIC, QuotePublisher, quote_inbox
 from ros2course.kit.quotes import amazing_quote
 
@@ -56,7 +56,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     msg_type = amazing_quote(s)
     path = scripts.script(s, "script", SCRIPT)
     mystery = QuotePublisher(s, msg_type)
@@ -75,7 +75,7 @@ def grade(s: GradingSession) -> None:
     judge_late_topic(s, path, msg_type, scripts.late_by(run))
 
 
-def judge_late_topic(s: GradingSession, path, msg_type, delay: float) -> None:
+def judge_late_topic(s: Session, path, msg_type, delay: float) -> None:
     """Record ``asks_again``: run the script again in a fresh graph with no daemon; the mystery node starts
     ``delay`` s (``kit.scripts.late_by``: as long as the first run took) after the script's first ``ros2``
     command joined the graph; its topic must be printed."""
@@ -97,7 +97,7 @@ def judge_late_topic(s: GradingSession, path, msg_type, delay: float) -> None:
                  "ros2 command, as long as its first run took (it asks again until the topic shows up)")
 
 
-def judge_inbox(s: GradingSession, inbox) -> None:
+def judge_inbox(s: Session, inbox) -> None:
     """Record ``published``: the grader's subscription on /amazing_quote_in received id 1994 from Lloyd."""
     def wanted(msg) -> bool:
         return msg.id == PUB_ID and msg.philosopher_name == PUB_PHILOSOPHER

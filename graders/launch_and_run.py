@@ -16,7 +16,7 @@ fixed 7 s landed in a node still importing rclpy, whose KeyboardInterrupt no
 
 from __future__ import annotations
 
-from ros2course.kit import Check, GradingSession, scripts
+from ros2course.kit import Check, Session, scripts
 from ._node_watch import NodeWatch, node_appeared
 from ros2course.kit.nodes import sigint_exit
 from ros2course.kit.quotes import LAUNCH_FILE, LAUNCH_NODE
@@ -51,7 +51,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     path = scripts.script(s, "script", SCRIPT)
     watch = NodeWatch(s)
     nodes = (f"/{RUN_NODE}", f"/{LAUNCH_NODE}")

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from ros2course.kit import LATE_DELIVERY
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, Unmet, params, quotes
+from ros2course.kit import Check, Session, Unmet, params, quotes
 from ros2course.kit.launch import installed_launch_file, launched_node, start_launch_file
 from ros2course.kit.quotes import LAUNCH_FILE, LAUNCH_NODE, LAUNCH_PERIOD, LAUNCH_TOPIC
 
@@ -51,7 +51,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Start the launch file, then watch the node, its topic, rate and messages."""
     with s.part("defaults", own_graph=True):  # first: a launch file that is missing ends the grading's main part
         _defaults_kept(s)
@@ -75,7 +75,7 @@ def grade(s: GradingSession) -> None:
             proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
 
 
-def _defaults_kept(s: GradingSession) -> None:
+def _defaults_kept(s: Session) -> None:
     """Record ``defaults_kept``: the executable started alone (no launch file, no ``-p``) declares the
     parameters lesson's defaults (:data:`ros2course.kit.quotes.DEFAULTS`), read through its parameter
     services (``ros2 param get``).

@@ -23,7 +23,7 @@ from __future__ import annotations
 import re
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, Unmet, checks
+from ros2course.kit import Check, Session, Unmet, checks
 from ros2course.kit import topics_services as ts
 
 from . import _lifecycle
@@ -92,7 +92,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Start the node, drive it through every transition and watch /heartbeat in each state, then Ctrl+C."""
     # a wheel of the venv; imported here because graders load for CHECKS without ROS
     from std_msgs.msg import String  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)

@@ -18,10 +18,9 @@ from __future__ import annotations
 
 import math
 import re
-import shutil
 from pathlib import Path
 
-from ros2course.kit import Check, GradingSession, NotGradable, depends, source_package
+from ros2course.kit import Check, NotGradable, Session, depends, python_programs, source_package
 from ros2course.kit.packaging import ros2_run_executable, setup_py_arguments
 from ros2course.kit.programs import ProgramRun, run_program
 
@@ -138,7 +137,7 @@ def _mistakes(want: dict[str, Q]) -> dict[str, dict[str, Q]]:
                     "r1 alone: r2 never multiplied": want["r1"]}}
 
 
-def record_value(s: GradingSession, check_id: str, name: str, what: str, printed: dict, want: dict[str, Q],
+def record_value(s: Session, check_id: str, name: str, what: str, printed: dict, want: dict[str, Q],
                  source: str, run: ProgramRun) -> bool:
     """Record ``check_id``: ``name`` was printed as a quaternion equal to the expected one, component by component."""
     expected = (f"one line with {name}=Quaternion(x=, y=, z=, w=) equal to {what} = {_show(want[name])} "
@@ -160,7 +159,7 @@ def record_value(s: GradingSession, check_id: str, name: str, what: str, printed
     return s.record(check_id, _close(got, want[name]) and len(items) == 1, observed, expected)
 
 
-def record_requires(s: GradingSession) -> bool:
+def record_requires(s: Session) -> bool:
     """``requires_nottf2``: setup.py's install_requires names the PyPI distribution nottf2 (the author's setup.py)."""
     expected = "'nottf2' in setup.py's install_requires (a version specifier is fine)"
     found = source_package(s, PACKAGE)
@@ -178,7 +177,7 @@ def record_requires(s: GradingSession) -> bool:
     return s.record("requires_nottf2", "nottf2" in names, observed, expected)
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Read package.xml and setup.py, run the executable once, judge its four quaternions and its exit."""
     want, source = expected_values()
     depends(s, "depends_geometry_msgs", PACKAGE, ("geometry_msgs",))
@@ -197,7 +196,7 @@ def grade(s: GradingSession) -> None:
     uses_nottf2(s, path, right)
 
 
-def uses_nottf2(s: GradingSession, path, names: list[str]) -> bool:
+def uses_nottf2(s: Session, path, names: list[str]) -> bool:
     """Record ``uses_nottf2``: run the program again with :data:`STAND_IN` first on PYTHONPATH; each of ``names``
     (the quantities it printed right) must now be the stand-in's value (its chain: -r1, conj(r1), -r2,
     -(r1 r2)). ``path``: the executable. Fraction: the share of ``names`` that are."""
@@ -208,13 +207,7 @@ def uses_nottf2(s: GradingSession, path, names: list[str]) -> bool:
         return s.record("uses_nottf2", False, "no quaternion was right in the first run: nothing to compare",
                         expected)
 
-    def fill(folder) -> None:
-        (folder / "marinholab" / "nottf2").mkdir(parents=True)
-        shutil.copyfile(STAND_IN, folder / "marinholab" / "nottf2" / "__init__.py")
-
-    stand_in = s.submission_folder("nottf2-stand-in", fill)
-    env = s.overlay()
-    env = {**env, "PYTHONPATH": ":".join(p for p in (str(stand_in), env.get("PYTHONPATH", "")) if p)}
+    env = python_programs.stand_in_env(s, "nottf2-stand-in", {"marinholab/nottf2/__init__.py": STAND_IN})
     run = run_program(s, [str(path)], f"{EXECUTABLE}.stand-in", timeout=EXIT_TIMEOUT, env=env)
     printed, want = parse(run.stdout + "\n" + run.stderr), _stand_in_chain()
     got = {n: printed[n][0] for n in names if printed.get(n) and not isinstance(printed[n][0], str)}

@@ -24,7 +24,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from ros2course.kit import Check, GradingSession, params
+from ros2course.kit import Check, Session, params
 from ros2course.kit.quotes import (
     LAUNCH_NODE,
     LAUNCH_PERIOD,
@@ -75,7 +75,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Check the file, start the node as launched, load the file into it, watch for the new quote."""
     source = package_source(s)
     path = source / CONFIG if source else None
@@ -97,7 +97,7 @@ def grade(s: GradingSession) -> None:
         proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
 
 
-def _new_quote(s: GradingSession, values: dict[str, Any]) -> None:
+def _new_quote(s: Session, values: dict[str, Any]) -> None:
     """``new_quote``: the file's quote is not the launch file's (read from the file alone)."""
     quote = values.get("quote")
     expected = f"a quote different from the launch file's ({short(LAUNCH_QUOTE, 40)})"

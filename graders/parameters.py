@@ -12,7 +12,7 @@ from __future__ import annotations
 import time
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks, params, parts
+from ros2course.kit import Check, Session, checks, params, parts
 from ros2course.kit.quotes import (
     DEFAULTS,
     EXECUTABLE,
@@ -80,7 +80,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Run the node with its defaults (messages, then read/set its parameters, Ctrl+C), and at the same time
     with overrides, in a graph of its own (its own domain id: its messages cannot mix in)."""
     path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)
@@ -88,7 +88,7 @@ def grade(s: GradingSession) -> None:
                   own_graphs={"configured"})
 
 
-def _defaults(s: GradingSession, path) -> None:
+def _defaults(s: Session, path) -> None:
     """The run with the defaults: node_name, default_messages, default_rate, declared, runtime_change."""
     probe = s.graph.topic(DEFAULT_TOPIC, amazing_quote(s))
     began = time.monotonic()
@@ -102,7 +102,7 @@ def _defaults(s: GradingSession, path) -> None:
                    topic=DEFAULT_TOPIC)
 
 
-def _default_messages(s: GradingSession, probe, proc, began: float) -> None:
+def _default_messages(s: Session, probe, proc, began: float) -> None:
     """``default_messages``, ``default_ids`` and ``default_rate`` from the messages on /amazing_quote (rate on
     send stamps)."""
     with s.phase("observe"):
@@ -124,7 +124,7 @@ def _default_messages(s: GradingSession, probe, proc, began: float) -> None:
              waited=timeout, noun="message", source="the messages' send stamps")
 
 
-def _configured_run(s: GradingSession, path) -> None:
+def _configured_run(s: Session, path) -> None:
     """``configured_topic`` and ``configured_rate`` from the run started with ``--ros-args -p`` overrides."""
     probe = s.graph.topic(f"/{CONFIGURED_TOPIC}", amazing_quote(s))  # the part's own graph
     args = ["--ros-args", "-p", f"topic_name:={CONFIGURED_TOPIC}", "-p", f"period:={CONFIGURED_PERIOD}"]

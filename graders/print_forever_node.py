@@ -3,7 +3,7 @@
 Black-box: watches /rosout for the node's records, never reads its source
 (except package.xml, whose rclpy dependency the contract names), and asks the
 node's parameter services once (``spins``: a node that never spins, a ``while``
-loop instead of a timer, cannot answer; :func:`record_spins`, used by the
+loop instead of a timer, cannot answer; :func:`ros2course.kit.params.record_spins`, used by the
 use-python-library and publisher-subscriber graders too).
 """
 
@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 from ros2course.kit import LATE_DELIVERY, stamp_seconds, wait_until
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, Unmet, checks, params
+from ros2course.kit import Check, Session, checks, params
 
 PACKAGE = "python_package_with_a_node"
 EXECUTABLE = "print_forever_node"
@@ -61,48 +61,16 @@ def make_checks(client_library: str = "rclpy", package: str = PACKAGE, node: str
     ]
 
 
-def spins_check(check_id: str = "spins", needs: tuple[str, ...] = ("executable",), part: str = "") -> Check:
-    """``check_id``: the node spins, so it answers its parameter services (1 point).
-
-    The lessons put periodic work in a timer callback and spin the node (seed ch. 13.3): a
-    ``while True`` loop with ``time.sleep`` logs and publishes the same, but never lets
-    the node answer anything (:func:`record_spins`).
-    """
-    return Check(check_id, "The node spins: it answers a call to its parameter services (ros2 param list)", 1,
-                 "put the periodic work in a timer callback (self.create_timer) and call rclpy.spin(node) in main(): "
-                 "a while loop with time.sleep never lets the node answer anything", needs=needs, part=part)
+CHECKS = [*make_checks(), checks.spins()]
 
 
-#: Seconds for a node's parameter services to appear, then to answer (:func:`record_spins`).
-SPIN_TIMEOUT = 5.0
-
-
-def record_spins(s: GradingSession, check_id: str, started: kit.StartedNode) -> bool:
-    """Record ``check_id``: the running node answers ``list_parameters`` (what ``ros2 param list`` calls).
-
-    Every rclpy and rclcpp node offers its parameter services; the executor that spins
-    the node serves them. A node whose process never spins (a ``while`` loop with
-    ``time.sleep`` instead of a timer) has the services but never answers.
-    """
-    expected = f"/{started.name or '<your node>'} answers list_parameters within {SPIN_TIMEOUT:.0f} s"
-    try:
-        names = params.connect(s, started.name, proc=started.proc, why="no node of yours appeared",
-                               timeout=SPIN_TIMEOUT).names()
-    except Unmet as exc:
-        return s.record(check_id, False, f"{exc}: the node does not spin", expected)
-    return s.record(check_id, True, f"/{started.name} answered with {len(names)} parameter name(s)", expected)
-
-
-CHECKS = [*make_checks(), spins_check()]
-
-
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Run print_forever_node, read its /rosout records, ask its parameter services, then Ctrl+C it."""
     # asked while the records come in (the node answers as soon as it spins): no time added after the window
-    grade_node(s, PACKAGE, NODE, "rclpy", while_waiting=lambda started: record_spins(s, "spins", started))
+    grade_node(s, PACKAGE, NODE, "rclpy", while_waiting=lambda started: params.record_spins(s, "spins", started))
 
 
-def grade_node(s: GradingSession, package: str, node: str, client_library: str, aliases: tuple[str, ...] = (),
+def grade_node(s: Session, package: str, node: str, client_library: str, aliases: tuple[str, ...] = (),
                while_waiting: Callable[[kit.StartedNode], object] | None = None) -> kit.StartedNode:
     """The print-forever checks (:func:`make_checks`) of ``package``'s ``print_forever_node`` named ``node``
     (or one of ``aliases``, :func:`ros2course.kit.nodes.wait_for_node`).

@@ -9,17 +9,16 @@ the seed's example cannot pass) and looks for them in the subscriber's
 ``/rosout`` records. Each executable is a part of its own (partial credit)
 and each ends with its Ctrl+C check. The publisher's parameter services are
 asked once: a timer and ``rclpy.spin()``, not a ``while`` loop that publishes
-(``pub_spins``, graders/print_forever_node.py).
+(``pub_spins``, ros2course.kit.checks.spins).
 """
 
 from __future__ import annotations
 
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, Unmet, checks, quotes
+from ros2course.kit import Check, Session, Unmet, checks, params, quotes
 from ros2course.kit import topics_services as ts
 
-from .print_forever_node import record_spins, spins_check
 
 PACKAGE = "python_package_that_uses_the_messages"
 PUB_EXE = "amazing_quote_publisher_node"
@@ -54,7 +53,7 @@ CHECKS = [
     Check("pub_rate", "One message every 0.5 s (2 Hz)", 2,
           "self.create_timer(0.5, self.timer_callback), one publish per tick", **PUB),
     checks.ctrl_c("pub_sigint_exit", "the publisher", **PUB),
-    spins_check("pub_spins", **PUB),
+    checks.spins("pub_spins", **PUB),
     *checks.started("sub", PACKAGE, SUB_EXE, SUB_NODE, part="subscriber"),
     Check("sub_topic", "It subscribes to /amazing_quote of type package_with_interfaces/msg/AmazingQuote", 2,
           "self.create_subscription(msg_type=AmazingQuote, topic='/amazing_quote', callback=..., qos_profile=1)",
@@ -72,11 +71,11 @@ def _show(msg) -> str:
     return f"{{id: {msg.id}, quote: {msg.quote!r}, philosopher_name: {msg.philosopher_name!r}}}"
 
 
-def _grade_publisher(s: GradingSession, msg_type: type) -> None:
+def _grade_publisher(s: Session, msg_type: type) -> None:
     path = kit.executable(s, "pub_executable", PACKAGE, PUB_EXE)
     probes = {TOPIC: ts.listen(s, TOPIC, msg_type)}  # before the node starts: no message is missed
     node = kit.start_node(s, "pub_node_name", path, PUB_NODE, sigint_check="pub_sigint_exit", need_node=False)
-    record_spins(s, "pub_spins", node)  # a timer and rclpy.spin(), not a while loop that publishes
+    params.record_spins(s, "pub_spins", node)  # a timer and rclpy.spin(), not a while loop that publishes
     target, where = ts.own_endpoint(s, "pub_topic", node, "publishers", TOPIC, MSG_TYPE,
                                     none=f"no {MSG_TYPE} topic published to listen to", where="on")
     probe = probes.get(target) or ts.listen(s, target, msg_type)  # grade the contents where they are published
@@ -104,7 +103,7 @@ def _grade_publisher(s: GradingSession, msg_type: type) -> None:
              noun="message", source="the messages' send stamps", where=where)
 
 
-def _grade_subscriber(s: GradingSession, msg_type: type) -> None:
+def _grade_subscriber(s: Session, msg_type: type) -> None:
     path = kit.executable(s, "sub_executable", PACKAGE, SUB_EXE)
     rosout = s.graph.rosout()
     node = kit.start_node(s, "sub_node_name", path, SUB_NODE, sigint_check="sub_sigint_exit", need_node=False)
@@ -114,7 +113,7 @@ def _grade_subscriber(s: GradingSession, msg_type: type) -> None:
                            count=GRADER_QUOTES, where=where)
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Grade the publisher (as a listener), then the subscriber (as a publisher), each a part of its own."""
     kit.depends(s, "depends", PACKAGE, ("rclpy", ts.INTERFACES))
     msg_type = ts.workspace_types(s, "msg", "AmazingQuote")

@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import Check, Session, Unmet
 from ._asyncio_trace import Trace, run_traced
 
 #: No continuous observation: each run ends by itself (about 1 s of asyncio.sleep at 0.1 s per retry).
@@ -88,7 +88,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Probe the coroutine, then run both examples with known rolls (about 3 s in all)."""
     _probe(s)
     with s.part("await"):
@@ -116,7 +116,7 @@ def grade(s: GradingSession) -> None:
                  f"task 2's result ({EXAMPLE_RESULTS[1]}) printed as soon as task 2 ends, before task 1's last roll")
 
 
-def _result_lines(s: GradingSession, trace: Trace) -> None:
+def _result_lines(s: Session, trace: Trace) -> None:
     """``await_result_lines``: a line 'The result of task=<tag> was <result>.' for task1 and task2, with their results."""
     text = "".join(str(e[2]) for e in trace.events if e[0] == "out")
     found = {}
@@ -153,7 +153,7 @@ def _cancelled(trace: Trace) -> str:
     return ""
 
 
-def _probe(s: GradingSession) -> None:
+def _probe(s: Session) -> None:
     """Import the coroutine and call it directly with known rolls: module, returns_roll, likelihood_param, yields."""
     folder = s.workspace_root / FOLDER
     if not (folder / "minimalist_package").is_dir():
@@ -192,7 +192,7 @@ def _probe(s: GradingSession) -> None:
              f"{PAUSE_RANGE[1]} s count)")
 
 
-def _progress_lines(s: GradingSession, part: Trace) -> None:
+def _progress_lines(s: Session, part: Trace) -> None:
     """prints_progress, on the default scenario (tag "probe", 3 misses then a hit): the lines the contract names."""
     printed = [e[2].strip() for e in part.events if e[0] == "out"]
     retries = [line for line in printed if "probe" in line and "retry" in line.lower()]
@@ -204,7 +204,7 @@ def _progress_lines(s: GradingSession, part: Trace) -> None:
              "3 lines saying a retry is needed (with the tag), then 'probe Done.' (the tag was 'probe')")
 
 
-def _example(s: GradingSession, name: str, runs_check: str, concurrent_check: str) -> Trace:
+def _example(s: Session, name: str, runs_check: str, concurrent_check: str) -> Trace:
     """Run example ``name`` with the example plans; record ``runs_check`` and ``concurrent_check``; return the trace.
 
     Raises:

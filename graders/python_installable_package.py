@@ -19,7 +19,7 @@ from pathlib import Path
 
 import tomllib
 
-from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import Check, Session, Unmet
 from . import _pip as kpip
 from ros2course.kit.parts import at_once
 from ros2course.kit.programs import interrupt_after, last_line, run_program
@@ -63,7 +63,7 @@ CHECKS = [
           needs=("installs",)),
 ]
 
-def _project_file(s: GradingSession) -> None:
+def _project_file(s: Session) -> None:
     """Record ``project_file``: pyproject.toml parses as TOML with a build backend, or a setup.py exists."""
     folder = s.workspace_root / FOLDER
     pyproject, setup_py = folder / "pyproject.toml", folder / "setup.py"
@@ -92,7 +92,7 @@ def _project_file(s: GradingSession) -> None:
     s.require("project_file")
 
 
-def _build_requires(s: GradingSession, data: dict) -> None:
+def _build_requires(s: Session, data: dict) -> None:
     """``build_requires``: ``[build-system] requires`` lists setuptools (pip installs it for an isolated build).
 
     The grader builds offline without isolation, so its own setuptools builds the package whatever ``requires``
@@ -108,7 +108,7 @@ def _build_requires(s: GradingSession, data: dict) -> None:
              "[build-system] requires = [\"setuptools>=61\"]: pip installs setuptools before building")
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Install into a fresh venv, import from /, then run the command while a copy of the venv uninstalls."""
     _project_file(s)
     tools = kpip.tools_folder(s)
@@ -135,7 +135,7 @@ def grade(s: GradingSession) -> None:
             lambda: _console_script(s, venv / "bin" / SCRIPT, env))
 
 
-def _importable(s: GradingSession, python: Path, env: dict[str, str]) -> None:
+def _importable(s: Session, python: Path, env: dict[str, str]) -> None:
     """``importable``: from ``/``, the venv's python imports minimalist_package from the venv's site-packages."""
     venv = python.parent.parent
     probe = "import minimalist_package, minimalist_package.minimalist_script as m; print(minimalist_package.__file__)"
@@ -148,7 +148,7 @@ def _importable(s: GradingSession, python: Path, env: dict[str, str]) -> None:
              f"it imports from the venv's site-packages ({venv}/lib/...), i.e. pip installed the package's modules")
 
 
-def _leaves_out_tests(s: GradingSession, python: Path) -> None:
+def _leaves_out_tests(s: Session, python: Path) -> None:
     """``leaves_out_tests``: the venv's site-packages holds no top-level ``test`` (package or module) after the install.
 
     The fresh venv holds nothing of its own (made without pip), so a ``test`` there came from this install.
@@ -162,7 +162,7 @@ def _leaves_out_tests(s: GradingSession, python: Path) -> None:
              f"only minimalist_package installed: {TEST_FOLDER}/ stays out of site-packages")
 
 
-def _uninstall(s: GradingSession, python: Path, tools: Path, env: dict[str, str]) -> None:
+def _uninstall(s: Session, python: Path, tools: Path, env: dict[str, str]) -> None:
     """``uninstall``: ``pip uninstall -y`` exits 0, then neither the command nor the import is left in that venv."""
     command, root = python.parent / SCRIPT, Path("/")
     removed = kpip.pip(s, python, tools, ["uninstall", "-y", PACKAGE], "pip_uninstall", cwd=root)
@@ -176,7 +176,7 @@ def _uninstall(s: GradingSession, python: Path, tools: Path, env: dict[str, str]
              "'pip uninstall -y minimalist_package' exits 0 and removes the package and its command")
 
 
-def _console_script(s: GradingSession, command: Path, env: dict[str, str]) -> None:
+def _console_script(s: Session, command: Path, env: dict[str, str]) -> None:
     """``console_script``: the installed command prints Howdy! at least twice in WINDOW s after its first line."""
     if not command.exists():
         scripts = sorted(p.name for p in command.parent.iterdir()

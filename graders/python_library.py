@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import math
 
-from ros2course.kit import Check, GradingSession
+from ros2course.kit import Check, Session
 from ros2course.kit.packaging import installed_import, installed_subpackage
 
 PACKAGE = "python_package_with_a_library"
@@ -105,7 +105,7 @@ for _key, _value in {"@CASES@": json.dumps(CASES), "@NAMES@": json.dumps(NAMES),
     _PROBE = _PROBE.replace(_key, repr(_value))
 
 
-def _record_function(s: GradingSession, result: dict) -> None:
+def _record_function(s: Session, result: dict) -> None:
     """``square_of_sum``: the probe's calls of the function returned (a + b)**2 (seed ch. 14.3)."""
     expected = "(a + b)**2 for " + ", ".join(f"({a}, {b})" for a, b in CASES)
     calls = result.get("calls")
@@ -129,7 +129,7 @@ def _record_function(s: GradingSession, result: dict) -> None:
     s.record("square_of_sum", not wrong, observed, expected)
 
 
-def _record_class(s: GradingSession, result: dict) -> None:
+def _record_class(s: Session, result: dict) -> None:
     """``sample_class``: two instances gave back the names they were made with (seed ch. 14.3)."""
     expected = (f"{CLASS}({NAMES[0]!r}).get_name() == {NAMES[0]!r} and "
                 f"{CLASS}(name={NAMES[1]!r}).get_name() == {NAMES[1]!r}, each instance keeping its own name")
@@ -148,7 +148,7 @@ HOMES = {FUNCTION: (f"{MODULE}._sample_function", "function_module"),
          CLASS: (f"{MODULE}._sample_class", "class_module")}
 
 
-def _record_layout(s: GradingSession, result: dict) -> None:
+def _record_layout(s: Session, result: dict) -> None:
     """``layout``: the function and the class are defined in ``_sample_function.py`` and ``_sample_class.py``
     (their ``__module__``), so ``sample_python_library/__init__.py`` only re-exports them (seed ch. 14.2)."""
     expected = ", ".join(f"{name} defined in {home}" for name, (home, _) in HOMES.items())
@@ -160,7 +160,7 @@ def _record_layout(s: GradingSession, result: dict) -> None:
     s.record("layout", not wrong, observed, expected, fraction=(len(HOMES) - len(wrong)) / len(HOMES))
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Check the install tree, then import and exercise the installed library in a subprocess."""
     installed = installed_subpackage(s, "installed", PACKAGE, SUBPACKAGE)
     result = installed_import(s, "importable", MODULE, f"from {MODULE} import {CLASS}, {FUNCTION} works from "

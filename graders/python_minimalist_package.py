@@ -19,7 +19,7 @@ from pathlib import Path
 import yaml
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import Check, Session, Unmet
 from ros2course.kit import python_programs as py
 from ros2course.kit.nodes import sigint_exit
 from ros2course.kit.programs import interrupt_after, printed_lines
@@ -100,7 +100,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Look at the files, run the script by its path, exercise the class, run the learner's tests."""
     project = kit.project_files(s, "layout", PROJECT, FILES)
     with s.part("script"):
@@ -111,7 +111,7 @@ def grade(s: GradingSession) -> None:
         _judge_tests(s, project)
 
 
-def _judge_script(s: GradingSession, project: Path) -> None:
+def _judge_script(s: Session, project: Path) -> None:
     """Shebang and executable bit of minimalist_script.py, then one run ended with Ctrl+C RUN_SECONDS after 'Howdy!'."""
     script = project / SCRIPT
     if not script.is_file():
@@ -138,7 +138,7 @@ def _judge_script(s: GradingSession, project: Path) -> None:
     _judge_main(s, project)
 
 
-def _judge_main(s: GradingSession, project: Path) -> None:
+def _judge_main(s: Session, project: Path) -> None:
     """``main_function``: import minimalist_script (it prints nothing), then call main(): it prints 'Howdy!'.
 
     What an installed console script (and ``ros2 run`` later) does; a loop under the ``if __name__`` block,
@@ -165,7 +165,7 @@ def _judge_main(s: GradingSession, project: Path) -> None:
              "(what an installed console script does)")
 
 
-def _judge_class(s: GradingSession, project: Path) -> None:
+def _judge_class(s: Session, project: Path) -> None:
     """Exercise MinimalistClass in a child interpreter (class_probe.py), judge each element (class_expectations)."""
     _absolute_import(s, project / "minimalist_package" / "__init__.py")
     probe = py.run_probe(s, DATA / "class_probe.py", [], "class_probe", cwd=project, timeout=CHILD_TIMEOUT,
@@ -185,7 +185,7 @@ def _judge_class(s: GradingSession, project: Path) -> None:
              "type hints on every argument and return value, and a docstring, on each public method")
 
 
-def _absolute_import(s: GradingSession, init: Path) -> None:
+def _absolute_import(s: Session, init: Path) -> None:
     """``absolute_import``: no ``from . import ...`` (a relative import) in the package's __init__.py."""
     expected = "from minimalist_package._minimalist_class import MinimalistClass (the package's full name)"
     try:
@@ -200,7 +200,7 @@ def _absolute_import(s: GradingSession, init: Path) -> None:
              if relative else "__init__.py has no relative import", expected)
 
 
-def _judge_tests(s: GradingSession, project: Path) -> None:
+def _judge_tests(s: Session, project: Path) -> None:
     """Run the learner's suite as the lesson says, then against each broken class of mutants.yaml."""
     py.unit_tests(s, "unit_tests_pass", project, timeout=CHILD_TIMEOUT)
     s.require("unit_tests_pass")

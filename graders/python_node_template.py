@@ -9,7 +9,7 @@ graph is started.
 from __future__ import annotations
 
 from ros2course.kit import wait_until
-from ros2course.kit import Check, GradingSession
+from ros2course.kit import Check, Session
 from ros2course.kit.packaging import ros2_run_executable
 
 PACKAGE = "python_package_with_a_node"
@@ -40,7 +40,7 @@ def _lines(text: str, limit: int = 3) -> str:
     return shown + (f" (+{len(lines) - limit} more lines)" if len(lines) > limit else "") if lines else "nothing"
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Run the executable once, wait for it to end, judge its stdout and exit code."""
     path = ros2_run_executable(s, "executable", PACKAGE, EXECUTABLE)
     # not a ROS node (the template uses no ROS API): a program, with the workspace sourced as 'ros2 run' has it

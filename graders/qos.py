@@ -23,7 +23,7 @@ packages inside its functions: a grader module is also loaded for its CHECKS alo
 from __future__ import annotations
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks
+from ros2course.kit import Check, Session, checks
 
 from . import _qos
 
@@ -122,7 +122,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Grade the three nodes and the script, each a part of its own (see the module docstring)."""
     kit.depends(s, "depends", PACKAGE, ("rclpy", "std_msgs", "sensor_msgs"))
     temperature, string = _qos.message_types()

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks
+from ros2course.kit import Check, Session, checks
 from . import _sas as sas
 
 PACKAGE = "sas_robot_driver_myrobot"
@@ -114,7 +114,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Check the launch file, grade the driver, then the client (started first, in a graph of its own)."""
     sas.launch_file(s, "launch_file", DRIVER, LAUNCH_FILE)
     client = None

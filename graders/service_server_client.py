@@ -19,8 +19,8 @@ Black-box, and the grader plays the other side each time:
 from __future__ import annotations
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks, parts
-from . import _services as services
+from ros2course.kit import Check, Session, checks, parts
+from ros2course.kit import services
 from ros2course.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_the_services"
@@ -98,7 +98,7 @@ CHECKS = [
 ]
 
 
-def _grade_server(s: GradingSession, srv_type: type) -> None:
+def _grade_server(s: Session, srv_type: type) -> None:
     path = kit.executable(s, "server_executable", PACKAGE, SERVER_EXE)
     node = kit.start_node(s, "server_node_name", path, SERVER_NODE, sigint_check="server_sigint_exit",
                           need_node=False)
@@ -116,7 +116,7 @@ def _grade_server(s: GradingSession, srv_type: type) -> None:
                          where)
 
 
-def _grade_client(s: GradingSession, srv_type: type) -> None:
+def _grade_client(s: Session, srv_type: type) -> None:
     path = kit.executable(s, "client_executable", PACKAGE, CLIENT_EXE)
     rosout = s.graph.rosout()  # the part's own graph
     # Made before the client starts, so it closes after the client's Ctrl+C (closing actions run newest first):
@@ -133,7 +133,7 @@ def _grade_client(s: GradingSession, srv_type: type) -> None:
                            late=LATE_ANSWER)
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Grade the server (as its client) and, at the same time, the client (as its server).
 
     Each runs in a private graph of its own, so the two halves overlap

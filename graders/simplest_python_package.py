@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import Check, Session, Unmet
 from ros2course.kit.packaging import (
     ament_index_packages,
     data_files_mapping,
@@ -54,7 +54,7 @@ FALLBACK = ("colcon-ros added it through its implicit fallback (colcon warns \"d
             "that fallback will be removed)")
 
 
-def _record_index(s: GradingSession, prefix: Path, installs: dict[str, str], problem: str) -> None:
+def _record_index(s: Session, prefix: Path, installs: dict[str, str], problem: str) -> None:
     """``ament_index``: setup.py installs the marker itself, and the sourced index lists the package."""
     wanted = f"{INDEX}/{PACKAGE}"
     explicit = [src for src, dest in installs.items() if dest == wanted]
@@ -77,7 +77,7 @@ def _record_index(s: GradingSession, prefix: Path, installs: dict[str, str], pro
                  f"(prefix {relative(s, Path(listed))})", expected)
 
 
-def _record_manifest(s: GradingSession, prefix: Path, installs: dict[str, str], problem: str) -> None:
+def _record_manifest(s: Session, prefix: Path, installs: dict[str, str], problem: str) -> None:
     """``package_xml_installed``: setup.py installs package.xml to share/<package>/ and it is there."""
     manifest = prefix / "share" / PACKAGE / "package.xml"
     expected = f"setup.py data_files installs package.xml to share/{PACKAGE}/"
@@ -94,7 +94,7 @@ def _record_manifest(s: GradingSession, prefix: Path, installs: dict[str, str], 
         s.record("package_xml_installed", True, f"{relative(s, manifest)} installed by data_files", expected)
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Read the package's files, then look at the install tree and the sourced environment."""
     found = kit.source_package(s, PACKAGE)
     if found is None:  # the build step already insists on it; kept for direct calls

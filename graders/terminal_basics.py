@@ -22,8 +22,8 @@ from __future__ import annotations
 import os
 from pathlib import Path
 
-from ros2course.kit import Check, GradingSession, Unmet
-from . import _files as files
+from ros2course.kit import Check, Session, Unmet
+from ros2course.kit import learner_files as files
 
 #: No program is observed: the checks read files.
 WINDOW = 0.0
@@ -55,7 +55,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Look at ``terminal_basics/`` and the files the chapter's commands make in it."""
     lesson = s.workspace_root / FOLDER
     expected = f"a folder {FOLDER}/ made with mkdir in the workspace folder"
@@ -79,7 +79,7 @@ def grade(s: GradingSession) -> None:
             judge(s, real)
 
 
-def _grade_a_folder(s: GradingSession, lesson: Path) -> None:
+def _grade_a_folder(s: Session, lesson: Path) -> None:
     """Checks ``a_folder`` and ``empty_file``."""
     expected = f"a folder {FOLDER}/a_folder/ (mkdir a_folder)"
     folder = files.entry(s, "a_folder", lesson / "a_folder", lesson, expected, kind="folder")
@@ -93,7 +93,7 @@ def _grade_a_folder(s: GradingSession, lesson: Path) -> None:
                   "'truncate -s 0 a_folder/an_empty_file.txt'")
 
 
-def _grade_stuff(s: GradingSession, lesson: Path) -> None:
+def _grade_stuff(s: Session, lesson: Path) -> None:
     """Check ``file_with_stuff``: one line ``stuff`` (the final newline nano adds is optional)."""
     what = "file_with_stuff.txt holding the word stuff (one line; a final newline is fine)"
     text = files.read_text(files.entry(s, "file_with_stuff", lesson / "file_with_stuff.txt", lesson, what))
@@ -102,7 +102,7 @@ def _grade_stuff(s: GradingSession, lesson: Path) -> None:
              hint=None if "stuff" not in text else "only the word stuff, on its own line, nothing else in the file")
 
 
-def _grade_appended(s: GradingSession, lesson: Path) -> None:
+def _grade_appended(s: Session, lesson: Path) -> None:
     """Check ``appended``: exactly the two lines of :data:`APPENDED_LINES`, in order."""
     first, second = APPENDED_LINES
     what = f"appended.txt holding two lines, {first!r} then {second!r} (each added with >>)"
@@ -119,7 +119,7 @@ def _grade_appended(s: GradingSession, lesson: Path) -> None:
              what, hint=hint)
 
 
-def _grade_listing(s: GradingSession, lesson: Path) -> None:
+def _grade_listing(s: Session, lesson: Path) -> None:
     """Check ``result_of_ls``: the names in the file are the folder's names now.
 
     ``result_of_ls.txt`` itself may be listed or not: ``ls > result_of_ls.txt``

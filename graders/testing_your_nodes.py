@@ -8,14 +8,14 @@ reference packages and fail on each hidden mutant below, one check per mutant, s
 the feedback names each bug the tests would let through.
 
 Only the learner's ``test/`` folders are used: the code under test is always the
-course's (``references:`` in lesson.yaml, ``GradingSession.reference_package``), so a
+course's (``references:`` in lesson.yaml, ``Session.reference_package``), so a
 learner's own bug cannot pass for a test's.
 """
 
 from __future__ import annotations
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession
+from ros2course.kit import Check, Session
 from ros2course.kit.packaging import setup_py_arguments
 from ros2course.kit.testing import (
     DeclaredMutant,
@@ -120,7 +120,7 @@ CHECKS = [
 ]
 
 
-def _asks_for_pytest(s: GradingSession) -> None:
+def _asks_for_pytest(s: Session) -> None:
     """``colcon_runs_pytest``: colcon-core runs pytest for a package whose setup() lists it in
     ``tests_require`` or ``extras_require['test']`` (``task/python/test/pytest.py``), else unittest."""
     lacking = []
@@ -133,7 +133,7 @@ def _asks_for_pytest(s: GradingSession) -> None:
              "tests_require=['pytest'] in the setup() of both packages")
 
 
-def _test_depends(s: GradingSession) -> None:
+def _test_depends(s: Session) -> None:
     """``test_depends``: each package.xml lists TEST_DEPENDENCIES as <test_depend> (or <depend>, which includes it)."""
     seen, missing = [], []
     for package, needed in TEST_DEPENDENCIES.items():
@@ -153,7 +153,7 @@ def _test_depends(s: GradingSession) -> None:
              fraction=max(0, total - len(missing)) / total)
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Static setup checks, then the learner's tests on the reference, then on each mutant (two runs at once)."""
     _asks_for_pytest(s)
     _test_depends(s)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import time
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks, scripts
+from ros2course.kit import Check, Session, checks, scripts
 from . import _tf2_broadcaster
 
 PACKAGE = "python_package_that_uses_tf2"
@@ -100,7 +100,7 @@ CIRCLE = _tf2_broadcaster.Circle(
     POSITION_TOLERANCE, SPEED_TOLERANCE, HEADING_TOLERANCE, NORM_TOLERANCE, STAMP_TOLERANCE, ORIGIN_TOLERANCE)
 
 
-def _grade_broadcaster(s: GradingSession, tf_message: type) -> None:
+def _grade_broadcaster(s: Session, tf_message: type) -> None:
     """The node's /tf stream, then its /tf_static transform (the judgements: graders/_tf2_broadcaster.py)."""
     path = kit.executable(s, "broadcaster_executable", PACKAGE, EXE)
     tf = s.graph.topic("/tf", tf_message, 100)
@@ -116,7 +116,7 @@ def _grade_broadcaster(s: GradingSession, tf_message: type) -> None:
         _tf2_broadcaster.static_once(s, CIRCLE, early_static)
 
 
-def _grade_cli(s: GradingSession, tf_message: type) -> None:
+def _grade_cli(s: Session, tf_message: type) -> None:
     """The learner's script, with the grader's own static transform of random offsets to show."""
     path = scripts.script(s, "cli_script", SCRIPT)
     offset = tuple(round(s.random.uniform(*bounds), 3) for bounds in ((0.2, 0.9), (-0.9, -0.2), (0.2, 0.9)))
@@ -133,7 +133,7 @@ def _grade_cli(s: GradingSession, tf_message: type) -> None:
              f"the script ends by itself after about 3 s of tf2_echo (within {SCRIPT_LENGTH:.0f} s in all)")
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """The broadcaster, then the script in a graph of its own (see the module docstring)."""
     kit.depends(s, "depends", PACKAGE, ("rclpy", "tf2_ros", "geometry_msgs"))
     tf_message = s.installed_type("tf2_msgs", "msg", "TFMessage")  # tf2 is not on PyPI: from the underlay

@@ -20,7 +20,7 @@ from __future__ import annotations
 import threading
 
 from ros2course import kit
-from ros2course.kit import LATE_DELIVERY, Check, GradingSession, checks, wait_until
+from ros2course.kit import LATE_DELIVERY, Check, Session, checks, wait_until
 from ros2course.kit import topics_services as ts
 
 PACKAGE = "python_package_that_uses_tf2"
@@ -76,7 +76,7 @@ CHECKS = [
 class _Broadcast:
     """The grader's own ``world -> target`` on /tf, sent every :data:`BROADCAST_PERIOD` s from a thread."""
 
-    def __init__(self, s: GradingSession, tf_message: type, transform_type: type) -> None:
+    def __init__(self, s: Session, tf_message: type, transform_type: type) -> None:
         self.s, self.tf_message, self.transform_type = s, tf_message, transform_type
         self.publisher = s.graph.node.create_publisher(tf_message, "/tf", ts.reliable_qos(100))
         self.position: tuple[float, float, float] | None = None
@@ -101,8 +101,8 @@ class _Broadcast:
         self.thread.join(timeout=2.0)
 
 
-def _random_position(s: GradingSession, far_from: tuple[float, float, float] | None = None) -> tuple[float, float, float]:
-    """Three decimals each in [-3, 3] m, every coordinate at least 0.5 m from ``far_from``'s (GradingSession.random)."""
+def _random_position(s: Session, far_from: tuple[float, float, float] | None = None) -> tuple[float, float, float]:
+    """Three decimals each in [-3, 3] m, every coordinate at least 0.5 m from ``far_from``'s (Session.random)."""
     while True:
         found = tuple(round(s.random.uniform(-3.0, 3.0), 3) for _ in range(3))
         if min(abs(v) for v in found) > 0.2 and (far_from is None or
@@ -121,7 +121,7 @@ def _logged(rosout, node: str, position: tuple[float, float, float]) -> list:
     return out
 
 
-def _every_lookup(s: GradingSession, rosout, name: str, node: kit.StartedNode,
+def _every_lookup(s: Session, rosout, name: str, node: kit.StartedNode,
                   position: tuple[float, float, float]) -> None:
     """logs_every_lookup: the unchanged position is logged again at the next lookups (the lesson's "every time").
 
@@ -142,7 +142,7 @@ def _every_lookup(s: GradingSession, rosout, name: str, node: kit.StartedNode,
              f"(one lookup every {PERIOD} s, each logged)")
 
 
-def _grade_listener(s: GradingSession) -> None:
+def _grade_listener(s: Session) -> None:
     tf_message = s.installed_type("tf2_msgs", "msg", "TFMessage")  # tf2 is not on PyPI: from the underlay
     path = kit.executable(s, "listener_executable", PACKAGE, EXE)
     rosout = s.graph.rosout()
@@ -175,7 +175,7 @@ def _grade_listener(s: GradingSession) -> None:
         _lookup_rate(s, rosout, name, node)
 
 
-def _lookup_rate(s: GradingSession, rosout, name: str, node: kit.StartedNode) -> None:
+def _lookup_rate(s: Session, rosout, name: str, node: kit.StartedNode) -> None:
     """Record ``lookup_rate`` on the stamps of the node's records from its first warning on (one per lookup),
     waiting (at most twice the time they take at :data:`PERIOD`) until :data:`RATE_RECORDS` of them came: a
     node whose position checks failed early is judged on as many records as one that passed them."""
@@ -193,7 +193,7 @@ def _lookup_rate(s: GradingSession, rosout, name: str, node: kit.StartedNode) ->
              source="the stamps of its log records, one per lookup", few_note=f"; {kit.process_state(node.proc)}")
 
 
-def _follow(s: GradingSession, rosout, name: str, node: kit.StartedNode, tf_message: type) -> None:
+def _follow(s: Session, rosout, name: str, node: kit.StartedNode, tf_message: type) -> None:
     """Steps 2 and 3: logs_transform and follows_changes, the grader broadcasting ``world -> target``."""
     from geometry_msgs.msg import TransformStamped  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
     # 2. the grader becomes the tf2 tree
@@ -227,7 +227,7 @@ def _follow(s: GradingSession, rosout, name: str, node: kit.StartedNode, tf_mess
              f"a record with the new position ({', '.join(f'{v:.3f}' for v in second)})")
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """One part: the listener against the grader's own transforms (see the module docstring)."""
     with s.part("listener"):
         _grade_listener(s)

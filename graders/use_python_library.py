@@ -8,7 +8,7 @@ letters). Numbers are parsed however the node formats them; c is compared with
 (a+b)**2 within the rounding of the printed digits (``ros2course.kit.packaging.SquareLine``).
 Only ``package.xml`` is read, for the dependency on the library the contract names.
 The node's parameter services are asked once: a timer and ``rclpy.spin()``, not a
-``while`` loop (``spins``, graders/print_forever_node.py).
+``while`` loop (``spins``, ros2course.kit.checks.spins).
 
 Then the node runs once more, in a graph of its own, with a stand-in of the library first on
 ``PYTHONPATH`` (the same modules as the lesson's library, whose function returns (a+b)**2 +
@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from ros2course.kit import LATE_DELIVERY, stamp_seconds, wait_until
 from ros2course import kit
-from ros2course.kit import Check, GradingSession, checks
+from ros2course.kit import Check, Session, checks, params, python_programs
 from ros2course.kit.packaging import (
     classify,
     name_lines,
@@ -32,7 +32,6 @@ from ros2course.kit.packaging import (
     square_lines,
 )
 
-from .print_forever_node import record_spins, spins_check
 
 PACKAGE = "python_package_that_uses_the_library"
 LIBRARY = "python_package_with_a_library"
@@ -96,7 +95,7 @@ CHECKS = [
     Check("sigint_exit", "Ctrl+C ends it with exit code 0 and no traceback", 2,
           "in Jazzy rclpy.spin() may raise ExternalShutdownException on Ctrl+C: catch it together with "
           "KeyboardInterrupt", needs=("executable",)),
-    spins_check(),
+    checks.spins(),
     Check("uses_library", "c comes from the library's function and the name from SampleClass.get_name()", 2,
           "import them (from python_package_with_a_library.sample_python_library import SampleClass, "
           "sample_function_for_square_of_sum), log c = sample_function_for_square_of_sum(a, b) and "
@@ -105,7 +104,7 @@ CHECKS = [
 ]
 
 
-def _numbers_random(s: GradingSession, records: list) -> None:
+def _numbers_random(s: Session, records: list) -> None:
     """``numbers_random``: the logged a and b are not the same in every square-of-sum record (seed ch. 15.1:
     two random numbers per tick). Two uniform draws printed with Python's default repr never repeat."""
     lines = [parse_square_line(r.msg) for r in records]
@@ -127,7 +126,7 @@ def _busiest(records: list) -> str | None:
     return max(sorted(set(loggers)), key=loggers.count) if loggers else None
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Run the node, read its /rosout records, judge them, then Ctrl+C it."""
     kit.depends(s, "depends_library", PACKAGE, (LIBRARY,))
     path = ros2_run_executable(s, "executable", PACKAGE, EXECUTABLE)
@@ -167,22 +166,16 @@ def grade(s: GradingSession) -> None:
     name_lines(s, "name_log", "pairs", "names_differ", ordered, max_gap=PERIOD / 2)
     kit.rate(s, "rate", [stamp_seconds(r.stamp) for r in mine], period=PERIOD, needed=SAMPLES, waited=waited,
              noun="record", source="the records' stamps")
-    record_spins(s, "spins", started)
+    params.record_spins(s, "spins", started)
     _uses_library(s, path)
 
 
-def _uses_library(s: GradingSession, path) -> None:
+def _uses_library(s: Session, path) -> None:
     """Record ``uses_library``: the node run once more, in a graph of its own, with the stand-in library
     (:data:`WITNESS_FILES`) first on PYTHONPATH, logs the stand-in's c (over WITNESS_OFFSET) and get_name()
     (starting with WITNESS_PREFIX): half the points each. ``path``: the node's executable."""
-    def fill(folder) -> None:
-        for rel, text in WITNESS_FILES.items():
-            (folder / LIBRARY / rel).parent.mkdir(parents=True, exist_ok=True)
-            (folder / LIBRARY / rel).write_text(text)
-
-    witness = s.submission_folder("witness-library", fill)
-    env = s.overlay()
-    env = {**env, "PYTHONPATH": ":".join(p for p in (str(witness), env.get("PYTHONPATH", "")) if p)}
+    env = python_programs.stand_in_env(s, "witness-library",
+                                       {f"{LIBRARY}/{rel}": text for rel, text in WITNESS_FILES.items()})
     graph = s.new_graph()
     rosout = graph.rosout()
     proc = s.start_program([str(path)], f"{EXECUTABLE}.witness", env=graph.learner_env(env))

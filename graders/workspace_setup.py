@@ -10,7 +10,7 @@ import re
 from pathlib import Path
 
 from ros2course.kit import NotGradable
-from ros2course.kit import Check, GradingSession, Unmet
+from ros2course.kit import Check, Session, Unmet
 
 #: No node is observed: the checks read the folder and ask colcon and bash.
 WINDOW = 0.0
@@ -62,7 +62,7 @@ def failed_packages(events: Path) -> list[str]:
     return failed
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Inspect the workspace folder, then ask colcon and bash about it."""
     root = s.workspace_root
     has_src = (root / "src").is_dir()
@@ -72,7 +72,7 @@ def grade(s: GradingSession) -> None:
     s.record("src_folder", has_src, f"{root} holds: {entries}", "a src/ folder for the packages")
 
     # --log-base /dev/null: 'colcon list' must not create log/ itself (colcon's documented way to disable logs)
-    # colcon list runs each setup.py: the submission's code, run as the submission (GradingSession.run_colcon)
+    # colcon list runs each setup.py: the submission's code, run as the submission (Session.run_colcon)
     proc = s.run_colcon(["--log-base", "/dev/null", "list"])
     packages = proc.stdout.strip().splitlines()
     s.record("colcon_reads", proc.returncode == 0,

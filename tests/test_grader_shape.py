@@ -7,6 +7,7 @@ placement rule in ``ros2course.kit``'s docstring) or as kit steps another lesson
 from __future__ import annotations
 
 import ast
+import re
 import io
 import tokenize
 from pathlib import Path
@@ -66,3 +67,55 @@ def test_a_lesson_grader_is_a_short_declaration_without_rclpy(grader: Path) -> N
         f"one function per check in graders/_{grader.stem}.py, or into a kit step another lesson can use")
     assert not rclpy_imports(source), (
         f"{grader.name} imports rclpy at line(s) {rclpy_imports(source)}: reach ROS through the kit")
+
+
+KIT = GRADERS.parent / "course" / "kit"
+#: A grader that reuses another lesson's grader because it is the same lesson in another client library:
+#: cpp-node is print-forever-node in C++ (tutorial ch. 12-13 and 27), graded by the same steps.
+TWINS = {"cpp_node": "print_forever_node"}
+
+
+def relative_imports(source: str) -> set[str]:
+    """Modules of the graders package ``source`` imports (``from . import _x``, ``from ._x import y``)."""
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.ImportFrom) and node.level == 1:
+            found.update([node.module] if node.module else [a.name for a in node.names])
+    return found
+
+
+def lessons_using(helper: str) -> set[str]:
+    """Lesson graders that import ``helper`` (a ``graders/_x.py``), directly or through other helpers."""
+    users: set[str] = set()
+    for grader in LESSON_GRADERS:
+        seen, todo = set(), [grader.stem]
+        while todo:
+            module = todo.pop()
+            if module in seen:
+                continue
+            seen.add(module)
+            todo.extend(m for m in relative_imports((GRADERS / f"{module}.py").read_text()) if m.startswith("_"))
+        if helper in seen:
+            users.add(grader.stem)
+    return users
+
+
+def test_the_placement_rule_holds() -> None:
+    """ros2course.kit's placement rule (issues 23 and 38): a ``graders/_x.py`` serves one lesson, a step two
+    lessons use lives in the kit; a lesson grader imports no other lesson's grader (but its twin's); every kit
+    module serves a grader or another kit module, or it goes."""
+    helpers = sorted(p.stem for p in GRADERS.glob("_*.py") if p.stem != "__init__")
+    shared = {h: sorted(users) for h in helpers if len(users := lessons_using(h)) > 1}
+    assert not shared, f"helpers more than one lesson imports (move them into ros2course.kit): {shared}"
+    unused = [h for h in helpers if not lessons_using(h)]
+    assert not unused, f"helpers no lesson imports: {unused}"
+    lessons = {p.stem for p in LESSON_GRADERS}
+    crossing = {g.stem: sorted(m for m in relative_imports(g.read_text()) if m in lessons and TWINS.get(g.stem) != m)
+                for g in LESSON_GRADERS}
+    assert not {k: v for k, v in crossing.items() if v}, f"graders importing another lesson's grader: {crossing}"
+    sources = {p: p.read_text() for p in (*GRADERS.glob("*.py"), *KIT.glob("*.py"))}
+    kit_modules = sorted(p.stem for p in KIT.glob("*.py") if p.stem != "__init__")
+    idle = [m for m in kit_modules
+            if not any(re.search(rf"ros2course\.kit\.{m}\b|from ros2course\.kit import [^\n]*\b{m}\b", text)
+                       for path, text in sources.items() if path != KIT / f"{m}.py")]
+    assert not idle, f"kit modules no grader or kit module imports (remove them): {idle}"

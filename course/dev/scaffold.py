@@ -82,7 +82,7 @@ raises ``Unmet``; the engine then marks every check that needs it "not checked".
 from __future__ import annotations
 
 from ros2course import kit
-from ros2course.kit import Check, GradingSession
+from ros2course.kit import Check, Session
 
 PACKAGE = "{package}"
 EXECUTABLE = "{executable}"
@@ -98,7 +98,7 @@ CHECKS = [
 ]
 
 
-def grade(s: GradingSession) -> None:
+def grade(s: Session) -> None:
     """Find the executable, start it, wait for the node in the graph."""
     path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)
     kit.start_node(s, "node_name", path, NODE)

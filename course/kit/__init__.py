@@ -18,7 +18,9 @@ This is the engine's public grading API (issue 18): a course's graders import
 :data:`API_VERSION` (``ros2course --version`` prints it); a course's ``course.yaml``
 names the major version its graders are written for (``kit: "2"``).
 
-A grader reaches the machine only through the :class:`GradingSession` it is handed
+A grader reaches the machine only through the session it is handed, typed
+:class:`Session` (:mod:`ros2course.kit.session_protocol`: the members a grader may use; the engine's
+:class:`GradingSession` implements it)
 (learner processes: ``s.launch``, ``s.start_program``; colcon: ``s.run_colcon``; the
 sourced workspace: ``s.overlay()``) and the steps here, which take that session.
 
@@ -26,19 +28,22 @@ The kit's modules, by what they observe (graders import the ones they use,
 ``from ros2course.kit import scripts``):
 
 * nodes, judge, checks, parts: executables, nodes, rates, Ctrl+C, shared check declarations;
-* topics_services, quotes, params, launch: the Python track's topics, services, parameters, launch;
+* topics_services, services, quotes, params, launch: the Python track's topics, services (the grader as a
+  server's client or a client's server), parameters (and whether a node spins), launch;
 * actions: the grader as an action client of a learner's server, or as a learner client's server;
 * scripts, mystery: the ``ros2`` command-line lessons and the grader's own "mystery" nodes;
 * packages, packaging, cmake: package.xml, setup.py, CMake installs and consumers;
-* programs, python_programs: learner programs that are not nodes;
+* programs, python_programs, learner_files: learner programs that are not nodes, and files a learner made;
 * testing: a learner's own tests, run on the course's reference and on hidden mutants of it.
 
-Placement rule (issue 23): a step two lessons use, or another course's author
+Placement rule (issues 23 and 38): a step two lessons use, or another course's author
 would, lives here; a helper of one lesson lives with that lesson's grader, as
 ``graders/_<name>.py`` of its course (the tutorial's asyncio trace, C++ package
-consumers, Fast DDS profiles, file checks, the 500 Hz joint stream and the sas
-stand-in driver, the mystery services, the launch node watch, pip installs and
-the service lessons' steps), imported with ``from . import _<name>``.
+consumers, Fast DDS profiles, the 500 Hz joint stream and the sas stand-in
+driver, the mystery services, the launch node watch, pip installs, one lesson's
+long procedures), imported with ``from . import _<name>``. tests/test_grader_shape.py
+keeps it: no ``graders/_x.py`` imported by two lessons, no grader importing
+another lesson's grader (a lesson's C++ twin aside), no kit module nobody imports.
 """
 
 from ros2course.errors import NotGradable
@@ -57,6 +62,7 @@ from ros2course.run.probes import (
     wait_until,
 )
 from ros2course.run.process import LearnerProcess
+from ros2course.kit.session_protocol import Session
 from ros2course.kit.judge import RATE_TOLERANCE, STANDARD_TOPICS, rate, topics_seen
 from ros2course.kit.nodes import (
     StartedNode,
@@ -79,5 +85,5 @@ __all__ = [
     "wait_until",
     "API_VERSION", "RATE_TOLERANCE", "STANDARD_TOPICS", "Check", "GradingSession", "StartedNode", "Unmet", "declared_dependencies",
     "depends", "executable", "process_state", "project_files", "rate", "sigint_exit", "source_package", "start_node", "topics_seen",
-    "wait_for_node",
+    "wait_for_node", "Session",
 ]

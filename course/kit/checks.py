@@ -73,3 +73,16 @@ def ctrl_c(check_id: str, what: str, points: float = 1, hint: str = SIGINT_HINT,
     """``check_id``: Ctrl+C ends ``what`` (e.g. "the publisher") with exit code 0 and no traceback."""
     return Check(check_id, f"Ctrl+C ends {what} with exit code 0 and no traceback", points, hint, needs=needs,
                  part=part)
+
+
+def spins(check_id: str = "spins", needs: tuple[str, ...] = ("executable",), part: str = "") -> Check:
+    """``check_id``: the node spins, so it answers its parameter services (1 point); judged by
+    :func:`ros2course.kit.params.record_spins`.
+
+    The lessons put periodic work in a timer callback and spin the node (seed ch. 13.3): a
+    ``while True`` loop with ``time.sleep`` logs and publishes the same, but never lets
+    the node answer anything. print-forever-node, publisher-subscriber and use-python-library grade it.
+    """
+    return Check(check_id, "The node spins: it answers a call to its parameter services (ros2 param list)", 1,
+                 "put the periodic work in a timer callback (self.create_timer) and call rclpy.spin(node) in main(): "
+                 "a while loop with time.sleep never lets the node answer anything", needs=needs, part=part)

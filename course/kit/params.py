@@ -332,3 +332,25 @@ def declared(s: GradingSession, declared_id: str, defaults_id: str, services: No
     s.record(defaults_id, not wrong, f"all {len(defaults)} as expected" if not wrong else
              f"none of the {len(defaults)} parameters is declared" if not values else "; ".join(wrong), shown,
              fraction=(len(values) - len(wrong) + len(missing)) / len(defaults))
+
+
+#: Seconds for a node's parameter services to appear, then to answer (:func:`record_spins`).
+SPIN_TIMEOUT = 5.0
+
+
+def record_spins(s: GradingSession, check_id: str, started: Any) -> bool:
+    """Record ``check_id`` (declared with :func:`ros2course.kit.checks.spins`): the running node
+    (a :class:`~ros2course.kit.nodes.StartedNode`) answers ``list_parameters`` within
+    :data:`SPIN_TIMEOUT` seconds (what ``ros2 param list`` calls).
+
+    Every rclpy and rclcpp node offers its parameter services; the executor that spins
+    the node serves them. A node whose process never spins (a ``while`` loop with
+    ``time.sleep`` instead of a timer, seed ch. 13.3) has the services but never answers.
+    """
+    expected = f"/{started.name or '<your node>'} answers list_parameters within {SPIN_TIMEOUT:.0f} s"
+    try:
+        names = connect(s, started.name, proc=started.proc, why="no node of yours appeared",
+                        timeout=SPIN_TIMEOUT).names()
+    except Unmet as exc:
+        return s.record(check_id, False, f"{exc}: the node does not spin", expected)
+    return s.record(check_id, True, f"/{started.name} answered with {len(names)} parameter name(s)", expected)

@@ -14,7 +14,9 @@ from __future__ import annotations
 import json
 import os
 import re
+import shutil
 import sys
+from collections.abc import Mapping
 from pathlib import Path
 
 from ros2course.grade.checklist import Unmet
@@ -39,6 +41,30 @@ def python_env(s: GradingSession, **extra: str) -> dict[str, str]:
     env = {k: v for k, v in s.base_env.items() if k not in _FOREIGN}
     env["PATH"] = os.pathsep.join([str(Path(sys.executable).parent), env.get("PATH", "")])
     env.update(PYTHONUNBUFFERED="1", PYTHONDONTWRITEBYTECODE="1", **extra)
+    return env
+
+
+def stand_in_env(s: GradingSession, name: str, files: Mapping[str, str | Path]) -> dict[str, str]:
+    """The sourced workspace's environment (``s.overlay()``) with a stand-in Python library first on PYTHONPATH.
+
+    For a requirement "use this library" whose output is the same without it (graders/README, "a stand-in
+    of what the learner must use"): run the learner's program again in this environment and judge that
+    it prints the stand-in's values. ``files`` maps a path relative to the folder put on PYTHONPATH
+    (``"marinholab/nottf2/__init__.py"``) to its text, or to a file (a :class:`~pathlib.Path`) copied
+    there. The folder is ``s.submission_folder(name)``, so ``grade``'s isolation lets the submission read it.
+    """
+    def fill(folder: Path) -> None:
+        for rel, content in files.items():
+            target = folder / rel
+            target.parent.mkdir(parents=True, exist_ok=True)
+            if isinstance(content, Path):
+                shutil.copyfile(content, target)
+            else:
+                target.write_text(content, encoding="utf-8")
+
+    stand_in = s.submission_folder(name, fill)
+    env = s.overlay()
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(stand_in), env.get("PYTHONPATH", "")) if p)
     return env
 
 

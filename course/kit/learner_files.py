@@ -1,7 +1,7 @@
 """Kit steps that read files a learner made, without ever following a link out of the lesson's folder.
 
 For lessons whose result is files, not programs (tutorial ch. 1: ``mkdir``,
-``touch``, ``echo >>``, ``ls >``). A symbolic link whose target lies outside
+``touch``, ``echo >>``, ``ls >``; the cryptography lesson's keys and messages). A symbolic link whose target lies outside
 the folder being graded is reported and never read: grading must not read
 (or quote back) files elsewhere on the machine.
 """

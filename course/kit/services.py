@@ -1,5 +1,9 @@
 """Kit steps that judge a learner's service server and client, the grader playing the other side (seed ch. 20-21).
 
+Three lessons use it (issue 38's placement rule: a step two lessons use lives in the kit):
+service-server-client (both halves), lifecycle-node (the transition services are asked with :func:`ask`)
+and actions-client (:func:`says_it_waits`, for the action server).
+
 A server is asked as ``ros2 service call`` asks it (:func:`ask`), its answers
 judged case by case (:func:`answers`). For a client, the grader's
 :class:`~ros2course.kit.topics_services.DeferredServer` (made with
