@@ -107,7 +107,8 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
     rosout = s.graph.rosout()
     node = kit.start_node(s, "node_name", path, NODE, args=_params(xy), label=EXECUTABLE)
     if services.says_it_waits(s, "waits", rosout, node, ACTION, timeout=WAIT_WINDOW, what="action server"):
-        _throttled(s, rosout, node)
+        services.waits_throttled(s, "waits_throttled", rosout, node, node_name=NODE, window=THROTTLE_WINDOW,
+                                 period=WAIT_PERIOD)
     server.offer()
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.goals), LOG_TIMEOUT, abort=node.ended)
@@ -147,28 +148,6 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
         s.record("logs_result", False, f"no record with ({final[0]}, {final[1]}); last log records: {_last(rosout)}",
                  expected)
     _ends(s, "ends", node.proc, "once its goal had SUCCEEDED")
-
-
-def _throttled(s: Session, rosout: Any, node: kit.StartedNode) -> None:
-    """Record ``waits_throttled``: with the server missing THROTTLE_WINDOW s more, the client's "waiting"
-    records (their own stamps) come at most once every WAIT_PERIOD s (one or two more are forgiven)."""
-    def waiting() -> list[float]:
-        return [r.stamp.sec + r.stamp.nanosec * 1e-9
-                for r in rosout.records(node=NODE, match=lambda text: services.WAITING.search(text) is not None)]
-
-    with s.phase("observe"):
-        kit.wait_until(lambda: False, THROTTLE_WINDOW, abort=node.ended)
-    stamps = sorted(waiting())
-    if not stamps:  # the record said it waits under another logger name: nothing to time
-        stamps = sorted(r.stamp.sec + r.stamp.nanosec * 1e-9 for r in rosout.records(
-            match=lambda text: services.WAITING.search(text) is not None))
-    span = stamps[-1] - stamps[0] if stamps else 0.0
-    allowed = int(span / WAIT_PERIOD) + 2
-    gaps = [b - a for a, b in zip(stamps, stamps[1:])]
-    s.record("waits_throttled", len(stamps) <= allowed,
-             f"{len(stamps)} 'waiting' record(s) in {span:.1f} s without the server"
-             + (f", {min(gaps):.2f} s apart at the closest" if gaps else ""),
-             f"at most one every {WAIT_PERIOD:.0f} s (at most {allowed} in {span:.1f} s; throttle_duration_sec=1.0)")
 
 
 def _feedback_records(records: list[str], distances: list[float], final: tuple[float, float]) -> list[float]:

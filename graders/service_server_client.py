@@ -34,6 +34,9 @@ PERIOD = 0.5  # seconds between calls, seed ch. 20.5.6
 CALLS = 6  # calls -> 5 intervals, the minimum LESSONS.md asks for
 SUM_TOLERANCE = 1e-6  # |x + y + z - 42|
 LATE_ANSWER = 1.0  # seconds: twice the call period, so a blocked client halves its rate
+#: Seconds the service stays missing after the client's first "waiting" record: a client that says so at
+#: most once a second says it three or four times, one that says it at every 0.5 s tick six.
+THROTTLE_WINDOW = 2.5
 #: Calls per quote. The seed's server draws x and y at random, so a rule right for most draws passes one call:
 #: ``z = 42 % (x + y)`` sums to 42 whenever x + y > 21, 85 % of the reference's draws; 50 calls leave it
 #: unseen 0.03 % of the time. The other quotes, 5 calls each (a point that sums to 42 only sometimes).
@@ -58,9 +61,9 @@ CLIENT = {"part": "client", "needs": ("client_executable",)}
 
 #: Seconds of observation the contract needs, on the client's clock (the server half runs at the
 #: same time in a graph of its own and is shorter): its first "waiting" record (within one 0.5 s
-#: tick of starting), then twice "the next tick + 5 intervals at 2 Hz": once with prompt answers
+#: tick of starting) and the throttle window after it, then twice "the next tick + 5 intervals at 2 Hz": once with prompt answers
 #: (rate, logged points), once with answers LATE_ANSWER s late (does it keep calling?).
-WINDOW = PERIOD + 2 * (PERIOD + (CALLS - 1) * PERIOD)
+WINDOW = PERIOD + THROTTLE_WINDOW + 2 * (PERIOD + (CALLS - 1) * PERIOD)
 
 CHECKS = [
     Check("build", "The packages build with colcon", 1),
@@ -80,6 +83,9 @@ CHECKS = [
     Check("client_waits", "Before the service exists, the client logs that it is waiting for it", 2,
           "until self.service_client.service_is_ready() is true, log e.g. "
           "'service /what_is_the_point not available, waiting...' (and send nothing)", **CLIENT),
+    Check("client_waits_throttled", "It says so at most once a second", 1,
+          "log the waiting record with throttle_duration_sec=1.0: the 0.5 s timer that checks service_is_ready() "
+          "would say it twice a second", part="client", needs=("client_waits",)),
     Check("client_calls", "Once the service exists, the client calls /what_is_the_point", 2,
           "create the client with srv_type=WhatIsThePoint, srv_name='/what_is_the_point' "
           "and call self.service_client.call_async(request) in a timer callback", **CLIENT),
@@ -124,7 +130,9 @@ def _grade_client(s: Session, srv_type: type) -> None:
     server = ts.stand_in_server(s, srv_type, SERVICE, services.point_answers(s.random))
     node = kit.start_node(s, "client_node_name", path, CLIENT_NODE, sigint_check="client_sigint_exit",
                           need_node=False)
-    services.says_it_waits(s, "client_waits", rosout, node, SERVICE)  # 1. no service yet
+    if services.says_it_waits(s, "client_waits", rosout, node, SERVICE):  # 1. no service yet
+        services.waits_throttled(s, "client_waits_throttled", rosout, node, node_name=CLIENT_NODE,
+                                 window=THROTTLE_WINDOW)
     server.offer()  # 2. prompt answers: the calls, their rate, the points in the log
     services.calls(s, "client_calls", "client_rate", server, node, service=SERVICE, count=CALLS, period=PERIOD)
     services.logs_answers(s, "client_logs_points", server, rosout, node)

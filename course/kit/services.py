@@ -78,6 +78,32 @@ def says_it_waits(s: GradingSession, check_id: str, rosout: Any, node: StartedNo
                     f"a log record (e.g. '{what} {service} not available, waiting...') while the {what} is missing")
 
 
+def waits_throttled(s: GradingSession, check_id: str, rosout: Any, node: StartedNode, *, node_name: str,
+                    window: float, period: float = 1.0) -> bool:
+    """Record ``check_id``, right after :func:`says_it_waits` passed: with what the client waits for still
+    missing ``window`` seconds more, its "waiting" records (their own stamps) come at most once every
+    ``period`` seconds (the lessons' ``throttle_duration_sec=1.0``); one or two more than
+    ``window / period + 1`` are forgiven (a timer that catches up after a late tick).
+
+    ``node_name``: the client's node (records under another logger name are counted when it has none).
+    """
+    def waiting(name: str | None) -> list[float]:
+        return sorted(r.stamp.sec + r.stamp.nanosec * 1e-9 for r in rosout.records(
+            node=name, match=lambda text: WAITING.search(text) is not None))
+
+    with s.phase("observe"):
+        wait_until(lambda: False, window, abort=node.ended)
+    stamps = waiting(node_name) or waiting(None)
+    span = stamps[-1] - stamps[0] if stamps else 0.0
+    allowed = int(span / period) + 2
+    gaps = [b - a for a, b in zip(stamps, stamps[1:])]
+    return s.record(check_id, len(stamps) <= allowed,
+                    f"{len(stamps)} 'waiting' record(s) in {span:.1f} s while it waited"
+                    + (f", {min(gaps):.2f} s apart at the closest" if gaps else ""),
+                    f"at most one every {period:.0f} s (at most {allowed} in {span:.1f} s; "
+                    "throttle_duration_sec=1.0)")
+
+
 def calls(s: GradingSession, calls_id: str, rate_id: str, server: DeferredServer, node: StartedNode, *,
           service: str, count: int, period: float) -> None:
     """Right after :meth:`DeferredServer.offer`: record ``calls_id`` (the client calls) and ``rate_id``.
