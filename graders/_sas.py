@@ -662,6 +662,38 @@ def client_targets(s: Session, check_id: str, run: ClientRun, window: float) -> 
     return got
 
 
+def client_swing(s: Session, check_id: str, run: ClientRun, got: list[JointSample], *, amplitude: float,
+                 step: float, tolerance: float) -> bool:
+    """Record ``check_id``: the targets' offset from the initial positions follows the seed's law (ch. 31.9),
+    ``amplitude * sin(i * step + phase)`` on every joint, ``i`` the loop counter (the publications'
+    sequence numbers; their order when the middleware gives none), within ``tolerance`` radians (RMS).
+
+    The phase is fitted (a loop counted from 1, or targets the stand-in got late, still fit), the angular
+    step per target is not: ``sin(i / (50 * pi))`` against another divisor is what is judged.
+    """
+    offsets = [[v - i for v, i in zip(x.positions, run.initial)] for x in got if len(x.positions) == len(run.initial)]
+    counter = [x.sequence for x in got if len(x.positions) == len(run.initial)]
+    if any(c is None for c in counter):
+        counter = list(range(len(offsets)))
+    expected = (f"every joint's offset = {math.degrees(amplitude):.0f} * sin(i / (50 * pi)) degrees, i the loop "
+                f"counter (one target per loop), within {math.degrees(tolerance):.2f} degrees RMS")
+    if len(offsets) < 10:
+        return s.record(check_id, False, f"only {len(offsets)} targets of {len(run.initial)} values", expected)
+    first = counter[0]
+
+    def rms(phase: float) -> float:
+        return math.sqrt(sum((o - amplitude * math.sin((c - first) * step + phase)) ** 2
+                             for row, c in zip(offsets, counter) for o in row) / (len(offsets) * len(offsets[0])))
+
+    phases = [2.0 * math.pi * k / 720 for k in range(720)]
+    best = min(phases, key=rms)
+    error = rms(best)
+    return s.record(check_id, error <= tolerance,
+                    f"{len(offsets)} targets: {math.degrees(error):.3f} degrees RMS from that law at its best phase; "
+                    f"offsets of joint 1: {fmt([math.degrees(row[0]) for row in offsets[:5]], 2)}... degrees",
+                    expected)
+
+
 def client_offsets(s: Session, targets_id: str, moves_id: str, run: ClientRun, got: list[JointSample], *,
                    amplitude: float, min_swing: float, window: float, label: str) -> None:
     """Record ``targets_id`` (``joints`` values each, within ``amplitude`` radians of the initial positions)

@@ -44,6 +44,8 @@ WRONG_WATCH = 0.3  # seconds the stream is watched after the wrong-size target
 CLIENT_PERIOD = 0.01  # seconds: the client sends a target every 10 ms (seed ch. 31.9)
 CLIENT_AMPLITUDE = math.radians(10.0)  # radians around the initial positions (seed ch. 31.9)
 CLIENT_MIN_SWING = math.radians(1.0)  # radians each joint must move over the window to count as moving
+CLIENT_STEP = 1.0 / (50.0 * math.pi)  # radians of sin's argument per loop iteration (seed ch. 31.9)
+CLIENT_LAW_TOLERANCE = math.radians(0.2)  # radians RMS from that law (a float printed and parsed is far closer)
 CLIENT_DISABLED = 0.5  # seconds of joint states without limits: the client must stay silent
 CLIENT_WINDOW = 1.5  # seconds of targets judged
 CLIENT_STREAM_PERIOD = 0.01  # seconds between the stand-in driver's joint states
@@ -105,6 +107,9 @@ CHECKS = [
     Check("client_targets", "Targets have 6 values within 10 degrees of the initial positions", 2,
           "target = joint_positions + numpy.deg2rad([10.0 * sin(...)] * 6), with joint_positions read once "
           "after the driver is enabled", **CLIENT_PART),
+    Check("client_swing", "The targets swing as the seed's loop does: 10 * sin(i / (50 * pi)) degrees", 1,
+          "target = joint_positions + numpy.deg2rad([10.0 * sin(i / (50.0 * pi))] * 6), i counting the loop's "
+          "iterations from 0, one target per iteration", **CLIENT_PART),
     Check("client_moves", "Every joint of the targets actually moves", 1,
           "make the offset depend on the loop counter i, e.g. 10.0 * sin(i / (50.0 * pi)) degrees", **CLIENT_PART),
     checks.ctrl_c("client_sigint_exit", "the client", 1,
@@ -141,3 +146,5 @@ def grade(s: Session) -> None:
                       few_note=f"; {kit.process_state(client.proc)}")
         sas.client_offsets(s, "client_targets", "client_moves", client, targets, amplitude=CLIENT_AMPLITUDE,
                            min_swing=CLIENT_MIN_SWING, window=CLIENT_WINDOW, label=CLIENT_EXECUTABLE)
+        sas.client_swing(s, "client_swing", client, targets, amplitude=CLIENT_AMPLITUDE, step=CLIENT_STEP,
+                         tolerance=CLIENT_LAW_TOLERANCE)
