@@ -19,6 +19,7 @@ from ros2course.kit.quotes import (
     NODE,
     PACKAGE,
     amazing_quote,
+    counts_from_zero,
     id_counts,
     set_at_runtime,
     short,
@@ -62,6 +63,9 @@ CHECKS = [
     Check("default_ids", "The id counts up by 1 from one message to the next, as in publisher-subscriber", 1,
           "keep the id in an attribute (self.incremental_id), put it in each message, then add 1",
           needs=RUNS, part="defaults"),
+    Check("default_ids_from_zero", "The id starts at 0, as in publisher-subscriber", 1,
+          "set self.incremental_id = 0 in __init__, and add 1 after publishing, not before",
+          needs=RUNS, part="defaults"),
     Check("default_rate", "With the defaults it publishes at 2 Hz (period 0.5 s)", 2,
           "create the timer with the period parameter's value: self.create_timer(timer_period, self.timer_callback)",
           needs=RUNS, part="defaults"),
@@ -95,6 +99,8 @@ def _defaults(s: Session, path) -> None:
     # a misnamed node is still graded through its parameter services (need_node=False)
     node = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit", need_node=False)
     _default_messages(s, probe, node.proc, began)
+    counts_from_zero(s, "default_ids_from_zero", [m for _, m in probe.samples()], path, DEFAULT_TOPIC,
+                     amazing_quote(s), DEFAULT_PERIOD, where=f" on {DEFAULT_TOPIC}")
     services = params.connect(s, node.name, proc=node.proc, why=s.results["node_name"].observed)
     params.declared(s, "declared", "defaults", services, DEFAULTS)
     set_at_runtime(s, "runtime_change", services, probe, node.proc, quote=RUNTIME_QUOTE,

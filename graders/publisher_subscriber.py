@@ -50,6 +50,8 @@ CHECKS = [
           "set amazing_quote.quote and amazing_quote.philosopher_name before publishing (check the spelling)", **PUB),
     Check("pub_id_counts", "The id counts up by 1 from one message to the next", 2,
           "keep the id in an attribute (self.incremental_id), put it in each message, then add 1", **PUB),
+    Check("pub_id_from_zero", "The id starts at 0", 1,
+          "set self.incremental_id = 0 in __init__, and add 1 after publishing, not before", **PUB),
     Check("pub_rate", "One message every 0.5 s (2 Hz)", 2,
           "self.create_timer(0.5, self.timer_callback), one publish per tick", **PUB),
     checks.ctrl_c("pub_sigint_exit", "the publisher", **PUB),
@@ -99,6 +101,7 @@ def _grade_publisher(s: Session, msg_type: type) -> None:
     s.record("pub_contents", share == 1.0, observed + where,
              f"quote: {QUOTE!r}, philosopher_name: {PHILOSOPHER!r} in every message", fraction=share)
     quotes.id_counts(s, "pub_id_counts", messages, where)
+    quotes.counts_from_zero(s, "pub_id_from_zero", messages, path, target, msg_type, PERIOD, where=where)
     kit.rate(s, "pub_rate", probe.send_stamps(SAMPLES), period=PERIOD, needed=SAMPLES, waited=window,
              noun="message", source="the messages' send stamps", where=where)
 

@@ -260,6 +260,60 @@ def id_counts(s: GradingSession, check_id: str, messages: list, where: str = "")
                     f"ids {ids[0]}, {ids[0] + 1}, {ids[0] + 2}, ... (each one more than the previous)")
 
 
+#: Seconds a fresh instance of a quote publisher may take to send its first message (a Python node starts in about
+#: 1 s; a loaded machine is slower).
+FRESH_START_TIMEOUT = 10.0
+
+
+def counts_from_zero(s: GradingSession, check_id: str, messages: list, path: Path, topic: str, msg_type: type,
+                     period: float, args: list[str] | None = None, where: str = "") -> bool:
+    """Record ``check_id``: the publisher's first AmazingQuote has ``id`` 0 (publisher-subscriber: "the id starts at
+    0"; parameters: "the id field counts up from 0, as before").
+
+    ``messages`` (in arrival order) came to a subscription made before the
+    node started, which hears the first message in nearly every run (the
+    first goes out one timer period after the node starts: 20 of 20 runs at
+    load 2 heard id 0 first). A publisher is volatile, though: a message it
+    sends before the subscription is matched is lost (ROS 2 QoS, durability),
+    so a first id other than 0 may be a missed message. Then a fresh instance
+    of ``path`` (``args``: its ``--ros-args``), in a graph of its own with the
+    grader's subscription made first, is asked again (stopped at the end of
+    the check); the check fails only when neither run heard 0 first.
+
+    Args:
+        messages: what the first run's subscription received, oldest first.
+        path: the publisher's executable (from ``kit.executable``).
+        topic: where the fresh instance publishes (e.g. ``/amazing_quote``).
+        msg_type: the workspace's AmazingQuote class.
+        period: the publisher's timer period, seconds.
+        where: appended to what was observed (e.g. the topic).
+
+    Returns whether it passed; no message in the first run is failed (nothing to tell).
+    """
+    expected = "ids 0, 1, 2, ...: the first message has id 0 (initialise the counter to 0, publish, then add 1)"
+    if not messages:
+        return s.record(check_id, False, "no message to read the first id from" + where, expected)
+    first = int(messages[0].id)
+    if first == 0:
+        return s.record(check_id, True, f"the first message has id 0 (ids {_ids(messages)})" + where, expected)
+    graph = s.new_graph()
+    probe = graph.topic(topic, msg_type)
+    proc = s.launch(path, f"{path.name}.from-zero", args, graph=graph)
+    with s.phase("observe"):
+        probe.observe(2, period, FRESH_START_TIMEOUT, abort=lambda: proc.poll() is not None)
+    again = probe.messages()
+    second = f"ids {_ids(again)}" if again else f"no message on {topic} ({process_state(proc)})"
+    ok = bool(again) and int(again[0].id) == 0
+    return s.record(check_id, ok, f"the first message heard has id {first} (ids {_ids(messages)}){where}; a fresh "
+                    f"instance, heard from its start, sent {second}", expected)
+
+
+def _ids(messages: list, limit: int = 6) -> str:
+    """The first ``limit`` ids of ``messages``, comma separated (``...`` when there are more)."""
+    shown = ", ".join(str(int(m.id)) for m in messages[:limit])
+    return shown + (", ..." if len(messages) > limit else "")
+
+
 def texts(s: GradingSession, check_id: str, messages: list, quote: str, philosopher: str, source: str) -> bool:
     """Record ``check_id``: every AmazingQuote in ``messages`` says ``quote`` by ``philosopher``.
 
