@@ -5,11 +5,14 @@ processes use it as their Fast DDS default profile and must exchange messages
 without any shared-memory segment (:mod:`graders._dds`); Fast DDS's own
 parser errors are quoted. ``docker/compose.yml`` is read, not run: two
 services of one image, ``stop_signal: SIGINT``, the profile mounted and
-``FASTRTPS_DEFAULT_PROFILES_FILE`` pointing at the mounted file.
+``FASTRTPS_DEFAULT_PROFILES_FILE`` pointing at the mounted file, a talker and a
+listener of ``/chatter`` as docker would start them, in one ROS domain.
 """
 
 from __future__ import annotations
 
+import re
+import shlex
 from pathlib import PurePosixPath
 
 from ros2course.kit import Check, Session, Unmet
@@ -18,6 +21,14 @@ from . import _dds as dds
 PROFILE = "docker/fastrtps_profile.xml"
 COMPOSE = "docker/compose.yml"
 VARIABLE = dds.PROFILE_VARIABLES[0]
+#: Programs a compose ``command:`` may start: a shell given ``-c`` and a script, or ``ros2`` itself (the
+#: osrf/ros images' entrypoint sources ROS 2 before it runs the command, docker docs: ENTRYPOINT and CMD).
+SHELLS = ("/bin/bash", "/bin/sh", "/usr/bin/bash", "/usr/bin/sh", "bash", "sh")
+#: What the lesson's two services run (tutorial ch. 32.4.2): a talker on /chatter, and a listener of it.
+TALKER = re.compile(r"\bros2\s+run\s+demo_nodes_(cpp|py)\s+talker\b|\bros2\s+topic\s+pub\s.*?/?\bchatter\b")
+LISTENER = re.compile(r"\bros2\s+topic\s+echo\s.*?/?\bchatter\b|\bros2\s+run\s+demo_nodes_(cpp|py)\s+listener\b")
+#: The largest ROS domain id (ROS 2 docs, "The ROS_DOMAIN_ID": 0-232; 0-101 are safe on every platform).
+MAX_DOMAIN_ID = 232
 
 CHECKS = [
     Check("profile_file", f"{PROFILE} exists", 1, f"create {PROFILE} (the starter has one with TODOs)",
@@ -43,6 +54,12 @@ CHECKS = [
     Check("compose_profile", f"Every service mounts the profile and sets {VARIABLE} to it", 2,
           f"volumes: [./fastrtps_profile.xml:/profiles/fastrtps_profile.xml:ro] and environment: "
           f"[{VARIABLE}=/profiles/fastrtps_profile.xml]", needs=("compose_services",), part="compose"),
+    Check("compose_commands", "One service runs a talker and another `ros2 topic echo /chatter`", 1,
+          "command: /bin/bash -c \"source /opt/ros/jazzy/setup.bash && ros2 topic echo /chatter\" in the listener "
+          "(a shell needs -c before its script)", needs=("compose_services",), part="compose"),
+    Check("compose_domain", "Both services are in one ROS domain", 1,
+          "set the same ROS_DOMAIN_ID (an integer, 0-101) in every service's environment, or in none",
+          needs=("compose_services",), part="compose"),
 ]
 
 
@@ -82,6 +99,60 @@ def grade_compose(s: Session) -> None:
     s.record("compose_profile", not bad and bool(services), "; ".join(bad) or
              f"every service mounts fastrtps_profile.xml and sets {VARIABLE} to it",
              f"each service mounts fastrtps_profile.xml and sets {VARIABLE} to the path inside the container")
+    _commands(s, services)
+    _domain(s, services)
+
+
+def _commands(s: Session, services: dict[str, dict]) -> None:
+    """``compose_commands``: a service whose command starts a talker, and another that echoes /chatter."""
+    scripts, problems = {}, []
+    for name, service in services.items():
+        script, problem = _command_script(service)
+        scripts[name] = script
+        if problem:
+            problems.append(f"{name}: {problem}")
+    talkers = [n for n, text in scripts.items() if TALKER.search(text)]
+    listeners = [n for n, text in scripts.items() if LISTENER.search(text) and n not in talkers[:1]]
+    ok = bool(talkers) and bool(listeners)
+    found = (f"talker: {talkers[0] if talkers else 'none'}; listener: {listeners[0] if listeners else 'none'}")
+    s.record("compose_commands", ok, "; ".join([found, *problems]),
+             "one service runs ros2 run demo_nodes_cpp talker, another ros2 topic echo /chatter, each as its "
+             "command (a shell with -c and a script, or ros2 itself)")
+
+
+def _command_script(service: dict) -> tuple[str, str]:
+    """``(script, problem)``: the text a compose service's ``command:`` runs, as docker would start it
+    (a string is split like a shell's words, docker compose docs: command), and why it runs nothing ("" if it
+    runs something)."""
+    command = service.get("command")
+    if command is None:
+        return "", "no command: (the image's default command starts no ROS program)"
+    try:
+        argv = shlex.split(command) if isinstance(command, str) else [str(word) for word in command]
+    except ValueError as exc:
+        return "", f"its command cannot be split into words ({exc})"
+    if not argv:
+        return "", "an empty command"
+    if argv[0] in SHELLS:
+        if len(argv) < 3 or argv[1] != "-c":
+            return "", f"{argv[0]} is given {' '.join(argv[1:]) or 'nothing'!r}, not -c and a script"
+        return argv[2], "" if argv[2].strip() else f"{argv[0]} -c is given an empty script"
+    if argv[0] == "ros2":
+        return shlex.join(argv), ""
+    return "", f"the command starts {argv[0]!r}, which is neither a shell ({SHELLS[0]} -c \"...\") nor ros2"
+
+
+def _domain(s: Session, services: dict[str, dict]) -> None:
+    """``compose_domain``: every service's ROS_DOMAIN_ID (0 when unset) is a valid domain id, the same in all."""
+    ids = {name: dds.environment(service).get("ROS_DOMAIN_ID", "0").strip() for name, service in services.items()}
+    invalid = [f"{n}: ROS_DOMAIN_ID={v!r} is not an integer from 0 to {MAX_DOMAIN_ID}" for n, v in ids.items()
+               if not (v.isdigit() and int(v) <= MAX_DOMAIN_ID)]
+    same = len({int(v) for v in ids.values() if v.isdigit()}) <= 1
+    shown = ", ".join(f"{n}: {v}" for n, v in ids.items())
+    s.record("compose_domain", bool(ids) and not invalid and same,
+             "; ".join(invalid) or (f"one domain id ({shown})" if same else f"different domain ids ({shown}): "
+                                    "the listener never hears the talker"),
+             "the same ROS_DOMAIN_ID (an integer from 0 to 232) in every service, or in none")
 
 
 def _profile_problem(service: dict) -> str:
