@@ -7,6 +7,7 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -70,6 +71,74 @@ def pytest_configure(config: pytest.Config) -> None:
         folder = tempfile.mkdtemp(prefix="ros2course-tests-")
         os.environ["ROS2COURSE_TESTS_CPU_LOCK"] = os.path.join(folder, "cpu.lock")
         config._ros2course_lock_folder = folder  # removed by pytest_unconfigure
+
+
+class RunUsage:
+    """How busy the test run kept the machine (issue 37's CI budget: 45 min on 2 cores).
+
+    Printed at the end of the run (controller only): wall time, the test time each xdist worker
+    reported (setup, call and teardown) and when it finished its last test, and the CPU's busy
+    share from ``/proc/stat`` over the run. A worker finishing long before the other, or a CPU
+    far from busy, says where the suite's time is lost (not a timed assert: a figure for the log).
+    """
+
+    def __init__(self) -> None:
+        self.start = time.monotonic()
+        self.cpu = self._cpu_ticks()
+        self.busy: dict[str, float] = {}
+        self.last: dict[str, float] = {}
+
+    @staticmethod
+    def _cpu_ticks() -> tuple[int, int] | None:
+        """(all ticks, idle + iowait ticks) of ``/proc/stat``'s cpu line; None off Linux."""
+        try:
+            fields = [int(v) for v in Path("/proc/stat").read_text().split("\n", 1)[0].split()[1:]]
+        except (OSError, ValueError):
+            return None
+        return sum(fields), fields[3] + fields[4]
+
+    def add(self, report: pytest.TestReport) -> None:
+        """Count one phase report (setup, call or teardown) of one worker."""
+        node = getattr(report, "node", None)
+        worker = getattr(getattr(node, "gateway", None), "id", None) or "main"
+        self.busy[worker] = self.busy.get(worker, 0.0) + report.duration
+        self.last[worker] = time.monotonic() - self.start
+
+    def line(self) -> str:
+        """One line for the log: wall, per-worker test time and last finish, CPU busy %."""
+        wall = time.monotonic() - self.start
+        workers = "; ".join(f"{w}: {self.busy[w] / 60:.1f} min of tests, last ended at {self.last[w] / 60:.1f} min"
+                            for w in sorted(self.busy))
+        text = f"test-run usage: wall {wall / 60:.1f} min; {workers or 'no tests'}"
+        now = self._cpu_ticks()
+        if self.cpu is not None and now is not None and now[0] > self.cpu[0]:
+            total, idle = now[0] - self.cpu[0], now[1] - self.cpu[1]
+            text += f"; CPU busy {100 * (1 - idle / total):.0f} % of {os.cpu_count()} cores"
+        return text
+
+
+#: The run's :class:`RunUsage` (controller only), under "usage".
+_USAGE: dict[str, RunUsage] = {}
+
+
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """The controller (or a run without xdist) starts counting :class:`RunUsage`."""
+    if not hasattr(session.config, "workerinput"):
+        _USAGE["usage"] = RunUsage()
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    """Each phase report reaching the controller counts toward :class:`RunUsage`."""
+    usage = _USAGE.get("usage")
+    if usage is not None:
+        usage.add(report)
+
+
+def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Config) -> None:
+    """The run's :class:`RunUsage` line, after pytest's durations."""
+    usage = _USAGE.get("usage")
+    if usage is not None:
+        terminalreporter.write_line(usage.line())
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
