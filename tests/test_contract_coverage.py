@@ -148,3 +148,20 @@ def test_which_reference_lines_implement_a_requirement() -> None:
     with pytest.raises(ValueError, match="not a regular expression"):
         Requirement.model_validate({**said.model_dump(by_alias=True, exclude_none=True),
                                     "code": [{"file": "*", "line": "("}]})
+
+
+def test_a_docstring_implements_a_requirement_only_when_code_marks_it() -> None:
+    """A docstring line implements nothing by its words (a rule may triage its mutants), unless the
+    requirement's ``code:`` marks it: a lesson that asks for docstrings (python-minimalist-package's
+    type-hints-docstrings) keeps a docstring rule off those lines (rule_conflicts)."""
+    from ros2course.lesson.contract import Requirement, implements
+
+    line = '        """Return the sum of the public and the private attribute."""'
+    derived = Requirement.model_validate({"id": "sum", "says": "method() returns the sum of the public and the "
+                                          "private attribute", "from": "instructions", "checks": ["method"]})
+    assert implements(derived, "pkg/_cls.py", line) is None
+    marked = Requirement.model_validate({"id": "docs", "says": "every public method has a docstring",
+                                         "from": "instructions", "checks": ["docs"],
+                                         "code": [{"file": "pkg/_cls.py", "line": r'^\s*"""'}]})
+    assert implements(marked, "pkg/_cls.py", line) == 'code: pkg/_cls.py /^\\s*"""/'
+    assert implements(marked, "pkg/other.py", line) is None

@@ -346,6 +346,11 @@ rules:
     (lesson.starter_dir / "src" / "p" / "p").mkdir(parents=True)
     (lesson.starter_dir / PY).write_text(NODE_SOURCE, encoding="utf-8")
     assert mut.rule_conflicts(lesson, reference=reference) == []
+    # a contract that does not load vouches for no rule: one problem naming its error, never a silent []
+    (lesson.folder / "contract.yaml").write_text("lesson: demo\nrequirements: [\n", encoding="utf-8")
+    problems = mut.rule_conflicts(lesson, reference=reference)
+    assert len(problems) == 1 and "rules not checked against the contract" in problems[0], problems
+    assert f"{contract_file}:" in problems[0] and "not valid YAML" in problems[0], problems
 
 
 def test_the_held_out_sample_is_disjoint_from_the_first_and_seeded() -> None:

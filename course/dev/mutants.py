@@ -1210,7 +1210,8 @@ def reference_texts(lesson: Lesson, reference: Path | None = None,
 def rule_conflicts(lesson: Lesson, config: MutationConfig | None = None, reference: Path | None = None) -> list[str]:
     """Each rule of the lesson's ``mutation.yaml`` that covers a line implementing a requirement of its
     ``contract.yaml`` (:func:`ros2course.lesson.contract.implements`), as ``mutation.yaml:LINE: rule ID covers
-    FILE:N `text`, which implements requirement R (contract.yaml:M: names `term`)``; [] without a contract.
+    FILE:N `text`, which implements requirement R (contract.yaml:M: names `term`)``; [] without a contract;
+    one problem naming the contract's first error when it does not load (no rule is then known to be safe).
 
     A rule covers a line when its matchers on the original (file, ``original``, ``block``, ``not_block``)
     hold there (:meth:`Rule.covers_line`): some mutant of that line could be triaged by it. A line the starter
@@ -1225,9 +1226,14 @@ def rule_conflicts(lesson: Lesson, config: MutationConfig | None = None, referen
     if not config.rules:
         return []
     path = contract_path(lesson.folder)
-    contract, _ = load_contract(path, lesson.id) if path.is_file() else (None, [])
-    if contract is None:
+    if not path.is_file():
         return []
+    contract, errors = load_contract(path, lesson.id)
+    if contract is None:
+        # a contract that does not load cannot vouch for any rule: say so, never "no conflict" (issue 37)
+        first = errors[0] if errors else None
+        return [f"{triage_path(lesson)}:1: rules not checked against the contract: "
+                + (f"{first.path}:{first.line}: {first.message}" if first is not None else f"{path} does not load")]
     rule_lines = _item_lines(triage_path(lesson), "rules")
     req_lines = requirement_lines(path)
     problems = []
