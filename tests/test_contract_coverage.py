@@ -151,8 +151,8 @@ def test_which_reference_lines_implement_a_requirement() -> None:
 
 
 def test_a_docstring_implements_a_requirement_only_when_code_marks_it() -> None:
-    """A docstring line implements nothing by its words (a rule may triage its mutants), unless the
-    requirement's ``code:`` marks it: a lesson that asks for docstrings (python-minimalist-package's
+    """A docstring line implements nothing by its words (a rule may triage its mutants), unless a marker of
+    the requirement's ``code:`` with ``docstrings: true`` marks it: a lesson that asks for docstrings (python-minimalist-package's
     type-hints-docstrings) keeps a docstring rule off those lines (rule_conflicts)."""
     from ros2course.lesson.contract import Requirement, implements
 
@@ -162,6 +162,11 @@ def test_a_docstring_implements_a_requirement_only_when_code_marks_it() -> None:
     assert implements(derived, "pkg/_cls.py", line) is None
     marked = Requirement.model_validate({"id": "docs", "says": "every public method has a docstring",
                                          "from": "instructions", "checks": ["docs"],
-                                         "code": [{"file": "pkg/_cls.py", "line": r'^\s*"""'}]})
+                                         "code": [{"file": "pkg/_cls.py", "line": r'^\s*"""', "docstrings": True}]})
     assert implements(marked, "pkg/_cls.py", line) == 'code: pkg/_cls.py /^\\s*"""/'
     assert implements(marked, "pkg/other.py", line) is None
+    # a marker without docstrings: true never marks a docstring that happens to name its words
+    by_name = Requirement.model_validate({"id": "sum", "says": "method() returns the sum", "from": "instructions",
+                                          "checks": ["method"], "code": [{"file": "pkg/*.py", "line": "attribute"}]})
+    assert implements(by_name, "pkg/_cls.py", line) is None
+    assert implements(by_name, "pkg/_cls.py", "        return self.attribute + 1") is not None

@@ -33,8 +33,8 @@ as in ``self.get_logger().info``, ``package.xml``, ``0.5``, ``<depend>``) marks 
 contains it. The derivation over-approximates (a ``main()`` call under ``if __name__ == '__main__':``
 contains ``main()``): the safe direction, since a rule it stops is either narrowed or the requirement
 names its lines exactly with ``code:``, a statement reviewed in the contract table. A line that is only a
-comment or only a string literal (a docstring) implements nothing (:func:`inert_line`), unless the
-requirement's ``code:`` marks it (a lesson that asks for docstrings).
+comment or only a string literal (a docstring) implements nothing (:func:`inert_line`), unless a ``code:``
+marker with ``docstrings: true`` marks it (a lesson that asks for docstrings).
 
 :func:`load_contract` reports every problem as ``path:line: message`` (the line from
 the YAML node's mark): a requirement with neither or both of ``checks`` and
@@ -77,12 +77,19 @@ class ContractProblem:
 
 
 class CodeMarker(BaseModel):
-    """Reference lines that implement a requirement: ``line`` (a regular expression) in the files ``file`` (a glob)."""
+    """Reference lines that implement a requirement: ``line`` (a regular expression) in the files ``file`` (a glob).
+
+    Attributes:
+        docstrings: the marker also marks lines that are only a comment or a string literal (a requirement
+            that asks for docstrings); False: such lines implement nothing (:func:`inert_line`), even when
+            ``line`` matches them (a docstring that mentions a marked name).
+    """
 
     model_config = ConfigDict(extra="forbid")
 
     file: Annotated[str, Field(min_length=1)]
     line: Annotated[str, Field(min_length=1)]
+    docstrings: bool = False
 
     @model_validator(mode="after")
     def _compiles(self) -> CodeMarker:
@@ -334,16 +341,16 @@ def implements(requirement: Requirement, rel: str, text: str) -> str | None:
 
     With ``code:``, the marker that marks the line (``code: <glob> /<regex>/``); otherwise the first
     code-like term of ``says`` (:func:`says_terms`) the line contains as a whole (``names `main()```; a call
-    ``f()`` also with arguments, ``f(``). Without ``code:``, a line that is only a comment or a string
-    literal implements nothing (:func:`inert_line`); a line ``code:`` marks implements it even so (a
-    requirement that asks for docstrings marks them).
+    ``f()`` also with arguments, ``f(``). A line that is only a comment or a string literal implements
+    nothing (:func:`inert_line`), unless a marker with ``docstrings: true`` marks it (a requirement that
+    asks for docstrings).
     """
+    inert = inert_line(rel, text)
     if requirement.code is not None:
-        # the contract names its lines itself: a docstring or comment it marks implements it (a lesson that
-        # asks for docstrings), whatever :func:`inert_line` would say
-        marker = next((m for m in requirement.code if m.marks(rel, text)), None)
+        # the contract names its lines itself; a docstring or comment only with `docstrings: true`
+        marker = next((m for m in requirement.code if m.marks(rel, text) and (m.docstrings or not inert)), None)
         return None if marker is None else f"code: {marker.file} /{marker.line}/"
-    if inert_line(rel, text):
+    if inert:
         return None
     term = next((t for t in says_terms(requirement.says) if _term_in(t, text)), None)
     return None if term is None else f"names `{term}`"
