@@ -6,7 +6,8 @@ attack (the node keeps doing its job afterwards, so each deserves full marks):
 * ``writer``: its node *and* its ``setup.py`` (run by colcon at build time) try
   to write into the course's ``graders/``, the venv, the grading user's home,
   OUTDIR, another student's submission, ``/tmp`` and their own worker's
-  result file, and record what happened in their ROS log folder;
+  result file, and to read the lesson's reference (in ``solutions/`` and in a
+  shared reference build in the venv), and record what happened in their ROS log folder;
 * ``daemon``: double-forks a ``setsid`` daemon that execs a fresh interpreter
   with an empty environment (no run marker to find it by);
 * ``forker``: forks until the kernel refuses;
@@ -27,18 +28,19 @@ from pathlib import Path
 import pytest
 from test_batch_ros import NODE_FILE, make_submission, tree_digest, wait_until_gone
 
-from ros2course.batch.runner import run_batch
-from ros2course.lesson.catalog import content_root
+from ros2course.batch.runner import build_trusted_interfaces, run_batch
+from ros2course.lesson.catalog import content_root, load_catalog
 from ros2course import sandbox
-from tests.conftest import cpu_lock
+from tests.conftest import SOLUTIONS, cpu_lock
 
 #: a fork storm and two jobs at once: never beside the determinism tests (conftest.cpu_exclusive)
 pytestmark = [pytest.mark.ros, pytest.mark.usefixtures("cpu_exclusive"), pytest.mark.timeout(1200)]
 
 SETUP_FILE = "src/python_package_with_a_node/setup.py"
 
-#: Tries each write and appends one line per attempt to ``$ROS_LOG_DIR/hostile-<who>.txt``
-#: (the job's log folder, copied to OUTDIR). ``TARGETS`` is prepended by the test.
+#: Tries each write, then each read of a reference source, and appends one line per attempt to
+#: ``$ROS_LOG_DIR/hostile-<who>.txt`` (the job's log folder, copied to OUTDIR). ``TARGETS`` and ``READS``
+#: are prepended by the test.
 ATTEMPTS = '''
 def _hostile_attempts(who):
     import glob, os
@@ -68,6 +70,13 @@ def _hostile_attempts(who):
         lines.append("WROTE result-file by rename")
     except OSError as exc:
         lines.append(f"DENIED result-file by rename {type(exc).__name__}")
+    for where, path in READS.items():
+        try:
+            with open(path) as handle:
+                handle.read()
+            lines.append(f"READ {where} {path}")
+        except OSError as exc:
+            lines.append(f"UNREAD {where} {path} {type(exc).__name__}")
     with open(os.path.join(log_dir, f"hostile-{who}.txt"), "a") as out:
         out.write("\\n".join(lines) + "\\n")
 '''
@@ -155,7 +164,16 @@ def hostile_class(tmp_path_factory):
         "other-submission": str(subs / "alice" / f"pwned_{token}"),
         "tmp": f"/tmp/pwned_{token}",
     }
-    prelude = f"TARGETS = {targets!r}\n"
+    # print-forever-node's reference source, where a submission could copy it from: solutions/, and a shared
+    # reference build that holds it (testing-your-nodes tests the learner's tests on it: a batch of that lesson
+    # leaves its trusted build in the venv, which the sandbox shows read-only)
+    shared = build_trusted_interfaces([load_catalog().get("testing-your-nodes")])
+    reads = {"solutions": str(SOLUTIONS / "python_package_with_a_node" / "python_package_with_a_node"
+                              / "print_forever_node.py"),
+             "shared-reference-build": str(shared.path / "src" / "python_package_with_a_node"
+                                           / "python_package_with_a_node" / "print_forever_node.py")}
+    assert all(Path(path).is_file() for path in reads.values()), reads
+    prelude = f"TARGETS = {targets!r}\nREADS = {reads!r}\n"
     make_submission("print-forever-node", subs / "alice")
     writer = make_submission("print-forever-node", subs / "writer")
     node = writer / NODE_FILE
@@ -172,7 +190,7 @@ def hostile_class(tmp_path_factory):
     subs_before = tree_digest(subs)
     with cpu_lock():  # a module fixture runs before the function-scoped cpu_exclusive
         report = run_batch(subs, ["print-forever-node"], out, jobs=2, timeout=180)
-    return {"report": report, "out": out, "targets": targets, "token": token,
+    return {"report": report, "out": out, "targets": targets, "token": token, "reads": reads,
             "graders_before": graders_before, "subs_before": subs_before, "subs": subs}
 
 
@@ -208,6 +226,16 @@ def test_nothing_outside_the_scratch_copy_changed(hostile_class) -> None:
     assert tree_digest(content_root() / "graders") == hostile_class["graders_before"]
     assert tree_digest(hostile_class["subs"]) == hostile_class["subs_before"], "the submissions folder changed"
     assert not list((hostile_class["out"]).glob("pwned*"))
+
+
+def test_no_reference_source_can_be_read(hostile_class) -> None:
+    """Neither the node nor setup.py can read the lesson's reference: solutions/ and the shared reference
+    builds in the venv are hidden (only the job's own trusted build is bound back)."""
+    for who in ("node", "setup"):
+        lines = _log(hostile_class, "writer", f"hostile-{who}.txt").splitlines()
+        read = [line for line in lines if line.startswith("READ ")]
+        assert not read, f"the {who} of a submission read a reference source: {read}"
+        assert {line.split()[1] for line in lines if line.startswith("UNREAD ")} == set(hostile_class["reads"]), lines
 
 
 def test_a_clean_environment_daemon_does_not_outlive_its_job(hostile_class) -> None:

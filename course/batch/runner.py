@@ -68,6 +68,7 @@ from ros2course.batch.job import (
 from ros2course.build.reference import (
     ReferenceBuild,
     lesson_dependencies,
+    reference_cache_root,
     shared_reference_build,
     trusted_interface_packages,
 )
@@ -93,10 +94,17 @@ def _hideable(folder: Path) -> bool:
 
 def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
     """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions
-    and wrong ones; for a course merged from a private one (:func:`ros2course.lesson.courses.course_folder`), the
-    folders it was made from too: the private course whole, the solutions and fixtures of the one it extends."""
+    and wrong ones, and the shared reference builds (:func:`ros2course.build.reference.reference_cache_root`: they
+    sit in the venv, which is read-only but visible, and hold the reference sources of every lesson a check, a
+    validation or an earlier batch built on; the job's own trusted build is bound back read-only, see
+    :func:`ros2course.batch.job.job_walls`); for a course merged from a private one
+    (:func:`ros2course.lesson.courses.course_folder`), the folders it was made from too: the private course whole,
+    the solutions and fixtures of the one it extends."""
     root = content_root()
     candidates = [scratch_root, submissions, out_dir, root / "solutions", course_fixtures(root)]
+    shared_builds = reference_cache_root()
+    if shared_builds is not None:
+        candidates.append(shared_builds)
     sources = course_sources(root)
     for index, source in enumerate(sources):
         if index == 0:
