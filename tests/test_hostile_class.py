@@ -238,6 +238,16 @@ def test_no_reference_source_can_be_read(hostile_class) -> None:
         assert {line.split()[1] for line in lines if line.startswith("UNREAD ")} == set(hostile_class["reads"]), lines
 
 
+def test_a_trusted_build_holds_no_reference_tests() -> None:
+    """testing-your-nodes' answer is the reference packages' test/ folders; a batch of that lesson shows its
+    trusted build (those packages' sources) to each submission, so the build leaves them out."""
+    trusted = build_trusted_interfaces([load_catalog().get("testing-your-nodes")])
+    packages = sorted(p.name for p in (trusted.path / "src").iterdir() if (p / "package.xml").is_file())
+    assert packages == ["python_package_with_a_library", "python_package_with_a_node"], packages
+    assert (SOLUTIONS / "python_package_with_a_node" / "test").is_dir()
+    assert not list((trusted.path / "src").glob("*/test")), list((trusted.path / "src").glob("*/test"))
+
+
 def test_a_clean_environment_daemon_does_not_outlive_its_job(hostile_class) -> None:
     """A double-forked setsid daemon with an empty environment ends with the job (PID namespace)."""
     assert _log(hostile_class, "daemon", "daemon-started.txt").strip().isdigit()

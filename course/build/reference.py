@@ -31,13 +31,16 @@ def solution_packages() -> dict[str, tuple[Path, Manifest]]:
 
 
 def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None = None, *,
-                        with_folders: bool = True) -> Path:
+                        with_folders: bool = True, with_tests: bool = True) -> Path:
     """Copy reference packages from ``solutions/src`` into ``dest/src``, and the lesson's ``folders``.
 
     Args:
         packages: which ones (default: the lesson's packages and their dependencies).
         with_folders: also copy the lesson's non-ROS ``folders`` from ``solutions/`` (a case's
             workspace needs them; an underlay of dependencies does not).
+        with_tests: also copy each package's own ``test/`` folder. A shared build
+            (:func:`build_reference`) leaves them out: they are testing-your-nodes' answer, and batch
+            grading shows its trusted build to the submission (nothing builds or grades with them).
 
     Raises:
         ValidationFailed: a folder the lesson names is not in ``solutions/``.
@@ -45,9 +48,16 @@ def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None =
     solutions = content_root() / "solutions"
     found = solution_packages()
     (dest / "src").mkdir(parents=True, exist_ok=True)
-    ignore = shutil.ignore_patterns("__pycache__", "*.egg-info")
     for name in (dependency_closure(lesson.packages, found) if packages is None else packages):
-        shutil.copytree(found[name][0], dest / "src" / found[name][0].name, ignore=ignore)
+        package = found[name][0]
+
+        def ignore(folder: str, names: list[str], package: Path = package) -> set[str]:
+            skip = set(shutil.ignore_patterns("__pycache__", "*.egg-info")(folder, names))
+            if not with_tests and Path(folder) == package and "test" in names:
+                skip.add("test")
+            return skip
+
+        shutil.copytree(package, dest / "src" / package.name, ignore=ignore)
     for folder in lesson.folders if with_folders else ():
         if not (solutions / folder).is_dir():
             raise ValidationFailed(f"lesson {lesson.id} names folder {folder!r}, which is not in solutions/")
@@ -94,7 +104,7 @@ def build_reference(lesson: Lesson, dest: Path, packages: list[str], log_name: s
         CourseError: they do not build (a fault of the course or the machine), the excerpt of the build log
             in the message.
     """
-    reference_workspace(lesson, dest, packages, with_folders=False)
+    reference_workspace(lesson, dest, packages, with_folders=False, with_tests=False)
     env = dict(os.environ)
     env_mod.activate(env)
     built = build_packages(dest, packages, env, dest / "log" / log_name)
@@ -150,7 +160,8 @@ def _cache_key(packages: list[str], env: dict[str, str]) -> str:
         folder = found[name][0]
         for path in sorted(p for p in folder.rglob("*") if p.is_file() and "__pycache__" not in p.parts):
             digest.update(f"{name}/{path.relative_to(folder)}\0".encode() + path.read_bytes() + b"\0")
-    digest.update(f"{sys.executable}\0{sys.version}\0{COLCON_ARGS}\0".encode())
+    # "without test/": builds made before shared builds left out the packages' tests are never reused
+    digest.update(f"{sys.executable}\0{sys.version}\0{COLCON_ARGS}\0without test/\0".encode())
     for prefix in env.get("AMENT_PREFIX_PATH", "").split(os.pathsep):
         index = Path(prefix) / "share" / "ament_index" / "resource_index" / "packages"
         try:
