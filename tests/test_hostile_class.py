@@ -6,8 +6,9 @@ attack (the node keeps doing its job afterwards, so each deserves full marks):
 * ``writer``: its node *and* its ``setup.py`` (run by colcon at build time) try
   to write into the course's ``graders/``, the venv, the grading user's home,
   OUTDIR, another student's submission, ``/tmp`` and their own worker's
-  result file, and to read the lesson's reference (in ``solutions/`` and in a
-  shared reference build in the venv), and record what happened in their ROS log folder;
+  result file, and to read the lesson's reference (in ``solutions/``, in a
+  shared reference build in the venv, the course's ``.git``, docs and mutation
+  records), and record what happened in their ROS log folder;
 * ``daemon``: double-forks a ``setsid`` daemon that execs a fresh interpreter
   with an empty environment (no run marker to find it by);
 * ``forker``: forks until the kernel refuses;
@@ -72,9 +73,9 @@ def _hostile_attempts(who):
         lines.append(f"DENIED result-file by rename {type(exc).__name__}")
     for where, path in READS.items():
         try:
-            with open(path) as handle:
-                handle.read()
-            lines.append(f"READ {where} {path}")
+            with open(path, "rb") as handle:
+                data = handle.read()
+            lines.append(f"READ {where} {path}" if data else f"UNREAD {where} {path} empty")
         except OSError as exc:
             lines.append(f"UNREAD {where} {path} {type(exc).__name__}")
     with open(os.path.join(log_dir, f"hostile-{who}.txt"), "a") as out:
@@ -172,6 +173,13 @@ def hostile_class(tmp_path_factory):
                               / "print_forever_node.py"),
              "shared-reference-build": str(shared.path / "src" / "python_package_with_a_node"
                                            / "python_package_with_a_node" / "print_forever_node.py")}
+    # and what else of the course holds reference lines: its git history (a checkout), the strength table,
+    # the lesson's mutation record
+    root = content_root()
+    for where, path in (("git", root / ".git" / "HEAD"), ("docs", root / "docs" / "grader-strength.md"),
+                        ("mutation-record", root / "chapters" / "print-forever-node" / "mutation-outcomes.json")):
+        if path.is_file():
+            reads[where] = str(path)
     assert all(Path(path).is_file() for path in reads.values()), reads
     prelude = f"TARGETS = {targets!r}\nREADS = {reads!r}\n"
     make_submission("print-forever-node", subs / "alice")
@@ -229,8 +237,9 @@ def test_nothing_outside_the_scratch_copy_changed(hostile_class) -> None:
 
 
 def test_no_reference_source_can_be_read(hostile_class) -> None:
-    """Neither the node nor setup.py can read the lesson's reference: solutions/ and the shared reference
-    builds in the venv are hidden (only the job's own trusted build is bound back)."""
+    """Neither the node nor setup.py can read the lesson's reference: solutions/, the shared reference
+    builds in the venv (only the job's own trusted build is bound back), the course's git history and docs are
+    hidden, its mutation records masked."""
     for who in ("node", "setup"):
         lines = _log(hostile_class, "writer", f"hostile-{who}.txt").splitlines()
         read = [line for line in lines if line.startswith("READ ")]

@@ -252,6 +252,17 @@ def run_job(job: Job) -> JobResult:
     return JobResult(job.student, [] if cancelled else records, isolation, peak, seconds, cancelled)
 
 
+#: A lesson's record of its graded mutants (``ros2course.dev.mutants``): each names a reference line, original and
+#: mutated, so a submission must not read them (the worker never does).
+MUTATION_RECORDS = ("mutation-outcomes.json",)
+
+
+def mutation_records() -> tuple[str, ...]:
+    """The course's mutation records (:data:`MUTATION_RECORDS` of every lesson folder), masked in a job."""
+    return tuple(sorted(str(lesson.folder / name) for lesson in load_catalog().lessons for name in MUTATION_RECORDS
+                        if (lesson.folder / name).is_file()))
+
+
 def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Isolation, sandbox.PidsCgroup | None]:
     """What one job runs inside: ``(command prefix, worker arguments, isolation, pids cgroup)``.
 
@@ -272,7 +283,8 @@ def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Is
     if caps.unshare:
         read_only = sandbox.read_only_paths() + ([job.trusted_interfaces] if job.trusted_interfaces else [])
         plan = sandbox.MountPlan(caps.tools["ip"], own=str(scratch), hide=job.hide, read_only=read_only, keep=[],
-                                 private_tmp=sandbox.PRIVATE_TMP, hidden_home=sandbox.grader_home())
+                                 private_tmp=sandbox.PRIVATE_TMP, hidden_home=sandbox.grader_home(),
+                                 secrets=sandbox.SECRETS + mutation_records())
         init = [caps.tools["dumb-init"], "--"] if caps.pidns else []
         prefix = [caps.tools["unshare"], *caps.unshare, *init, "/bin/sh", "-c", plan.script(), "ros2course-ns"]
         protections[sandbox.NETWORK] = "loopback only: no internet, no DDS traffic between submissions"

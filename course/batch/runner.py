@@ -92,9 +92,14 @@ def _hideable(folder: Path) -> bool:
     return folder != Path("/") and not any(p.resolve() == folder or p.resolve().is_relative_to(folder) for p in needed)
 
 
+#: Folders of a course that only its author reads: hidden from submissions when the course has them.
+AUTHOR_FOLDERS = (".git", "docs", "tests", "benchmarks")
+
+
 def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
     """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions
-    and wrong ones, and the shared reference builds (:func:`ros2course.build.reference.reference_cache_root`: they
+    and wrong ones, the course's :data:`AUTHOR_FOLDERS` (``.git`` holds every version of ``solutions/``), and the
+    shared reference builds (:func:`ros2course.build.reference.reference_cache_root`: they
     sit in the venv, which is read-only but visible, and hold the reference sources of every lesson a check, a
     validation or an earlier batch built on; the job's own trusted build is bound back read-only, see
     :func:`ros2course.batch.job.job_walls`); for a course merged from a private one
@@ -102,6 +107,9 @@ def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list
     the solutions and fixtures of the one it extends."""
     root = content_root()
     candidates = [scratch_root, submissions, out_dir, root / "solutions", course_fixtures(root)]
+    # a course checked out from git holds every version of solutions/ in .git; its docs (the strength
+    # tables list reference lines), tests and benchmarks are the author's, never the worker's
+    candidates += [root / name for name in AUTHOR_FOLDERS]
     shared_builds = reference_cache_root()
     if shared_builds is not None:
         candidates.append(shared_builds)
