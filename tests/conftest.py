@@ -50,17 +50,45 @@ def private_cache_dir(tmp_path_factory: pytest.TempPathFactory):
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """The tests that take the CPU lock first, then the long ones, then the rest (stable order otherwise).
+    """The tests that take the CPU lock first, then the long ones, then the rest; in each, the longest known
+    first (:data:`DURATIONS_FILE`), stable order otherwise.
 
     See :data:`CPU_LOCK_MODULES` and :data:`LONG_MODULES`.
     """
-    def rank(item: pytest.Item) -> int:
+    known = _known_durations()
+    first = {}  # (module, test function) -> where it first appears
+    for index, item in enumerate(items):
+        first.setdefault((item.path, getattr(item, "originalname", item.name)), index)
+
+    def rank(item: pytest.Item) -> tuple[int, int, float]:
         name = item.path.name
+        # the cases of one parametrized test, the longest known first (tests keep their order otherwise: a
+        # module fixture is set up once): work stealing takes from the end of a worker's queue, so the run's
+        # last tests are short ones, not a 5-minute validation the other worker waits out
+        where = first[(item.path, getattr(item, "originalname", item.name))]
+        longest = -known.get(item.nodeid, 0.0)
         if name in CPU_LOCK_MODULES or "cpu_exclusive" in getattr(item, "fixturenames", ()):
-            return 0
-        return 1 + (LONG_MODULES.index(name) if name in LONG_MODULES else len(LONG_MODULES))
+            return 0, where, longest
+        return 1 + (LONG_MODULES.index(name) if name in LONG_MODULES else len(LONG_MODULES)), where, longest
 
     items.sort(key=rank)
+
+
+#: Seconds (setup + call) each of the slowest tests took in a recorded CI run: the order of the run, nothing else.
+DURATIONS_FILE = Path(__file__).with_name("durations.json")
+#: When set, the run writes every test's seconds there in :data:`DURATIONS_FILE`'s format (to refresh it).
+DURATIONS_OUT = "ROS2COURSE_TEST_DURATIONS_OUT"
+
+
+def _known_durations() -> dict[str, float]:
+    """``{node id: seconds}`` from :data:`DURATIONS_FILE`; {} when it is missing or unreadable."""
+    import json
+
+    try:
+        data = json.loads(DURATIONS_FILE.read_text(encoding="utf-8"))
+        return {str(k): float(v) for k, v in data["seconds"].items()}
+    except (OSError, ValueError, KeyError, TypeError, AttributeError):
+        return {}
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -87,6 +115,7 @@ class RunUsage:
         self.cpu = self._cpu_ticks()
         self.busy: dict[str, float] = {}
         self.last: dict[str, float] = {}
+        self.seconds: dict[str, float] = {}
 
     @staticmethod
     def _cpu_ticks() -> tuple[int, int] | None:
@@ -103,6 +132,16 @@ class RunUsage:
         worker = getattr(getattr(node, "gateway", None), "id", None) or "main"
         self.busy[worker] = self.busy.get(worker, 0.0) + report.duration
         self.last[worker] = time.monotonic() - self.start
+        if report.when in ("setup", "call"):
+            self.seconds[report.nodeid] = self.seconds.get(report.nodeid, 0.0) + report.duration
+
+    def write_durations(self, path: str) -> None:
+        """Every test's seconds (setup + call), slowest first, in :data:`DURATIONS_FILE`'s format."""
+        import json
+
+        ordered = dict(sorted(((k, round(v, 1)) for k, v in self.seconds.items()), key=lambda kv: -kv[1]))
+        Path(path).write_text(json.dumps({"source": f"a test run of {time.strftime('%Y-%m-%d')}, seconds "
+                                          "(setup + call)", "seconds": ordered}, indent=1) + "\n", encoding="utf-8")
 
     def line(self) -> str:
         """One line for the log: wall, per-worker test time and last finish, CPU busy %."""
@@ -139,6 +178,8 @@ def pytest_terminal_summary(terminalreporter, exitstatus: int, config: pytest.Co
     usage = _USAGE.get("usage")
     if usage is not None:
         terminalreporter.write_line(usage.line())
+        if os.environ.get(DURATIONS_OUT):
+            usage.write_durations(os.environ[DURATIONS_OUT])
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
