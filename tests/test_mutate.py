@@ -204,6 +204,12 @@ def test_rules_match_kinds_of_mutant_mechanically() -> None:
     assert OUTSIDE_LOOPS.matches(_mutant(script, "cli/a.sh", 3, "break;", insert=True))
     assert not OUTSIDE_LOOPS.matches(_mutant(script, "cli/a.sh", 6, "  break;", insert=True))
     assert OUTSIDE_LOOPS.matches(_mutant(script, "cli/a.sh", 7, "break;", insert=True))
+    # right under the loop's header it takes the header's indentation (none), yet bash runs it in the loop:
+    # a shell loop is what lies between do and done (inspect-topics' 0173f16abe21 was killed, not a no-op)
+    assert not OUTSIDE_LOOPS.matches(_mutant(script, "cli/a.sh", 4, "break;", insert=True))
+    split = "#!/usr/bin/env bash\nwhile true\ndo\n  ros2 node list && break  # done? no\nbreak;\ndone\n"
+    assert not OUTSIDE_LOOPS.matches(_mutant(split, "cli/a.sh", 5, "break;", insert=True))
+    assert OUTSIDE_LOOPS.matches(_mutant(split + "echo over\n", "cli/a.sh", 7, "break;", insert=True))
     # a line inserted after a backslash joins the command above (`echo hi \\` + `break;` + `| age`): never a no-op
     piped = "#!/usr/bin/env bash\necho hi \\\n  | cat\n"
     assert not OUTSIDE_LOOPS.matches(_mutant(piped, "cli/a.sh", 3, "break;", insert=True))

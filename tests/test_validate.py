@@ -174,3 +174,20 @@ def test_a_fixture_case_judges_its_skips_and_notes_what_else_it_lost(monkeypatch
     validate.render_outcomes([validate.Outcome("print-forever-node", case.name, ok, expected, "failed 1/10", 1.0,
                                                result, note=case.note(result))], Console(file=out, width=300))
     assert "failed 1/10; also lost: c" in out.getvalue()
+
+
+def test_every_lesson_has_a_reference_workspace_with_and_without_tests(tmp_path) -> None:
+    """reference_workspace copies each lesson's packages and folders (a lesson may have no package, only folders);
+    shared builds (with_tests=False) leave out each package's own test/ folder and nothing else."""
+    from ros2course.build.reference import reference_workspace
+
+    for lesson in load_catalog().lessons:
+        whole = reference_workspace(lesson, tmp_path / lesson.id / "whole")
+        bare = reference_workspace(lesson, tmp_path / lesson.id / "bare", with_tests=False)
+        files = {p.relative_to(whole) for p in whole.rglob("*") if p.is_file()}
+        kept = {p.relative_to(bare) for p in bare.rglob("*") if p.is_file()}
+        assert kept <= files, lesson.id
+        assert {p for p in files - kept if not (len(p.parts) > 2 and p.parts[0] == "src" and p.parts[2] == "test")} \
+            == set(), (lesson.id, sorted(files - kept)[:5])
+        assert not any(len(p.parts) > 2 and p.parts[0] == "src" and p.parts[2] == "test" for p in kept), lesson.id
+    assert (tmp_path / "testing-your-nodes" / "whole" / "src" / "python_package_with_a_node" / "test").is_dir()

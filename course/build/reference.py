@@ -48,16 +48,17 @@ def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None =
     solutions = content_root() / "solutions"
     found = solution_packages()
     (dest / "src").mkdir(parents=True, exist_ok=True)
+    ignore = shutil.ignore_patterns("__pycache__", "*.egg-info")
     for name in (dependency_closure(lesson.packages, found) if packages is None else packages):
         package = found[name][0]
 
-        def ignore(folder: str, names: list[str], package: Path = package) -> set[str]:
-            skip = set(shutil.ignore_patterns("__pycache__", "*.egg-info")(folder, names))
-            if not with_tests and Path(folder) == package and "test" in names:
+        def without_tests(folder: str, names: list[str], package: Path = package) -> set[str]:
+            skip = set(ignore(folder, names))
+            if Path(folder) == package and "test" in names:
                 skip.add("test")
             return skip
 
-        shutil.copytree(package, dest / "src" / package.name, ignore=ignore)
+        shutil.copytree(package, dest / "src" / package.name, ignore=ignore if with_tests else without_tests)
     for folder in lesson.folders if with_folders else ():
         if not (solutions / folder).is_dir():
             raise ValidationFailed(f"lesson {lesson.id} names folder {folder!r}, which is not in solutions/")

@@ -145,14 +145,42 @@ def _indent(text: str) -> int:
     return len(text) - len(text.lstrip())
 
 
-def in_block(lines: list[str], number: int, header: str, own: bool = True) -> bool:
+#: A shell loop's body opens at ``do`` and closes at ``done`` (words, outside comments).
+_SHELL_DO_DONE = re.compile(r"(?<![\w./-])(do|done)(?![\w./-])")
+
+
+def _shell_loops_open(lines: list[str]) -> list[str]:
+    """The headers of the shell loops still open after ``lines`` (outermost first): each ``do`` opens the
+    loop of its line, or of the line above when it stands alone; each ``done`` closes the innermost."""
+    headers: list[str] = []
+    previous = ""
+    for text in lines:
+        code = text.split("#", 1)[0] if not text.lstrip().startswith("#!") else ""
+        for word in _SHELL_DO_DONE.findall(code):
+            if word == "do":
+                headers.append(text if code.strip() != "do" else previous)
+            elif headers:
+                headers.pop()
+        if code.strip():
+            previous = text
+    return headers
+
+
+def in_block(lines: list[str], number: int, header: str, own: bool = True, shell: bool = False) -> bool:
     """Whether line ``number`` (1-based) of ``lines`` lies in the indented block of a line matching ``header``
     (a regex; an enclosing line of smaller indentation, as Python and indented scripts nest), or (``own``)
-    matches it itself. A blank line belongs to the block of the line above it."""
+    matches it itself. A blank line belongs to the block of the line above it.
+
+    ``shell``: the lines are a shell script, where a loop's body is what lies between ``do`` and ``done``
+    whatever its indentation (an unindented line inserted in a loop is in it): a line is in the block of an
+    open loop whose header matches; other headers are judged by indentation.
+    """
     if not 1 <= number <= len(lines):
         return False
     pattern = re.compile(header)
     if own and pattern.search(lines[number - 1]):
+        return True
+    if shell and any(pattern.search(h) for h in _shell_loops_open(lines[:number - 1])):
         return True
     level = _indent(lines[number - 1]) if lines[number - 1].strip() else None
     for text in reversed(lines[:number - 1]):
@@ -267,9 +295,10 @@ class Rule(BaseModel):
             # the changed line as it sits among the lines above: the original one, or for a line universalmutator
             # inserts (no original line) the inserted one, whose indentation says which block it lands in
             lines.append(mutant.original if mutant.original.strip() else mutant.mutated)
-            if self.block is not None and not in_block(lines, mutant.line, self.block):
+            shell = mutant.file.endswith((".sh", ".bash"))
+            if self.block is not None and not in_block(lines, mutant.line, self.block, shell=shell):
                 return False
-            if self.not_block is not None and in_block(lines, mutant.line, self.not_block, own=False):
+            if self.not_block is not None and in_block(lines, mutant.line, self.not_block, own=False, shell=shell):
                 return False
         if self.starter_line:
             whole = whole_file()
