@@ -403,3 +403,20 @@ def test_a_job_that_raises_is_a_grader_error_row_and_tells_nothing_of_the_walls(
     assert (report.isolation["memory"], report.isolation["pids_peak"], report.isolation["killed_after"]) == ("none", 3, 2)
     assert sandbox.Isolation.never_ran("not run (not gradable)").to_json() == {
         "netns": False, "mountns": False, "reason": "not run (not gradable)"}
+
+
+def test_a_batch_hides_the_shared_reference_builds_and_the_authors_folders(tmp_path: Path) -> None:
+    """The venv is read-only but visible to a submission; its shared reference builds hold reference sources,
+    so they are hidden, and so are the course's .git, docs, tests and benchmarks (solutions/ too)."""
+    from ros2course.batch.runner import default_hidden
+    from ros2course.build.reference import reference_cache_folder
+    from ros2course.lesson.catalog import content_root
+
+    reference_cache_folder().mkdir(parents=True, exist_ok=True)
+    hidden = default_hidden(tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
+    assert str(reference_cache_folder().resolve()) in hidden
+    root = content_root()
+    for name in ("solutions", "docs", "tests", "benchmarks", ".git"):
+        if (root / name).is_dir():
+            assert str((root / name).resolve()) in hidden, name
+    assert str((root / "graders").resolve()) not in hidden and str((root / "chapters").resolve()) not in hidden

@@ -68,7 +68,7 @@ from ros2course.batch.job import (
 from ros2course.build.reference import (
     ReferenceBuild,
     lesson_dependencies,
-    reference_cache_root,
+    reference_cache_folder,
     shared_reference_build,
     trusted_interface_packages,
 )
@@ -99,7 +99,7 @@ AUTHOR_FOLDERS = (".git", "docs", "tests", "benchmarks")
 def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
     """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions
     and wrong ones, the course's :data:`AUTHOR_FOLDERS` (``.git`` holds every version of ``solutions/``), and the
-    shared reference builds (:func:`ros2course.build.reference.reference_cache_root`: they
+    shared reference builds (:func:`ros2course.build.reference.reference_cache_folder`: they
     sit in the venv, which is read-only but visible, and hold the reference sources of every lesson a check, a
     validation or an earlier batch built on; the job's own trusted build is bound back read-only, see
     :func:`ros2course.batch.job.job_walls`); for a course merged from a private one
@@ -110,9 +110,7 @@ def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list
     # a course checked out from git holds every version of solutions/ in .git; its docs (the strength
     # tables list reference lines), tests and benchmarks are the author's, never the worker's
     candidates += [root / name for name in AUTHOR_FOLDERS]
-    shared_builds = reference_cache_root()
-    if shared_builds is not None:
-        candidates.append(shared_builds)
+    candidates.append(reference_cache_folder())  # whoever owns it: hidden when it exists
     sources = course_sources(root)
     for index, source in enumerate(sources):
         if index == 0:

@@ -139,11 +139,17 @@ class ReferenceBuild:
             shutil.rmtree(self.path.parent, ignore_errors=True)
 
 
+def reference_cache_folder() -> Path:
+    """Where shared reference builds live, whether or not it exists: ``<sys.prefix>/var/cache/ros2course/reference``
+    (batch grading hides it from submissions, :func:`ros2course.batch.runner.default_hidden`)."""
+    return Path(sys.prefix) / "var" / "cache" / "ros2course" / "reference"
+
+
 def reference_cache_root() -> Path | None:
-    """Where shared reference builds live: ``<sys.prefix>/var/cache/ros2course/reference``, next to the
+    """Where shared reference builds live (:func:`reference_cache_folder`), made if missing: next to the
     ROS install they were built against (so a new venv never reads an old build, and every uid can read it,
     unlike ``~/.cache`` under a 0700 home). None when that folder cannot be written."""
-    root = Path(sys.prefix) / "var" / "cache" / "ros2course" / "reference"
+    root = reference_cache_folder()
     try:
         root.mkdir(parents=True, exist_ok=True)
     except OSError:
