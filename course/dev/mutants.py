@@ -610,8 +610,8 @@ def equivalent_mutant(rel: str, original: str, mutated: str, old_line: str, new_
     """Whether a mutant changes nothing a program can see, so it is dropped like universalmutator's own
     equivalents (its Python handler drops mutants with the original's bytecode; its TCE, C++ duplicates).
 
-    Two kinds, for the files universalmutator mutates with its universal rules only: a changed comment
-    line (``#`` comments of shell scripts, CMake, ``.msg``/``.srv``/``.action`` definitions, YAML,
+    Three kinds, for the files universalmutator mutates with its universal rules only: a shell no-op
+    proven from the text (:func:`_shell_no_op`), a changed comment line (``#`` comments of shell scripts, CMake, ``.msg``/``.srv``/``.action`` definitions, YAML,
     setup.cfg and TOML such as pyproject.toml; not the ``#!`` line, and never in a script with a here-document, where ``#`` lines are
     data), and an XML file (package.xml, launch XML) whose mutant parses to the same elements,
     attributes and texts (:func:`_xml_shape`). A mutant that breaks the XML is invalid (:func:`invalid_mutant`).
@@ -630,8 +630,65 @@ def equivalent_mutant(rel: str, original: str, mutated: str, old_line: str, new_
         if suffix in {".sh", ".bash"} and _HEREDOC.search(original):
             return False
         old, new = old_line.lstrip(), new_line.lstrip()
-        return (old.startswith("#") and new.startswith("#") and not old.startswith("#!")
-                and "\n" not in old_line and "\n" not in new_line)
+        if (old.startswith("#") and new.startswith("#") and not old.startswith("#!")
+                and "\n" not in old_line and "\n" not in new_line):
+            return True
+        return suffix in {".sh", ".bash"} and _shell_no_op(original, mutated, old_line, new_line)
+    return False
+
+
+#: ``for NAME in WORDS; do`` on one line (the loops the course's scripts write).
+_SHELL_FOR = re.compile(r"^(\s*)for\s+([A-Za-z_]\w*)\s+in\s+(.*?)\s*;\s*do\s*$")
+#: A word bash takes as it is: no expansion, quoting, globbing or arithmetic.
+_SHELL_LITERAL = re.compile(r"^[A-Za-z0-9_.,:+=@%-]+$")
+
+
+def _shell_no_op(original: str, mutated: str, old_line: str, new_line: str) -> bool:
+    """Two shell mutants that change nothing bash does, proven from the text (never a judgement):
+
+    * a value of a ``for NAME in WORDS; do`` list replaced by another plain word, when the loop's body
+      never names ``NAME``: the loop runs as many times with the same body (the discovery loops'
+      ``for attempt in 1 2 ... 10``, whose counter only counts);
+    * ``continue`` inserted as the last command of a loop's body, right before its ``done``.
+
+    A script that uses ``eval`` or indirect expansion (``${!``) is never judged (a name may hide there).
+    """
+    if "eval" in original.split() or "${!" in original:
+        return False
+    before = _SHELL_FOR.match(old_line.rstrip("\n"))
+    after = _SHELL_FOR.match(new_line.rstrip("\n"))
+    if before and after:
+        if before.group(1, 2) != after.group(1, 2):
+            return False
+        old_words, new_words = before.group(3).split(), after.group(3).split()
+        if len(old_words) != len(new_words) or not all(_SHELL_LITERAL.match(w) for w in old_words + new_words):
+            return False
+        lines = original.splitlines()
+        start = next((i for i, text in enumerate(lines) if text == old_line.rstrip("\n")), None)
+        if start is None:
+            return False
+        depth, body = 0, []
+        for index in range(start, len(lines)):
+            code = lines[index].split("#", 1)[0]
+            for word in _SHELL_DO_DONE.findall(code):
+                depth += 1 if word == "do" else -1
+            if index > start:
+                body.append(code)
+            if depth == 0:
+                break
+        if depth != 0:
+            return False
+        return not re.search(rf"(?<![\w]){re.escape(before.group(2))}(?!\w)", "\n".join(body))
+    if old_line.strip() or not re.fullmatch(r"\s*continue\s*;?\s*", new_line.rstrip("\n")):
+        return False
+    # an inserted `continue`: the next command after it closes its loop
+    mutated_lines = mutated.splitlines()
+    inserted = [i for i, text in enumerate(mutated_lines) if text == new_line.rstrip("\n")]
+    for index in inserted:
+        following = next((t.split("#", 1)[0].strip() for t in mutated_lines[index + 1:]
+                          if t.split("#", 1)[0].strip()), "")
+        if following in ("done", "done;") and _shell_loops_open(mutated_lines[:index]):
+            return True
     return False
 
 
