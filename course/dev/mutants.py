@@ -1296,7 +1296,8 @@ def reference_texts(lesson: Lesson, reference: Path | None = None,
 def rule_conflicts(lesson: Lesson, config: MutationConfig | None = None, reference: Path | None = None) -> list[str]:
     """Each rule of the lesson's ``mutation.yaml`` that covers a line implementing a requirement of its
     ``contract.yaml`` (:func:`ros2course.lesson.contract.implements`), as ``mutation.yaml:LINE: rule ID covers
-    FILE:N `text`, which implements requirement R (contract.yaml:M: names `term`)``; [] without a contract;
+    FILE:N `text`, which implements requirement R (contract.yaml:M: names `term`)``, for the requirements a check
+    grades (a ``not_graded`` one already says its breakage is unseen); [] without a contract;
     one problem naming the contract's first error when it does not load (no rule is then known to be safe).
 
     A rule covers a line when its matchers on the original (file, ``original``, ``block``, ``not_block``)
@@ -1333,6 +1334,10 @@ def rule_conflicts(lesson: Lesson, config: MutationConfig | None = None, referen
                 if not rule.covers_line(rel, lines, number):
                     continue
                 for requirement in contract.requirements:
+                    if requirement.checks is None:
+                        # a requirement the contract says no check can see (not_graded, with its reason): a
+                        # rule triaging its lines' survivors says the same thing, and the table is where it is reviewed
+                        continue
                     if number in given and requirement.code is None:
                         # a line the starter gives as is: the learner never writes it, so naming a term of a
                         # requirement does not make it that requirement's; a given line the lesson makes a
