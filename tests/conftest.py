@@ -50,45 +50,26 @@ def private_cache_dir(tmp_path_factory: pytest.TempPathFactory):
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    """The tests that take the CPU lock first, then the long ones, then the rest; in each, the longest known
-    first (:data:`DURATIONS_FILE`), stable order otherwise.
+    """The tests that take the CPU lock first, then the long ones, then the rest (stable order otherwise).
 
     See :data:`CPU_LOCK_MODULES` and :data:`LONG_MODULES`.
     """
-    known = _known_durations()
-    first = {}  # (module, test function) -> where it first appears
-    for index, item in enumerate(items):
-        first.setdefault((item.path, getattr(item, "originalname", item.name)), index)
-
-    def rank(item: pytest.Item) -> tuple[int, int, float]:
+    # The cases of a parametrized test keep their order: a longest-first order (tests/durations.json) made
+    # the fresh-clone rehearsal of ff8114f take 57.8 min instead of 45-47 (four validations at once early in
+    # the run); the durations file stays, for measuring, not for ordering.
+    def rank(item: pytest.Item) -> int:
         name = item.path.name
-        # the cases of one parametrized test, the longest known first (tests keep their order otherwise: a
-        # module fixture is set up once): work stealing takes from the end of a worker's queue, so the run's
-        # last tests are short ones, not a 5-minute validation the other worker waits out
-        where = first[(item.path, getattr(item, "originalname", item.name))]
-        longest = -known.get(item.nodeid, 0.0)
         if name in CPU_LOCK_MODULES or "cpu_exclusive" in getattr(item, "fixturenames", ()):
-            return 0, where, longest
-        return 1 + (LONG_MODULES.index(name) if name in LONG_MODULES else len(LONG_MODULES)), where, longest
+            return 0
+        return 1 + (LONG_MODULES.index(name) if name in LONG_MODULES else len(LONG_MODULES))
 
     items.sort(key=rank)
 
 
-#: Seconds (setup + call) each of the slowest tests took in a recorded CI run: the order of the run, nothing else.
+#: Seconds (setup + call) each of the slowest tests took in a recorded CI run (a record for comparing runs).
 DURATIONS_FILE = Path(__file__).with_name("durations.json")
 #: When set, the run writes every test's seconds there in :data:`DURATIONS_FILE`'s format (to refresh it).
 DURATIONS_OUT = "ROS2COURSE_TEST_DURATIONS_OUT"
-
-
-def _known_durations() -> dict[str, float]:
-    """``{node id: seconds}`` from :data:`DURATIONS_FILE`; {} when it is missing or unreadable."""
-    import json
-
-    try:
-        data = json.loads(DURATIONS_FILE.read_text(encoding="utf-8"))
-        return {str(k): float(v) for k, v in data["seconds"].items()}
-    except (OSError, ValueError, KeyError, TypeError, AttributeError):
-        return {}
 
 
 def pytest_configure(config: pytest.Config) -> None:
