@@ -212,14 +212,27 @@ class DriverRun:
         """True once the process exited (an ``abort=`` for waits)."""
         return self.proc.poll() is not None
 
-    def publish_target(self, s: Session, values: Sequence[float]) -> None:
-        """Publish ``values`` (radians) on the driver's target topic (publisher made on first use)."""
+    def open_target_publisher(self, s: Session, timeout: float = 2.0) -> None:
+        """Make the grader's publisher on the driver's target topic and wait up to ``timeout`` seconds for
+        it to match the driver's subscription (done once; later calls return at once).
+
+        Called before a latency is timed, so discovery is not counted as the driver's latency: on a busy
+        machine the first match took most of the 100 ms a target is allowed (a correct driver's first target
+        measured 102 ms in 1 of 20 runs at load 2, its next ones 46 and 13 ms).
+        """
         from std_msgs.msg import Float64MultiArray  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
 
         if self._publisher is None:
             self._publisher = s.ros.node.create_publisher(Float64MultiArray, self.driver.target, 1)
             s.on_close(lambda: s.ros.node.destroy_publisher(self._publisher))
-            wait_until(lambda: self._publisher.get_subscription_count() >= 1, 2.0, interval=0.01, abort=self.ended)
+            wait_until(lambda: self._publisher.get_subscription_count() >= 1, timeout, interval=0.01,
+                       abort=self.ended)
+
+    def publish_target(self, s: Session, values: Sequence[float]) -> None:
+        """Publish ``values`` (radians) on the driver's target topic (:meth:`open_target_publisher` first)."""
+        from std_msgs.msg import Float64MultiArray  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
+
+        self.open_target_publisher(s)
         self._publisher.publish(Float64MultiArray(data=[float(x) for x in values]))
 
 
@@ -382,40 +395,72 @@ def stream(s: Session, rate_id: str, shape_id: str, zeros_id: str, run: DriverRu
              "target are zeros", f"{d.joints} zeros until a target arrives (connect() sets the positions to zeros)")
 
 
+def _send_until_shown(s: Session, run: DriverRun, target: list[float], *, give_up: float,
+                      resend: float) -> float | None:
+    """Publish ``target`` every ``resend`` s until the stream shows it; return the seconds from the first
+    publication to the first joint state with those positions (arrival time), or None after ``give_up`` s."""
+    sent = time.monotonic()
+    next_send = sent
+    while time.monotonic() - sent < give_up and not run.ended():
+        if time.monotonic() >= next_send:
+            run.publish_target(s, target)
+            next_send += resend
+        hit = [x for x in run.probe.samples(since=sent) if same(x.positions, target)]
+        if hit:
+            return hit[0].arrival - sent
+        time.sleep(0.002)
+    return None
+
+
 def tracking(s: Session, check_id: str, run: DriverRun, targets: list[list[float]], *, latency: float,
              give_up: float, resend: float) -> list[float] | None:
     """Send each of ``targets`` (radians) in turn; record ``check_id``: the stream shows each within ``latency`` s.
 
     Each target is republished every ``resend`` seconds (a client streams them
     too) until the stream shows it or ``give_up`` seconds pass, then held until
-    ``latency`` is over (so the plot shows each step). Partial credit per
-    target followed. Returns the last target followed (None if none).
+    ``latency`` is over (so the plot shows each step). A target shown late or
+    not at all is tried once more after the pass (the target before it first,
+    so the stream must move again) and the better of its two latencies is
+    judged: a correct driver that a busy machine delayed once still passes,
+    a driver that is slow or ignores targets is late both times. Partial
+    credit per target followed. Returns the target the stream shows last
+    (None if it never showed one).
     """
-    latencies: list[float | None] = []
-    last_followed = None
+    shown_last = None
     with s.phase("observe"):
+        run.open_target_publisher(s)  # discovery is not the driver's latency
+        first: list[float | None] = []
         for target in targets:
-            sent = time.monotonic()
-            seen = None
-            next_send = sent
-            while time.monotonic() - sent < give_up and not run.ended():
-                if time.monotonic() >= next_send:
-                    run.publish_target(s, target)
-                    next_send += resend
-                hit = [x for x in run.probe.samples(since=sent) if same(x.positions, target)]
-                if hit:
-                    seen = hit[0].arrival - sent
-                    break
-                time.sleep(0.002)
-            time.sleep(max(0.0, sent + latency - time.monotonic()))
-            latencies.append(seen)
+            started = time.monotonic()
+            seen = _send_until_shown(s, run, target, give_up=give_up, resend=resend)
+            time.sleep(max(0.0, started + latency - time.monotonic()))
+            first.append(seen)
             if seen is not None:
-                last_followed = target
-    shown = ", ".join(f"{lat * 1000:.0f} ms" if lat is not None else f"not within {give_up:.1f} s"
-                      for lat in latencies)
+                shown_last = target
+        again: dict[int, float | None] = {}
+        for i, seen in enumerate(first):
+            if (seen is not None and seen <= latency) or run.ended():
+                continue
+            before = targets[i - 1]  # the last of the list for the first target: the stream must change
+            if _send_until_shown(s, run, before, give_up=give_up, resend=resend) is None:
+                again[i] = None
+                continue
+            shown_last = before
+            again[i] = _send_until_shown(s, run, targets[i], give_up=give_up, resend=resend)
+            if again[i] is not None:
+                shown_last = targets[i]
+    latencies = [min((x for x in (seen, again.get(i)) if x is not None), default=None)
+                 for i, seen in enumerate(first)]
+
+    def _ms(lat: float | None) -> str:
+        return f"{lat * 1000:.0f} ms" if lat is not None else f"not within {give_up:.1f} s"
+
+    shown = ", ".join(_ms(seen) + (f" (sent again: {_ms(again[i])})" if i in again else "")
+                      for i, seen in enumerate(first))
     followed = sum(1 for lat in latencies if lat is not None and lat <= latency)
     expected = (f"each of {len(targets)} targets (radians, sent on {run.driver.target}) shows up as the streamed "
-                f"positions within {latency * 1000:.0f} ms")
+                f"positions within {latency * 1000:.0f} ms (a late target is sent once more and the better time "
+                "counts)")
     observed = f"latencies: {shown}"
     if followed < len(targets):
         last = run.probe.samples()
@@ -423,7 +468,7 @@ def tracking(s: Session, check_id: str, run: DriverRun, targets: list[list[float
         if run.ended():
             observed += "; the driver stopped"
     s.record(check_id, followed == len(targets), observed, expected, fraction=followed / len(targets))
-    return last_followed
+    return shown_last
 
 
 def wrong_size(s: Session, check_id: str, run: DriverRun, target: list[float], previous: list[float] | None,
