@@ -420,3 +420,36 @@ def test_a_batch_hides_the_shared_reference_builds_and_the_authors_folders(tmp_p
         if (root / name).is_dir():
             assert str((root / name).resolve()) in hidden, name
     assert str((root / "graders").resolve()) not in hidden and str((root / "chapters").resolve()) not in hidden
+
+
+def test_one_set_of_walls_serves_grade_and_gradescope(tmp_path: Path, monkeypatch) -> None:
+    """``submission_walls`` is what every job of a batch carries: the hidden folders and, masked, every lesson's
+    mutation record; a job's mount plan masks exactly those beside the machine's secrets."""
+    from ros2course import sandbox
+    from ros2course.batch import gradescope, job as job_mod, runner
+    from ros2course.lesson.catalog import load_catalog
+
+    walls = runner.submission_walls(tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
+    assert walls.hide == runner.default_hidden(tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
+    records = [lesson.folder / runner.MUTATION_RECORD for lesson in load_catalog().lessons]
+    assert walls.masked == sorted(str(p) for p in records if p.is_file()) and walls.masked
+    assert "submission_walls" in gradescope.run_gradescope.__code__.co_names
+    can_unshare = bool(sandbox.capabilities().unshare)  # probed (with a real mount plan) before the plan is replaced
+    plans = []
+
+    class Planned(Exception):
+        pass
+
+    def plan(*args, **kwargs):
+        plans.append(kwargs)
+        raise Planned  # the plan is what is checked; nothing is mounted
+
+    monkeypatch.setattr(sandbox, "MountPlan", plan)
+    job = job_mod.Job("b", "s", str(tmp_path), "", ["print-forever-node"], str(tmp_path / "out"),
+                      hide=walls.hide, masked=walls.masked)
+    (tmp_path / "scratch").mkdir()
+    if can_unshare:
+        with pytest.raises(Planned):
+            job_mod.job_walls(job, tmp_path / "scratch")
+        assert plans[0]["secrets"] == sandbox.SECRETS + tuple(walls.masked)
+        assert plans[0]["hide"] == walls.hide

@@ -25,9 +25,9 @@ from ros2course.batch.archive import ARCHIVE_SUFFIXES
 from ros2course.batch.job import Job, lesson_checks, run_job
 from ros2course.batch.runner import (
     build_trusted_interfaces,
-    default_hidden,
     needs_reference_sources,
     refuse_without_isolation,
+    submission_walls,
 )
 from ros2course.errors import CourseError
 from ros2course.files import atomic_write_text
@@ -98,12 +98,12 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
         lesson_checks(lesson_id)
     entry = submission_entry(submission)
     results.parent.mkdir(parents=True, exist_ok=True)
-    hide = default_hidden(Path(tempfile.gettempdir()) / "ros2course-none", results.parent,
-                          Path(tempfile.gettempdir()) / "ros2course-none")
+    walls = submission_walls(Path(tempfile.gettempdir()) / "ros2course-none", results.parent,
+                             Path(tempfile.gettempdir()) / "ros2course-none")
     trusted = (build_trusted_interfaces([catalog.get(lesson_id) for lesson_id in lessons])
                if sandbox.capabilities().uid_drop or needs_reference_sources(lessons) else None)
-    job = Job(uuid.uuid4().hex, "submission", str(entry.absolute()), "", lessons, str(results.parent), timeout, hide=hide,
-              pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""), require_isolation=require_isolation)
+    job = Job(uuid.uuid4().hex, "submission", str(entry.absolute()), "", lessons, str(results.parent), timeout,
+              hide=walls.hide, masked=walls.masked, pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""), require_isolation=require_isolation)
     try:
         outcome = run_job(job)
     finally:

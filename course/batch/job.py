@@ -85,6 +85,9 @@ class Job:
         file_limit: bytes per written file (0: no limit).
         output_cap: bytes of worker output kept.
         hide: folders hidden from the submission (when a mount namespace is available).
+        masked: files shown to the submission as empty (``/dev/null`` bound over them), beside
+            :data:`ros2course.sandbox.SECRETS`; ``hide`` and ``masked`` come from
+            :func:`ros2course.batch.runner.submission_walls`.
         isolate: use the protections of :mod:`ros2course.sandbox` the machine allows.
         scratch_root: where scratch folders are made (None: the system temp folder).
         pids_limit: tasks (processes + threads) the submission may have at once.
@@ -104,6 +107,7 @@ class Job:
     file_limit: int = DEFAULT_FILE_LIMIT
     output_cap: int = DEFAULT_OUTPUT_CAP
     hide: list[str] = dataclasses.field(default_factory=list)
+    masked: list[str] = dataclasses.field(default_factory=list)
     isolate: bool = True
     scratch_root: str | None = None
     pids_limit: int = sandbox.DEFAULT_PIDS_LIMIT
@@ -252,17 +256,6 @@ def run_job(job: Job) -> JobResult:
     return JobResult(job.student, [] if cancelled else records, isolation, peak, seconds, cancelled)
 
 
-#: A lesson's record of its graded mutants (``ros2course.dev.mutants``): each names a reference line, original and
-#: mutated, so a submission must not read them (the worker never does).
-MUTATION_RECORDS = ("mutation-outcomes.json",)
-
-
-def mutation_records() -> tuple[str, ...]:
-    """The course's mutation records (:data:`MUTATION_RECORDS` of every lesson folder), masked in a job."""
-    return tuple(sorted(str(lesson.folder / name) for lesson in load_catalog().lessons for name in MUTATION_RECORDS
-                        if (lesson.folder / name).is_file()))
-
-
 def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Isolation, sandbox.PidsCgroup | None]:
     """What one job runs inside: ``(command prefix, worker arguments, isolation, pids cgroup)``.
 
@@ -284,7 +277,7 @@ def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Is
         read_only = sandbox.read_only_paths() + ([job.trusted_interfaces] if job.trusted_interfaces else [])
         plan = sandbox.MountPlan(caps.tools["ip"], own=str(scratch), hide=job.hide, read_only=read_only, keep=[],
                                  private_tmp=sandbox.PRIVATE_TMP, hidden_home=sandbox.grader_home(),
-                                 secrets=sandbox.SECRETS + mutation_records())
+                                 secrets=sandbox.SECRETS + tuple(job.masked))
         init = [caps.tools["dumb-init"], "--"] if caps.pidns else []
         prefix = [caps.tools["unshare"], *caps.unshare, *init, "/bin/sh", "-c", plan.script(), "ros2course-ns"]
         protections[sandbox.NETWORK] = "loopback only: no internet, no DDS traffic between submissions"

@@ -96,6 +96,33 @@ def _hideable(folder: Path) -> bool:
 AUTHOR_FOLDERS = (".git", "docs", "tests", "benchmarks")
 
 
+#: A lesson's record of its graded mutants (``mutation-outcomes.json``, written by ``ros2course dev mutate``: each
+#: names a reference line, original and mutated). The worker never reads it; a submission must not either.
+MUTATION_RECORD = "mutation-outcomes.json"
+
+
+@dataclasses.dataclass(frozen=True)
+class SubmissionWalls:
+    """What a submission may not see in a batch, worked out once per batch and carried by each job.
+
+    Attributes:
+        hide: folders covered by an empty tmpfs (:func:`default_hidden`).
+        masked: files bound to ``/dev/null`` (every lesson's :data:`MUTATION_RECORD`), beside
+            :data:`ros2course.sandbox.SECRETS`.
+    """
+
+    hide: list[str]
+    masked: list[str]
+
+
+def submission_walls(submissions: Path, out_dir: Path, scratch_root: Path) -> SubmissionWalls:
+    """The folders hidden from and the files masked for every submission of a batch (``grade`` and
+    ``gradescope`` alike): :func:`default_hidden` and the course's mutation records."""
+    masked = sorted(str(lesson.folder / MUTATION_RECORD) for lesson in load_catalog().lessons
+                    if (lesson.folder / MUTATION_RECORD).is_file())
+    return SubmissionWalls(default_hidden(submissions, out_dir, scratch_root), masked)
+
+
 def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
     """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions
     and wrong ones, the course's :data:`AUTHOR_FOLDERS` (``.git`` holds every version of ``solutions/``), and the
@@ -370,7 +397,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     batch_id = uuid.uuid4().hex
     scratch_root = Path(tempfile.mkdtemp(prefix="ros2course-batch-"))
     scratch_root.chmod(0o711)
-    hide = default_hidden(submissions, out_dir, scratch_root)
+    walls = submission_walls(submissions, out_dir, scratch_root)
     trusted = None
     if entries and (isolate and sandbox.capabilities().uid_drop or needs_reference_sources(lessons)):
         try:
@@ -381,7 +408,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     todo: list[Job] = []
     for entry, missing in _to_grade(entries, lessons, student_lessons, done):
         todo.append(Job(batch_id, entry.student, str(entry.path), entry.problem, missing, str(out_dir), timeout,
-                        memory_limit, hide=hide, isolate=isolate, scratch_root=str(scratch_root),
+                        memory_limit, hide=walls.hide, masked=walls.masked, isolate=isolate, scratch_root=str(scratch_root),
                         pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""),
                         require_isolation=require_isolation))
     skipped = len(entries) - len(todo)

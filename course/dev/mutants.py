@@ -149,14 +149,25 @@ def _indent(text: str) -> int:
 _SHELL_DO_DONE = re.compile(r"(?<![\w./-])(do|done)(?![\w./-])")
 
 
+def _shell_code(text: str) -> str:
+    """A shell line without its comment (a ``#!`` line is all comment)."""
+    return text.split("#", 1)[0] if not text.lstrip().startswith("#!") else ""
+
+
+def _shell_do_done(text: str) -> list[str]:
+    """The ``do`` and ``done`` words of a shell line, in order, outside its comment: the one reading of a
+    loop's span that :func:`_shell_loops_open` and :func:`_shell_no_op` share."""
+    return _SHELL_DO_DONE.findall(_shell_code(text))
+
+
 def _shell_loops_open(lines: list[str]) -> list[str]:
     """The headers of the shell loops still open after ``lines`` (outermost first): each ``do`` opens the
     loop of its line, or of the line above when it stands alone; each ``done`` closes the innermost."""
     headers: list[str] = []
     previous = ""
     for text in lines:
-        code = text.split("#", 1)[0] if not text.lstrip().startswith("#!") else ""
-        for word in _SHELL_DO_DONE.findall(code):
+        code = _shell_code(text)
+        for word in _shell_do_done(text):
             if word == "do":
                 headers.append(text if code.strip() != "do" else previous)
             elif headers:
@@ -669,11 +680,10 @@ def _shell_no_op(original: str, mutated: str, old_line: str, new_line: str) -> b
             return False
         depth, body = 0, []
         for index in range(start, len(lines)):
-            code = lines[index].split("#", 1)[0]
-            for word in _SHELL_DO_DONE.findall(code):
+            for word in _shell_do_done(lines[index]):
                 depth += 1 if word == "do" else -1
             if index > start:
-                body.append(code)
+                body.append(_shell_code(lines[index]))
             if depth == 0:
                 break
         if depth != 0:
@@ -685,8 +695,7 @@ def _shell_no_op(original: str, mutated: str, old_line: str, new_line: str) -> b
     mutated_lines = mutated.splitlines()
     inserted = [i for i, text in enumerate(mutated_lines) if text == new_line.rstrip("\n")]
     for index in inserted:
-        following = next((t.split("#", 1)[0].strip() for t in mutated_lines[index + 1:]
-                          if t.split("#", 1)[0].strip()), "")
+        following = next((_shell_code(t).strip() for t in mutated_lines[index + 1:] if _shell_code(t).strip()), "")
         if following in ("done", "done;") and _shell_loops_open(mutated_lines[:index]):
             return True
     return False
