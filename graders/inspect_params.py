@@ -10,11 +10,17 @@ file ``cli/params_dump.yaml`` (the ``ros2 param dump`` format). A second run, in
 a fresh graph with no ``ros2`` daemon, starts the node only as long after the
 script's first ``ros2`` command joined the graph as the first run took (3 to 10 s; kit.scripts.run_script_first):
 a script that waits until ``ros2 node list`` shows the node still gets its
-quote, one that asks at once does not.
+quote, one that asks at once does not. The first run also shows whether the
+wait ends when the node shows: its first ``ros2 param`` command must come
+soon after the script starts (the node is listed all along), not after the
+whole loop of tries (a loop whose test never matches waits its 10 tries,
+then asks whether the node came or not).
 """
 
 from __future__ import annotations
 
+import re
+import threading
 import time
 from typing import Any
 
@@ -39,6 +45,17 @@ SET_COMMAND = f"ros2 param set {NODE} quote \"{NEW_QUOTE}\""
 NAMES = ("period", "philosopher_name", "quote", "topic_name")
 TIMEOUT = 30.0  # seconds for the whole script (each ros2 command starts in ~1 s)
 NEXT_MESSAGES = 2  # the change must show within this many messages (one may be on its way)
+
+#: Seconds from the start of the first run (a daemon lists the node all along) by which the script's first
+#: ``ros2 param`` command must have joined the graph. A script that checks once and breaks takes 2-5 s to get
+#: there (``ros2 daemon start``, one ``ros2 node list``: about 1 s each, more on a busy machine); the
+#: starter's loop whose test never matches takes its 10 tries, 10 pauses of 1 s and 10 ``ros2 node list``,
+#: at least 15 s.
+PROMPT = 12.0
+#: The node a ``ros2 param`` command calls the node's services from: ``_ros2cli_<pid>`` (ros2cli
+#: ``node/direct.py`` DirectNode; ``ros2param`` ``verb/*.py`` use it for every call). ``ros2 node list`` and
+#: ``ros2 daemon start`` make none while a daemon answers; the daemon is ``_ros2cli_daemon_<domain>_<uuid>``.
+PARAM_COMMAND_NODE = re.compile(r"_ros2cli_\d+")
 
 WAIT_HINT = ("the node may join after your first command (a daemon that has just started has not discovered it "
              "yet): `ros2 daemon start`, then wait until `ros2 node list` shows the node (the starter's loop) "
@@ -73,7 +90,12 @@ def grade(s: Session) -> None:
     started = time.time()
     # a daemon that already lists the node, as in a learner's terminal (kit.scripts.ros2_daemon); the second run
     # (judge_late_node) has none
-    run = scripts.run_script(s, path, timeout=TIMEOUT, daemon_sees=[NODE])
+    watch = FirstParamCommand(s.ros.node)
+    try:
+        run = scripts.run_script(s, path, timeout=TIMEOUT, daemon_sees=[NODE])
+    finally:
+        watch.stop()
+    asked_at = watch.seconds_after(time.monotonic() - run.seconds)
     scripts.ended(s, "ends", run, "it ends by itself with exit code 0")
     scripts.printed(s, "listed", run, [f"  {name}" for name in NAMES],  # --param-type appends " (type: ...)"
                     f"the names of {NODE}'s parameters, one per line", f"ros2 param list {NODE}", whole_lines=True,
@@ -82,13 +104,42 @@ def grade(s: Session) -> None:
                     f"ros2 param get {NODE} quote")
     judge_set(s, node, run)
     judge_dump(s, dump, started, node.parameters())
-    judge_late_node(s, path, scripts.late_by(run))
+    judge_late_node(s, path, scripts.late_by(run), asked_at)
 
 
-def judge_late_node(s: Session, path, delay: float) -> None:
+class FirstParamCommand:
+    """When the first ``ros2 param`` command's node (:data:`PARAM_COMMAND_NODE`) joins the graph of ``node``
+    (an rclpy node), watched every 50 ms from a thread of its own (graph queries need no spinning)."""
+
+    def __init__(self, node: Any) -> None:
+        self._node = node
+        self._stopped = threading.Event()
+        self.seen: float | None = None  # time.monotonic() when it was first seen
+        self._thread = threading.Thread(target=self._watch, name="first-param-command", daemon=True)
+        self._thread.start()
+
+    def _watch(self) -> None:
+        while self.seen is None and not self._stopped.wait(0.05):
+            names = self._node.get_node_names_and_namespaces()
+            if any(PARAM_COMMAND_NODE.fullmatch(name) for name, _ in names):
+                self.seen = time.monotonic()
+
+    def stop(self) -> None:
+        """Stop watching (returns once the thread has ended)."""
+        self._stopped.set()
+        self._thread.join()
+
+    def seconds_after(self, start: float) -> float | None:
+        """Seconds from ``start`` (``time.monotonic()``) to the first such node; None if none joined."""
+        return None if self.seen is None else max(0.0, self.seen - start)
+
+
+def judge_late_node(s: Session, path, delay: float, asked_at: float | None) -> None:
     """Record ``waits_for_node``: run the script again in a fresh graph with no daemon; the node starts
     ``delay`` s (``kit.scripts.late_by``) after the script's first ``ros2`` command joined the graph; its quote must be
-    printed. Run after :func:`judge_dump`: the file this run may write is not the one judged."""
+    printed. And the wait must end when the node shows: in the first run, where it was listed all along, the
+    script's first ``ros2 param`` command came ``asked_at`` s after the script started (None: none was seen),
+    at most :data:`PROMPT`. Run after :func:`judge_dump`: the file this run may write is not the one judged."""
     if (blocker := s.unmet_need("waits_for_node")) is not None:
         s.record("waits_for_node", False, blocker, "")
         return
@@ -99,12 +150,20 @@ def judge_late_node(s: Session, path, delay: float) -> None:
                                        late_by=delay, timeout=TIMEOUT,
                                        until=lambda out: bool(late) and late[0].initial_quote in out)
         got = late[0].initial_quote in run.run.stdout
-        s.record("waits_for_node", got,
-                 f"{run.describe()}; " + ("it printed the node's quote" if got else
-                                          f"it never printed the node's quote ({short(late[0].initial_quote)}); "
-                                          f"it printed: {scripts.excerpt(run.run.stdout + run.run.stderr)}"),
+        prompt = asked_at is None or asked_at <= PROMPT
+        observed = f"{run.describe()}; " + ("it printed the node's quote" if got else
+                                            f"it never printed the node's quote ({short(late[0].initial_quote)}); "
+                                            f"it printed: {scripts.excerpt(run.run.stdout + run.run.stderr)}")
+        if not prompt:
+            observed += (f"; in the first run, where the daemon listed {NODE} from the start, the first ros2 param "
+                         f"command came only {asked_at:.1f} s after the script started: the wait did not end when "
+                         "ros2 node list showed the node (does the loop's test ever match? grep -q and the exact "
+                         "node name, then break)")
+        s.record("waits_for_node", got and prompt, observed,
                  f"the script waits for {NODE}, which joins {delay:.1f} s after its first ros2 command (as long as "
-                 "its first run took), and prints its quote (ros2 param get)")
+                 f"its first run took), and prints its quote (ros2 param get); and it stops waiting once ros2 node "
+                 f"list shows the node (first ros2 param command within {PROMPT:.0f} s when the node is there "
+                 "from the start)")
 
 
 def judge_set(s: Session, node: ConfigurableQuotePublisher, run: Any) -> None:
