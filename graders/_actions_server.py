@@ -32,6 +32,10 @@ POSITION_TOLERANCE = 0.01
 #: Metres: where the point is after a cancel or a first step, judged to one step and a half (one
 #: more step may be taken while the request travels).
 STEP_TOLERANCE = 1.5 * SPEED * PERIOD
+#: Metres: how far off the straight way from its start to the goal a canceled goal's final_position may be
+#: (a correct server: a rounding error; a goal 1 result within POSITION_TOLERANCE of its goal moves the way's
+#: start that far); a server whose steps do not point at the goal drifts off it a step's length.
+OFF_THE_WAY = 5 * POSITION_TOLERANCE
 #: Seconds a goal of distance d may take: d / SPEED plus this (start-up and a loaded machine).
 GOAL_SLACK = 3.0
 #: Metres: goal 1 from (0, 0). Just under 1 m (with its coordinates rounded to 3 decimals, 0.9983 to
@@ -302,6 +306,9 @@ def cancel(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNod
     # hypot(1, 1.6) = 1.89 m away, so a server that reset the point shows it in its first feedback
     d = CANCEL_DISTANCE
     late_tries: list[str] = []
+    # where the way starts is known when the server's goal 1 ended on its goal and the goal's first feedback
+    # starts there (position_kept); else only the distances are judged (one bug, one lost check)
+    known_start = _passed(s, "result")
     for attempt in range(CANCEL_ATTEMPTS):
         target = (round(start[0] - d * math.sin(heading), 3), round(start[1] + d * math.cos(heading), 3))
         goal = client.send(_goal(action, *target))
@@ -326,6 +333,7 @@ def cancel(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNod
         late_tries.append(f"the goal {_show(target)} had SUCCEEDED when the cancel request arrived "
                           f"({len(_distances(client, goal))} feedback messages seen)")
         start, heading = _finite_or(_xy(goal.result.final_position), target), heading + math.pi / 2
+        known_start = True  # the server's own result
     tried = _tried(late_tries)
     s.record("cancel_accepted", bool(accepted),
              "the cancel request was accepted" + tried if accepted else f"cancel: {why}; the goal then ended "
@@ -339,7 +347,8 @@ def cancel(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNod
     late = [d for t, d in _distances(client, goal) if t > asked + 1.5 * PERIOD]
     samples = _distances(client, goal)
     expected = (f"status CANCELED, final_position where the point stopped (short of the goal by the last "
-                f"distance_to_goal ± {STEP_TOLERANCE:.2f} m), no feedback after the cancel")
+                f"distance_to_goal ± {STEP_TOLERANCE:.2f} m, within {OFF_THE_WAY} m of the straight way from where "
+                "it started), no feedback after the cancel")
     if goal.status is None:
         s.record("canceled", False, f"{goal.why} after the cancel; {kit.process_state(node.proc)}", expected)
         return [target]
@@ -354,6 +363,11 @@ def cancel(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNod
     if abs(short - last) > STEP_TOLERANCE or short < POSITION_TOLERANCE:
         problems.append(f"final_position {_show(final)} is {short:.3f} m from the goal, the last feedback said "
                         f"{last:.3f}")
+    elif known_start and _passed(s, "position_kept") and all(map(math.isfinite, final)) and (off := _off_the_way(start, target, final)) > OFF_THE_WAY:
+        # the right distance from the goal, but off the straight way there: each step moves the point
+        # towards the goal (contract: 0.1 m towards it), so where it stopped is on the segment
+        problems.append(f"final_position {_show(final)} is {off:.3f} m off the straight way from {_show(start)} "
+                        f"to the goal (a point moved towards the goal stays on it)")
     if late:
         problems.append(f"{len(late)} feedback message(s) sent after the cancel (down to {late[-1]:.3f} m)")
     s.record("canceled", not problems, "; ".join(problems) if problems else
@@ -364,6 +378,18 @@ def cancel(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNod
     # uncertain: goal 4 must then be valid from both, or its verdict would depend on a random angle
     return [stopped, final] if all(map(math.isfinite, final)) and math.dist(stopped, final) > STEP_TOLERANCE \
         else [stopped]
+
+
+def _passed(s: Session, check_id: str) -> bool:
+    """True when ``check_id`` was recorded and passed."""
+    return check_id in s.results and s.results[check_id].passed
+
+
+def _off_the_way(start: tuple[float, float], target: tuple[float, float], point: tuple[float, float]) -> float:
+    """Metres from ``point`` to the line through ``start`` and ``target`` (its cross-track distance)."""
+    ux, uy = target[0] - start[0], target[1] - start[1]
+    length = math.hypot(ux, uy)
+    return abs((point[0] - start[0]) * uy - (point[1] - start[1]) * ux) / length if length else math.dist(start, point)
 
 
 def _tried(late_tries: list[str]) -> str:
