@@ -378,6 +378,9 @@ def main() -> int:
     parser.add_argument("--held-out", type=int, default=None, metavar="N",
                         help="grade each lesson's held-out sample of N mutants (disjoint from its recorded first "
                              "sample and earlier held-out ones, another seed), triaged with mutation.yaml as it is, and record it beside the first")
+    parser.add_argument("--first-loss", action="store_true",
+                        help="stop grading each mutant at its first lost point (dev mutate --first-loss): the same "
+                             "outcomes, sooner")
     parser.add_argument("--held-out-seed", type=int, default=None, metavar="S",
                         help="with --held-out: its seed (default: --seed + 1)")
     parser.add_argument("--readme", action="store_true",
@@ -407,7 +410,7 @@ def main() -> int:
     chosen = [lesson_id for lesson_id in chosen if not nothing_to_mutate(lesson_id)]  # listed as such in the doc
     found = mutate_lessons(chosen, args.out, sample=args.sample, seed=args.seed, jobs=args.jobs,
                            console=console, held_out=args.held_out,
-                           held_out_seed=args.held_out_seed) if chosen else []
+                           held_out_seed=args.held_out_seed, first_loss=args.first_loss) if chosen else []
     render(found, console, diffs=False)
     speedup_file = args.out / "speedup.txt"
     speedup = speedup_file.read_text(encoding="utf-8").strip() if speedup_file.is_file() else ""

@@ -761,6 +761,9 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
            jobs: Annotated[int, typer.Option("--jobs", "-j", help="Mutants graded at once.")] = 1,
            out: Annotated[Path, typer.Option("--out", "-o", metavar="DIR", help="Cache, batch outputs, mutation.json and survivors' diffs.")] = Path("mutation-out"),
            timeout: Annotated[float, typer.Option("--timeout", help="Wall-clock limit per mutant, seconds.")] = 300.0,
+           first_loss: Annotated[bool, typer.Option(
+               "--first-loss", help="Stop grading each mutant at its first lost point: the same killed/survived "
+                                    "outcomes, sooner; a killed mutant's lost checks are those before the stop.")] = False,
            as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON instead of the table.")] = False,
            course: CourseOpt = None,
            ) -> None:
@@ -774,7 +777,8 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
     if held_out is not None and held_out < 1:
         raise CourseError(f"--held-out must be at least 1 (got {held_out})", "e.g. --held-out 30")
     found = mutate_lessons(lesson_ids, out, sample=sample, seed=seed, jobs=jobs, timeout=timeout,
-                           console=stderr_console(), held_out=held_out, held_out_seed=held_out_seed)
+                           console=stderr_console(), held_out=held_out, held_out_seed=held_out_seed,
+                           first_loss=first_loss)
     if as_json:
         import json  # noqa: PLC0415 - start time, see the imports
 

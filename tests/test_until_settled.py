@@ -122,6 +122,10 @@ def test_grades_batch_verdicts_are_compared_on_the_checks_check_judged():
                                              CheckResult("log", "l", 1, 1, True, "", "", "")))
     whole = result(exists, rate, CheckResult("log", "l", 0, 1, False, "", "", ""))
     assert not same_verdicts(whole, result(exists, rate, CheckResult("log", "l", 1, 1, True, "", "", "")))
+    # grade stopped too (dev validate --batch --until-settled hands the fixture's checks to the batch):
+    # compared on the checks both judged, the named ones always among them
+    assert same_verdicts(checked, result(exists, rate, stopped))
+    assert not same_verdicts(checked, result(exists, CheckResult("rate", "r", 2, 2, True, "", "", ""), stopped))
 
 
 def test_the_stop_is_raised_at_the_next_step_once_and_only_on_the_grading_thread(tmp_path):
@@ -165,3 +169,17 @@ def test_a_grading_process_that_crashes_once_is_graded_again(monkeypatch, tmp_pa
     answers[:] = [subprocess.CompletedProcess([], 1, "", "Boom"), subprocess.CompletedProcess([], 0, record, "")]
     failed = child.grade_in_child("print-forever-node", tmp_path, (), tmp_path / "log")
     assert failed.status == Status.GRADER_ERROR and failed.message.endswith("Boom (exit 1)") and len(answers) == 1
+
+
+def test_a_mutant_stopped_at_its_first_loss_is_killed_by_the_checks_it_lost_before_the_stop():
+    """``dev mutate --first-loss``: the checks left "not checked" by the stop are not counted as lost."""
+    from ros2course.dev.mutants import KILLED, SURVIVED, classify  # noqa: PLC0415
+
+    stopped = CheckResult("log", "l", 0, 1, False, NOT_CHECKED + STOPPED_SETTLED, "", "", skipped=True)
+    rate = CheckResult("rate", "r", 0, 2, False, "2.0 Hz", "", "")
+    exists = CheckResult("exists", "e", 1, 1, True, "", "", "")
+    assert classify(LessonResult("l", 1.0, 4.0, Status.FAILED, [exists, rate, stopped])) == (KILLED, ["rate"])
+    whole = CheckResult("log", "l", 0, 1, False, "no record", "", "")
+    assert classify(LessonResult("l", 1.0, 4.0, Status.FAILED, [exists, rate, whole])) == (KILLED, ["rate", "log"])
+    full = LessonResult("l", 1.0, 1.0, Status.PASSED, [exists])
+    assert classify(full) == (SURVIVED, [])

@@ -39,6 +39,7 @@ import psutil
 from ros2course.batch.archive import Submission, prepare
 from ros2course.build.reference import lesson_dependencies
 from ros2course.errors import CourseError, NotGradable
+from ros2course.grade.checklist import StopWhen
 from ros2course.grade.engine import load_grader
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import content_root, load_catalog
@@ -94,6 +95,10 @@ class Job:
         trusted_interfaces: a built workspace of the course's own interface packages, which the
             grader imports instead of the submission's (its generated code is submission code).
         require_isolation: grade only with every protection in effect (else a "grader error" row).
+        stop_when: when each lesson's grading may stop, the checks after it "not checked"
+            (:class:`~ros2course.grade.checklist.StopWhen`): the author's tools only, never a class's batch
+            (``dev validate --batch --until-settled``: once a wrong solution's named checks are judged;
+            ``dev mutate --first-loss``: at a mutant's first lost point); None: graded whole.
     """
 
     batch_id: str
@@ -113,6 +118,7 @@ class Job:
     pids_limit: int = sandbox.DEFAULT_PIDS_LIMIT
     trusted_interfaces: str = ""
     require_isolation: bool = False
+    stop_when: StopWhen | None = None
 
 
 # --- one job ------------------------------------------------------------------------------------
@@ -347,6 +353,9 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], 
     for lesson in job.lessons:
         # the course's reference dependencies, read here: solutions/ is hidden from the worker
         cmd += ["--lesson", lesson, "--build-also", f"{lesson}={','.join(_reference_dependencies(lesson))}"]
+    if job.stop_when:
+        cmd += [arg for check_id in sorted(job.stop_when.judged) for arg in ("--until-judged", check_id)]
+        cmd += ["--until-first-loss"] if job.stop_when.any_loss else []
     isolation = dataclasses.replace(
         walls, memory=f"RLIMIT_AS {job.memory_limit / 2**20:.0f} MiB per process" if job.memory_limit else "none")
     # parent-death signal: the worker dies with the thread that started it (a pool thread lives as long as

@@ -74,6 +74,7 @@ from ros2course.build.reference import (
 )
 from ros2course.errors import CourseError, MissingRequirement
 from ros2course.files import atomic_write_text
+from ros2course.grade.checklist import StopWhen
 from ros2course.grade.fingerprint import grader_fingerprint
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import content_root, load_catalog
@@ -323,7 +324,8 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
               executor: cf.Executor | None = None, pids_limit: int = sandbox.DEFAULT_PIDS_LIMIT,
               require_isolation: bool = False, student_lessons: dict[str, list[str]] | None = None,
               regrade: str | None = None, only: list[str] | None = None,
-              not_taken: dict[str, str] | None = None) -> BatchReport:
+              not_taken: dict[str, str] | None = None,
+              stop_when: dict[str, StopWhen] | None = None) -> BatchReport:
     """Grade every submission in ``submissions`` for ``lessons``; write OUTDIR as each one finishes.
 
     Args:
@@ -350,6 +352,8 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
         only: student ids: grade (and regrade, an appeal) only these students' submissions.
         not_taken: student id -> why the intake could not take their submission (:mod:`ros2course.batch.intake`):
             each gets a "not gradable" row per lesson with that reason, so the gradebook lists the whole class.
+        stop_when: student id -> when that submission's grading may stop (the author's tools only, never
+            a class: :attr:`~ros2course.batch.job.Job.stop_when`).
 
     Raises:
         CourseError: bad input (no such folder, OUTDIR inside SUBMISSIONS or already
@@ -410,7 +414,8 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
         todo.append(Job(batch_id, entry.student, str(entry.path), entry.problem, missing, str(out_dir), timeout,
                         memory_limit, hide=walls.hide, masked=walls.masked, isolate=isolate, scratch_root=str(scratch_root),
                         pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""),
-                        require_isolation=require_isolation))
+                        require_isolation=require_isolation,
+                        stop_when=(stop_when or {}).get(entry.student)))
     skipped = len(entries) - len(todo)
     records = list(existing)
     peaks: list[int] = []

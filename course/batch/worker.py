@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.files import atomic_write_text
+from ros2course.grade.checklist import StopWhen
 from ros2course.grade.engine import grade_lesson
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import load_catalog
@@ -60,7 +61,13 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--build-also", action="append", default=[], metavar="LESSON=PKG,PKG",
                         help="reference packages the lesson's packages depend on, built too when the workspace has "
                              "them (read by the batch: solutions/ is hidden here)")
+    parser.add_argument("--until-judged", action="append", default=[], metavar="CHECK",
+                        help="author's tools only (StopWhen): stop each lesson's grading once these checks are "
+                             "judged (the rest 'not checked'); never given for a class")
+    parser.add_argument("--until-first-loss", action="store_true",
+                        help="author's tools only (StopWhen): stop each lesson's grading at its first lost point")
     args = parser.parse_args(argv)
+    stop_when = StopWhen(frozenset(args.until_judged), args.until_first_loss) or None
     build_also = {lesson: [p for p in packages.split(",") if p]
                   for lesson, _, packages in (item.partition("=") for item in args.build_also)}
 
@@ -83,7 +90,7 @@ def main(argv: list[str] | None = None) -> int:
             lesson = catalog.get(lesson_id)
             result = grade_lesson(lesson, args.workspace, log_dir=log_dir,
                                   trusted_interfaces=args.trusted_interfaces, build_also=build_also.get(lesson_id),
-                                  hand_in=True)
+                                  hand_in=True, stop_when=stop_when)
         except Exception as exc:  # noqa: BLE001 - any failure is this lesson's "grader error" row
             (log_dir / "grader-error.txt").write_text(traceback.format_exc(), encoding="utf-8")
             result = LessonResult.unfinished(lesson_id, Status.GRADER_ERROR,

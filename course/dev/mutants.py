@@ -88,6 +88,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, model_validator
 from ros2course.errors import CourseError, LessonFormatError, MissingRequirement
 from ros2course.files import atomic_write_text
+from ros2course.grade.checklist import STOPPED_SETTLED
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import Lesson, content_root, load_catalog, yaml_error_text
 from ros2course.lesson.schema import format_validation_error
@@ -827,7 +828,8 @@ def classify(result: LessonResult) -> tuple[str, list[str]]:
         # the build failed, or colcon could not even read the package (a broken package.xml): the
         # checks never ran, so it says nothing about the grader
         return KILLED_BY_BUILD, ["build"]
-    lost = [c.id for c in result.checks if c.points < c.max_points]
+    # a check left "not checked" by a stop at the first loss (``dev mutate --first-loss``) was never judged
+    lost = [c.id for c in result.checks if c.points < c.max_points and not c.observed.endswith(STOPPED_SETTLED)]
     if "build" in lost:
         return KILLED_BY_BUILD, lost
     if result.score >= result.max_score and not lost:

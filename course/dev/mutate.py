@@ -31,6 +31,7 @@ from rich.table import Table
 from ros2course.dev.parity import case_workspace
 from ros2course.batch.runner import run_batch
 from ros2course.errors import CourseError
+from ros2course.grade.checklist import StopWhen
 from ros2course.files import atomic_write_text
 from ros2course.dev import mutants as mut
 from ros2course.lesson.catalog import Lesson, load_catalog
@@ -63,7 +64,7 @@ def _student(mutant: mut.Mutant) -> str:
 
 def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: int = 1, jobs: int = 1,
                   timeout: float = 300.0, console: Console | None = None, held_out: int | None = None,
-                  held_out_seed: int | None = None) -> mut.LessonMutation:
+                  held_out_seed: int | None = None, first_loss: bool = False) -> mut.LessonMutation:
     """Generate, grade (what the cache does not know) and classify one lesson's mutants.
 
     Args:
@@ -78,6 +79,9 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
             (:func:`ros2course.dev.mutants.held_out_sample`): drawn with ``held_out_seed`` (default
             ``seed + 1``) from the mutants neither the first sample (``sample``, ``seed``) nor the lesson's
             recorded first run nor a held-out sample recorded before took, triaged with ``mutation.yaml`` as it is.
+        first_loss: each mutant's grading stops at its first lost point
+            (:class:`~ros2course.grade.checklist.StopWhen` ``any_loss``): the same outcome (a mutant is killed when
+            any check loses points), sooner; its ``lost`` checks are then those lost before the stop.
 
     Raises:
         MissingRequirement: universalmutator, or what the lesson requires, is not installed.
@@ -127,8 +131,9 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
                 (dest / mutant.file).write_text(mutant.content, encoding="utf-8")
             batch_out = out / "batch" / f"{lesson.id}-{course[:8]}{grader[:8]}"
             _forget_unfinished(batch_out / "results.jsonl")
+            stop = {_student(m): StopWhen(any_loss=True) for m in todo} if first_loss else None
             report = run_batch(submissions, [lesson.id], batch_out, jobs=jobs, timeout=timeout,
-                               resume=batch_out.exists(), console=console)
+                               resume=batch_out.exists(), console=console, stop_when=stop)
             results = {r.student: r for r in report.records if r.lesson == lesson.id}
             for mutant in todo:
                 result = results.get(_student(mutant))
@@ -176,7 +181,7 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
 
 def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, seed: int = 1, jobs: int = 1,
                    timeout: float = 300.0, console: Console | None = None, held_out: int | None = None,
-                   held_out_seed: int | None = None) -> list[mut.LessonMutation]:
+                   held_out_seed: int | None = None, first_loss: bool = False) -> list[mut.LessonMutation]:
     """:func:`mutate_lesson` for each lesson, then ``OUT/mutation.json`` (written even when one lesson fails).
 
     With ``held_out``, each lesson's held-out sample instead of its first one (:func:`mutate_lesson`), recorded
@@ -207,7 +212,8 @@ def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, 
     found: list[mut.LessonMutation] = []
     try:
         for lesson in lessons:
-            found.append(mutate_lesson(lesson, out, sample, seed, jobs, timeout, console, held_out, held_out_seed))
+            found.append(mutate_lesson(lesson, out, sample, seed, jobs, timeout, console, held_out, held_out_seed,
+                                       first_loss))
             mut.write_score(lesson, found[-1])
     finally:
         before = mut.read_json_object(out / RESULT_FILE)

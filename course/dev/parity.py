@@ -25,6 +25,7 @@ from pathlib import Path
 
 from ros2course.batch.runner import run_batch
 from ros2course.build.reference import reference_workspace
+from ros2course.grade.checklist import StopWhen
 from ros2course.grade.results import LessonResult
 from ros2course.dev.validate import (
     Outcome,
@@ -103,10 +104,11 @@ def same_verdicts(checked: LessonResult, batch: LessonResult) -> bool:
     """``grade``'s result gives ``check``'s verdicts: the same status, score and failed checks; or, when
     ``check`` stopped early (``dev validate --until-settled``: checks "not checked: " +
     :data:`~ros2course.grade.checklist.STOPPED_SETTLED`), the same status and, check by check, the same
-    points, pass and skip on every check ``check`` judged (the batch grades its hand-ins whole)."""
+    points, pass and skip on every check both judged (the batch stops there too: :func:`batch_parity`)."""
     cut = unjudged(checked)
     if not cut:
         return _verdict(batch) == _verdict(checked)
+    cut |= unjudged(batch)  # the batch stopped too (its hand-in settled by the same checks): judged by both
 
     def judged(result: LessonResult) -> list[tuple[str, float, bool, bool]]:
         return [(c.id, round(c.points, 6), c.passed, c.skipped) for c in result.checks if c.id not in cut]
@@ -148,13 +150,19 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
         submissions, out_dir = root / "submissions", root / "out"
         submissions.mkdir()
         student_lessons: dict[str, list[str]] = {}
+        stop_when: dict[str, StopWhen] = {}
         names: dict[str, Outcome] = {}
         for outcome in cases:
             student = f"{outcome.lesson}.{outcome.case}"
             case_workspace(by_id[outcome.lesson], outcome.case, submissions / student)
             student_lessons[student] = [outcome.lesson]
             names[student] = outcome
-        report = run_batch(submissions, list(by_id), out_dir, jobs=jobs, student_lessons=student_lessons)
+            if unjudged(outcome.result):  # check stopped once the fixture's checks were judged: so does grade
+                fixture = {f.name: f for f in load_fixtures(outcome.lesson)}.get(outcome.case)
+                if fixture is not None and fixture.judged_by():
+                    stop_when[student] = StopWhen(frozenset(fixture.judged_by()))
+        report = run_batch(submissions, list(by_id), out_dir, jobs=jobs, student_lessons=student_lessons,
+                           stop_when=stop_when)
         graded = {(r.student, r.lesson): r for r in report.records}
         out: list[Outcome] = []
         for student, checked_case in names.items():
