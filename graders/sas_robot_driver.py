@@ -39,8 +39,10 @@ TARGETS = [
 TRACK_LATENCY = 0.1  # seconds: the stream shows a target this soon after it is sent
 TRACK_GIVE_UP = 0.5  # seconds waited per target before calling it not followed
 RESEND = 0.01  # seconds between repeated publications of a target (a client streams them too)
-WRONG_TARGET = [0.7, 0.7, 0.7, 0.7, 0.7]  # five values: must never be applied
-WRONG_WATCH = 0.3  # seconds the stream is watched after the wrong-size target
+#: Targets of the wrong size, sent in turn: five values and seven (a size check written `<` or `>` lets one
+#: through); neither may ever be applied.
+WRONG_TARGETS = ([0.7] * 5, [0.7] * 7)
+WRONG_WATCH = 0.3  # seconds the stream is watched after each wrong-size target
 CLIENT_PERIOD = 0.01  # seconds: the client sends a target every 10 ms (seed ch. 31.9)
 CLIENT_AMPLITUDE = math.radians(10.0)  # radians around the initial positions (seed ch. 31.9)
 CLIENT_MIN_SWING = math.radians(1.0)  # radians each joint must move over the window to count as moving
@@ -52,7 +54,7 @@ CLIENT_STREAM_PERIOD = 0.01  # seconds between the stand-in driver's joint state
 #: The stand-in driver's joint positions (radians): not zeros, so a client must read them.
 INITIAL = [0.1, -0.2, 0.3, 0.4, -0.5, 0.6]
 #: Seconds of observation: stream rate, target tracking, wrong-size watch, client silent + client targets.
-WINDOW = RATE_SPAN + len(TARGETS) * TRACK_LATENCY + WRONG_WATCH + CLIENT_DISABLED + CLIENT_WINDOW
+WINDOW = RATE_SPAN + len(TARGETS) * TRACK_LATENCY + len(WRONG_TARGETS) * WRONG_WATCH + CLIENT_DISABLED + CLIENT_WINDOW
 TARGET_TOPIC = DRIVER.target
 DRIVER_PART = {"needs": ("executable",), "part": "driver"}
 CLIENT_PART = {"needs": ("client_executable",), "part": "client"}
@@ -88,7 +90,7 @@ CHECKS = [
     Check("tracking", f"The stream follows each target within {TRACK_LATENCY:.1f} s", 3,
           "store the latest target in the subscriber callback and apply it with set_target_joint_positions "
           "in the next loop iteration", **DRIVER_PART),
-    Check("wrong_size", "A target of the wrong size is not applied (error logged)", 2,
+    Check("wrong_size", "A target of the wrong size (5 or 7 values) is not applied (error logged)", 2,
           "set_target_joint_positions must raise on a vector whose size is not 6; catch it in the loop, log "
           "an error and keep the previous positions (or end cleanly, as sas does)", **DRIVER_PART),
     checks.ctrl_c("sigint_exit", "the driver", 2,
@@ -134,7 +136,7 @@ def grade(s: Session) -> None:
         sas.stream(s, "stream_rate", "stream_shape", "zeros_at_start", driver, span=RATE_SPAN)
         followed = sas.tracking(s, "tracking", driver, TARGETS, latency=TRACK_LATENCY, give_up=TRACK_GIVE_UP,
                                 resend=RESEND)
-        sas.wrong_size(s, "wrong_size", driver, WRONG_TARGET, followed, watch=WRONG_WATCH, resend=RESEND)
+        sas.wrong_size(s, "wrong_size", driver, WRONG_TARGETS, followed, watch=WRONG_WATCH, resend=RESEND)
         sas.plot_stream(s, driver)
     with s.part("client"):
         s.require("client_executable")
