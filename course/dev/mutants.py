@@ -89,7 +89,7 @@ from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError,
 from ros2course.errors import CourseError, LessonFormatError, MissingRequirement
 from ros2course.files import atomic_write_text
 from ros2course.grade.checklist import STOPPED_SETTLED
-from ros2course.grade.results import LessonResult, Status
+from ros2course.grade.results import NOT_CHECKED, LessonResult, Status
 from ros2course.lesson.catalog import Lesson, content_root, load_catalog, yaml_error_text
 from ros2course.lesson.schema import format_validation_error
 from ros2course.lesson.courses import MANIFEST, load_manifest
@@ -817,6 +817,13 @@ def held_out_sample(candidates: list[Mutant], first: list[Mutant], count: int, s
     return sample_mutants([m for m in candidates if m.key not in taken], count, seed)
 
 
+def unjudged(result: LessonResult) -> set[str]:
+    """Ids of the checks a grading stopped early (:class:`~ros2course.grade.checklist.StopWhen`: ``dev validate
+    --until-settled``, ``dev mutate --first-loss``) left unjudged ("not checked: " +
+    :data:`~ros2course.grade.checklist.STOPPED_SETTLED`); empty for a whole grading."""
+    return {c.id for c in result.checks if c.skipped and c.observed == NOT_CHECKED + STOPPED_SETTLED}
+
+
 def classify(result: LessonResult) -> tuple[str, list[str]]:
     """``(outcome, lost checks)`` of a mutant's grading (see the module docstring for the outcomes)."""
     if result.status == Status.GRADER_ERROR:
@@ -828,8 +835,8 @@ def classify(result: LessonResult) -> tuple[str, list[str]]:
         # the build failed, or colcon could not even read the package (a broken package.xml): the
         # checks never ran, so it says nothing about the grader
         return KILLED_BY_BUILD, ["build"]
-    # a check left "not checked" by a stop at the first loss (``dev mutate --first-loss``) was never judged
-    lost = [c.id for c in result.checks if c.points < c.max_points and not c.observed.endswith(STOPPED_SETTLED)]
+    cut = unjudged(result)  # a check left "not checked" by a stop at the first loss was never judged
+    lost = [c.id for c in result.checks if c.points < c.max_points and c.id not in cut]
     if "build" in lost:
         return KILLED_BY_BUILD, lost
     if result.score >= result.max_score and not lost:

@@ -151,6 +151,7 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
         submissions.mkdir()
         student_lessons: dict[str, list[str]] = {}
         stop_when: dict[str, StopWhen] = {}
+        fixtures: dict[str, dict] = {}  # lesson id -> its fixtures by name, read once
         names: dict[str, Outcome] = {}
         for outcome in cases:
             student = f"{outcome.lesson}.{outcome.case}"
@@ -158,7 +159,9 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
             student_lessons[student] = [outcome.lesson]
             names[student] = outcome
             if unjudged(outcome.result):  # check stopped once the fixture's checks were judged: so does grade
-                fixture = {f.name: f for f in load_fixtures(outcome.lesson)}.get(outcome.case)
+                if outcome.lesson not in fixtures:
+                    fixtures[outcome.lesson] = {f.name: f for f in load_fixtures(outcome.lesson)}
+                fixture = fixtures[outcome.lesson].get(outcome.case)
                 if fixture is not None and fixture.judged_by():
                     stop_when[student] = StopWhen(frozenset(fixture.judged_by()))
         report = run_batch(submissions, list(by_id), out_dir, jobs=jobs, student_lessons=student_lessons,

@@ -68,9 +68,9 @@ from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
 from ros2course.dev.child import grade_in_child
 from ros2course.dev.coverage import lesson_coverage
 from ros2course.grade.engine import grade_lesson, load_grader
-from ros2course.dev.mutants import describe_score, score_text, triage_problems
-from ros2course.grade.checklist import STOPPED_SETTLED, StopWhen
-from ros2course.grade.results import NOT_CHECKED, LessonResult, Status
+from ros2course.dev.mutants import describe_score, score_text, triage_problems, unjudged
+from ros2course.grade.checklist import StopWhen
+from ros2course.grade.results import LessonResult, Status
 from ros2course.dev.strength import steadiness_text
 from ros2course.lesson.catalog import Lesson, content_root, load_catalog
 from ros2course.lesson.schema import format_validation_error
@@ -300,12 +300,6 @@ def contract_outcome(lesson: Lesson) -> Outcome | None:
     return Outcome(lesson.id, CONTRACT_CASE, True, expected,
                    f"{len(contract.requirements)} requirements: {len(contract.mapped)} mapped, "
                    f"{len(contract.not_graded)} not graded", time.monotonic() - begin)
-
-
-def unjudged(result: LessonResult) -> set[str]:
-    """Ids of the checks a grading stopped by ``--until-settled`` left unjudged
-    ("not checked: " + :data:`~ros2course.grade.checklist.STOPPED_SETTLED`); empty for a whole grading."""
-    return {c.id for c in result.checks if c.skipped and c.observed == NOT_CHECKED + STOPPED_SETTLED}
 
 
 def _describe(result: LessonResult) -> str:
