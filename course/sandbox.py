@@ -449,8 +449,14 @@ def grader_home() -> str:
 
 
 def read_only_paths() -> list[str]:
-    """What a submission may read but never write: the course, the venv, the Python and ROS installs."""
-    paths = [str(content_root()), sys.prefix, sys.base_prefix]
+    """What a submission may read but never write: the course, the engine, the venv, the Python and ROS installs.
+
+    The engine's own package folder is listed apart from the venv: an editable install (``pip install -e``)
+    imports it from the source checkout, which may lie under a folder the job replaces (``/tmp``), and the
+    grading worker the job starts imports ``ros2course`` from there.
+    """
+    engine = os.path.dirname(os.path.abspath(__file__))
+    paths = [str(content_root()), engine, sys.prefix, sys.base_prefix]
     for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH"):
         paths += [p for p in os.environ.get(var, "").split(os.pathsep) if p]
     out: list[str] = []

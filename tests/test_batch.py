@@ -292,6 +292,19 @@ def test_mount_plan_keeps_what_a_hidden_folder_holds_read_only(tmp_path: Path) -
     assert "mount --bind /dev/null /etc/shadow" in script
 
 
+def test_the_engine_an_editable_install_imports_stays_readable_in_a_job(tmp_path: Path, monkeypatch) -> None:
+    """A checkout under /tmp installed with ``pip install -e``: the job's worker imports ``ros2course`` from the
+    checkout, not the venv, and the job's private /tmp would hide it (a fresh clone in /tmp failed so)."""
+    from pathlib import Path as P
+
+    import ros2course
+    from ros2course import sandbox
+
+    monkeypatch.setattr(sandbox, "content_root", lambda: tmp_path)  # a course copied elsewhere (dev mutate's tests)
+    engine = os.path.realpath(P(ros2course.__file__).parent)
+    assert any(engine == p or engine.startswith(p.rstrip("/") + "/") for p in sandbox.read_only_paths())
+
+
 def test_copy_logs_never_copies_links_or_fifos(tmp_path: Path) -> None:
     from ros2course import sandbox
 
