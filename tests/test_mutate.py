@@ -210,6 +210,25 @@ def test_shell_no_ops_are_equivalent_mutants() -> None:
     assert not mut.equivalent_mutant("cli/a.sh", script, inserted.replace("continue", "break"), "", "break;\n")
 
 
+def test_a_holds_rule_covers_only_cases_that_stay_true() -> None:
+    """``holds``: a parametrized case mutated into another true case (computed from its numbers as written) is
+    matched; a false case, a call, a name or a tuple of another length is not, and `that` may name only the
+    case's names (testing-your-nodes' library-case-still-true, decided after held-out seed 15)."""
+    rule = mut.Rule(id="case-still-true", reason="another true case of (a + b)**2", file=["*/test_lib.py"],
+                    original=r"^\s*\([^()]*\),\s*$", holds={"names": ["a", "b", "expected"],
+                                                           "that": "(a + b) ** 2 == expected"})
+    source = "import pytest\n@pytest.mark.parametrize(('a', 'b', 'expected'), [\n    (0.5, 0.25, 0.5625),\n])\n"
+    rel = "src/p/test/test_lib.py"
+    for true_case in ("    (0.-1, 0.25, 0.5625),", "    ( 0.25,0.5, 0.5625),", "    (0.5, -1.25, 0.5625),"):
+        assert rule.matches(_mutant(source, rel, 3, true_case)), true_case
+    for other in ("    (0.5, 0.25, 0.5626),", "    (0.5, 0.25),", "    (abs(-1), 0.25, 1.5625),",
+                  "    (a, 0.25, 0.5625),", "    (1 / 0, 0.25, 0.5625),", "    (0.5, 0.25, 0.5625, 1),"):
+        assert not rule.matches(_mutant(source, rel, 3, other)), other
+    assert not rule.matches(_mutant(source, "src/p/test/test_other.py", 3, "    (0.25, 0.5, 0.5625),"))
+    with pytest.raises(ValueError, match="which `names` does not list"):
+        mut.Rule(id="x", reason="a reason long enough", holds={"names": ["a"], "that": "f(a) == b"})
+
+
 def test_rules_match_kinds_of_mutant_mechanically() -> None:
     assert DOCSTRING.matches(_mutant(NODE_SOURCE, PY, 1, "pass"))
     assert DOCSTRING.matches(_mutant(NODE_SOURCE, PY, 7, "    pass"))

@@ -209,6 +209,72 @@ def in_block(lines: list[str], number: int, header: str, own: bool = True, shell
     return False
 
 
+class CaseHolds(BaseModel):
+    """A rule's ``holds`` matcher: the names of a parametrized test's case, in order, and what a true case satisfies."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    names: list[str] = Field(min_length=1)
+    that: str = Field(min_length=3)
+
+    @model_validator(mode="after")
+    def _parses(self) -> CaseHolds:
+        import ast  # noqa: PLC0415 - only rules with `holds` need it
+
+        try:
+            tree = ast.parse(self.that, mode="eval")
+        except SyntaxError as exc:
+            raise ValueError(f"`that` is not a Python expression: {exc.msg}") from None
+        unknown = sorted({n.id for n in ast.walk(tree) if isinstance(n, ast.Name)} - set(self.names))
+        if unknown:
+            raise ValueError(f"`that` names {', '.join(unknown)}, which `names` does not list")
+        return self
+
+
+def _arithmetic(node: Any, values: dict[str, float]) -> float:
+    """The value of an expression made of numbers, names in ``values``, unary and binary + - * / ** and a
+    single ``==`` (1.0 when both sides agree within 1e-9, else 0.0). Raises ValueError on anything else."""
+    import ast  # noqa: PLC0415
+    import math  # noqa: PLC0415
+    import operator  # noqa: PLC0415
+
+    binary = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
+              ast.Pow: operator.pow}
+    if isinstance(node, ast.Constant) and type(node.value) in (int, float):
+        return node.value
+    if isinstance(node, ast.Name) and node.id in values:
+        return values[node.id]
+    if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
+        value = _arithmetic(node.operand, values)
+        return -value if isinstance(node.op, ast.USub) else value
+    if isinstance(node, ast.BinOp) and type(node.op) in binary:
+        left, right = _arithmetic(node.left, values), _arithmetic(node.right, values)
+        if isinstance(node.op, ast.Pow) and abs(right) > 64:
+            raise ValueError("exponent too large")
+        return binary[type(node.op)](left, right)
+    if (isinstance(node, ast.Compare) and len(node.ops) == 1 and isinstance(node.ops[0], ast.Eq)):
+        left, right = _arithmetic(node.left, values), _arithmetic(node.comparators[0], values)
+        return 1.0 if math.isclose(left, right, rel_tol=1e-9, abs_tol=1e-9) else 0.0
+    raise ValueError(f"not arithmetic: {type(node).__name__}")
+
+
+def case_holds(line: str, holds: CaseHolds) -> bool:
+    """Whether ``line`` (a mutated line such as ``(0.25, 0.5, 0.5625),``) is a case of ``holds.names`` for
+    which ``holds.that`` is true. False for a line that is not such a tuple, or whose arithmetic fails
+    (division by zero, overflow, a call, a name)."""
+    import ast  # noqa: PLC0415
+
+    text = line.strip().removesuffix(",").strip()
+    try:
+        tree = ast.parse(text, mode="eval").body
+        if not isinstance(tree, ast.Tuple) or len(tree.elts) != len(holds.names):
+            return False
+        values = {name: _arithmetic(element, {}) for name, element in zip(holds.names, tree.elts, strict=True)}
+        return _arithmetic(ast.parse(holds.that, mode="eval").body, values) == 1.0
+    except (SyntaxError, ValueError, ArithmeticError, TypeError):
+        return False
+
+
 class Rule(BaseModel):
     r"""A kind of survivor the author judged equivalent or outside the lesson's contract, decided before it is
     tested and applied mechanically: every mutant it matches is triaged with its reason (issue 37).
@@ -229,6 +295,12 @@ class Rule(BaseModel):
       the contract says otherwise (a rule never covers a line that implements a requirement, so a given line
       the lesson makes a requirement, e.g. a discovery loop the grader runs late, stays counted).
 
+    * ``holds``: ``{names: [a, b, expected], that: "(a + b) ** 2 == expected"}``: the mutated line is a case of
+      a parametrized test (a tuple of numbers, written as number literals and arithmetic, one per name) for
+      which ``that`` still holds, computed exactly as written (``==`` within 1e-9): the mutant turned one true
+      case of the function under test into another true case (:func:`case_holds`). Only arithmetic on the
+      case's numbers is evaluated, never a call or a name from the file.
+
     ``set_aside``: its mutants are set aside before sampling, never graded (free text no program reads),
     so a sample is spent on mutants that count. A rule may never cover a line that implements a requirement
     of the lesson's contract (:func:`rule_conflicts`).
@@ -245,6 +317,7 @@ class Rule(BaseModel):
     strings_only: bool = False
     not_block: str | None = None
     starter_line: bool = False
+    holds: CaseHolds | None = None
     set_aside: bool = False
     #: ``{workspace-relative file: the starter's copy's lines}``, set by :func:`load_config` (``starter_line``).
     _starters: dict[str, list[str]] = PrivateAttr(default_factory=dict)
@@ -261,9 +334,9 @@ class Rule(BaseModel):
         for name in ("original", "mutated", "block", "not_block"):
             _regex(getattr(self, name), name)
         if (self.original is None and self.mutated is None and self.block is None and not self.strings_only
-                and not self.starter_line):
+                and not self.starter_line and self.holds is None):
             raise ValueError("a rule needs a matcher besides `file`: `original`, `mutated`, `block`, "
-                             "`strings_only` or `starter_line` (a whole file is left out with `files:`)")
+                             "`strings_only`, `starter_line` or `holds` (a whole file is left out with `files:`)")
         return self
 
     def _file(self, rel: str) -> bool:
@@ -289,6 +362,8 @@ class Rule(BaseModel):
         if self.original is not None and re.search(self.original, mutant.original) is None:
             return False
         if self.mutated is not None and re.search(self.mutated, mutant.mutated) is None:
+            return False
+        if self.holds is not None and not case_holds(mutant.mutated, self.holds):
             return False
         if self.strings_only and (mutant.original == mutant.mutated or "\n" in mutant.original + mutant.mutated
                                   or _STRING.sub('""', mutant.original) != _STRING.sub('""', mutant.mutated)):
