@@ -99,6 +99,10 @@ def _held_out_cell(row) -> str:
     earlier = _earlier_held_out(data.get("earlier", []), data.get("fingerprint"))
     if earlier:
         text += "; earlier held-out samples: " + ", ".join(earlier)
+    pooled = mut.pooled_held_out(row.data, data.get("fingerprint") or "")
+    if pooled is not None and pooled.samples > 1 and not held.stale:
+        text += (f"; **all {pooled.samples} held-out samples under this grader together: {_pct(pooled.score)} of "
+                 f"{pooled.counted} counted** (seeds {', '.join(str(x) for x in pooled.seeds)})")
     return text
 
 
@@ -208,7 +212,7 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "held-out sample of the lesson scored, which a new one never hides), graded afterwards with "
         "`mutation.yaml`'s rules and entries as they were, nothing added; its survivors no rule or entry covers "
         "count against it and are listed below for the author (strengthen the grader, or add a rule that "
-        "applies from the next held-out sample on). **Fingerprint**: each run records its lesson's "
+        "applies from the next held-out sample on). Where more than one held-out sample was graded under the lesson's current grader, the cell also gives **all of them together** (killed / counted over every one): a lesson is judged by that pooled figure, never by the best or the latest sample, since drawing samples until one scores well would narrow the sample to a lucky one. **Fingerprint**: each run records its lesson's "
         "grader fingerprint (`ros2course.grade.fingerprint`: the grader and the course modules it imports, the kit "
         "and grading engine modules they or the engine import, lesson.yaml, the reference files); a row measured under another fingerprint (the "
         "grader, engine or reference changed since) is **stale**, with the date of its run, and `dev validate` "

@@ -210,6 +210,19 @@ def test_shell_no_ops_are_equivalent_mutants() -> None:
     assert not mut.equivalent_mutant("cli/a.sh", script, inserted.replace("continue", "break"), "", "break;\n")
 
 
+def test_held_out_samples_under_one_grader_are_pooled_never_the_best_shown_alone() -> None:
+    """Three held-out samples, two under today's grader: the pooled figure counts both of those (23 + 29 of
+    60), not the last one's 29 of 30, and leaves out the one graded under an earlier grader."""
+    score = {"held_out": {"graded": 30, "killed_by_build": 0, "triaged": 0, "killed": 29, "seed": 16,
+                          "fingerprint": "now", "earlier": [
+                              {"seed": 2, "fingerprint": "old", "graded": 30, "counted": 30, "killed": 30},
+                              {"seed": 15, "fingerprint": "now", "graded": 30, "counted": 30, "killed": 23}]}}
+    pooled = mut.pooled_held_out(score, "now")
+    assert (pooled.samples, pooled.killed, pooled.counted, pooled.seeds) == (2, 52, 60, (15, 16))
+    assert round(pooled.score, 3) == 0.867 and mut.pooled_held_out(score, "other") is None
+    assert mut.pooled_held_out({}, "now") is None
+
+
 def test_a_holds_rule_covers_only_cases_that_stay_true() -> None:
     """``holds``: a parametrized case mutated into another true case (computed from its numbers as written) is
     matched; a false case, a call, a name or a tuple of another length is not, and `that` may name only the

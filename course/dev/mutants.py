@@ -1244,6 +1244,36 @@ def held_out_history(score: dict) -> list[dict]:
 MIN_COUNTED = 20
 
 
+@dataclasses.dataclass(frozen=True)
+class PooledHeldOut:
+    """Every held-out sample graded under one grader fingerprint, taken together (issue 37).
+
+    A lesson whose held-out samples are drawn one after another could be shown by its best one; the pooled
+    figure counts them all: ``killed / counted`` over ``samples`` samples, ``seeds`` in the order drawn.
+    """
+
+    samples: int
+    killed: int
+    counted: int
+    seeds: tuple[int | None, ...]
+
+    @property
+    def score(self) -> float | None:
+        """killed / counted, None when nothing was counted."""
+        return self.killed / self.counted if self.counted > 0 else None
+
+
+def pooled_held_out(score: dict, fingerprint: str) -> PooledHeldOut | None:
+    """The held-out samples of ``score`` (a ``mutation-score.json`` object, :func:`held_out_history`) graded
+    under ``fingerprint``, pooled; None when none was."""
+    same = [e for e in held_out_history(score)
+            if e.get("fingerprint") == fingerprint and isinstance(e.get("counted"), int) and e.get("graded")]
+    if not same:
+        return None
+    return PooledHeldOut(len(same), sum(int(e.get("killed") or 0) for e in same),
+                         sum(int(e["counted"]) for e in same), tuple(e.get("seed") for e in same))
+
+
 @dataclasses.dataclass
 class RecordedScore:
     """A lesson's recorded mutation run (``mutation-score.json``), as the figures the doc and ``dev validate`` show.
