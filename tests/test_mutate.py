@@ -210,6 +210,18 @@ def test_shell_no_ops_are_equivalent_mutants() -> None:
     assert not mut.equivalent_mutant("cli/a.sh", script, inserted.replace("continue", "break"), "", "break;\n")
 
 
+def test_the_fingerprint_is_the_same_wherever_the_course_lies(tmp_path: Path) -> None:
+    """The course copied to another folder (the engine then outside its root, as for a wheel install, or a
+    worktree): the same grader fingerprint, so recorded rows stay current there."""
+    from ros2course.grade.fingerprint import grader_fingerprint
+    from ros2course.lesson import use_course
+    from ros2course.lesson.catalog import load_catalog
+
+    here = grader_fingerprint(load_catalog().get(LESSON))
+    use_course(_course(tmp_path / "elsewhere", TRIAGE))
+    assert grader_fingerprint(load_catalog().get(LESSON)) == here
+
+
 def test_held_out_samples_under_one_grader_are_pooled_never_the_best_shown_alone() -> None:
     """Three held-out samples, two under today's grader: the pooled figure counts both of those (23 + 29 of
     60), not the last one's 29 of 30, and leaves out the one graded under an earlier grader."""

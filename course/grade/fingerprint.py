@@ -31,6 +31,10 @@ from ros2course.lesson import content_root
 from ros2course.lesson.catalog import Lesson
 from ros2course.ros.manifests import dependency_closure, find_packages
 
+#: The engine's folder in the repository (``course/``, imported as ``ros2course``): engine files are named by
+#: their path there in a fingerprint, wherever the engine is installed.
+ENGINE_FOLDER = "course"
+
 #: The engine modules (relative to the ``ros2course`` package) whose code every grader runs on.
 ENGINE_PARTS = ("kit", "run", "grade/engine.py", "grade/session.py", "grade/checklist.py", "grade/results.py")
 
@@ -190,16 +194,24 @@ def _file_digest(path: Path) -> bytes:
 
 
 def grader_fingerprint(lesson: Lesson) -> str:
-    """sha256 (hex, first 16 digits) over the paths (relative to the course or the engine) and contents
-    of :func:`grader_files`: equal only when the grader, the engine it runs on, the lesson and its
-    reference are the same."""
+    """sha256 (hex, first 16 digits) over the paths and contents of :func:`grader_files`: equal only when
+    the grader, the engine it runs on, the lesson and its reference are the same, wherever they are installed.
+
+    A course file is named by its path in the course; an engine file by its path in the repository
+    (``course/kit/checks.py``), whether the engine is the checkout's (an editable install, inside the
+    bundled course's root) or an installed copy (a wheel, a course in another folder): one engine, one name.
+    """
     import ros2course  # noqa: PLC0415
 
-    bases = (content_root(), Path(ros2course.__file__).resolve().parent)
-    digest = hashlib.sha256()
+    engine = Path(ros2course.__file__).resolve().parent
+    root = content_root().resolve()
+    named = []
     for path in grader_files(lesson):
-        rel = next((path.resolve().relative_to(b.resolve()).as_posix() for b in bases
-                    if path.resolve().is_relative_to(b.resolve())), path.name)
+        where = path.resolve()
+        named.append((f"{ENGINE_FOLDER}/{where.relative_to(engine).as_posix()}" if where.is_relative_to(engine)
+                      else where.relative_to(root).as_posix() if where.is_relative_to(root) else path.name, path))
+    digest = hashlib.sha256()
+    for rel, path in sorted(named):  # in the order of their names, not of where they are installed
         digest.update(f"{rel}\0".encode())
         digest.update(_file_digest(path))
     return digest.hexdigest()[:16]
