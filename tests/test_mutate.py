@@ -477,7 +477,7 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
                                           "seed 2; 3 uncovered)")
     small = mut.RecordedScore({"graded": 12, "pool": 12, "seed": 2, "survivors": [], "date": "2026-11-20"}, 12,
                               1.0, 1.0, "stale: graded on 2026-11-20 under grader fingerprint 0, now 1")
-    assert module._held_out_cell(SimpleNamespace(held_out=small, stale="")) == (
+    assert module._held_out_cell(SimpleNamespace(held_out=small, stale="", data={})) == (
         "100 % of 12 counted (raw 100 %; 12 graded of the 12 no earlier sample took, seed 2; 0 uncovered) "
         "(too small to judge: 12 < 20) **stale** (2026-11-20)")
     assert module._held_out_cell(SimpleNamespace(held_out=None, stale="", data={})) == "not drawn"
