@@ -501,7 +501,9 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
     row = mut.recorded_score(lesson)
     assert row.held_out.tuned == 0.8 and [e["seed"] for e in row.held_out.data["earlier"]] == [2]
     assert mut.EARLIER_KEY not in json.loads((tmp_path / mut.SCORE_FILE).read_text())
-    assert module._held_out_cell(row).endswith("; earlier held-out samples: seed 2 (%s): 90 %% of 30" % earlier[0]["date"])
+    cell = module._held_out_cell(row)
+    assert cell.endswith("; earlier held-out samples: seed 2 (%s): 90 %% of 30; **all 2 held-out samples under this "
+                         "grader together: 85 %% of 60 counted** (seeds 2, 3)" % earlier[0]["date"]), cell
 
 
 @pytest.mark.parametrize("triage,words", [
