@@ -504,6 +504,7 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
     cell = module._held_out_cell(row)
     assert cell.endswith("; earlier held-out samples: seed 2 (%s): 90 %% of 30; **all 2 held-out samples under this "
                          "grader together: 85 %% of 60 counted** (seeds 2, 3)" % earlier[0]["date"]), cell
+    assert mut.score_text(lesson).endswith("; held-out 80 % of 30 (all 2 under this grader: 85 % of 60)")
 
 
 @pytest.mark.parametrize("triage,words", [

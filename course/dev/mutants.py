@@ -1335,7 +1335,8 @@ def _share(value: float | None) -> str:
 def score_text(lesson: Lesson) -> str:
     """The lesson's last mutation score in a few words (a table cell): the raw kill rate, the score after
     triage and its counted denominator, ``too small`` below :data:`MIN_COUNTED`, the held-out sample's score
-    when one was drawn, ``stale`` when the grader changed since
+    when one was drawn (with every held-out sample under the current grader pooled, when there are two or
+    more: :func:`pooled_held_out`), ``stale`` when the grader changed since
     (``"raw 62 %, triaged 100 % of 13 counted (too small); held-out 80 % of 25; stale"``), or ``"not measured"``."""
     row = recorded_score(lesson)
     if row is None:
@@ -1343,6 +1344,9 @@ def score_text(lesson: Lesson) -> str:
     held = row.held_out
     held_text = ("" if held is None else f"; held-out {_share(held.tuned)} of {held.counted}"
                  + (" (too small)" if held.too_small else "") + ("" if not held.stale or row.stale else " (stale)"))
+    pooled = pooled_held_out(row.data, held.data.get("fingerprint") or "") if held is not None else None
+    if pooled is not None and pooled.samples > 1 and not held.stale:
+        held_text += f" (all {pooled.samples} under this grader: {_share(pooled.score)} of {pooled.counted})"
     return (f"raw {_share(row.raw)}, triaged {_share(row.tuned)} of {row.counted} counted"
             + (" (too small)" if row.too_small else "") + held_text + ("; stale" if row.stale else ""))
 
