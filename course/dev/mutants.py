@@ -40,6 +40,10 @@ triage by rule, decided before it is tested)::
         file: "*/package.xml"
         original: '<(description|maintainer|license|url)\b'
         set_aside: true                     # never graded: free text no program reads
+      - id: library-case-still-true
+        reason: "..."
+        original: '^\s*\([^()]*\),\s*$'     # a case of a parametrized test ...
+        holds: {names: [a, b, expected], that: "(a + b) ** 2 == expected"}  # ... still true once mutated
     survivors:                              # one mutant each, for what no rule covers (:class:`TriageEntry`)
       - file: src/python_package_with_a_node/setup.py
         key: 3f2a9c0d1e4b                   # its identity (Mutant.key); or `line: 12` + original + mutated
@@ -61,7 +65,9 @@ held_out=N)``) is drawn afterwards with another seed from the mutants the first 
 not take, graded with the rules and entries as they are, never tuned: its uncovered survivors
 count against it, and are listed for the author (strengthen the grader, or add a rule that
 applies from the next held-out sample on). Both are recorded in ``mutation-score.json``
-(``held_out``) and ``mutation-outcomes.json``.
+(``held_out``) and ``mutation-outcomes.json``. Every held-out sample graded under the lesson's
+current grader fingerprint is pooled (:func:`pooled_held_out`): a lesson is judged by all of
+them together, never by its latest or best one.
 """
 
 from __future__ import annotations
@@ -271,7 +277,7 @@ def case_holds(line: str, holds: CaseHolds) -> bool:
             return False
         values = {name: _arithmetic(element, {}) for name, element in zip(holds.names, tree.elts, strict=True)}
         return _arithmetic(ast.parse(holds.that, mode="eval").body, values) == 1.0
-    except (SyntaxError, ValueError, ArithmeticError, TypeError):
+    except (SyntaxError, ValueError, ArithmeticError, TypeError, RecursionError, MemoryError):
         return False
 
 
