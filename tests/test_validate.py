@@ -56,6 +56,10 @@ def test_a_fixture_that_does_not_build_fails_only_for_the_build() -> None:
     assert judge_fixture(["rate"], graded)[0]
     assert not judge_fixture(["rate", "log"], graded)[0]
     assert "unknown check ids: nope" in judge_fixture(["nope"], graded)[1]
+    # the grader failing half-way proves nothing about the fixture, even with its named check lost on the way
+    crashed = LessonResult("l", 1.0, 10.0, "grader error", graded.checks, "FileNotFoundError: crypto/my_key")
+    ok, expected = judge_fixture(["rate"], crashed)
+    assert not ok and "the grader failed: FileNotFoundError" in expected
 
 
 

@@ -415,6 +415,10 @@ def lesson_cases(lesson: Lesson, underlay: Path | None, until_settled: bool = Fa
         return result.status == Status.PASSED, "full marks"
 
     def not_full(result: LessonResult) -> tuple[bool, str]:
+        # a learner's first check runs on the starter: the grader must judge it, never fail on it
+        # (cryptography's starter once ended in a FileNotFoundError and still counted as "not full marks")
+        if result.status == Status.GRADER_ERROR:
+            return False, f"not full marks, judged (but the grader failed: {result.message.splitlines()[0][:300]})"
         return result.status != Status.PASSED and result.score < result.max_score, "not full marks"
 
     cases = [Case(lesson, "reference", reference, underlays, full_marks, alone=True),
@@ -586,12 +590,15 @@ def judge_fixture(fails: list[str], result: LessonResult, says: dict[str, list[s
     ``says`` maps check ids to words their feedback must contain; each of
     ``diagnosis`` must be matched by a finding of that kind, mentioning every
     one of its words, on a failed check (the one it names, if any). Other checks
-    lost are not judged here (:func:`fixture_note` reports them).
+    lost are not judged here (:func:`fixture_note` reports them). A grading that
+    ended in a grader error proves nothing, whatever checks it lost on the way.
     """
     skips = list(skips or [])
     expected = "loses the points of " + ", ".join(fails)
     if skips:
         expected += "; not checked: " + ", ".join(skips)
+    if result.status == Status.GRADER_ERROR:  # the grader's own failure proves nothing about the fixture's bug
+        return False, expected + f" (but the grader failed: {(result.message or '').splitlines()[0][:300] if result.message else '?'})"
     if not result.checks:
         if set(fails) == {BUILD_CHECK} and result.status == Status.NOT_GRADABLE and not skips:
             return True, expected
