@@ -153,6 +153,52 @@ def decrypted(path: Path, message: str) -> tuple[bool, str]:
                                                        "characters the shipped key decrypts the message to")
 
 
+#: What opens a private key file: OpenSSH's (ssh-keygen's default) and PEM's (``-m PEM``, openssl, PKCS#8).
+PRIVATE_KEY_MARKERS = (b"-----BEGIN OPENSSH PRIVATE KEY-----", b"PRIVATE KEY-----")
+#: colcon's output folders and version control: not the learner's packages.
+NOT_PACKAGES = {"build", "install", "log", ".git"}
+
+
+def keys_in_packages(src: Path, most: int = 20000) -> tuple[list[str], int]:
+    """The files under ``src`` (the workspace's packages) that hold a private key: their paths relative to
+    ``src``'s parent, and how many files were looked at. A file counts when one of
+    :data:`PRIVATE_KEY_MARKERS` is in its first 4 KiB and it is at most 64 KiB (a key is about 400 bytes);
+    links are never followed; colcon's build/, install/, log/ and .git are left out; at most ``most`` files
+    are looked at (a workspace of many packages)."""
+    found: list[str] = []
+    looked = 0
+    for here, dirs, names in os.walk(src, followlinks=False):
+        dirs[:] = sorted(d for d in dirs if d not in NOT_PACKAGES)
+        for name in sorted(names):
+            path = Path(here) / name
+            if looked >= most:
+                return found, looked
+            looked += 1
+            try:
+                if path.is_symlink() or not path.is_file() or path.stat().st_size > 65536:
+                    continue
+                with path.open("rb") as handle:
+                    head = handle.read(4096)
+            except OSError:
+                continue
+            if any(marker in head for marker in PRIVATE_KEY_MARKERS):
+                found.append(path.relative_to(src.parent).as_posix())
+    return found, looked
+
+
+def key_outside_src(root: Path) -> tuple[bool, str]:
+    """The lesson: "a private key has no place in a ROS package (colcon installs it and you may publish it):
+    keep it in crypto/, outside src/". Passes when no file of ``root``/src holds one (or there is no src/)."""
+    src = root / "src"
+    if not src.is_dir() or src.is_symlink():
+        return True, "no src/ folder: no package holds a key"
+    found, looked = keys_in_packages(src)
+    if found:
+        shown = ", ".join(found[:3]) + (f" and {len(found) - 3} more" if len(found) > 3 else "")
+        return False, f"a private key in your packages: {shown}"
+    return True, f"no private key among the {looked} files of src/"
+
+
 def kept(made: Path, handed_in: dict[str, str]) -> Found:
     """Whether the script left the ``handed_in`` pair (file name -> text) in ``made`` as it was (same text, the
     key's mode 600); one entry per file name."""
@@ -180,7 +226,7 @@ def fill(folder: str, script_name: str, trusted: dict[str, Path], script: Path, 
         shutil.copyfile(src, where / folder / name)
     for name, text in handed_in.items() if with_pair else ():
         (where / folder / name).write_text(text, encoding="utf-8")
-    if with_pair:
+    if with_pair and "my_key" in handed_in:  # a workspace without my_key (the starter's) has none to protect
         (where / folder / "my_key").chmod(0o600)
 
 

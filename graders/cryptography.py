@@ -55,6 +55,8 @@ CHECKS = [
     Check("script_makes_key", "Where my_key is missing, the script makes an ed25519 pair, no passphrase, mode 600", 2,
           "the script runs ssh-keygen -t ed25519 -N \"\" -f my_key when my_key is missing: nothing may ask",
           needs=("script_runs",), part="script"),
+    Check("key_outside_src", "No private key in the workspace's packages (src/)", 1,
+          "a package is installed and published: keep private keys in crypto/ only, and delete the copy in src/"),
 ]
 
 
@@ -84,3 +86,5 @@ def grade(s: Session) -> None:
         # a second fresh folder without the pair: step 2 of the script must make it (no question asked)
         fresh = s.submission_folder("script-run-no-key", functools.partial(fill, with_pair=False))
         crypto.script_makes_key(s, names, fresh, FOLDER, SCRIPT, tmp)
+    s.record("key_outside_src", *crypto.key_outside_src(s.workspace_root),
+             "no file under src/ holding a private key (the lesson: keep them in crypto/, outside src/)")
