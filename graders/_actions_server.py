@@ -27,6 +27,9 @@ ACTION_TYPE = "package_with_interfaces/action/MoveStraightIn2D"
 SPEED = 1.0  # metres per second (CONTRACT.md)
 PERIOD = 0.1  # seconds between two feedback messages (CONTRACT.md)
 MAX_DISTANCE = 2.0  # metres: goals farther than this from the point are rejected (CONTRACT.md)
+#: metres from the point of the goal just over the limit (rejected): far enough past it that no rounding of the
+#: point's position decides, near enough that a server with a looser limit (2.1 m) accepts it
+JUST_OVER = 2.02
 #: Metres: positions judged (the result, where a canceled goal stopped).
 POSITION_TOLERANCE = 0.01
 #: Metres: where the point is after a cancel or a first step, judged to one step and a half (one
@@ -227,8 +230,9 @@ def rejects(s: Session, action: Any, client: act.GoalClient,
              start: tuple[float, float]) -> tuple[float, float]:
     """Record ``rejects``: goals 3 m from the point along y and along x, one 2.6 m from it across the
     origin (only 1.6 m from the origin: a server measuring from (0, 0) instead of from the point accepts
-    it), one with a NaN x and one with a NaN y are all rejected. ``start`` is the point after goal 1, 1 m
-    from the origin.
+    it), one :data:`JUST_OVER` the limit straight away from the origin (a server whose limit is looser than
+    the lesson's 2.0 m accepts it), one with a NaN x and one with a NaN y are all rejected. ``start`` is the
+    point after goal 1, 1 m from the origin.
 
     Returns where the point is afterwards: ``start``, or where a goal the server wrongly accepted
     stopped when the grader canceled it (its result's final_position; how far it got depends on how
@@ -240,10 +244,14 @@ def rejects(s: Session, action: Any, client: act.GoalClient,
     far_y = (round(start[0], 3), round(start[1] - math.copysign(3.0, start[1]), 3))
     far_x = (round(start[0] - math.copysign(3.0, start[0]), 3), round(start[1], 3))
     across = (round(-1.6 * start[0], 3), round(-1.6 * start[1], 3))
+    norm = math.hypot(*start) or 1.0
+    just_over = (round(start[0] + JUST_OVER * start[0] / norm, 3), round(start[1] + JUST_OVER * start[1] / norm, 3))
     cases = [(f"{_show(far_y)}, 3 m away", far_y),
              (f"{_show(far_x)}, 3 m away", far_x),
              (f"{_show(across)}, {math.dist(across, start):.1f} m away (but {math.hypot(*across):.1f} m from the "
               "origin)", across),
+             (f"{_show(just_over)}, {math.dist(just_over, start):.2f} m away (just over the {MAX_DISTANCE} m limit)",
+              just_over),
              ("(nan, 0.5)", (math.nan, 0.5)),
              ("(0.5, nan)", (0.5, math.nan))]
     seen, wrong = [], 0

@@ -8,8 +8,8 @@ in a row, the point it simulates carrying over from one to the next:
    feedback (0.0) or does not land on the goal shows it in every run): accepted, feedback every
    0.1 s with the distance falling at 1 m/s (a least-squares fit over the feedback messages' send
    stamps), ending at 0.0, the result the goal itself and the status SUCCEEDED;
-2. goals 3 m away along y and along x, one 2.6 m away across the origin, and goals with a NaN x
-   and a NaN y: all rejected; then one 1.99 m away (just within the 2.0 m limit, straight away
+2. goals 3 m away along y and along x, one 2.6 m away across the origin, one 2.02 m away (just
+   over the 2.0 m limit), and goals with a NaN x and a NaN y: all rejected; then one 1.99 m away (just within the 2.0 m limit, straight away
    from the origin): accepted, and canceled at once;
 3. a goal 1.6 m from where goal 1 ended, canceled after three feedback messages:
    its first feedback shows where the point started (the position is kept), the
