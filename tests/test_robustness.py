@@ -270,8 +270,12 @@ def test_reference_grading_is_deterministic(lesson, tmp_path):
 
 
 # Reached after Ctrl+C whether rclpy.spin() raised (caught above) or returned (it returns when the shutdown lands
-# between two waits), so the runs end as written here, never by the chance of where the SIGINT landed.
+# between two waits), so the runs end as written here, never by the chance of where the SIGINT landed: rclpy's
+# real race, which the first run imitates, once hit the second run too (CI rehearsal of 1febf73: its RCLError left
+# the node before the RuntimeError below was raised, and the grader rightly allowed it), so it is caught as well.
 RACE_ONCE = '''    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except Exception:  # rclpy's real race (RCLError out of rclpy.spin) may hit either run too: go on as written
         pass
     import pathlib
     import sys
