@@ -72,6 +72,7 @@ them together, never by its latest or best one.
 
 from __future__ import annotations
 
+import ast
 import dataclasses
 import datetime as dt
 import difflib
@@ -80,6 +81,8 @@ import functools
 import hashlib
 import importlib.util
 import json
+import math
+import operator
 import random
 import re
 import shutil
@@ -222,11 +225,11 @@ class CaseHolds(BaseModel):
 
     names: list[str] = Field(min_length=1)
     that: str = Field(min_length=3)
+    #: ``that`` parsed once (:func:`case_holds` evaluates it for every mutated line of a sample).
+    _that: ast.expr = PrivateAttr()
 
     @model_validator(mode="after")
     def _parses(self) -> CaseHolds:
-        import ast  # noqa: PLC0415 - only rules with `holds` need it
-
         try:
             tree = ast.parse(self.that, mode="eval")
         except SyntaxError as exc:
@@ -234,18 +237,18 @@ class CaseHolds(BaseModel):
         unknown = sorted({n.id for n in ast.walk(tree) if isinstance(n, ast.Name)} - set(self.names))
         if unknown:
             raise ValueError(f"`that` names {', '.join(unknown)}, which `names` does not list")
+        self._that = tree.body
         return self
+
+
+#: The binary operators :func:`_arithmetic` evaluates.
+_BINARY = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
+           ast.Pow: operator.pow}
 
 
 def _arithmetic(node: Any, values: dict[str, float]) -> float:
     """The value of an expression made of numbers, names in ``values``, unary and binary + - * / ** and a
     single ``==`` (1.0 when both sides agree within 1e-9, else 0.0). Raises ValueError on anything else."""
-    import ast  # noqa: PLC0415
-    import math  # noqa: PLC0415
-    import operator  # noqa: PLC0415
-
-    binary = {ast.Add: operator.add, ast.Sub: operator.sub, ast.Mult: operator.mul, ast.Div: operator.truediv,
-              ast.Pow: operator.pow}
     if isinstance(node, ast.Constant) and type(node.value) in (int, float):
         return node.value
     if isinstance(node, ast.Name) and node.id in values:
@@ -253,11 +256,11 @@ def _arithmetic(node: Any, values: dict[str, float]) -> float:
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
         value = _arithmetic(node.operand, values)
         return -value if isinstance(node.op, ast.USub) else value
-    if isinstance(node, ast.BinOp) and type(node.op) in binary:
+    if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
         left, right = _arithmetic(node.left, values), _arithmetic(node.right, values)
         if isinstance(node.op, ast.Pow) and abs(right) > 64:
             raise ValueError("exponent too large")
-        return binary[type(node.op)](left, right)
+        return _BINARY[type(node.op)](left, right)
     if (isinstance(node, ast.Compare) and len(node.ops) == 1 and isinstance(node.ops[0], ast.Eq)):
         left, right = _arithmetic(node.left, values), _arithmetic(node.comparators[0], values)
         return 1.0 if math.isclose(left, right, rel_tol=1e-9, abs_tol=1e-9) else 0.0
@@ -268,15 +271,13 @@ def case_holds(line: str, holds: CaseHolds) -> bool:
     """Whether ``line`` (a mutated line such as ``(0.25, 0.5, 0.5625),``) is a case of ``holds.names`` for
     which ``holds.that`` is true. False for a line that is not such a tuple, or whose arithmetic fails
     (division by zero, overflow, a call, a name)."""
-    import ast  # noqa: PLC0415
-
     text = line.strip().removesuffix(",").strip()
     try:
         tree = ast.parse(text, mode="eval").body
         if not isinstance(tree, ast.Tuple) or len(tree.elts) != len(holds.names):
             return False
         values = {name: _arithmetic(element, {}) for name, element in zip(holds.names, tree.elts, strict=True)}
-        return _arithmetic(ast.parse(holds.that, mode="eval").body, values) == 1.0
+        return _arithmetic(holds._that, values) == 1.0
     except (SyntaxError, ValueError, ArithmeticError, TypeError, RecursionError, MemoryError):
         return False
 

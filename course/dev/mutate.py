@@ -28,6 +28,7 @@ from typing import Any
 
 from rich.console import Console
 from rich.table import Table
+from ros2course.dev import first_line
 from ros2course.dev.parity import case_workspace
 from ros2course.batch.runner import run_batch
 from ros2course.errors import CourseError
@@ -141,7 +142,7 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
                     continue  # interrupted before this one: graded next time
                 outcome, lost = mut.classify(result)
                 row = {"outcome": outcome, "lost": lost, "score": result.score, "max_score": result.max_score,
-                       "message": (result.message or "").splitlines()[0][:300] if result.message else ""}
+                       "message": first_line(result.message)}
                 # a grader error or a timeout says something about this run (a loaded machine, a grader
                 # bug since fixed), not about the mutant: reported now, graded again next time
                 (this_run if outcome in UNFINISHED else graded_now)[mut.cache_key(grader, course, mutant)] = row

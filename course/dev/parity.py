@@ -23,6 +23,7 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from ros2course.dev import first_line
 from ros2course.batch.runner import run_batch
 from ros2course.build.reference import reference_workspace
 from ros2course.grade.checklist import StopWhen
@@ -119,7 +120,7 @@ def same_verdicts(checked: LessonResult, batch: LessonResult) -> bool:
 def _describe(result: LessonResult) -> str:
     text = f"{result.status} {result.score:g}/{result.max_score:g}; failed: {', '.join(result.failed_checks()) or 'none'}"
     if result.message and not result.status.graded:
-        text += f"; {result.message.splitlines()[0][:300]}"
+        text += f"; {first_line(result.message)}"
     return text
 
 

@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 from typing import Any
 
+from ros2course.dev import first_line
 from ros2course.errors import CourseError
 from ros2course.dev.child import grade_in_child
 from ros2course.grade.results import LessonResult, Status
@@ -68,7 +69,7 @@ def unsteady(results: list[LessonResult]) -> list[Flake]:
         other = [r for r in results if r.status != Status.PASSED]
         flakes.append(Flake("status", len(passed), len(other),
                             str(passed[0].status) if passed else str(results[0].status),
-                            f"{other[0].status}: {other[0].message.splitlines()[0] if other[0].message else ''}"
+                            f"{other[0].status}: {first_line(other[0].message)}"
                             if other else ""))
     order: list[str] = []
     verdicts: dict[str, list[tuple[bool, str]]] = collections.defaultdict(list)

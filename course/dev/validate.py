@@ -57,6 +57,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
+from ros2course.dev import first_line
 from ros2course.build.reference import (
     ReferenceBuild,
     lesson_dependencies,
@@ -309,7 +310,7 @@ def _describe(result: LessonResult) -> str:
     if cut:
         text += f"; {len(cut)} not judged (--until-settled)"
     if result.message and result.status != Status.PASSED:
-        text += f"; {result.message.splitlines()[0]}"
+        text += f"; {first_line(result.message, cap=1000)}"
     return text
 
 
@@ -418,7 +419,7 @@ def lesson_cases(lesson: Lesson, underlay: Path | None, until_settled: bool = Fa
         # a learner's first check runs on the starter: the grader must judge it, never fail on it
         # (cryptography's starter once ended in a FileNotFoundError and still counted as "not full marks")
         if result.status == Status.GRADER_ERROR:
-            return False, f"not full marks, judged (but the grader failed: {result.message.splitlines()[0][:300]})"
+            return False, f"not full marks, judged (but the grader failed: {first_line(result.message)})"
         return result.status != Status.PASSED and result.score < result.max_score, "not full marks"
 
     cases = [Case(lesson, "reference", reference, underlays, full_marks, alone=True),
@@ -598,7 +599,7 @@ def judge_fixture(fails: list[str], result: LessonResult, says: dict[str, list[s
     if skips:
         expected += "; not checked: " + ", ".join(skips)
     if result.status == Status.GRADER_ERROR:  # the grader's own failure proves nothing about the fixture's bug
-        return False, expected + f" (but the grader failed: {(result.message or '').splitlines()[0][:300] if result.message else '?'})"
+        return False, expected + f" (but the grader failed: {first_line(result.message) or '?'})"
     if not result.checks:
         if set(fails) == {BUILD_CHECK} and result.status == Status.NOT_GRADABLE and not skips:
             return True, expected
