@@ -607,7 +607,9 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
          with_: Annotated[Optional[list[str]], typer.Option("--with", metavar="COMPONENT",
                                                             help="With --build: also build an optional component "
                                                                  "(sas: SmartArmStack C++ for the sas lesson, "
-                                                                 "about 6 min on 2 cores).")] = None,
+                                                                 "about 6 min on 2 cores; nav2: the nav2 and Gazebo "
+                                                                 "interfaces, nav2_msgs and ros_gz_interfaces, needs "
+                                                                 "the nav2 extra; repeatable).")] = None,
          ) -> None:
     """The learner's ROS 2 environment: source "$(ros2course env --path)" in a terminal."""
     _ros()
@@ -618,12 +620,20 @@ def env_(path: Annotated[bool, typer.Option("--path", help="Print the path of th
     extra = []
     for name in with_ or []:
         if name not in underlay.COMPONENTS or name == "jazzy":
-            raise CourseError(f"unknown component {name!r}", "the optional component is: sas")
-        extra.append(underlay.COMPONENTS[name])
+            raise CourseError(f"unknown component {name!r}",
+                              f"the optional components are: {', '.join(c.name for c in underlay.OPTIONAL)}")
+        if underlay.COMPONENTS[name] not in extra:
+            extra.append(underlay.COMPONENTS[name])
+    if with_ and not build:
+        raise CourseError("--with builds an optional component: it goes with --build",
+                          f"e.g. ros2course env --build --with {extra[0].name}")
     if build:
         install = _env().detect()
         if install.kind == "system":
             stderr_console().print(f"a system ROS 2 {install.distro} is sourced ({install.prefix}): nothing to build")
+            if underlay.NAV2_COMPONENT in extra:
+                stderr_console().print(f"{underlay.NAV2_COMPONENT.what}: with a system ROS, install "
+                                       f"{' '.join(underlay.NAV2_APT_PACKAGES)} (apt)", markup=False)
         else:
             err = stderr_console()
             for component in (underlay.JAZZY_COMPONENT, *extra):

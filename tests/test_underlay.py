@@ -234,3 +234,174 @@ def test_the_portable_key_follows_the_pins_and_the_wheels_never_the_install_path
     assert underlay_cache.portable_key("sas", (tiny,), below=key) != key
     monkeypatch.setattr(underlay_cache, "wheel_versions", lambda: [("ros-jazzy-rclcpp-fake", "9.9.9")])
     assert underlay_cache.portable_key("jazzy", (tiny,)) != key
+
+
+# --- The optional nav2 component (nav2 and Gazebo interfaces; issue 40): no build ------------------------------
+
+
+def test_the_nav2_component_builds_its_interfaces_on_the_underlay_and_leaves_the_jazzy_key_alone():
+    from ros2course.ros.underlay_pins import JAZZY, NAV2
+
+    component = underlay.COMPONENTS["nav2"]
+    assert component is underlay.NAV2_COMPONENT and component.pins is NAV2 and component.subdir == "nav2"
+    assert [c.name for c in underlay.OPTIONAL] == ["sas", "nav2"]
+    assert underlay.component_root(component) == underlay.root() / "nav2"
+    built = {pin.repo: pin.packages for pin in NAV2}
+    assert built == {"ros_gz": ("ros_gz_interfaces",), "geographic_info": ("geographic_msgs",),
+                     "navigation2": ("nav2_common", "nav2_msgs")}
+    assert [pin.archive_name for pin in NAV2] == [
+        "gazebosim--ros_gz-739cb42a5846cd12a526b97ba051a2d8cdbe034b.tar.gz",
+        "ros-geographic-info--geographic_info-2a0ae99219645b8d29772b997ef31f8e17345d52.tar.gz",
+        "ros-navigation--navigation2-f4108e5b1c2bce804a1aa0c7be6673a8eb4a1501.tar.gz"]
+    assert all(pin.mirror_dir == "" and pin.colcon_pass == 1 and not pin.patches for pin in NAV2)
+    # the underlay's own pins (and so its key) do not know nav2: adding it rebuilt nothing
+    assert not {pin.repo for pin in NAV2} & {pin.repo for pin in JAZZY}
+    assert underlay.cache_key() == underlay.cache_key(JAZZY)
+    # nav2's key follows its pins and the underlay below it, like sas's
+    assert underlay.cache_key(NAV2, "below-1") != underlay.cache_key(NAV2, "below-2")
+    assert underlay.cache_key(NAV2, "below-1") != underlay.cache_key(underlay.SAS_COMPONENT.pins, "below-1")
+    assert underlay_cache.portable_key("nav2", NAV2, "p") != underlay_cache.portable_key("sas", NAV2, "p")
+
+
+def test_the_nav2_archives_are_in_the_projects_mirror():
+    mirror = underlay.project_mirror()
+    if mirror is None:
+        pytest.skip("no ../shared/ros-src beside the project")
+    assert underlay.missing_archives(underlay.NAV2_COMPONENT.pins, mirror) == []
+
+
+def test_missing_archives_names_the_files_a_sources_folder_lacks(tmp_path):
+    sas_pin = Pin("o", "sub", COMMIT, "1", mirror_dir="sas")
+    patched = Pin("o", "patched", COMMIT, "1", patches=("fix.patch",))
+    (tmp_path / "sas").mkdir()
+    assert underlay.missing_archives((sas_pin, patched), tmp_path) == [
+        f"sas/{sas_pin.archive_name}", patched.archive_name, "fix.patch"]
+    (tmp_path / "sas" / sas_pin.archive_name).touch()
+    (tmp_path / "fix.patch").touch()
+    assert underlay.missing_archives((sas_pin, patched), tmp_path) == [patched.archive_name]
+
+
+def test_nav2_needs_the_nav_msgs_wheel(tmp_path):
+    missing = underlay.nav2_missing_prerequisites(tmp_path)
+    assert len(missing) == 1 and "nav_msgs" in missing[0][0] and missing[0][1] == "pip install 'ros2course[nav2]'"
+    config = tmp_path / "share" / "nav_msgs" / "cmake" / "nav_msgsConfig.cmake"
+    config.parent.mkdir(parents=True)
+    config.touch()
+    assert underlay.nav2_missing_prerequisites(tmp_path) == []
+    assert underlay.component_missing_prerequisites(underlay.JAZZY_COMPONENT) == []
+
+
+@pytest.fixture
+def underlay_built_elsewhere(tmp_path, monkeypatch):
+    """underlay_build.build of an optional component as if the underlay were built, without touching the venv."""
+    from ros2course.ros.env import RosInstall
+
+    monkeypatch.setattr(underlay_build, "built", lambda component: underlay.Underlay(tmp_path / "jazzy", {"key": "k"}))
+    monkeypatch.setattr(underlay_build, "detect", lambda: RosInstall("none", None, None))
+    monkeypatch.setattr(underlay_build, "missing_prerequisites", lambda: [])
+    return tmp_path / "nav2"
+
+
+def test_with_nav2_and_a_sources_folder_without_its_archives_fails_in_one_line(tmp_path, underlay_built_elsewhere,
+                                                                                monkeypatch):
+    monkeypatch.setattr(underlay, "nav2_missing_prerequisites", lambda prefix=None: [])
+    empty = tmp_path / "old-ros-src"
+    empty.mkdir()
+    with pytest.raises(underlay.UnderlayBuildFailed) as failure:
+        underlay_build.build(empty, component=underlay.NAV2_COMPONENT, base=underlay_built_elsewhere)
+    message, hint = failure.value.message, failure.value.hint
+    assert message == (f"cannot build {underlay.NAV2_COMPONENT.what}: gazebosim--ros_gz-739cb42a5846cd12a526b97ba051a2"
+                       f"d8cdbe034b.tar.gz (and 2 more) is not in the sources folder {empty}")
+    assert "\n" not in message and "SOURCES.md" in hint and "ROS2COURSE_ROS_SOURCES" in hint
+    assert underlay.current(underlay_built_elsewhere) is None
+    assert not list((underlay_built_elsewhere / "logs").iterdir())  # failed before anything was unpacked
+
+
+def test_with_nav2_but_without_the_nav_msgs_wheel_says_which_extra(tmp_path, underlay_built_elsewhere, monkeypatch):
+    monkeypatch.setattr(underlay, "nav2_missing_prerequisites", lambda prefix=None: [("no nav_msgs", "pip install x")])
+    with pytest.raises(underlay.UnderlayBuildFailed) as failure:
+        underlay_build.build(tmp_path, component=underlay.NAV2_COMPONENT, base=underlay_built_elsewhere)
+    assert failure.value.message == f"cannot build {underlay.NAV2_COMPONENT.what}: no nav_msgs (pip install x)"
+
+
+def test_env_with_an_unknown_component_names_the_optional_ones():
+    from conftest import run_cli_in_process
+
+    result = run_cli_in_process("env", "--build", "--with", "gazebo")
+    assert result.returncode == 5
+    assert "unknown component 'gazebo'" in result.stderr and "sas, nav2" in result.stderr
+    result = run_cli_in_process("env", "--path", "--with", "nav2")
+    assert result.returncode == 5 and "goes with --build" in result.stderr
+
+
+def test_the_doctor_row_of_nav2(monkeypatch):
+    from ros2course.ros import doctor
+    from ros2course.ros.env import RosInstall
+
+    wheels = RosInstall("wheels", Path("/venv"), "jazzy")
+    monkeypatch.setattr(underlay, "built", lambda component: None)
+    monkeypatch.setattr(underlay, "nav2_missing_prerequisites", lambda prefix=None: [])
+    row = doctor.nav2_row(wheels)
+    assert (row.component, row.ok) == ("nav2 interfaces (optional)", False)
+    assert row.detail.startswith("not built") and row.hint.startswith("ros2course env --build --with nav2")
+    row = doctor.nav2_row(wheels, failure="building it failed: log: /x.log")
+    assert row.detail.startswith("building it failed")
+    monkeypatch.setattr(underlay, "nav2_missing_prerequisites",
+                        lambda prefix=None: [("no nav_msgs", "pip install 'ros2course[nav2]'")])
+    row = doctor.nav2_row(wheels)
+    assert "cannot build: no nav_msgs" in row.detail and row.hint == "pip install 'ros2course[nav2]'"
+
+    stamp = {"built": "2026-11-28T10:06:00+00:00", "seconds": 88.5}
+    monkeypatch.setattr(underlay, "built", lambda component: underlay.Underlay(Path("/u/nav2/builds/k"), stamp)
+                        if component is underlay.NAV2_COMPONENT else None)
+    row = doctor.nav2_row(wheels)
+    assert row.ok and "nav2_msgs, ros_gz_interfaces" in row.detail and "in 88.5 s into /u/nav2/builds/k" in row.detail
+
+    # a sourced system ROS: nothing is built, the row names the apt packages
+    system = RosInstall("system", Path("/opt/ros/jazzy"), "jazzy")
+    monkeypatch.setattr(doctor.env_mod, "ament_has", lambda name: name == "nav2_msgs")
+    row = doctor.nav2_row(system)
+    assert not row.ok and "ros_gz_interfaces not installed" in row.detail
+    assert row.hint == "sudo apt-get install ros-jazzy-ros-gz-interfaces ros-jazzy-nav2-msgs"
+    monkeypatch.setattr(doctor.env_mod, "ament_has", lambda name: True)
+    row = doctor.nav2_row(system)
+    assert row.ok and "from the system ROS (/opt/ros/jazzy)" in row.detail and row.hint == ""
+
+
+def test_activation_puts_a_built_nav2_on_top_of_the_underlay(tmp_path, monkeypatch):
+    import sys
+
+    from ros2course.ros import env as env_mod
+
+    jazzy = underlay.Underlay(tmp_path / "jazzy", {"component": "jazzy"})
+    nav2 = underlay.Underlay(tmp_path / "nav2", {"component": "nav2"})
+    monkeypatch.setattr(underlay, "current", lambda base=None: jazzy)
+    monkeypatch.setattr(underlay, "built", lambda component: nav2 if component is underlay.NAV2_COMPONENT else None)
+    install = env_mod.RosInstall("wheels", Path(sys.prefix), "jazzy")
+
+    def ament(**kwargs) -> list[str]:
+        return [value for op, var, value in env_mod.activation(install, **kwargs) if var == "AMENT_PREFIX_PATH"]
+
+    assert ament() == [sys.prefix, str(jazzy.prefix), str(nav2.prefix)]  # later prepends come first
+    assert ament(nav2=False) == [sys.prefix, str(jazzy.prefix)]
+    assert ament(underlay=False) == [sys.prefix]
+    paths = [value for op, var, value in env_mod.activation(install) if var == "PYTHONPATH"]
+    assert paths[-1] == str(nav2.site_packages)
+
+
+def test_the_wheel_repair_covers_nav_msgs(tmp_path):
+    import sysconfig
+
+    from ros2course.ros import env as env_mod
+
+    # the line the ros-jazzy-nav-msgs 5.3.6 wheel ships (as the other message wheels the set-up repairs)
+    export = tmp_path / "share" / "nav_msgs" / "cmake" / "export_nav_msgs__rosidl_generator_pyExport.cmake"
+    export.parent.mkdir(parents=True)
+    export.write_text('  INTERFACE_INCLUDE_DIRECTORIES "/opt/python/cp311-cp311/include/python3.11;'
+                      '/opt/python/cp311-cp311/lib/python3.11/site-packages/numpy/_core/include"\n')
+    assert env_mod.cmake_files_needing_repair(tmp_path) == [export]
+    assert env_mod.repair_cmake_files(tmp_path) == [export]
+    paths = sysconfig.get_paths()
+    assert export.read_text() == (f'  INTERFACE_INCLUDE_DIRECTORIES "{paths["include"]};'
+                                  f'{paths["purelib"]}/numpy/_core/include"\n')
+    assert env_mod.repair_cmake_files(tmp_path) == [] and env_mod.cmake_files_needing_repair(tmp_path) == []

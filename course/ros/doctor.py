@@ -36,6 +36,47 @@ class DoctorRow:
     hint: str = ""
 
 
+#: The ``doctor`` row of the optional nav2 component.
+NAV2_ROW = "nav2 interfaces (optional)"
+#: Who needs the nav2 component (said when it is missing, which is no fault).
+_NAV2_USERS = "only the Gazebo and nav2 chapters need them"
+
+
+def nav2_row(install: env_mod.RosInstall, failure: str = "") -> DoctorRow:
+    """The ``doctor`` row "nav2 interfaces (optional)": nav2_msgs and ros_gz_interfaces (GitHub issue 40).
+
+    Args:
+        install: the ROS install in use (:func:`ros2course.ros.env.detect`).
+        failure: the one-line message of a build that ``doctor --fix`` just tried and that failed.
+
+    Returns:
+        With a sourced system ROS: present when both packages are in its ament index,
+        else missing with the apt packages that give them
+        (:data:`~ros2course.ros.underlay.NAV2_APT_PACKAGES`); nothing is built there.
+        With the wheels: built (when, where) or not built, with the command that builds
+        it, or what the build lacks (the nav_msgs wheel). ``ok`` is False when it is
+        not there, but the row is optional: ``doctor``'s exit status ignores it.
+    """
+    wanted = ("nav2_msgs", "ros_gz_interfaces")
+    if install.kind == "system":
+        absent = [name for name in wanted if not env_mod.ament_has(name)]
+        if not absent:
+            return DoctorRow(NAV2_ROW, True, f"{' and '.join(wanted)} from the system ROS ({install.prefix})")
+        return DoctorRow(NAV2_ROW, False, f"{' and '.join(absent)} not installed ({_NAV2_USERS})",
+                         f"sudo apt-get install {' '.join(_underlay.NAV2_APT_PACKAGES)}")
+    component = _underlay.NAV2_COMPONENT
+    on_top = _underlay.built(component)
+    if on_top is not None:
+        how = (f"restored {on_top.stamp.get('built', '?')} from the build cache" if on_top.stamp.get("restored_from")
+               else f"built {on_top.stamp.get('built', '?')} in {on_top.stamp.get('seconds', '?')} s")
+        return DoctorRow(NAV2_ROW, True, f"{', '.join(wanted)} ({len(component.pins)} pinned repos), {how} "
+                                         f"into {on_top.prefix}")
+    missing = _underlay.nav2_missing_prerequisites()
+    why = failure or (f"not built; cannot build: {missing[0][0]}" if missing else "not built")
+    return DoctorRow(NAV2_ROW, False, f"{why} ({_NAV2_USERS})",
+                     missing[0][1] if missing else "ros2course env --build --with nav2 (7-14 min on 2 cores)")
+
+
 def _underlay_rows(fix: bool, sources: Path | None) -> list[DoctorRow]:
     """Rows for the source-built underlay: one per pinned repository, plus what a build needs."""
     rows = []
@@ -97,6 +138,15 @@ def _underlay_rows(fix: bool, sources: Path | None) -> list[DoctorRow]:
         why = sas_failure or (f"not built; cannot build: {missing[0][0]}" if missing else "not built")
         rows.append(DoctorRow("sas (optional)", False, why + " (only the sas lesson's C++ path needs it)",
                               missing[0][1] if missing else "ros2course env --build --with sas (about 6 min)"))
+    nav2_failure = ""
+    if fix and _underlay.built(_underlay.JAZZY_COMPONENT) is not None and _underlay.built(_underlay.NAV2_COMPONENT) \
+            is None and not _underlay.nav2_missing_prerequisites():
+        try:
+            underlay_build.build(sources, component=_underlay.NAV2_COMPONENT)
+        except CourseError as exc:
+            nav2_failure = exc.message
+        env_mod.activate()
+    rows.append(nav2_row(env_mod.detect(), nav2_failure))
     return rows
 
 
@@ -105,7 +155,8 @@ def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
 
     Args:
         fix: repair the wheels' CMake files, install osrf-pycommon and build the
-            underlay (``ros2course.ros.underlay``) when missing or out of date; idempotent.
+            underlay (``ros2course.ros.underlay``) when missing or out of date, and the
+            optional components (sas, nav2) whose prerequisites are installed; idempotent.
         sources: folder of the pinned archives for the build (default
             :func:`ros2course.ros.underlay.default_sources`).
 
@@ -142,6 +193,8 @@ def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
                 )
             )
         rows += _underlay_rows(fix, sources)
+    elif install.kind == "system":
+        rows.append(nav2_row(install))
     for name in KNOWN_REQUIREMENTS:
         ok, detail = env_mod.probe_requirement(name)
         rows.append(DoctorRow(name, ok, detail, "" if ok else env_mod.INSTALL_HINTS.get(name, "")))

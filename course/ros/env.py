@@ -108,7 +108,7 @@ def wheel_library_dirs(prefix: Path) -> list[Path]:
     return [prefix / "lib", *sorted(p for p in site.glob("ros_*.libs") if p.is_dir())]
 
 
-def activation(install: RosInstall | None = None, underlay: bool = True, sas: bool = True
+def activation(install: RosInstall | None = None, underlay: bool = True, sas: bool = True, nav2: bool = True
                ) -> list[tuple[str, str, str]]:
     """What activating the wheels (and the underlay) does to an environment, in order.
 
@@ -116,6 +116,8 @@ def activation(install: RosInstall | None = None, underlay: bool = True, sas: bo
         install: the install to activate (default :func:`detect`).
         underlay: include the source-built underlay (``ros2course.ros.underlay``) when it is built.
         sas: include the optional sas component too when it is built (on top of the underlay).
+        nav2: include the optional nav2 component (nav2 and Gazebo interfaces) too when it is built
+            (on top of the underlay, after sas; the two never depend on each other).
 
     Returns:
         ``(operation, variable, value)`` triples, ``operation`` being ``"set"`` or
@@ -137,9 +139,11 @@ def activation(install: RosInstall | None = None, underlay: bool = True, sas: bo
     built = _underlay.current() if underlay else None
     if built is not None:
         layers.append(built)
-        on_top = _underlay.built(_underlay.SAS_COMPONENT) if sas else None
-        if on_top is not None:
-            layers.append(on_top)
+        wanted = {"sas": sas, "nav2": nav2}
+        for component in _underlay.OPTIONAL:
+            on_top = _underlay.built(component) if wanted.get(component.name, False) else None
+            if on_top is not None:
+                layers.append(on_top)
     for layer in layers:
         here = str(layer.prefix)
         ops += [("prepend", "AMENT_PREFIX_PATH", here), ("prepend", "CMAKE_PREFIX_PATH", here),
@@ -154,20 +158,23 @@ def activation(install: RosInstall | None = None, underlay: bool = True, sas: bo
     return ops
 
 
-def activate(environ: dict[str, str] | None = None, underlay: bool = True, sas: bool = True) -> RosInstall:
+def activate(environ: dict[str, str] | None = None, underlay: bool = True, sas: bool = True,
+             nav2: bool = True) -> RosInstall:
     """Make ``environ`` (default ``os.environ``) see the ROS install, in place.
 
     For wheels this does :func:`activation`: ``ROS_DISTRO=jazzy``, the venv
     prefix on ``AMENT_PREFIX_PATH`` and ``CMAKE_PREFIX_PATH``, the venv's
     ``bin`` on ``PATH`` (so ``colcon`` and ``python3`` are the venv's), the
     wheels' libraries on ``LD_LIBRARY_PATH``, and, when it is built, the
-    underlay (``ros2``, launch, rclcpp) on all of those and ``PYTHONPATH``.
-    For the running process the underlay's Python packages are also put on
-    ``sys.path``. A system install is left untouched. Idempotent.
+    underlay (``ros2``, launch, rclcpp) on all of those and ``PYTHONPATH``,
+    and on top of it the optional components that are built (``sas``,
+    ``nav2``: :func:`activation`'s arguments). For the running process the
+    underlay's Python packages are also put on ``sys.path``. A system install
+    is left untouched. Idempotent.
     """
     env = os.environ if environ is None else environ
     install = detect()
-    for operation, var, value in activation(install, underlay, sas):
+    for operation, var, value in activation(install, underlay, sas, nav2):
         if operation == "set":
             env[var] = value
         else:

@@ -12,6 +12,7 @@ lives under ``<venv>/opt/ros2course-jazzy`` (``ROS2COURSE_UNDERLAY`` moves it)::
     <root>/logs/build-<time>.log       the output of every build
     <root>/setup.bash                  the learner's activation script (ros2course.ros.env)
     <root>/sas/...                     the optional sas component, same layout, built on top
+    <root>/nav2/...                    the optional nav2 component (nav2 and Gazebo interfaces), same layout
 
 Atomic: a build goes into a fresh ``builds/<key>`` folder; only when colcon
 succeeded is the stamp written and ``current`` switched with one
@@ -42,7 +43,7 @@ import tarfile
 from pathlib import Path
 
 from ros2course.errors import CourseError, ExitStatus
-from ros2course.ros.underlay_pins import JAZZY, PATCHES, REPAIRS_VERSION, SAS, Pin
+from ros2course.ros.underlay_pins import JAZZY, NAV2, PATCHES, REPAIRS_VERSION, SAS, Pin
 
 #: Environment variable: the underlay's root folder (default ``<sys.prefix>/opt/ros2course-jazzy``).
 ROOT_VAR = "ROS2COURSE_UNDERLAY"
@@ -90,7 +91,7 @@ class Component:
     """A set of pins built together into one prefix.
 
     Attributes:
-        name: ``"jazzy"`` (the ROS 2 underlay) or ``"sas"`` (optional, on top of it).
+        name: ``"jazzy"`` (the ROS 2 underlay), ``"sas"`` or ``"nav2"`` (optional, each on top of it).
         pins: what it is built from.
         subdir: its folder under :func:`root` (``""``: the root itself).
         what: how messages name it.
@@ -106,7 +107,15 @@ class Component:
 JAZZY_COMPONENT = Component("jazzy", JAZZY, "", "the ROS 2 underlay (ros2 CLI, launch, rclcpp)")
 #: SmartArmStack + DQ Robotics for the sas lesson's C++ path (on demand: ``ros2course env --build --with sas``).
 SAS_COMPONENT = Component("sas", SAS, "sas", "SmartArmStack (sas) and DQ Robotics C++")
-COMPONENTS = {c.name: c for c in (JAZZY_COMPONENT, SAS_COMPONENT)}
+#: The interfaces of the author's Gazebo and nav2 chapters (ros_gz_interfaces, nav2_msgs; on demand:
+#: ``ros2course env --build --with nav2``; GitHub issue 40).
+NAV2_COMPONENT = Component("nav2", NAV2, "nav2", "the nav2 and Gazebo interfaces (nav2_msgs, ros_gz_interfaces)")
+COMPONENTS = {c.name: c for c in (JAZZY_COMPONENT, SAS_COMPONENT, NAV2_COMPONENT)}
+#: The optional components, in the order they are built and activated (each on top of the underlay only).
+OPTIONAL = tuple(c for c in COMPONENTS.values() if c is not JAZZY_COMPONENT)
+#: What a sourced system ROS 2 Jazzy installs instead of the nav2 component (Ubuntu's apt names of the
+#: build farm's packages; geographic_msgs and nav_msgs come along as their dependencies).
+NAV2_APT_PACKAGES = ("ros-jazzy-ros-gz-interfaces", "ros-jazzy-nav2-msgs")
 
 
 def root() -> Path:
@@ -195,6 +204,41 @@ def sas_missing_prerequisites() -> list[tuple[str, str]]:
     if importlib.util.find_spec("dqrobotics") is None:
         missing.append(("no dqrobotics (Python)", "pip install 'ros2course[sas]'"))
     return missing
+
+
+def nav2_missing_prerequisites(prefix: Path | None = None) -> list[tuple[str, str]]:
+    """What the nav2 component needs beyond :func:`missing_prerequisites`: ``[(what, hint)]``.
+
+    nav2_msgs' CMakeLists finds ``nav_msgs``, which is not built here: it is the PyPI
+    wheel ``ros-jazzy-nav-msgs`` (the ``nav2`` extra), found through its CMake config
+    under the wheels' prefix (``prefix``, default ``sys.prefix``).
+    """
+    config = (prefix or Path(sys.prefix)) / "share" / "nav_msgs" / "cmake" / "nav_msgsConfig.cmake"
+    if not config.is_file():
+        return [("no nav_msgs (the ros-jazzy-nav-msgs wheel; nav2_msgs needs it)", "pip install 'ros2course[nav2]'")]
+    return []
+
+
+def component_missing_prerequisites(component: Component) -> list[tuple[str, str]]:
+    """What ``component`` needs beyond :func:`missing_prerequisites` (``[]`` for jazzy): ``[(what, hint)]``."""
+    if component is SAS_COMPONENT:
+        return sas_missing_prerequisites()
+    if component is NAV2_COMPONENT:
+        return nav2_missing_prerequisites()
+    return []
+
+
+def missing_archives(pins: tuple[Pin, ...], mirror: Path) -> list[str]:
+    """The archive files (of ``pins`` and their patches) that the sources folder ``mirror`` lacks, in pin order.
+
+    Checked before a build starts, so that a mirror older than the pins (e.g. a
+    ``shared/ros-src`` without the nav2 archives) fails in one line naming the
+    first missing file, not half-way through unpacking. Names are relative to
+    ``mirror`` (``sas/<archive>`` for a pin with a ``mirror_dir``).
+    """
+    wanted = [f"{pin.mirror_dir}/{pin.archive_name}" if pin.mirror_dir else pin.archive_name for pin in pins]
+    wanted += [name for pin in pins for name in pin.patches]
+    return [name for name in dict.fromkeys(wanted) if not (mirror / name).is_file()]
 
 
 def missing_prerequisites() -> list[tuple[str, str]]:

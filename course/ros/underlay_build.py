@@ -41,13 +41,14 @@ from ros2course.ros.underlay import (
     UnderlayBuildFailed,
     built,
     cache_key,
+    component_missing_prerequisites,
     component_root,
     current,
     default_sources,
     libpython_link_flags,
+    missing_archives,
     missing_prerequisites,
     prepare_sources,
-    sas_missing_prerequisites,
 )
 
 
@@ -96,7 +97,7 @@ def _build_env(prefix: Path, component: Component) -> dict[str, str]:
     env = dict(os.environ)
     for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH", "PYTHONPATH"):
         env.pop(var, None)  # only the wheels (and what this component builds on), nothing sourced by chance
-    activate(env, underlay=component is not JAZZY_COMPONENT, sas=False)
+    activate(env, underlay=component is not JAZZY_COMPONENT, sas=False, nav2=False)
     for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH"):
         env[var] = os.pathsep.join([str(prefix), *[p for p in env.get(var, "").split(os.pathsep) if p]])
     env.pop("COLCON_PREFIX_PATH", None)
@@ -127,16 +128,18 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
             (:class:`~ros2course.ros.colcon_log.BuildProgress`; e.g. a status display's update).
         pins: what to build (default: the component's pins, course/ros/underlay_pins.py).
         base: the component's folder (default :func:`component_root`).
-        component: :data:`JAZZY_COMPONENT` or :data:`SAS_COMPONENT` (needs the
-            first one built).
+        component: :data:`JAZZY_COMPONENT`, or an optional one built on top of it
+            (:data:`SAS_COMPONENT`, :data:`NAV2_COMPONENT`: needs the first one built).
 
     Returns:
         ``(underlay, built)``: ``built`` is False when the cache was used.
 
     Raises:
-        UnderlayBuildFailed: a missing prerequisite, source or patch, or a failed
-            colcon pass; the one-line message says which package and where the
-            log is. The earlier build (if any) stays current.
+        UnderlayBuildFailed: a missing prerequisite (for nav2: the nav_msgs wheel), a
+            sources folder without the pinned archives (checked before anything is
+            unpacked), a damaged source or patch, or a failed colcon pass; the
+            one-line message says which package and where the log is. The earlier
+            build (if any) stays current.
     """
     pins = component.pins if pins is None else pins
     base = base or component_root(component)
@@ -157,11 +160,13 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
     with _locked(base):
         install = detect()
         if install.kind == "wheels" and install.prefix is not None:
-            repair_cmake_files(install.prefix)  # shared/ROS_ENV.md; idempotent, also when cached
+            # shared/ROS_ENV.md; idempotent, also when cached. It also repairs wheels installed after the
+            # underlay was built: the nav2 extra's nav_msgs names the build farm's Python as the others did
+            repair_cmake_files(install.prefix)
         found = current(base)
         if found is not None and found.stamp.get("key") == key and not force:
             return found, False
-        missing = missing_prerequisites() + (sas_missing_prerequisites() if component is SAS_COMPONENT else [])
+        missing = missing_prerequisites() + component_missing_prerequisites(component)
         if missing:
             what, hint = missing[0]
             raise UnderlayBuildFailed(f"cannot build {component.what}: {what} ({hint})")
@@ -196,6 +201,12 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
                                       "below": below, "seconds": round(time.monotonic() - begin, 1),
                                       "restored_from": str(entry)})
                 return _switch(base, key, keep), True
+        absent = missing_archives(pins, mirror) if mirror is not None else []
+        if absent:
+            more = f" (and {len(absent) - 1} more)" if len(absent) > 1 else ""
+            raise UnderlayBuildFailed(f"cannot build {component.what}: {absent[0]}{more} is not in the sources folder "
+                                      f"{mirror}", "put the pinned archives there (shared/ros-src/SOURCES.md), or "
+                                      f"unset {SOURCES_VAR} and leave out --sources to download them from GitHub")
         step = "preparing the sources"
         with open(log_path, "wb") as log:
             try:
@@ -205,7 +216,7 @@ def build(sources: Path | None = None, force: bool = False, progress: Callable[[
                 linker = libpython_link_flags()
                 cmake_args = ["--cmake-args", "-DBUILD_TESTING=OFF", "-DCMAKE_BUILD_TYPE=Release",
                               f"-DPython3_EXECUTABLE={sys.executable}", f"-DPYTHON_EXECUTABLE={sys.executable}"]
-                if component is JAZZY_COMPONENT:
+                if component is not SAS_COMPONENT:  # jazzy, and nav2's interface libraries, as rclcpp's
                     cmake_args.append(f"-DCMAKE_SHARED_LINKER_FLAGS={linker}")
                 else:  # sas links a bare -ldqrobotics: find it in, and load it from, this prefix (ROS_ENV.md)
                     linker += f" -L{prefix / 'lib'} -Wl,-rpath,{prefix / 'lib'}"

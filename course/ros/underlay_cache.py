@@ -77,7 +77,7 @@ def portable_key(component: str, pins: tuple[Pin, ...], below: str = "") -> str:
     """16 hex digits naming a build by what its output depends on, never by where it is installed.
 
     Args:
-        component: the component's name (``jazzy``, ``sas``).
+        component: the component's name (``jazzy``, ``sas``, ``nav2``).
         pins: what is built.
         below: the portable key of the component it is built on ("" for jazzy).
     """

@@ -156,3 +156,19 @@ SAS = (
     Pin("SmartArmStack", "sas_robot_driver", "2050db0dcec4c287e914272156d5954cce3c421a", "humble 2023-06-22",
         group=2, mirror_dir="sas"),
 )
+
+#: The interfaces of the author's Gazebo and nav2 chapters, optional, built on top of :data:`JAZZY`
+#: (shared/ros-src/SOURCES.md, first table; GitHub issue 40): ``ros_gz_interfaces`` (SetEntityPose,
+#: EntityWrench, Entity), ``nav2_msgs`` (NavigateToPose) with the CMake helpers of ``nav2_common`` it is
+#: built with, and ``geographic_msgs``, which nav2_msgs needs (FollowGPSWaypoints). The navigation2 archive
+#: is a subset (``git archive <commit> nav2_msgs nav2_common LICENSE``): the whole repository is large and
+#: its other packages need the full nav2 stack. nav2_msgs also needs ``nav_msgs``, which is a wheel (the
+#: ``nav2`` extra: ``ros-jazzy-nav-msgs``), not a pin. One colcon pass: colcon orders them by their
+#: package.xml dependencies.
+NAV2 = (
+    Pin("gazebosim", "ros_gz", "739cb42a5846cd12a526b97ba051a2d8cdbe034b", "1.0.5", ("ros_gz_interfaces",)),
+    Pin("ros-geographic-info", "geographic_info", "2a0ae99219645b8d29772b997ef31f8e17345d52", "1.0.5",
+        ("geographic_msgs",)),
+    Pin("ros-navigation", "navigation2", "f4108e5b1c2bce804a1aa0c7be6673a8eb4a1501", "1.3.13",
+        ("nav2_common", "nav2_msgs")),
+)
