@@ -118,3 +118,25 @@ def test_a_package_on_sas_builds_the_sas_component_on_demand_or_says_why_not(tmp
     with pytest.raises(MissingRequirement, match="depends on sas_core .* no Eigen 3 headers"):
         doctor.ensure_components_for(ws, ["sas_robot_driver_myrobot"])
     assert calls == ["sas"]
+
+
+@needs_wheels
+def test_a_package_on_nav2_msgs_builds_the_nav2_component_on_demand_or_says_why_not(tmp_path, monkeypatch):
+    """The nav2 lesson's package (issue 40) depends on nav2_msgs: the component is built as sas is, or the
+    check says in one line what is missing (the nav_msgs wheel: the nav2 extra)."""
+    from ros2course.errors import MissingRequirement
+    from ros2course.ros import doctor, underlay, underlay_build
+
+    calls = []
+    monkeypatch.setattr(underlay_build, "build", lambda **kw: calls.append(kw["component"].name))
+    monkeypatch.setattr(underlay, "missing_prerequisites", lambda: [])
+    monkeypatch.setattr(underlay, "nav2_missing_prerequisites", lambda prefix=None: [])
+    monkeypatch.setattr(env_mod, "ament_has", lambda name: False)
+    ws = _workspace_depending_on(tmp_path, "nav2_msgs")
+    assert doctor.ensure_components_for(ws, ["sas_robot_driver_myrobot"]) == ["nav2"]
+    assert calls == ["nav2"]
+    monkeypatch.setattr(underlay, "nav2_missing_prerequisites", lambda prefix=None: [
+        ("no nav_msgs (the ros-jazzy-nav-msgs wheel; nav2_msgs needs it)", "pip install 'ros2course[nav2]'")])
+    with pytest.raises(MissingRequirement, match="depends on nav2_msgs .* no nav_msgs") as raised:
+        doctor.ensure_components_for(ws, ["sas_robot_driver_myrobot"])
+    assert raised.value.hint == "pip install 'ros2course[nav2]'" and calls == ["nav2"]

@@ -202,14 +202,30 @@ def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
     return rows
 
 
+#: The packages the optional nav2 component provides (course/ros/underlay_pins.py NAV2), and nav_msgs, which
+#: nav2_msgs needs from the ``nav2`` extra's wheel: a learner's package that depends on one needs the component.
+NAV2_PROVIDES = frozenset({"nav2_msgs", "nav2_common", "ros_gz_interfaces", "geographic_msgs", "nav_msgs"})
+
+
+def _component_of(dependency: str) -> _underlay.Component | None:
+    """The optional component that provides ``dependency`` (a package name), or None."""
+    if dependency.startswith("sas_"):
+        return _underlay.SAS_COMPONENT
+    if dependency in NAV2_PROVIDES:
+        return _underlay.NAV2_COMPONENT
+    return None
+
+
 def ensure_components_for(workspace_root: Path, packages: list[str],
                           progress: Callable[[str], None] | None = None) -> list[str]:
     """Build the optional underlay components the learner's packages depend on, if missing.
 
-    Today one component: sas (SmartArmStack C++, tutorial ch. 29-31). When a
-    package in ``workspace_root/src`` that ``packages`` need depends on a
-    ``sas_*`` package that neither the workspace nor the ament index has, and
-    ROS 2 comes from the wheels, the sas component is built now (minutes; once).
+    sas (SmartArmStack C++, tutorial ch. 29-31: a ``sas_*`` dependency) and nav2 (the
+    author's nav2 and Gazebo chapters: :data:`NAV2_PROVIDES`, issue 40). When a package in
+    ``workspace_root/src`` that ``packages`` need depends on such a package that neither
+    the workspace nor the ament index has, and ROS 2 comes from the wheels, the component
+    is built now (minutes; once). With a system ROS nothing is built: its apt packages
+    are the learner's (``ros2course doctor`` names them).
 
     Args:
         workspace_root: the learner's workspace (holding ``src/``).
@@ -220,29 +236,35 @@ def ensure_components_for(workspace_root: Path, packages: list[str],
         the names of the components built (empty: nothing was needed).
 
     Raises:
-        MissingRequirement: sas is needed but cannot be built here (one line, why).
+        MissingRequirement: a component is needed but cannot be built here (one line, why, and the hint).
     """
     try:
         found = find_packages(workspace_root / "src")
     except NotGradable:
         return []  # the check reports the broken package.xml itself
-    needed = set()
+    needed: dict[str, set[str]] = {}
     for name in dependency_closure([p for p in packages if p in found], found):
         pkg = found[name][1]
         for dep in (*pkg.build_depends, *pkg.buildtool_depends, *pkg.exec_depends, *pkg.build_export_depends):
-            if dep.name.startswith("sas_") and dep.name not in found and not env_mod.ament_has(dep.name):
-                needed.add(dep.name)
+            component = _component_of(dep.name)
+            if component is not None and dep.name not in found and not env_mod.ament_has(dep.name):
+                needed.setdefault(component.name, set()).add(dep.name)
     if not needed or env_mod.detect().kind != "wheels":
         return []
-    what = ", ".join(sorted(needed))
-    missing = _underlay.missing_prerequisites() + _underlay.sas_missing_prerequisites()
-    if missing:
-        raise MissingRequirement(f"your package depends on {what} (SmartArmStack), which is not installed and "
-                                 f"cannot be built here: {missing[0][0]}", missing[0][1])
-    try:
-        underlay_build.build(component=_underlay.SAS_COMPONENT, progress=progress)
-    except CourseError as exc:
-        raise MissingRequirement(f"your package depends on {what}: {exc.message}",
-                                 "ros2course env --build --with sas") from None
+    built = []
+    for component in _underlay.OPTIONAL:
+        if component.name not in needed:
+            continue
+        what = f"{', '.join(sorted(needed[component.name]))} ({component.what})"
+        missing = _underlay.missing_prerequisites() + _underlay.component_missing_prerequisites(component)
+        if missing:
+            raise MissingRequirement(f"your package depends on {what}, which is not installed and cannot be "
+                                     f"built here: {missing[0][0]}", missing[0][1])
+        try:
+            underlay_build.build(component=component, progress=progress)
+        except CourseError as exc:
+            raise MissingRequirement(f"your package depends on {what}: {exc.message}",
+                                     f"ros2course env --build --with {component.name}") from None
+        built.append(component.name)
     env_mod.activate()
-    return ["sas"]
+    return built
