@@ -1,0 +1,442 @@
+"""The steps of the ``nav2-custom-nodes`` grader (graders/nav2_custom_nodes.py): one function per run of the
+learner's two nodes, and the lesson's contract values they and the grader's ``CHECKS`` share
+(chapters/nav2-custom-nodes/CONTRACT.md). A helper of one lesson (the placement rule in ``ros2course.kit``'s
+docstring).
+
+nav2 itself never runs here: the grader plays it.
+
+* For ``nav2_initial_pose_publisher_node`` it plays rviz2 and amcl, the two subscribers of ``/initialpose``
+  (``geometry_msgs/msg/PoseWithCovarianceStamped``; RELIABLE, VOLATILE, as amcl subscribes): the first
+  subscribes before the node starts, the second only :data:`THROTTLE_WINDOW` seconds after the node's first
+  "waiting" record. A node that publishes before the second joined is caught by the send stamp of the message
+  the first subscriber received (the DDS source timestamp: when the node wrote it), compared with the wall
+  time just before the second subscription was made: a node can only count the second subscriber after it
+  exists, so a node that waits for two never publishes earlier, however loaded the machine.
+* For ``nav2_navigate_to_pose_action_client_node`` it plays nav2's ``bt_navigator``: a
+  ``nav2_msgs/action/NavigateToPose`` server (:class:`ros2course.kit.actions.StandInActionServer`) that is
+  missing at first, then accepts the goal, sends feedback and succeeds; in other runs it aborts the goal
+  (with an error code and message of its own) or rejects it.
+
+Positions are metres in the ``map`` frame, variances square metres and square radians, times seconds.
+ROS modules are imported inside the functions that grade: a grader module is also loaded for its CHECKS
+alone (``ros2course list``, ``hint``), where ROS is not needed.
+"""
+
+from __future__ import annotations
+
+import re
+import string
+import time
+from collections.abc import Callable
+from typing import Any
+
+from ros2course import kit
+from ros2course.kit import Session, Unmet, services
+from ros2course.kit import actions as act
+from ros2course.kit.topics_services import numbers_in, reliable_qos
+
+PACKAGE = "python_package_that_uses_nav2"
+POSE_EXECUTABLE = POSE_NODE = "nav2_initial_pose_publisher_node"
+CLIENT_EXECUTABLE = "nav2_navigate_to_pose_action_client_node"
+CLIENT_NODE = "nav2_navigate_to_pose_action_client"
+TOPIC = "/initialpose"
+ACTION = "/navigate_to_pose"
+FRAME = "map"
+SUBSCRIBERS = 2  # rviz2 and amcl in the real demo
+#: The initial pose (metres, map frame) and its orientation (x, y, z, w): facing along the map's x axis.
+INITIAL_POSITION = (-2.1, -0.3, 0.0)
+IDENTITY = (0.0, 0.0, 0.0, 1.0)
+#: The covariance entries that are not 0 (row-major 6x6 over x, y, z, rotation about x, y, z): what rviz2's
+#: "2D Pose Estimate" sends, 0.25 m^2 on x and y and (pi/12)^2 rad^2 (15 degrees of standard deviation) on yaw.
+COVARIANCE = {0: 0.25, 7: 0.25, 35: 0.06853891909122467}
+COVARIANCE_TOLERANCE = 1e-6
+#: The goal (metres, map frame), orientation IDENTITY, behavior_tree empty (nav2's default tree).
+GOAL_POSITION = (1.0, -1.0, 0.0)
+POSITION_TOLERANCE = 1e-6  # metres: the values are given exactly
+#: Seconds: how far a header stamp may be from when its message was sent (pose) or received (goal).
+STAMP_TOLERANCE = 1.5
+#: Seconds a node runs with what it waits for missing before its first "waiting" record must be there.
+WAIT_WINDOW = 3.0
+#: Seconds what a node waits for stays missing after its first "waiting" record (at most once a second:
+#: three records; at every 0.1 s tick: about 25).
+THROTTLE_WINDOW = 2.5
+#: Seconds for the pose once the second subscriber has joined, and for a node to end by itself after its work.
+PUBLISH_TIMEOUT = 3.0
+END_TIMEOUT = 3.0
+#: Seconds for the log records the grader looks for (one goal lasts under a second).
+LOG_TIMEOUT = 5.0
+PERIOD = 0.1  # seconds between the grader's feedback messages
+#: Metres: a logged distance matches one the grader sent when it is this close (3 decimals printed).
+NUMBER_TOLERANCE = 0.0006
+#: What a record pretending a rejected goal ended says (a status, a result).
+PRETENDS = re.compile(r"succe|abort|cancel|unknown|status|result|error_code", re.IGNORECASE)
+
+
+# --- shared --------------------------------------------------------------------------------------------
+
+def navigate_to_pose(s: Session) -> type:
+    """``nav2_msgs/action/NavigateToPose`` of the ROS install (the underlay's nav2 component, or a system
+    ROS 2 Jazzy's ``ros-jazzy-nav2-msgs``).
+
+    The grading process loads an installed interface package's C libraries itself (``s.installed_type``
+    preloads ``lib<package>__*.so``); nav2_msgs' need those of ``geographic_msgs`` and ``nav_msgs``, which lie in
+    other prefixes and which the dynamic loader of an already running process does not look for on the
+    ``LD_LIBRARY_PATH`` set after it started ("cannot load libnav2_msgs__rosidl_generator_c.so"). A type of
+    each is loaded first, so their libraries are there when nav2_msgs' are loaded.
+
+    Raises:
+        NotGradable: nav2_msgs (or one of the two) is not installed, or its types do not load; the hint names
+            how to install them (the lesson's "How it is checked").
+    """
+    try:
+        s.installed_type("geographic_msgs", "msg", "GeoPose")
+        s.installed_type("nav_msgs", "msg", "Path")
+        return s.installed_type("nav2_msgs", "action", "NavigateToPose")
+    except kit.NotGradable as exc:
+        raise kit.NotGradable(f"this lesson needs the nav2 interfaces (nav2_msgs), which do not load here: {exc.message}",
+                              "ros2course env --build --with nav2 (with a system ROS 2 Jazzy: sudo apt install "
+                              "ros-jazzy-nav2-msgs)") from exc
+
+
+def _gone(proc: kit.LearnerProcess) -> Callable[[], bool]:
+    """True once ``proc`` has been dead for :data:`kit.LATE_DELIVERY` s: the records it logged (and the
+    messages it published) just before exiting are still on their way to the grader until then."""
+    def gone() -> bool:
+        return proc.poll() is not None and time.monotonic() - (proc.ended_at or 0.0) > kit.LATE_DELIVERY
+
+    return gone
+
+
+def _records(rosout: Any, node: str) -> list[str]:
+    """The log records of ``node``'s logger, oldest first, on one line each."""
+    return [" ".join(r.msg.split()) for r in rosout.records(node=node)]
+
+
+def _last(rosout: Any, node: str, count: int = 3) -> str:
+    return " | ".join(text[:80] for text in _records(rosout, node)[-count:]) or "no log records"
+
+
+def _has(text: str, value: float, tolerance: float = NUMBER_TOLERANCE) -> bool:
+    return any(abs(number - value) <= tolerance for number in numbers_in(text))
+
+
+def _close(found: tuple[float, ...], wanted: tuple[float, ...], tolerance: float = POSITION_TOLERANCE) -> bool:
+    return all(abs(a - b) <= tolerance for a, b in zip(found, wanted, strict=True))
+
+
+def _xyz(point: Any) -> tuple[float, float, float]:
+    return point.x, point.y, point.z
+
+
+def _xyzw(q: Any) -> tuple[float, float, float, float]:
+    return q.x, q.y, q.z, q.w
+
+
+def _shown(values: tuple[float, ...]) -> str:
+    return "(" + ", ".join(f"{v:g}" for v in values) + ")"
+
+
+def _stamp(header: Any) -> float:
+    return header.stamp.sec + header.stamp.nanosec * 1e-9
+
+
+def ends(s: Session, check_id: str, proc: kit.LearnerProcess, when: str, timeout: float = END_TIMEOUT) -> bool:
+    """Record ``check_id``: ``proc`` ends by itself within :data:`END_TIMEOUT` s, exit code 0, no traceback.
+
+    ``when`` says after what, for the feedback ("once it had published"); ``timeout``: the seconds still to
+    wait (less than END_TIMEOUT when the caller has waited already). Returns the verdict.
+    """
+    with s.phase("observe"):
+        kit.wait_until(lambda: proc.poll() is not None, timeout)
+    expected = f"the process ends by itself within {END_TIMEOUT:.0f} s, exit code 0, no traceback"
+    ended = proc.exit_state()
+    if ended is None:
+        return s.record(check_id, False, f"still running {END_TIMEOUT:.0f} s {when}", expected)
+    traceback = "Traceback (most recent call last)" in proc.stderr() + proc.stdout()
+    ok = ended.returncode == 0 and not traceback
+    return s.record(check_id, ok, f"{when}, the process {ended.describe()}"
+                    + (f" ({ended.last_line})" if ended.last_line and not ok else ""), expected)
+
+
+def interrupted_run(s: Session, check_id: str, path: Any, node: str, label: str) -> None:
+    """``check_id`` (a Ctrl+C check): start ``path`` with nothing it waits for in the graph; once it has logged
+    (that it waits), Ctrl+C is pressed as the part ends (:func:`kit.sigint_exit`)."""
+    rosout = s.graph.rosout()
+    proc = s.launch(path, label, [])
+    s.on_close(lambda: kit.sigint_exit(s, check_id, proc))
+    with s.phase("observe"):  # Ctrl+C once it says it waits (what a learner sees before pressing it)
+        kit.wait_until(lambda: bool(_records(rosout, node)), 2 * WAIT_WINDOW, abort=lambda: proc.poll() is not None)
+
+
+# --- the initial pose ----------------------------------------------------------------------------------
+
+def _says_it_waits(s: Session, check_id: str, rosout: Any, node: kit.StartedNode) -> bool:
+    """Record ``check_id``: within :data:`WAIT_WINDOW` s, with one subscriber on /initialpose, the node logs
+    that it waits (a record holding "wait" or "availab")."""
+    def said() -> list:
+        return rosout.records(node=POSE_NODE, match=lambda text: services.WAITING.search(text) is not None) or \
+            rosout.records(match=lambda text: services.WAITING.search(text) is not None)
+
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(said()), WAIT_WINDOW, abort=node.ended)
+    found = said()
+    expected = f"a log record saying it waits (e.g. '1 of {SUBSCRIBERS} subscribers on {TOPIC}, waiting...')"
+    if found:
+        return s.record(check_id, True, f"logged '{found[0].msg.strip()[:120]}' while one node subscribed to {TOPIC}",
+                        expected)
+    return s.record(check_id, False, f"in {WAIT_WINDOW:.0f} s with one subscriber on {TOPIC}: "
+                    f"{_last(rosout, POSE_NODE)}; {kit.process_state(node.proc)}", expected)
+
+
+def pose_run(s: Session, message_type: type, path: Any) -> None:
+    """pose_waits, pose_waits_throttled, pose_published, after_second, pose_frame, pose_values, covariance,
+    pose_stamp, published_once, pose_ends: one subscriber from the start, the second joining late."""
+    first = s.graph.topic(TOPIC, message_type, reliable_qos(100))  # rviz2: there before the node
+    rosout = s.graph.rosout()
+    node = kit.start_node(s, "pose_node_name", path, POSE_NODE, label=POSE_EXECUTABLE)
+    if _says_it_waits(s, "pose_waits", rosout, node):
+        services.waits_throttled(s, "pose_waits_throttled", rosout, node, node_name=POSE_NODE,
+                                 window=THROTTLE_WINDOW)
+    joined = time.time()  # just before the second subscription exists: nothing of the node can count it earlier
+    s.graph.topic(TOPIC, message_type, reliable_qos(100))  # amcl: joins late
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(first.messages()), PUBLISH_TIMEOUT, abort=_gone(node.proc))
+    messages, stamps = first.messages(), first.send_stamps()
+    if not messages:
+        s.record("pose_published", False, f"no message on {TOPIC}, {PUBLISH_TIMEOUT:.0f} s after the second subscriber "
+                 f"joined (one published before a subscriber matched is lost: the topic is VOLATILE); last log "
+                 f"records: {_last(rosout, POSE_NODE)}; {kit.process_state(node.proc)}",
+                 f"one PoseWithCovarianceStamped on {TOPIC}")
+        s.require("pose_published")
+    s.record("pose_published", True, f"a PoseWithCovarianceStamped on {TOPIC}", f"one PoseWithCovarianceStamped on {TOPIC}")
+    early = joined - stamps[0]
+    s.record("after_second", early <= 0,
+             f"published {early:.2f} s before the second subscriber joined (one subscriber then)" if early > 0 else
+             f"published {-early:.2f} s after the second subscriber joined",
+             f"published once {SUBSCRIBERS} nodes subscribe to {TOPIC} (the second joined "
+             f"{THROTTLE_WINDOW} s after your first 'waiting' record)")
+    _judge_pose(s, messages[0], stamps[0])
+    with s.phase("observe"):  # every message it publishes until it ends (or END_TIMEOUT)
+        kit.wait_until(_gone(node.proc), END_TIMEOUT + kit.LATE_DELIVERY)
+    count = len(first.messages())
+    s.record("published_once", count == 1,
+             f"{count} message(s) on {TOPIC} from the start until "
+             + ("the process ended" if node.proc.poll() is not None else f"{END_TIMEOUT:.0f} s after the first"),
+             "one message")
+    ends(s, "pose_ends", node.proc, "once it had published", timeout=0.0)  # waited above
+
+
+def _judge_pose(s: Session, message: Any, sent: float) -> None:
+    """pose_frame, pose_values, covariance, pose_stamp on the first message (``sent``: its send stamp, seconds
+    since the epoch)."""
+    s.record("pose_frame", message.header.frame_id == FRAME, f"header.frame_id '{message.header.frame_id}'",
+             f"'{FRAME}'")
+    position, orientation = _xyz(message.pose.pose.position), _xyzw(message.pose.pose.orientation)
+    s.record("pose_values", _close(position, INITIAL_POSITION) and _close(orientation, IDENTITY),
+             f"position {_shown(position)}, orientation {_shown(orientation)}",
+             f"position {_shown(INITIAL_POSITION)}, orientation {_shown(IDENTITY)} (no rotation)")
+    covariance = list(message.pose.covariance)
+    wrong = [(i, v) for i, v in enumerate(covariance) if abs(v - COVARIANCE.get(i, 0.0)) > COVARIANCE_TOLERANCE]
+    nonzero = ", ".join(f"[{i}] = {v:g}" for i, v in enumerate(covariance) if v) or "all 0"
+    s.record("covariance", not wrong,
+             f"entries not 0: {nonzero}" + (f"; {len(wrong)} of 36 differ, first at index {wrong[0][0]} (row "
+                                           f"{wrong[0][0] // 6}, column {wrong[0][0] % 6})" if wrong else ""),
+             ", ".join(f"[{i}] = {v:g}" for i, v in COVARIANCE.items()) + ", every other entry 0 (row-major 6x6: "
+             "x, y, z, roll, pitch, yaw)")
+    stamp = _stamp(message.header)
+    s.record("pose_stamp", abs(stamp - sent) <= STAMP_TOLERANCE,
+             "header.stamp is 0 (never set)" if stamp == 0 else
+             f"header.stamp {abs(stamp - sent):.2f} s {'before' if stamp < sent else 'after'} the message was sent",
+             f"stamped with the node's clock as it publishes (within {STAMP_TOLERANCE} s of sending)")
+
+
+# --- the action client ---------------------------------------------------------------------------------
+
+def _feedback(action: Any, distances: list[float]) -> list[Any]:
+    """Feedback messages: the robot closing in on the goal along a straight line, ``distances`` metres away."""
+    messages = []
+    for index, distance in enumerate(distances):
+        message = action.Feedback()
+        message.current_pose.header.frame_id = FRAME
+        message.current_pose.pose.position.x = GOAL_POSITION[0] - distance
+        message.current_pose.pose.position.y = GOAL_POSITION[1]
+        message.current_pose.pose.orientation.w = 1.0
+        message.navigation_time.sec = index
+        message.estimated_time_remaining.sec = len(distances) - index
+        message.distance_remaining = distance
+        messages.append(message)
+    return messages
+
+
+def _script(action: Any, distances: list[float], status: int, code: int = 0, text: str = "") -> act.Script:
+    result = action.Result()
+    result.error_code, result.error_msg = code, text
+    return act.Script(accept=True, feedback=_feedback(action, distances), result=result, status=status, period=PERIOD)
+
+
+def goal_run(s: Session, action: Any, path: Any) -> None:
+    """client_waits, client_waits_throttled, goal_sent, goal_pose, goal_stamp, logs_feedback, logs_result, ends."""
+    # none near 1.0, the goal's x, which a record of the goal sent may hold
+    distances = sorted([mm / 1000 for mm in s.random.sample(range(1050, 2500), 2)]
+                       + [mm / 1000 for mm in s.random.sample(range(50, 950), 2)], reverse=True) + [0.0]
+    server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _script(action, distances, act.SUCCEEDED))
+    rosout = s.graph.rosout()
+    node = kit.start_node(s, "client_node_name", path, CLIENT_NODE, label=CLIENT_EXECUTABLE)
+    if services.says_it_waits(s, "client_waits", rosout, node, ACTION, timeout=WAIT_WINDOW, what="action server"):
+        services.waits_throttled(s, "client_waits_throttled", rosout, node, node_name=CLIENT_NODE,
+                                 window=THROTTLE_WINDOW)
+    server.offer()
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(server.goals), LOG_TIMEOUT, abort=node.ended)
+    expected = f"one goal on {ACTION}"
+    if not server.goals:
+        s.record("goal_sent", False, f"no goal in {LOG_TIMEOUT:.0f} s after the server appeared; last log records: "
+                 f"{_last(rosout, CLIENT_NODE)}; {kit.process_state(node.proc)}", expected)
+        s.require("goal_sent")
+    received = time.time() - (time.monotonic() - server.goals[0][0])  # wall time the first goal arrived
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(server.ended), len(distances) * PERIOD + 2.0, abort=node.ended)
+        kit.wait_until(lambda: any(re.search(r"succe", text, re.IGNORECASE) for text in _records(rosout, CLIENT_NODE)),
+                       LOG_TIMEOUT, abort=_gone(node.proc))
+    # counted once the goal has ended: a client that sends again at every tick has sent several by now
+    s.record("goal_sent", len(server.goals) == 1, f"{len(server.goals)} goal(s) by the time the first had ended",
+             expected)
+    _judge_goal(s, server.goals[0][1], received)
+    records = _records(rosout, CLIENT_NODE)
+    found = _feedback_records(records, distances)
+    anywhere = [d for d in distances if any(_has(text, d) for text in records)]
+    s.record("logs_feedback", len(found) == len(distances),
+             f"{len(found)} of the {len(distances)} distances sent ({', '.join(f'{d:.3f}' for d in distances)}) "
+             "found in the log, each in a record of its own, in the order sent, before the result"
+             + ("" if len(anywhere) == len(found) else
+                f" ({len(anywhere)} written somewhere: several in one record, out of order, or only with the result)")
+             + ("" if found else f"; last log records: {_last(rosout, CLIENT_NODE)}"),
+             "each distance_remaining in a log record of its own as it arrives (the logger, not print())",
+             fraction=len(found) / len(distances))
+    said = [text for text in records if re.search(r"succe", text, re.IGNORECASE)]
+    s.record("logs_result", bool(said), f"'{said[0][:120]}'" if said else
+             f"no record names SUCCEEDED; last log records: {_last(rosout, CLIENT_NODE)}",
+             "a log record naming the status SUCCEEDED")
+    ends(s, "ends", node.proc, "once its goal had SUCCEEDED")
+
+
+def _judge_goal(s: Session, goal: Any, received: float) -> None:
+    """goal_pose and goal_stamp on the first goal (``received``: when it reached the server, seconds since
+    the epoch)."""
+    pose = goal.pose
+    position, orientation = _xyz(pose.pose.position), _xyzw(pose.pose.orientation)
+    problems = []
+    if pose.header.frame_id != FRAME:
+        problems.append(f"header.frame_id '{pose.header.frame_id}'")
+    if not _close(position, GOAL_POSITION):
+        problems.append(f"position {_shown(position)}")
+    if not _close(orientation, IDENTITY):
+        problems.append(f"orientation {_shown(orientation)}")
+    if goal.behavior_tree:
+        problems.append(f"behavior_tree '{goal.behavior_tree[:60]}'")
+    s.record("goal_pose", not problems, "; ".join(problems) or
+             f"'{FRAME}', position {_shown(position)}, orientation {_shown(orientation)}, behavior_tree ''",
+             f"header.frame_id '{FRAME}', position {_shown(GOAL_POSITION)}, orientation {_shown(IDENTITY)}, "
+             "behavior_tree '' (nav2's default tree)")
+    stamp = _stamp(pose.header)
+    s.record("goal_stamp", abs(stamp - received) <= STAMP_TOLERANCE,
+             "pose.header.stamp is 0 (never set)" if stamp == 0 else
+             f"pose.header.stamp {abs(stamp - received):.2f} s {'before' if stamp < received else 'after'} the goal "
+             "reached the server",
+             f"stamped with the node's clock as the goal is sent (within {STAMP_TOLERANCE} s of its arrival)")
+
+
+def _feedback_records(records: list[str], distances: list[float]) -> list[float]:
+    """The distances logged as the feedback arrived: each in a record of its own (one record matches one
+    distance), in the order sent, before the record naming the result (SUCCEEDED)."""
+    found: list[float] = []
+    for text in records:
+        if len(found) == len(distances) or re.search(r"succe", text, re.IGNORECASE):
+            break
+        if _has(text, distances[len(found)]):
+            found.append(distances[len(found)])
+    return found
+
+
+def aborted_run(s: Session, action: Any, path: Any) -> None:
+    """handles_abort: the grader's server aborts the goal after two feedback messages, with an error code and
+    message of its own; the client must log ABORTED, both, and end by itself."""
+    code = s.random.randint(101, 399)
+    token = "".join(s.random.choice(string.ascii_uppercase) for _ in range(6))
+    text = f"no path to the goal ({token})"
+    server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _script(
+        action, [0.6, 0.5], act.ABORTED, code, text))
+    rosout = s.graph.rosout()
+    server.offer()
+    proc = s.launch(path, f"{CLIENT_EXECUTABLE}.aborted", [])
+
+    def shown() -> bool:
+        records = _records(rosout, CLIENT_NODE)
+        return all(any(test(r) for r in records) for test in (
+            lambda r: re.search(r"abort", r, re.IGNORECASE), lambda r: code in numbers_in(r), lambda r: token in r))
+
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(server.goals), 2 * LOG_TIMEOUT, abort=lambda: proc.poll() is not None)
+        if not server.goals:
+            raise Unmet(f"no goal reached the server; last log records: {_last(rosout, CLIENT_NODE)}; "
+                        f"{kit.process_state(proc)}")
+        kit.wait_until(shown, LOG_TIMEOUT, abort=_gone(proc))
+        kit.wait_until(lambda: proc.poll() is not None, END_TIMEOUT)
+        if proc.poll() is not None:  # what it logged just before exiting may still be on its way
+            kit.wait_until(lambda: False, 0.5)
+    records = _records(rosout, CLIENT_NODE)
+    problems = []
+    if not any(re.search(r"abort", r, re.IGNORECASE) for r in records):
+        problems.append("no log record names the status ABORTED")
+    if not any(code in numbers_in(r) for r in records):
+        problems.append(f"no log record holds the error_code {code}")
+    if not any(token in r for r in records):
+        problems.append(f"no log record holds the error_msg '{text}'")
+    problems += _not_ended(proc, "after the abort")
+    said = [r for r in records if re.search(r"abort", r, re.IGNORECASE)]
+    s.record("handles_abort", not problems, "; ".join(problems) + f" (last records: {_last(rosout, CLIENT_NODE)})"
+             if problems else f"'{said[0][:120]}', then the process {proc.exit_state().describe()}",
+             f"a log record naming ABORTED, the error_code ({code}) and the error_msg ('{text}'), then exit code 0, "
+             "no traceback")
+
+
+def _not_ended(proc: kit.LearnerProcess, when: str) -> list[str]:
+    """What is wrong with how ``proc`` ended: still running, an exit code other than 0, a traceback."""
+    ended = proc.exit_state()
+    if ended is None:
+        return [f"still running {END_TIMEOUT:.0f} s {when}"]
+    traceback = "Traceback (most recent call last)" in proc.stderr() + proc.stdout()
+    if ended.returncode != 0 or traceback:
+        return [f"the process {ended.describe()}" + (f" ({ended.last_line})" if ended.last_line else "")]
+    return []
+
+
+def rejected_run(s: Session, action: Any, path: Any) -> None:
+    """handles_rejection: the grader's server rejects the goal."""
+    server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: act.Script(accept=False))
+    rosout = s.graph.rosout()
+    server.offer()
+    proc = s.launch(path, f"{CLIENT_EXECUTABLE}.rejected", [])
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(server.goals), 2 * LOG_TIMEOUT, abort=lambda: proc.poll() is not None)
+        if not server.goals:
+            raise Unmet(f"no goal reached the server; last log records: {_last(rosout, CLIENT_NODE)}; "
+                        f"{kit.process_state(proc)}")
+        kit.wait_until(lambda: any(re.search(r"reject", text, re.IGNORECASE) for text in _records(rosout, CLIENT_NODE)),
+                       LOG_TIMEOUT, abort=_gone(proc))
+        kit.wait_until(lambda: proc.poll() is not None, END_TIMEOUT)
+        if proc.poll() is not None:  # what it logged just before exiting may still be on its way
+            kit.wait_until(lambda: False, 0.5)
+    records = _records(rosout, CLIENT_NODE)
+    said = [text for text in records if re.search(r"reject", text, re.IGNORECASE)]
+    after = records[records.index(said[0]) + 1:] if said else []
+    pretends = [text for text in after if PRETENDS.search(text) and not re.search(r"reject", text, re.IGNORECASE)]
+    problems = [] if said else [f"no log record says the goal was rejected (last records: {_last(rosout, CLIENT_NODE)})"]
+    problems += _not_ended(proc, "after the rejection")
+    if pretends:
+        problems.append(f"after the rejection, a record that pretends the goal ended: '{pretends[0][:120]}' (a rejected "
+                        "goal has no result: do not ask for it)")
+    s.record("handles_rejection", not problems, "; ".join(problems) or f"'{said[0][:120]}', then the process "
+             f"{proc.exit_state().describe()}", "a log record saying the goal was rejected, no status or result "
+             "logged after it, then exit code 0, no traceback")
+
