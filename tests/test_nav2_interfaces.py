@@ -82,3 +82,27 @@ def test_python_imports_the_nav2_and_gazebo_interfaces(nav2_env):
                           stdin=subprocess.DEVNULL, check=False)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout.split() == ["bt.xml", "1.5", "robot"], proc.stdout
+
+
+def test_grading_process_loads_nav2_msgs_without_loading_its_dependencies_first(nav2_env):
+    """The engine's interface loader (course/ros/interfaces.py) preloads the generated libraries of an interface
+    package's dependencies from their own prefixes: nav2_msgs needs geographic_msgs' and nav_msgs', which are
+    not on the library path the process started with (a grading process is already running when it
+    asks for the type). Without that preload this fails with "cannot load libnav2_msgs__rosidl_generator_c.so"."""
+    code = ("import os\n"
+            "from ros2course.ros import env as env_mod\n"
+            "from ros2course.ros.interfaces import workspace_type\n"
+            "base = dict(os.environ)\n"
+            "env_mod.activate(base)\n"
+            "NavigateToPose = workspace_type(base, 'nav2_msgs', 'action', 'NavigateToPose')\n"
+            "from rclpy.serialization import serialize_message\n"
+            "goal = NavigateToPose.Goal(behavior_tree='bt.xml')\n"
+            "goal.pose.header.frame_id = 'map'\n"
+            "print(len(serialize_message(goal)) > 0)\n")
+    started = {key: value for key, value in os.environ.items() if key != "LD_LIBRARY_PATH"}
+    nav2_lib = [p for p in nav2_env.get("LD_LIBRARY_PATH", "").split(os.pathsep) if "nav2" in p]
+    started["LD_LIBRARY_PATH"] = os.pathsep.join(
+        p for p in os.environ.get("LD_LIBRARY_PATH", "").split(os.pathsep) if p and p not in nav2_lib)
+    proc = subprocess.run([sys.executable, "-c", code], env=started, capture_output=True, text=True, timeout=120,
+                          stdin=subprocess.DEVNULL, check=False)
+    assert proc.returncode == 0 and proc.stdout.strip() == "True", proc.stderr[-2000:]

@@ -9,7 +9,10 @@ linker and ``PYTHONPATH`` would have done:
   typesupport dispatch finds ``lib<pkg>__rosidl_typesupport_*.so`` through
   ``rcpputils::find_library_path``, which reads that variable at call time;
 * load the package's ``lib*.so`` with ``RTLD_GLOBAL`` so the Python extension's
-  ``NEEDED`` entries resolve (the generated libraries carry no RUNPATH);
+  ``NEEDED`` entries resolve (the generated libraries carry no RUNPATH), after
+  those of the interface packages its ``package.xml`` depends on that the process
+  has not loaded yet, each from its own prefix (:func:`_preload_dependencies`:
+  nav2_msgs needs geographic_msgs' and nav_msgs', from other prefixes);
 * add the package's Python folder to ``sys.path`` and import.
 
 One process holds one build of each interface package at a time. When a
@@ -35,6 +38,52 @@ from typing import Any
 
 from ros2course.errors import NotGradable
 from ros2course.ros.index import package_prefix
+from ros2course.ros.manifests import read_manifest
+
+
+def _loaded_libraries() -> set[str]:
+    """The file names of the shared libraries this process has mapped (``/proc/self/maps``); empty elsewhere."""
+    try:
+        maps = Path("/proc/self/maps").read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return set()
+    return {Path(line.split()[-1]).name for line in maps.splitlines() if ".so" in line and "/" in line}
+
+
+def _preload_dependencies(overlay: dict[str, str], package: str, prefix: Path, seen: set[str]) -> None:
+    """Load, dependencies first, the generated libraries of the interface packages ``package`` depends on.
+
+    An interface package's typesupport libraries need those of the interface packages its ``package.xml``
+    names (``nav2_msgs``: ``geographic_msgs``, ``nav_msgs``...). When those lie in another prefix than the
+    ones on the library path the process started with (an underlay component, a wheel installed later),
+    the dynamic loader of a running process does not find them through ``LD_LIBRARY_PATH`` set now
+    (dlopen reads it once, at start-up: ld.so(8)), so each is loaded from its own prefix first. A library
+    the process has mapped already (rclpy's own messages, from wherever they were loaded) is left alone:
+    loading another copy of one soname would give the process two type registries.
+
+    Args:
+        overlay: the environment whose ament index is searched (``GradingSession.overlay()`` or ``base_env``).
+        package: the interface package (its ``share/<package>/package.xml`` under ``prefix`` is read).
+        seen: the packages visited already in this lookup (cycles and shared dependencies, once each).
+    """
+    try:
+        manifest = read_manifest(prefix / "share" / package / "package.xml")
+    except NotGradable:
+        return  # no readable package.xml: its own libraries are loaded as before, and say so if they fail
+    names = {d.name for key in ("build_depends", "exec_depends", "build_export_depends")
+             for d in getattr(manifest, key)}
+    loaded = _loaded_libraries()
+    for name in sorted(names - seen):
+        seen.add(name)
+        where = package_prefix(name, overlay)
+        if where is None or not any((where / "lib").glob(f"lib{name}__*.so")):
+            continue  # not installed here, or not an interface package
+        _preload_dependencies(overlay, name, where, seen)
+        if not any(f"lib{name}__" in lib for lib in loaded):
+            try:
+                _preload(where / "lib", name)
+            except NotGradable:
+                pass  # the package's own libraries then fail to load, and that error names what is missing
 
 
 def _preload(lib_dir: Path, package: str) -> None:
@@ -107,6 +156,7 @@ def _import_type(prefix: Path, overlay: dict[str, str], package: str, kind: str,
     _forget_other_prefix(package, prefix)
     module = sys.modules.get(module_name)
     if module is None:
+        _preload_dependencies(overlay, package, prefix, {package})
         _preload(prefix / "lib", package)
         for entry in reversed(overlay.get("PYTHONPATH", "").split(os.pathsep)):
             if entry and entry.startswith(str(prefix)) and entry not in sys.path:
