@@ -199,7 +199,23 @@ def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
         ok, detail = env_mod.probe_requirement(name)
         rows.append(DoctorRow(name, ok, detail, "" if ok else env_mod.INSTALL_HINTS.get(name, "")))
     rows.append(DoctorRow("ccache (optional)", True, compiler_cache.describe()))
+    rows.append(physics_row())
     return rows
+
+
+def physics_row() -> DoctorRow:
+    """The row "MuJoCo physics (optional)": the engine of the simulated Gazebo world (ros2course.run.world;
+    only the gazebo-custom-nodes lesson needs it; issue 40). Read from the package's metadata, not imported."""
+    import importlib.metadata  # noqa: PLC0415 - only doctor reads it
+
+    try:
+        version = importlib.metadata.version("mujoco")
+    except importlib.metadata.PackageNotFoundError:
+        version = None
+    if version is None:
+        return DoctorRow("MuJoCo physics (optional)", False, "mujoco not installed (only the Gazebo lesson needs it)",
+                         "pip install 'ros2course[gazebo]'")
+    return DoctorRow("MuJoCo physics (optional)", True, f"mujoco {version} (the Gazebo lesson's simulated world)")
 
 
 #: The packages the optional nav2 component provides (course/ros/underlay_pins.py NAV2), and nav_msgs, which
