@@ -368,6 +368,27 @@ def test_the_doctor_row_of_nav2(monkeypatch):
     assert row.ok and "from the system ROS (/opt/ros/jazzy)" in row.detail and row.hint == ""
 
 
+def test_the_doctor_rows_of_the_optional_components_come_from_one_function(monkeypatch):
+    """sas and nav2 rows: one shape (built, or not built with the command or what the build lacks); a system ROS
+    has no sas row (nothing of SmartArmStack is in its apt packages here)."""
+    from ros2course.ros import doctor
+    from ros2course.ros.env import RosInstall
+
+    wheels = RosInstall("wheels", Path("/venv"), "jazzy")
+    monkeypatch.setattr(underlay, "built", lambda component: None)
+    monkeypatch.setattr(underlay, "sas_missing_prerequisites", lambda: [("no pybind11", "pip install 'ros2course[sas]'")])
+    row = doctor.component_row(underlay.SAS_COMPONENT, wheels)
+    assert (row.component, row.ok) == ("sas (optional)", False)
+    assert "cannot build: no pybind11" in row.detail and "sas lesson" in row.detail
+    assert row.hint == "pip install 'ros2course[sas]'"
+    stamp = {"built": "2026-11-28T10:00:00+00:00", "restored_from": "/cache/x.tar"}
+    monkeypatch.setattr(underlay, "built", lambda component: underlay.Underlay(Path("/u/sas/builds/k"), stamp))
+    row = doctor.component_row(underlay.SAS_COMPONENT, wheels)
+    assert row.ok and row.detail.startswith(f"{len(underlay.SAS_COMPONENT.pins)} pinned repos, restored")
+    assert doctor.component_row(underlay.SAS_COMPONENT, RosInstall("system", Path("/opt/ros/jazzy"), "jazzy")) is None
+    assert doctor.NAV2_PROVIDES == {"ros_gz_interfaces", "geographic_msgs", "nav2_common", "nav2_msgs", "nav_msgs"}
+
+
 def test_activation_puts_a_built_nav2_on_top_of_the_underlay(tmp_path, monkeypatch):
     import sys
 

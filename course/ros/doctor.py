@@ -38,43 +38,76 @@ class DoctorRow:
 
 #: The ``doctor`` row of the optional nav2 component.
 NAV2_ROW = "nav2 interfaces (optional)"
-#: Who needs the nav2 component (said when it is missing, which is no fault).
-_NAV2_USERS = "only the Gazebo and nav2 chapters need them"
 
 
-def nav2_row(install: env_mod.RosInstall, failure: str = "") -> DoctorRow:
-    """The ``doctor`` row "nav2 interfaces (optional)": nav2_msgs and ros_gz_interfaces (GitHub issue 40).
+@dataclasses.dataclass(frozen=True)
+class _OptionalRow:
+    """How ``doctor`` shows one optional underlay component (``ros2course.ros.underlay.OPTIONAL``).
+
+    Attributes:
+        label: the row's name.
+        users: who needs it (said when it is missing, which is no fault).
+        build: the command that builds it, with how long it takes on 2 cores.
+        provides: the packages a sourced system ROS must have instead (its ament index); () when a system ROS
+            has no row for it.
+        apt: the apt packages that give ``provides``.
+    """
+
+    label: str
+    users: str
+    build: str
+    provides: tuple[str, ...] = ()
+    apt: tuple[str, ...] = ()
+
+
+_OPTIONAL_ROWS = {
+    "sas": _OptionalRow("sas (optional)", "only the sas lesson's C++ path needs it",
+                        "ros2course env --build --with sas (about 6 min)"),
+    "nav2": _OptionalRow(NAV2_ROW, "only the Gazebo and nav2 chapters need them",
+                         "ros2course env --build --with nav2 (7-14 min on 2 cores)",
+                         ("nav2_msgs", "ros_gz_interfaces"), _underlay.NAV2_APT_PACKAGES),
+}
+
+
+def component_row(component: _underlay.Component, install: env_mod.RosInstall, failure: str = "") -> DoctorRow | None:
+    """The ``doctor`` row of an optional underlay component (sas, nav2: GitHub issue 40).
 
     Args:
+        component: one of :data:`ros2course.ros.underlay.OPTIONAL`.
         install: the ROS install in use (:func:`ros2course.ros.env.detect`).
         failure: the one-line message of a build that ``doctor --fix`` just tried and that failed.
 
     Returns:
-        With a sourced system ROS: present when both packages are in its ament index,
-        else missing with the apt packages that give them
-        (:data:`~ros2course.ros.underlay.NAV2_APT_PACKAGES`); nothing is built there.
-        With the wheels: built (when, where) or not built, with the command that builds
-        it, or what the build lacks (the nav_msgs wheel). ``ok`` is False when it is
-        not there, but the row is optional: ``doctor``'s exit status ignores it.
+        With a sourced system ROS: present when the packages the component stands for are in its ament
+        index, else missing with the apt packages that give them; nothing is built there (None: no row,
+        for a component a system ROS has no packages for). With the wheels: built (when, where) or not
+        built, with the command that builds it, or what the build lacks. ``ok`` is False when it is not
+        there, but the row is optional: ``doctor``'s exit status ignores it.
     """
-    wanted = ("nav2_msgs", "ros_gz_interfaces")
+    text = _OPTIONAL_ROWS[component.name]
     if install.kind == "system":
-        absent = [name for name in wanted if not env_mod.ament_has(name)]
+        if not text.provides:
+            return None
+        absent = [name for name in text.provides if not env_mod.ament_has(name)]
         if not absent:
-            return DoctorRow(NAV2_ROW, True, f"{' and '.join(wanted)} from the system ROS ({install.prefix})")
-        return DoctorRow(NAV2_ROW, False, f"{' and '.join(absent)} not installed ({_NAV2_USERS})",
-                         f"sudo apt-get install {' '.join(_underlay.NAV2_APT_PACKAGES)}")
-    component = _underlay.NAV2_COMPONENT
+            return DoctorRow(text.label, True, f"{' and '.join(text.provides)} from the system ROS ({install.prefix})")
+        return DoctorRow(text.label, False, f"{' and '.join(absent)} not installed ({text.users})",
+                         f"sudo apt-get install {' '.join(text.apt)}")
     on_top = _underlay.built(component)
     if on_top is not None:
         how = (f"restored {on_top.stamp.get('built', '?')} from the build cache" if on_top.stamp.get("restored_from")
                else f"built {on_top.stamp.get('built', '?')} in {on_top.stamp.get('seconds', '?')} s")
-        return DoctorRow(NAV2_ROW, True, f"{', '.join(wanted)} ({len(component.pins)} pinned repos), {how} "
-                                         f"into {on_top.prefix}")
-    missing = _underlay.nav2_missing_prerequisites()
+        what = f"{', '.join(text.provides)} ({len(component.pins)} pinned repos)" if text.provides \
+            else f"{len(component.pins)} pinned repos"
+        return DoctorRow(text.label, True, f"{what}, {how} into {on_top.prefix}")
+    missing = _underlay.component_missing_prerequisites(component)
     why = failure or (f"not built; cannot build: {missing[0][0]}" if missing else "not built")
-    return DoctorRow(NAV2_ROW, False, f"{why} ({_NAV2_USERS})",
-                     missing[0][1] if missing else "ros2course env --build --with nav2 (7-14 min on 2 cores)")
+    return DoctorRow(text.label, False, f"{why} ({text.users})", missing[0][1] if missing else text.build)
+
+
+def nav2_row(install: env_mod.RosInstall, failure: str = "") -> DoctorRow:
+    """:func:`component_row` of the nav2 component (nav2_msgs and ros_gz_interfaces)."""
+    return component_row(_underlay.NAV2_COMPONENT, install, failure)
 
 
 def _underlay_rows(fix: bool, sources: Path | None) -> list[DoctorRow]:
@@ -92,7 +125,7 @@ def _underlay_rows(fix: bool, sources: Path | None) -> list[DoctorRow]:
     have_osrf = importlib.util.find_spec("osrf_pycommon") is not None
     rows.append(DoctorRow("osrf_pycommon", have_osrf, "importable" if have_osrf else "not installed (launch needs it)",
                           "" if have_osrf else "pip install osrf-pycommon (or ros2course doctor --fix)"))
-    failure = sas_failure = ""
+    failure = ""
     if fix and _underlay.built(_underlay.JAZZY_COMPONENT) is None:
         try:
             underlay_build.build(sources)
@@ -121,32 +154,18 @@ def _underlay_rows(fix: bool, sources: Path | None) -> list[DoctorRow]:
             why = failure or (f"not built; cannot build: {missing[0][0]}" if missing else "not built")
             rows.append(DoctorRow(pin.repo, False, why,
                                   missing[0][1] if missing else "ros2course doctor --fix (about 4 min on 2 cores)"))
-    sas = _underlay.SAS_COMPONENT
-    if fix and _underlay.built(_underlay.JAZZY_COMPONENT) is not None and _underlay.built(sas) is None \
-            and not _underlay.sas_missing_prerequisites():
-        try:
-            underlay_build.build(sources, component=sas)
-        except CourseError as exc:
-            sas_failure = exc.message
-        env_mod.activate()
-    on_top = _underlay.built(sas)
-    if on_top is not None:
-        rows.append(DoctorRow("sas (optional)", True, f"{len(sas.pins)} pinned repos, built "
-                              f"{on_top.stamp.get('built', '?')} into {on_top.prefix}"))
-    else:
-        missing = _underlay.sas_missing_prerequisites()
-        why = sas_failure or (f"not built; cannot build: {missing[0][0]}" if missing else "not built")
-        rows.append(DoctorRow("sas (optional)", False, why + " (only the sas lesson's C++ path needs it)",
-                              missing[0][1] if missing else "ros2course env --build --with sas (about 6 min)"))
-    nav2_failure = ""
-    if fix and _underlay.built(_underlay.JAZZY_COMPONENT) is not None and _underlay.built(_underlay.NAV2_COMPONENT) \
-            is None and not _underlay.nav2_missing_prerequisites():
-        try:
-            underlay_build.build(sources, component=_underlay.NAV2_COMPONENT)
-        except CourseError as exc:
-            nav2_failure = exc.message
-        env_mod.activate()
-    rows.append(nav2_row(env_mod.detect(), nav2_failure))
+    for component in _underlay.OPTIONAL:  # each on top of the underlay only
+        component_failure = ""
+        if fix and _underlay.built(_underlay.JAZZY_COMPONENT) is not None and _underlay.built(component) is None \
+                and not _underlay.component_missing_prerequisites(component):
+            try:
+                underlay_build.build(sources, component=component)
+            except CourseError as exc:
+                component_failure = exc.message
+            env_mod.activate()
+        row = component_row(component, env_mod.detect(), component_failure)
+        if row is not None:
+            rows.append(row)
     return rows
 
 
@@ -193,8 +212,8 @@ def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
                 )
             )
         rows += _underlay_rows(fix, sources)
-    elif install.kind == "system":
-        rows.append(nav2_row(install))
+    elif install.kind == "system":  # nothing is built: the rows say which apt packages give the components
+        rows += [row for component in _underlay.OPTIONAL if (row := component_row(component, install)) is not None]
     for name in KNOWN_REQUIREMENTS:
         ok, detail = env_mod.probe_requirement(name)
         rows.append(DoctorRow(name, ok, detail, "" if ok else env_mod.INSTALL_HINTS.get(name, "")))
@@ -220,7 +239,7 @@ def physics_row() -> DoctorRow:
 
 #: The packages the optional nav2 component provides (course/ros/underlay_pins.py NAV2), and nav_msgs, which
 #: nav2_msgs needs from the ``nav2`` extra's wheel: a learner's package that depends on one needs the component.
-NAV2_PROVIDES = frozenset({"nav2_msgs", "nav2_common", "ros_gz_interfaces", "geographic_msgs", "nav_msgs"})
+NAV2_PROVIDES = frozenset({name for pin in _underlay.NAV2_COMPONENT.pins for name in pin.packages or ()} | {"nav_msgs"})
 
 
 def _component_of(dependency: str) -> _underlay.Component | None:
