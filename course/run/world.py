@@ -73,10 +73,6 @@ from typing import Any, NamedTuple
 from ros2course.errors import MissingRequirement, NotGradable
 from ros2course.run.probes import record, spin_until_shutdown, stop_spinning
 
-# The world renders nothing: without an OpenGL backend, importing mujoco loads none (with the default, its
-# glfw probe starts a Python subprocess at import and evals what it prints, which failed under pdoc). Only set
-# when unset: a process that renders (MUJOCO_GL=egl) keeps its choice.
-os.environ.setdefault("MUJOCO_GL", "disable")
 try:
     import mujoco
     import numpy
