@@ -153,6 +153,21 @@ def current() -> SubmissionIdentity | None:
     return _identity
 
 
+def parent_alive_guard(parent_pid: int | None = None) -> list[str]:
+    """A command prefix that execs the rest only if its parent is still ``parent_pid`` (default: this process).
+
+    ``setpriv --pdeathsig KILL`` closes a race of its own only half: the signal is armed by
+    ``prctl(PR_SET_PDEATHSIG)`` in the child, and a parent that dies between the ``fork`` and
+    that call never sends it (prctl(2) says to check ``getppid()`` after it). Placed *after*
+    the ``setpriv`` in an argv, this ``/bin/sh`` reads ``$PPID`` (``getppid()`` at its start, so
+    after the prctl) and ends with 137 (128 + SIGKILL, as if the signal had come) when the
+    parent has gone; otherwise it ``exec``s, so the PID and exit code stay the program's.
+    Seen in CI: ``ros2course check`` SIGKILLed 10 ms after starting a node left the node running.
+    """
+    pid = os.getpid() if parent_pid is None else parent_pid
+    return ["/bin/sh", "-c", '[ "$PPID" = "$0" ] || exit 137; exec "$@"', str(pid)]
+
+
 def command(argv: list[str], env: dict[str, str], pdeathsig: bool = False,
             identity: SubmissionIdentity | None = None) -> tuple[list[str], dict[str, str]]:
     """``(argv, env)`` to give ``subprocess`` so that ``argv`` runs as the submission.
@@ -179,7 +194,7 @@ def command(argv: list[str], env: dict[str, str], pdeathsig: bool = False,
                prlimit, f"--nproc={identity.nproc}:{identity.nproc}", "--",
                setpriv, f"--reuid={identity.uid}", f"--regid={identity.gid}", "--clear-groups",
                "--no-new-privs", "--inh-caps=-all", "--bounding-set=-all",
-               *(["--pdeathsig", "KILL"] if pdeathsig else []), "--",
+               *(["--pdeathsig", "KILL", "--", *parent_alive_guard()] if pdeathsig else ["--"]),
                "/usr/bin/env", "-i", *[f"{k}={v}" for k, v in env.items() if _ENV_NAME.match(k)], *argv]
     return wrapped, {"PATH": SAFE_PATH, "LANG": "C.UTF-8"}
 

@@ -270,7 +270,7 @@ def test_command_drops_to_the_identity_and_keeps_the_learner_env_away_from_root(
     env_i = argv.index("-i")
     assert argv[drop:env_i] == [argv[drop], "--reuid=1900000123", "--regid=1900000123", "--clear-groups",
                                 "--no-new-privs", "--inh-caps=-all", "--bounding-set=-all", "--pdeathsig", "KILL", "--",
-                                "/usr/bin/env"]
+                                *sandbox.parent_alive_guard(), "/usr/bin/env"]
     assert "--nproc=99:99" in argv[:drop] and "/sys/fs/cgroup/pids/x/cgroup.procs" in argv[:drop]
     assert argv[env_i + 1:] == ["LD_PRELOAD=/ws/evil.so", "ROS_DOMAIN_ID=7", "/bin/prog", "--x"]
 

@@ -714,3 +714,40 @@ def test_rclpys_own_ctrl_c_race_is_told_from_the_learners_traceback() -> None:
     assert not rclpy_shutdown_race(learner)
     assert not rclpy_shutdown_race(_RACE.replace("the given context is not valid", "bad alloc"))
     assert not rclpy_shutdown_race("")
+
+
+def test_a_program_whose_parent_died_before_the_parent_death_signal_was_armed_never_runs(tmp_path):
+    """prctl(PR_SET_PDEATHSIG) in the child cannot see a parent that died before it: the guard after it checks.
+
+    Seen in CI: ``ros2course check`` SIGKILLed 10 ms after forking a node (setpriv not yet at its prctl) left
+    the node running. Here the guard is told a parent that is not ours, as a reparented child would see it.
+    """
+    import shutil
+    import subprocess
+
+    from ros2course import sandbox
+
+    setpriv = shutil.which("setpriv")
+    if setpriv is None:
+        pytest.skip("util-linux setpriv is not installed")
+    marker = tmp_path / "ran"
+    program = ["/bin/sh", "-c", f"touch {marker}"]
+    gone = subprocess.run([setpriv, "--pdeathsig", "KILL", "--", *sandbox.parent_alive_guard(os.getpid() + 1_000_000),
+                           *program], check=False, timeout=30)
+    assert gone.returncode == 137 and not marker.exists()
+    alive = subprocess.run([setpriv, "--pdeathsig", "KILL", "--", *sandbox.parent_alive_guard(), *program],
+                           check=False, timeout=30)
+    assert alive.returncode == 0 and marker.exists()
+
+
+def test_a_learner_process_started_from_the_main_thread_is_guarded_against_its_parent_dying(tmp_path):
+    """The parent-death signal is followed by the guard (above), then the learner's program itself."""
+    from ros2course import sandbox
+
+    proc = LearnerProcess([PY, "-c", "pass"], dict(os.environ), tmp_path, "guarded")
+    if "--pdeathsig" not in proc.argv:
+        pytest.skip("util-linux setpriv is not installed")
+    guard = sandbox.parent_alive_guard()
+    at = proc.argv.index("--pdeathsig")
+    assert proc.argv[at + 2:at + 3 + len(guard)] == ["--", *guard]
+    assert proc.argv[-3:] == [PY, "-c", "pass"]
