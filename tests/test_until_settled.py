@@ -183,3 +183,37 @@ def test_a_mutant_stopped_at_its_first_loss_is_killed_by_the_checks_it_lost_befo
     assert classify(LessonResult("l", 1.0, 4.0, Status.FAILED, [exists, rate, whole])) == (KILLED, ["rate", "log"])
     full = LessonResult("l", 1.0, 1.0, Status.PASSED, [exists])
     assert classify(full) == (SURVIVED, [])
+
+
+def test_a_stop_or_a_crash_inside_a_part_still_closes_the_part_every_action_of_it(tmp_path):
+    """A world or a stand-in server left spinning when the session shuts its graph down crashed the grading
+    process (SIGSEGV in CI): the part's closing actions run on every way out, newest first, each however the
+    one before ended, and the stop or the crash goes on."""
+    closed = []
+
+    def broken_closer():
+        closed.append("broken")
+        raise RuntimeError("a closer that fails")
+
+    def grade_settled(s):
+        with s.part("talker"):
+            s.on_close(lambda: closed.append("world"))
+            s.on_close(broken_closer)
+            s.record("exists", True, "", "")
+            s.record("rate", False, "1 Hz", "2 Hz")  # settles: the next step stops
+            s.record("log", True, "", "")
+
+    status, results, _ = run(session(tmp_path, ("exists",)), grade_settled)
+    assert status is None and closed == ["broken", "world"]
+    assert results["log"].observed == NOT_CHECKED + STOPPED_SETTLED
+
+    closed.clear()
+
+    def grade_crashing(s):
+        with s.part("talker"):
+            s.on_close(lambda: closed.append("world"))
+            raise KeyError("a grader's own bug")
+
+    (tmp_path / "log").mkdir(exist_ok=True)
+    status, _, _ = run(session(tmp_path), grade_crashing)
+    assert status == Status.GRADER_ERROR and closed == ["world"]

@@ -430,6 +430,14 @@ class GradingSession:
         except Unmet as stop:
             self._run_closers(self._closers.pop())
             self.stop_part(name, str(stop))
+        except BaseException:
+            # Any other end (VerdictSettled, a grader's crash, KeyboardInterrupt) closes the part too, every
+            # action however another fails, and lets the end go on: a world, a stand-in server or a probe
+            # still spinning on the part's graph when close() shuts that graph down crashed the grading
+            # process (SIGSEGV: a physics world's stepping thread publishing on the context being destroyed,
+            # seen twice in CI under dev validate --until-settled).
+            self._run_closers(self._closers.pop(), keep_going=True)
+            raise
         else:
             self._run_closers(self._closers.pop())
         finally:
@@ -464,9 +472,11 @@ class GradingSession:
         """Run ``action()`` when the current :meth:`part` (or ``grade()``) ends, even after :class:`Unmet`."""
         self._closers[-1].append(action)
 
-    def _run_closers(self, closers: list[Any]) -> None:
+    def _run_closers(self, closers: list[Any], keep_going: bool = False) -> None:
+        """Run ``closers`` newest first; :class:`Unmet` from one never stops the others (nor, with
+        ``keep_going``, any ``Exception``: the part is already ending with an error of its own)."""
         for action in reversed(closers):
-            with contextlib.suppress(Unmet):
+            with contextlib.suppress(Exception if keep_going else Unmet):
                 action()
 
     def ordered_results(self) -> list[CheckResult]:
