@@ -29,7 +29,7 @@ LONG_MODULES = ("test_validate.py", "test_batch_ros.py", "test_benchmarks.py", "
 #: everything else: xdist's work stealing hands the first half of the collection to one worker
 #: and steals from the end of a queue, so they run one after the other on that worker instead
 #: of leaving the other worker waiting for the lock (8 worker-minutes idle in a CI run).
-CPU_LOCK_MODULES = ("test_determinism.py", "test_batch_ros.py", "test_hostile_class.py")
+CPU_LOCK_MODULES = ("test_batch_ros.py", "test_hostile_class.py")
 
 
 @pytest.fixture(autouse=True)
@@ -188,7 +188,7 @@ def cpu_lock():
 def cpu_exclusive():
     """Run the test under :func:`cpu_lock`.
 
-    The 20-fold determinism tests must not share the 2 cores with the tests
+    Tests that grade whole classes at once must not share the 2 cores with the tests
     that compile C++ (the underlay, rclcpp and sas packages, a whole
     workspace) or grade whole classes at once (a fork storm among them): a
     grader's timing verdicts are meant to hold under a normal load, not

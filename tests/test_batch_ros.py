@@ -31,7 +31,7 @@ from ros2course.lesson.catalog import load_catalog
 from ros2course.report import gradebook
 from tests.conftest import cpu_lock
 
-#: whole classes graded two at a time: never beside the determinism tests (conftest.cpu_exclusive)
+#: whole classes graded two at a time: never beside each other (conftest.cpu_exclusive)
 pytestmark = [pytest.mark.ros, pytest.mark.usefixtures("cpu_exclusive"), pytest.mark.timeout(1200)]
 
 PKG = "python_package_with_a_node"

@@ -34,7 +34,7 @@ from ros2course.lesson.catalog import content_root, load_catalog
 from ros2course import sandbox
 from tests.conftest import SOLUTIONS, cpu_lock
 
-#: a fork storm and two jobs at once: never beside the determinism tests (conftest.cpu_exclusive)
+#: a fork storm and two jobs at once: never beside each other (conftest.cpu_exclusive)
 pytestmark = [pytest.mark.ros, pytest.mark.usefixtures("cpu_exclusive"), pytest.mark.timeout(1200)]
 
 SETUP_FILE = "src/python_package_with_a_node/setup.py"

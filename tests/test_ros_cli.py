@@ -30,7 +30,7 @@ ROS2COURSE = Path(sys.executable).parent / "ros2course"
 
 pytestmark = [
     pytest.mark.ros,
-    # they compile C++: never beside the determinism tests (conftest.cpu_exclusive), which may wait for them
+    # they compile C++: never beside each other (conftest.cpu_exclusive), which may wait for them
     pytest.mark.usefixtures("cpu_exclusive"),
     pytest.mark.timeout(1200),
     pytest.mark.skipif(ROS2 is None, reason="no ros2 command: the ROS 2 underlay is not built "

@@ -30,7 +30,7 @@ def _sas_installed() -> bool:
 
 pytestmark = [
     pytest.mark.ros,
-    # they compile C++: never beside the determinism tests (conftest.cpu_exclusive), which may wait for them
+    # they compile C++: never beside each other (conftest.cpu_exclusive), which may wait for them
     pytest.mark.usefixtures("cpu_exclusive"),
     pytest.mark.timeout(1200),
     pytest.mark.skipif(not _sas_installed(), reason="SmartArmStack (sas_robot_driver) is not installed: "

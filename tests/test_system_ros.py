@@ -30,7 +30,7 @@ from pathlib import Path
 
 import pytest
 
-#: colcon builds C++: never beside the determinism tests (conftest.cpu_exclusive)
+#: colcon builds C++: never beside each other (conftest.cpu_exclusive)
 pytestmark = [pytest.mark.ros, pytest.mark.usefixtures("cpu_exclusive"), pytest.mark.timeout(900)]
 
 REPO = Path(__file__).resolve().parents[1]
@@ -59,7 +59,7 @@ def _source_venv() -> tuple[Path, str | None]:
 
 
 SOURCE_VENV, SKIP_REASON = _source_venv()
-# skipped before the CPU lock is taken (a skip must not wait for the determinism tests)
+# skipped before the CPU lock is taken (a skip must not wait for the CPU lock)
 pytestmark.insert(0, pytest.mark.skipif(SKIP_REASON is not None, reason=SKIP_REASON or ""))
 
 

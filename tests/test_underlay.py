@@ -18,7 +18,7 @@ import pytest
 from ros2course.ros import underlay, underlay_build, underlay_cache
 from ros2course.ros.underlay_pins import Pin
 
-#: colcon builds: never beside the determinism tests (conftest.cpu_exclusive)
+#: colcon builds: never beside each other (conftest.cpu_exclusive)
 pytestmark = [pytest.mark.usefixtures("cpu_exclusive"), pytest.mark.timeout(1200)]
 
 COMMIT = "0123456789abcdef0123456789abcdef01234567"

@@ -226,6 +226,16 @@ with RosSession() as graph:
     seen = peer.box().transform.translation
     out["tf"] = [seen.x, seen.y, seen.z]
     out["records"] = [[r.target, r.applied, r.success] for r in world.set_pose_requests]
+    # answer_delay: the pose is applied at once, the answer sent that long after (answered_at just before it)
+    delayed = PhysicsWorld(graph, TYPES, world="delayed", answer_delay=0.5).start(paused=True)
+    delayed_client = peer.node.create_client(TYPES.set_entity_pose, "/world/delayed/set_pose")
+    assert delayed_client.wait_for_service(timeout_sec=10)
+    asked = time.monotonic()
+    assert set_pose(delayed_client, "box", 1.0, 0.0)
+    got = time.monotonic()
+    answered = delayed.set_pose_requests[0].answered_at
+    out["delay"] = [answered - asked >= 0.5, got >= answered, delayed.box_state().position[0]]
+    delayed.close()
 
     clocks = []
     peer.node.create_subscription(TYPES.clock, "/clock", lambda m: clocks.append(m.clock.sec + m.clock.nanosec * 1e-9), 10)
@@ -326,6 +336,7 @@ def test_the_world_serves_set_pose_wrench_tf_and_clock(ros_env):
     assert out["success"] == [True, True, True, False]
     assert out["records"] == [[8, True, True], [None, False, True]]
     assert out["tf"] == pytest.approx([2.0, 1.0, 0.5], abs=1e-4)  # world -> box on /tf, on sim time
+    assert out["delay"] == [True, True, 1.0]
     pushed, by_name_only, by_model_name = out["x"]
     assert pushed == pytest.approx(2.0 + 0.8086, abs=0.01)  # id 9, 1000 N for one step
     assert by_name_only == pushed  # a name without a type: Gazebo ignores it

@@ -50,7 +50,8 @@ def _loaded_libraries() -> set[str]:
     return {Path(line.split()[-1]).name for line in maps.splitlines() if ".so" in line and "/" in line}
 
 
-def _preload_dependencies(overlay: dict[str, str], package: str, prefix: Path, seen: set[str]) -> None:
+def _preload_dependencies(overlay: dict[str, str], package: str, prefix: Path, seen: set[str],
+                          loaded: set[str] | None = None) -> None:
     """Load, dependencies first, the generated libraries of the interface packages ``package`` depends on.
 
     An interface package's typesupport libraries need those of the interface packages its ``package.xml``
@@ -65,6 +66,8 @@ def _preload_dependencies(overlay: dict[str, str], package: str, prefix: Path, s
         overlay: the environment whose ament index is searched (``GradingSession.overlay()`` or ``base_env``).
         package: the interface package (its ``share/<package>/package.xml`` under ``prefix`` is read).
         seen: the packages visited already in this lookup (cycles and shared dependencies, once each).
+        loaded: the library file names the process had mapped when the lookup began (read once, at the top
+            of the recursion: a dependency the lookup itself loads is another name, which ``seen`` covers).
     """
     try:
         manifest = read_manifest(prefix / "share" / package / "package.xml")
@@ -72,13 +75,13 @@ def _preload_dependencies(overlay: dict[str, str], package: str, prefix: Path, s
         return  # no readable package.xml: its own libraries are loaded as before, and say so if they fail
     names = {d.name for key in ("build_depends", "exec_depends", "build_export_depends")
              for d in getattr(manifest, key)}
-    loaded = _loaded_libraries()
+    loaded = _loaded_libraries() if loaded is None else loaded
     for name in sorted(names - seen):
         seen.add(name)
         where = package_prefix(name, overlay)
         if where is None or not any((where / "lib").glob(f"lib{name}__*.so")):
             continue  # not installed here, or not an interface package
-        _preload_dependencies(overlay, name, where, seen)
+        _preload_dependencies(overlay, name, where, seen, loaded)
         if not any(f"lib{name}__" in lib for lib in loaded):
             try:
                 _preload(where / "lib", name)

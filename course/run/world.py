@@ -73,6 +73,10 @@ from typing import Any, NamedTuple
 from ros2course.errors import MissingRequirement, NotGradable
 from ros2course.run.probes import record, spin_until_shutdown, stop_spinning
 
+# The world renders nothing: without an OpenGL backend, importing mujoco loads none (with the default, its
+# glfw probe starts a Python subprocess at import and evals what it prints, which failed under pdoc). Only set
+# when unset: a process that renders (MUJOCO_GL=egl) keeps its choice.
+os.environ.setdefault("MUJOCO_GL", "disable")
 try:
     import mujoco
     import numpy
@@ -479,6 +483,8 @@ class SetPoseRecord:
         position: metres; orientation: ``(x, y, z, w)`` as requested.
         applied: the box was moved (the target was the box model and the pose valid).
         success: the ``success`` answered.
+        answered_at: ``time.monotonic()`` seconds just before the answer was sent (None until then): a
+            client that ends before it did not wait for its answer.
     """
 
     wall_time: float
@@ -489,6 +495,7 @@ class SetPoseRecord:
     orientation: Quaternion
     applied: bool
     success: bool
+    answered_at: float | None = None
 
 
 @dataclass
@@ -556,6 +563,10 @@ class PhysicsWorld:
             default: true for every request, as the bridged ``/set_pose`` answers.
         keep_velocity_on_set_pose: keep the box's velocity when set_pose moves it (gz-physics' dartsim does);
             default: the box is set at rest.
+        answer_delay: wall seconds between a set_pose request and its answer (the pose is applied at once).
+            gz-sim answers a bridged request only after the simulation's next update, so a client gets its
+            answer some time after asking; a delay makes a client that ends without waiting for the answer
+            end before it (:attr:`SetPoseRecord.answered_at`). Other callbacks of the world wait meanwhile.
 
     Attributes:
         physics: the :class:`BoxWorld` (read it under :attr:`lock`, or through :meth:`box_state`).
@@ -571,12 +582,13 @@ class PhysicsWorld:
     def __init__(self, graph: Any, types: WorldTypes | None = None, *, world: str = WORLD,
                  friction: float = FRICTION, gravity: float = GRAVITY, real_time_factor: float | None = 1.0,
                  wait_for_input: float | None = None, strict_set_pose: bool = False,
-                 keep_velocity_on_set_pose: bool = False) -> None:
+                 keep_velocity_on_set_pose: bool = False, answer_delay: float = 0.0) -> None:
         self.physics = BoxWorld(friction, gravity)
         self.types = types or load_types()
         self.graph, self.world = graph, world
         self.real_time_factor, self.wait_for_input = real_time_factor, wait_for_input
         self.strict_set_pose, self.keep_velocity_on_set_pose = strict_set_pose, keep_velocity_on_set_pose
+        self.answer_delay = answer_delay
         self.set_pose_service = f"/world/{world}/set_pose"
         self.wrench_topic = f"/world/{world}/wrench"
         self.set_pose_requests: list[SetPoseRecord] = []
@@ -848,6 +860,9 @@ class PhysicsWorld:
         with self.lock:
             entry = self._set_pose(request)
             self.set_pose_requests.append(entry)
+            if self.answer_delay > 0:
+                self.lock.wait_for(lambda: self._closing, self.answer_delay)
+            entry.answered_at = time.monotonic()
         response.success = entry.success
         record(self.graph, f"{self.set_pose_service}/response", response)
         return response

@@ -1,0 +1,49 @@
+"""The grader's physics world: a simulated Gazebo world behind the author's interfaces (issue 40).
+
+Gazebo does not install on a pip-only machine; :mod:`ros2course.run.world` runs the author's
+``shapes_with_tf2_and_wrench`` box on MuJoCo and serves what Gazebo and ``ros_gz_bridge`` serve the
+learner's nodes (``set_pose``, the wrench topic, the box on ``/tf``, ``/clock``). This is the kit's door to
+it: a world in the part's graph, closed with the part, plus the names a grader judges with.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ros2course.grade.session import GradingSession
+from ros2course.run.world import (
+    BOX,
+    BOX_ID,
+    BOX_LINK_ID,
+    FRICTION,
+    GRAVITY,
+    STEP_SIZE,
+    WORLD,
+    BoxState,
+    BoxWorld,
+    PhysicsWorld,
+    StepRecord,
+    load_types,
+)
+
+__all__ = ["BOX", "BOX_ID", "BOX_LINK_ID", "FRICTION", "GRAVITY", "STEP_SIZE", "WORLD", "BoxState", "BoxWorld", "PhysicsWorld",
+           "StepRecord", "physics_world"]
+
+
+def physics_world(s: GradingSession, *, paused: bool = False, graph: Any = None, **options: Any) -> PhysicsWorld:
+    """A :class:`~ros2course.run.world.PhysicsWorld` serving in ``graph`` (default ``s.graph``), started
+    (stepping unless ``paused``), closed when the part ends (create it before the learner's node: closers
+    run newest first, so the node's Ctrl+C is judged while the world still exists).
+
+    Args:
+        options: :class:`~ros2course.run.world.PhysicsWorld`'s keywords (``world``, ``friction``,
+            ``real_time_factor`` in sim seconds per wall second, ``wait_for_input`` in wall seconds for
+            lockstep, ``strict_set_pose``).
+
+    Raises:
+        MissingRequirement: MuJoCo is not installed (hint: ``pip install 'ros2course[gazebo]'``).
+        NotGradable: the Gazebo interfaces (ros_gz_interfaces, the nav2 component) do not load.
+    """
+    world = PhysicsWorld(graph or s.graph, load_types(s.base_env), **options)
+    s.on_close(world.close)
+    return world.start(paused=paused)

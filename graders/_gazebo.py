@@ -1,0 +1,422 @@
+"""The steps of the ``gazebo-custom-nodes`` grader (graders/gazebo_custom_nodes.py): one function per run of the
+learner's three nodes, and the lesson's contract values they and the grader's ``CHECKS`` share
+(chapters/gazebo-custom-nodes/CONTRACT.md). A helper of one lesson (the placement rule in ``ros2course.kit``'s
+docstring).
+
+Gazebo never runs here: the grader's world (:mod:`ros2course.kit.world`, MuJoCo) serves the author's
+``shapes_with_tf2_and_wrench`` box, its ``set_pose`` service, its wrench topic, the box on ``/tf`` and
+``/clock``, as Gazebo and ``ros_gz_bridge`` would.
+
+* ``send_poses_to_gazebo_node``: the world (and so the service) appears only after the node said it waits;
+  then its one request is judged (the box, where, upright) and the node must end by itself.
+* ``send_wrenches_to_gazebo_node``: nothing subscribes to the wrench topic until the node said it waits; then
+  its one message is judged (entity, force, torque), and the node must keep spinning.
+* ``control_shape_thrust_node``, on the world's clock (``use_sim_time:=true``), in lockstep: after each 0.004 s
+  step the world waits for the controller's answer, so a loaded machine slows the run but never changes the
+  physics judged. From the box at rest at x = 0: every step's force against the lesson's law (from the pose
+  published before it), an answer to every step, and where the box comes to rest against where the law
+  brings it in the same world (:func:`ideal_run`).
+
+Positions are metres in the world frame, forces newtons, times seconds (sim seconds where said).
+ROS modules are imported inside the functions that grade: a grader module is also loaded for its CHECKS
+alone (``ros2course list``, ``hint``), where ROS is not needed.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable
+from typing import Any
+
+import yaml
+
+from ros2course import kit
+from ros2course.kit import Session, Unmet, services
+from ros2course.kit import launch as launching
+from ros2course.kit import world as sim
+
+PACKAGE = "python_package_that_uses_gazebo"
+POSE_EXECUTABLE = POSE_NODE = "send_poses_to_gazebo_node"
+WRENCH_EXECUTABLE = WRENCH_NODE = "send_wrenches_to_gazebo_node"
+THRUST_EXECUTABLE = THRUST_NODE = "control_shape_thrust_node"
+WORLD = sim.WORLD
+SET_POSE = f"/world/{WORLD}/set_pose"
+WRENCH_TOPIC = f"/world/{WORLD}/wrench"
+#: The pose the pose client asks for (metres, world frame), upright (x, y, z, w).
+POSE_POSITION = (0.0, 0.0, 50.0)
+IDENTITY = (0.0, 0.0, 0.0, 1.0)
+#: The push (newtons, world frame) the wrench publisher sends once, and the entity id it sends it to (the box's
+#: link in Gazebo; gz-sim finds a wrench's entity by id, not by name).
+PUSH = (1000.0, 0.0, 0.0)
+ENTITY_ID = sim.BOX_LINK_ID
+#: The thrust controller's law: a force on x of -GAIN * (x - TARGET_X) newtons.
+TARGET_X = -3.0
+GAIN = 5.0
+VALUE_TOLERANCE = 1e-6  # the values are given exactly
+#: Newtons: a step's force may differ this much (plus 0.1 %) from the law at the pose published before it.
+FORCE_TOLERANCE = 0.01
+#: Steps of the closed-loop run (4 s of sim time: the box is at rest after about 1.6 s).
+STEPS = 1000
+#: Metres and m/s: where the box comes to rest, against where the law brings it in the same world.
+REST_TOLERANCE = 0.02
+REST_SPEED = 0.01
+#: Fraction of the steps that must get an answer (a force from the controller), and that must follow the law.
+ANSWERED = 0.95
+#: Wall seconds the world waits for the controller's answer to a step once the run is judged (lockstep; a
+#: correct controller answers in about 2 ms, 50 ms on a loaded machine), and before (while the controller
+#: starts: the box rests).
+LOCKSTEP_WAIT = 0.5
+STARTUP_WAIT = 0.5
+#: Wall seconds the judged run may take (a correct controller: about 2 s; one that answers every third step
+#: makes the world wait LOCKSTEP_WAIT for each of the others, and is judged on the steps run by then).
+RUN_LIMIT = 30.0
+#: Seconds: for a node's first "waiting" record; what it waits for then stays missing THROTTLE_WINDOW more.
+WAIT_WINDOW = 3.0
+THROTTLE_WINDOW = 2.5
+#: Seconds: for the request or message once the world is there; for a node to end by itself; for the
+#: controller's first answer (a node that starts, then waits for the world's subscriber and /clock).
+SEND_TIMEOUT = 3.0
+END_TIMEOUT = 3.0
+ANSWER_TIMEOUT = 15.0
+#: Wall seconds the world takes to answer the pose client (gz-sim answers a bridged request after its next
+#: update): a client that does not wait for its answer has ended by then (rclpy's shutdown takes ~0.1 s).
+ANSWER_DELAY = 1.5
+#: The bridge file the thrust launch file configures ros_gz_bridge with, and what it must bridge:
+#: (ros_topic_name, gz_topic_name, ros_type_name, gz_type_name, direction).
+BRIDGE_FILE = "control_shape_thrust.yaml"
+BRIDGE = (
+    ("/clock", "/clock", "rosgraph_msgs/msg/Clock", "gz.msgs.Clock", "GZ_TO_ROS"),
+    ("/tf", "/model/box/pose", "tf2_msgs/msg/TFMessage", "gz.msgs.Pose_V", "GZ_TO_ROS"),
+    (WRENCH_TOPIC, WRENCH_TOPIC, "ros_gz_interfaces/msg/EntityWrench", "gz.msgs.EntityWrench", "ROS_TO_GZ"),
+)
+BRIDGE_KEYS = ("ros_topic_name", "gz_topic_name", "ros_type_name", "gz_type_name", "direction")
+#: The launch files: (file, executable, what its parameter_bridge must carry: an argument or a config file).
+LAUNCH_FILES = (
+    ("send_poses_to_gazebo_launch.py", POSE_EXECUTABLE, f"{SET_POSE}@ros_gz_interfaces/srv/SetEntityPose"),
+    ("send_wrenches_to_gazebo_launch.py", WRENCH_EXECUTABLE,
+     f"{WRENCH_TOPIC}@ros_gz_interfaces/msg/EntityWrench]gz.msgs.EntityWrench"),
+    ("control_shape_thrust_launch.py", THRUST_EXECUTABLE, BRIDGE_FILE),
+)
+
+
+def law(x: float) -> float:
+    """The lesson's force (N) on x for the box at ``x`` metres."""
+    return -GAIN * (x - TARGET_X)
+
+
+def _shown(values: tuple[float, ...]) -> str:
+    return "(" + ", ".join(f"{v:g}" for v in values) + ")"
+
+
+def _close(found: tuple[float, ...], wanted: tuple[float, ...], tolerance: float = VALUE_TOLERANCE) -> bool:
+    return all(abs(a - b) <= tolerance for a, b in zip(found, wanted, strict=True))
+
+
+def _records(rosout: Any, node: str) -> list[str]:
+    return [" ".join(r.msg.split()) for r in rosout.records(node=node)]
+
+
+def _last(rosout: Any, node: str, count: int = 3) -> str:
+    return " | ".join(text[:80] for text in _records(rosout, node)[-count:]) or "no log records"
+
+
+def _gone(proc: kit.LearnerProcess) -> Callable[[], bool]:
+    def gone() -> bool:
+        return proc.poll() is not None and time.monotonic() - (proc.ended_at or 0.0) > kit.LATE_DELIVERY
+
+    return gone
+
+
+def says_it_waits(s: Session, check_id: str, rosout: Any, node: kit.StartedNode, node_name: str, what: str) -> bool:
+    """Record ``check_id``: within :data:`WAIT_WINDOW` s, with ``what`` missing, the node logs that it waits (a
+    record holding "wait" or "availab")."""
+    def said() -> list:
+        return rosout.records(node=node_name, match=lambda text: services.WAITING.search(text) is not None)
+
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(said()), WAIT_WINDOW, abort=node.ended)
+    found = said()
+    expected = f"a log record saying it waits while {what} is missing (e.g. '... not available, waiting...')"
+    if found:
+        return s.record(check_id, True, f"logged '{found[0].msg.strip()[:120]}' while {what} was missing", expected)
+    return s.record(check_id, False, f"in {WAIT_WINDOW:.0f} s with {what} missing: {_last(rosout, node_name)}; "
+                    f"{kit.process_state(node.proc)}", expected)
+
+
+def ends(s: Session, check_id: str, proc: kit.LearnerProcess, when: str, *, after: Any = None,
+         expected: str = "") -> bool:
+    """Record ``check_id``: ``proc`` ends by itself within :data:`END_TIMEOUT` s, exit code 0, no traceback
+    (and, with ``after``, a callable giving the ``time.monotonic()`` of what it must wait for or None, not
+    before that)."""
+    with s.phase("observe"):
+        kit.wait_until(lambda: proc.poll() is not None, END_TIMEOUT + (ANSWER_DELAY if after else 0.0))
+    expected = expected or f"the process ends by itself within {END_TIMEOUT:.0f} s, exit code 0, no traceback"
+    ended = proc.exit_state()
+    if ended is None:
+        return s.record(check_id, False, f"still running {END_TIMEOUT:.0f} s {when}", expected)
+    waited_for = after() if after else None
+    ended_at = proc.ended_at or time.monotonic()  # None: reaped by poll() just now
+    if after and (waited_for is None or ended_at < waited_for):
+        early = "" if waited_for is None else f" {waited_for - ended_at:.1f} s"
+        return s.record(check_id, False, f"the process {ended.describe()}{early} before the world answered its "
+                        "request: it did not wait for the answer", expected)
+    traceback = "Traceback (most recent call last)" in proc.stderr() + proc.stdout()
+    ok = ended.returncode == 0 and not traceback
+    return s.record(check_id, ok, f"{when}, the process {ended.describe()}"
+                    + (f" ({ended.last_line})" if ended.last_line and not ok else ""), expected)
+
+
+def interrupted_run(s: Session, check_id: str, path: Any, node: str, label: str) -> None:
+    """``check_id`` (a Ctrl+C check): start ``path`` with no world at all; once it has logged (that it waits),
+    Ctrl+C is pressed as the part ends (:func:`kit.sigint_exit`)."""
+    rosout = s.graph.rosout()
+    proc = s.launch(path, label, [])
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(_records(rosout, node)), 2 * WAIT_WINDOW, abort=lambda: proc.poll() is not None)
+    s.on_close(lambda: kit.sigint_exit(s, check_id, proc))
+
+
+# --- the pose client ---------------------------------------------------------------------------------------
+
+def pose_run(s: Session, path: Any) -> None:
+    """pose_node_name, pose_waits, pose_waits_throttled, pose_request, pose_ends: the world appears only
+    :data:`THROTTLE_WINDOW` s after the node said it waits."""
+    rosout = s.graph.rosout()
+    node = kit.start_node(s, "pose_node_name", path, POSE_NODE)
+    if says_it_waits(s, "pose_waits", rosout, node, node.name or POSE_NODE, f"the service {SET_POSE}"):
+        services.waits_throttled(s, "pose_waits_throttled", rosout, node, node_name=node.name or POSE_NODE,
+                                 window=THROTTLE_WINDOW)
+    world = sim.physics_world(s, answer_delay=ANSWER_DELAY)
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(world.set_pose_requests), SEND_TIMEOUT + END_TIMEOUT, abort=_gone(node.proc))
+    expected = (f"one SetEntityPose request for the box (entity.name 'box'), position {_shown(POSE_POSITION)}, "
+                f"orientation {_shown(IDENTITY)} (upright)")
+    if not world.set_pose_requests:
+        s.record("pose_request", False, f"no request to {SET_POSE} in {SEND_TIMEOUT + END_TIMEOUT:.0f} s once it "
+                 f"was there; last log records: {_last(rosout, node.name or POSE_NODE)}; {kit.process_state(node.proc)}", expected)
+        s.require("pose_request")
+    ends(s, "pose_ends", node.proc, "once the world had answered its request",
+         after=lambda: world.set_pose_requests[0].answered_at,
+         expected=f"the node waits for the world's answer ({ANSWER_DELAY:.1f} s after its request here), then ends "
+                  f"by itself within {END_TIMEOUT:.0f} s: exit code 0, no traceback")
+    requests = list(world.set_pose_requests)
+    first = requests[0]
+    box = world.box_state()
+    problems = []
+    if first.target != sim.BOX_ID:  # the box model: its name, or its id
+        problems.append(f"entity (id {first.entity[0]}, name '{first.entity[1]}') is not the box")
+    if not _close(first.position, POSE_POSITION):
+        problems.append(f"position {_shown(first.position)}")
+    if not _close(first.orientation, IDENTITY):
+        problems.append(f"orientation {_shown(first.orientation)}")
+    if len(requests) > 1:
+        problems.append(f"{len(requests)} requests")
+    s.record("pose_request", not problems,
+             "; ".join(problems) + f" (the box is now at {_shown(tuple(round(v, 2) for v in box.position))})"
+             if problems else f"one request: the box at {_shown(first.position)}, upright; the world's box was then "
+             f"at z = {box.position[2]:.1f} m, falling", expected)
+
+
+# --- the wrench publisher ------------------------------------------------------------------------------------
+
+def wrench_run(s: Session, path: Any) -> None:
+    """wrench_node_name, wrench_waits, wrench_waits_throttled, wrench_sent, wrench_once, wrench_values,
+    wrench_spins (and wrench_sigint_exit when the part ends): nothing subscribes to the wrench topic until
+    :data:`THROTTLE_WINDOW` s after it said it waits."""
+    rosout = s.graph.rosout()
+    node = kit.start_node(s, "wrench_node_name", path, WRENCH_NODE, sigint_check="wrench_sigint_exit")
+    if says_it_waits(s, "wrench_waits", rosout, node, node.name or WRENCH_NODE, f"a subscriber on {WRENCH_TOPIC}"):
+        services.waits_throttled(s, "wrench_waits_throttled", rosout, node, node_name=node.name or WRENCH_NODE,
+                                 window=THROTTLE_WINDOW)
+    world = sim.physics_world(s)
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(world.wrenches), SEND_TIMEOUT, abort=_gone(node.proc))
+    if not world.wrenches:
+        s.record("wrench_sent", False, f"no message on {WRENCH_TOPIC} in {SEND_TIMEOUT:.0f} s once the world "
+                 "subscribed (one published before a subscriber matched is lost); last log records: "
+                 f"{_last(rosout, node.name or WRENCH_NODE)}; {kit.process_state(node.proc)}",
+                 f"one EntityWrench on {WRENCH_TOPIC} once the world subscribes")
+        s.require("wrench_sent")
+    s.record("wrench_sent", True, f"an EntityWrench on {WRENCH_TOPIC} once the world subscribed",
+             f"one EntityWrench on {WRENCH_TOPIC} once the world subscribes")
+    with s.phase("observe"):  # more messages, and the push's effect (the box slides about 0.8 m in 0.4 s)
+        kit.wait_until(lambda: False, 2.0, abort=_gone(node.proc))
+    count = len(world.wrenches)
+    s.record("wrench_once", count == 1, f"{count} message(s) in the 2 s after the first", "one message")
+    first = world.wrenches[0]
+    problems = []
+    if first.link != ENTITY_ID:
+        problems.append(f"entity id {first.entity[0]}, name '{first.entity[1]}', type {first.entity[2]}: "
+                        f"{'no entity Gazebo finds' if first.link is None else f'entity {first.link}'}")
+    if not _close(first.force, PUSH):
+        problems.append(f"force {_shown(first.force)} N")
+    if not _close(first.torque, (0.0, 0.0, 0.0)):
+        problems.append(f"torque {_shown(first.torque)} N m")
+    x = world.box_state().position[0]
+    s.record("wrench_values", not problems, ("; ".join(problems) if problems else
+             f"entity {first.entity[0]}, force {_shown(first.force)} N, no torque")
+             + f"; the box slid to x = {x:.2f} m", f"entity.id {ENTITY_ID} (the box's link), force "
+             f"{_shown(PUSH)} N, torque 0 (the box slides about 0.81 m along x)")
+    running = node.proc.poll() is None
+    s.record("wrench_spins", running, "still running 2 s after sending" if running else
+             f"{kit.process_state(node.proc)} after sending", "the node keeps spinning (rclpy.spin) until Ctrl+C")
+
+
+# --- the thrust controller ------------------------------------------------------------------------------------
+
+def ideal_run(steps: int = STEPS) -> list[sim.StepRecord]:
+    """The steps the lesson's law makes from the SDF's start, at rest, in ``steps`` steps of the grader's world:
+    each step's force computed from the pose published after the step before (the first step, as in the
+    judged run, takes none)."""
+    world = sim.BoxWorld()
+    force = (0.0, 0.0, 0.0)
+    for _ in range(steps):
+        entry = world.step(force)
+        force = (law(entry.position[0]), 0.0, 0.0)
+    return world.trajectory
+
+
+def _plot(s: Session, steps: list[sim.StepRecord], ideal: list[sim.StepRecord], points: int = 60) -> None:
+    """Hand ``check`` the box's x against sim time beside the law's (``ros2course evidence``); never costs a grade."""
+    count = min(len(steps), len(ideal))
+    if count < 2:
+        return
+    index = list(range(0, count, max(1, count // points)))
+    start = steps[0].time - sim.STEP_SIZE
+    s.add_plot("the box's x on the world's clock (s), yours and the law's", [steps[i].time - start for i in index],
+               {"x": [steps[i].position[0] for i in index], "law": [ideal[i].position[0] for i in index]}, "m")
+
+
+def thrust_run(s: Session, path: Any) -> None:
+    """thrust_node_name, thrust_entity, thrust_rate, thrust_law, thrust_settles (and thrust_sigint_exit when the
+    part ends): the controller on the world's clock, in lockstep, from the box at rest at x = 0."""
+    world = sim.physics_world(s, real_time_factor=None, wait_for_input=STARTUP_WAIT)
+    node = kit.start_node(s, "thrust_node_name", path, THRUST_NODE, sigint_check="thrust_sigint_exit",
+                          args=["--ros-args", "-p", "use_sim_time:=true"])
+    with s.phase("observe"):
+        kit.wait_until(lambda: bool(world.wrenches), ANSWER_TIMEOUT, abort=node.ended)
+    if not world.wrenches:
+        why = (f"no message on {WRENCH_TOPIC} in {ANSWER_TIMEOUT:.0f} s (the world published the box on /tf and "
+               f"the time on /clock every step); {kit.process_state(node.proc)}")
+        for check_id in ("thrust_entity", "thrust_rate", "thrust_law", "thrust_settles"):
+            s.record(check_id, False, why, "a force on the wrench topic at every step of the world")
+        raise Unmet(why)
+    world.pause()
+    world.wait_for_input = LOCKSTEP_WAIT
+    start = world.set_box_state()
+    heard = len(world.wrenches)
+    world.resume()
+    end = (start + STEPS) * sim.STEP_SIZE - sim.STEP_SIZE / 2
+    with s.phase("observe"):
+        done = kit.wait_until(lambda: world.sim_time >= end, RUN_LIMIT, abort=node.ended)
+    world.pause()
+    steps = [e for e in world.trajectory if e.step >= start][:STEPS]
+    _judge_thrust(s, world, steps, world.wrenches[heard:], done)
+
+
+def _judge_thrust(s: Session, world: sim.PhysicsWorld, steps: list[sim.StepRecord], wrenches: list, done: bool) -> None:
+    """thrust_entity, thrust_rate, thrust_law, thrust_settles on the judged steps."""
+    off = [w for w in wrenches if w.link != ENTITY_ID or abs(w.force[1]) > VALUE_TOLERANCE
+           or abs(w.force[2]) > VALUE_TOLERANCE or not _close(w.torque, (0.0, 0.0, 0.0))]
+    s.record("thrust_entity", bool(wrenches) and not off,
+             f"{len(off)} of {len(wrenches)} messages off, e.g. entity {off[0].entity}, force {_shown(off[0].force)}, "
+             f"torque {_shown(off[0].torque)}" if off else f"{len(wrenches)} messages, each for entity "
+             f"{ENTITY_ID} with a force along x only", f"entity.id {ENTITY_ID}, force (u, 0, 0), no torque")
+    judged = steps[1:]  # the first step after the box was set takes no answer (the world drops stale ones)
+    answered = [e for e in judged if e.inputs >= 1 and not e.timed_out]
+    share = len(answered) / len(judged) if judged else 0.0
+    late = sum(e.timed_out for e in judged)
+    s.record("thrust_rate", done and share >= ANSWERED,
+             f"{len(answered)} of {len(judged)} steps got a force ({late} waited {LOCKSTEP_WAIT:g} s in vain)"
+             + ("" if done else f"; {len(steps)} of the {STEPS} steps ran in {RUN_LIMIT:.0f} s"),
+             f"a force for every 0.004 s step of the world (at least {ANSWERED:.0%}): a timer of 0.001 s on "
+             "the world's clock ticks once per step")
+    # the forces sent (whatever entity they name: thrust_entity judges that), summed per step as Gazebo sums them
+    sent: dict[int, float] = {}
+    for wrench in wrenches:
+        if wrench.step is not None:
+            sent[wrench.step] = sent.get(wrench.step, 0.0) + wrench.force[0]
+    pairs = [(before.position[0], sent[step.step]) for before, step in zip(steps, steps[1:]) if step.step in sent]
+    wrong = [(x, f) for x, f in pairs if abs(f - law(x)) > FORCE_TOLERANCE + 0.001 * abs(law(x))]
+    sample = (f"; e.g. {wrong[0][1]:.3f} N at x = {wrong[0][0]:.3f} m (the law: {law(wrong[0][0]):.3f} N)"
+              if wrong else "")
+    s.record("thrust_law", bool(pairs) and len(wrong) <= (1 - ANSWERED) * len(pairs),
+             f"{len(pairs) - len(wrong)} of {len(pairs)} forces follow the law" + sample,
+             f"each force -{GAIN:g} * (x - ({TARGET_X:g})) N for the x of the box's latest transform, "
+             f"± {FORCE_TOLERANCE} N")
+    run = ideal_run(len(steps))
+    ideal = run[-1] if run else sim.BoxWorld().state()
+    _plot(s, steps, run)
+    last = steps[-1] if steps else None
+    if last is None:
+        s.record("thrust_settles", False, "no step of the world was run", "the box at rest where the law brings it")
+        return
+    x, speed = last.position[0], math.hypot(*last.linear_velocity)
+    moved = [e.position[0] for e in steps]
+    ok = done and abs(x - ideal.position[0]) <= REST_TOLERANCE and speed <= REST_SPEED
+    s.record("thrust_settles", ok,
+             f"after {len(steps) * sim.STEP_SIZE:.1f} s of sim time the box is at x = {x:.3f} m, moving at "
+             f"{speed:.3f} m/s (it went from {moved[0]:.2f} to as far as {min(moved):.2f} m)",
+             f"at rest at x = {ideal.position[0]:.3f} ± {REST_TOLERANCE} m, where the law brings the box in this world "
+             f"(friction holds it once |{GAIN:g} (x + 3)| N is below mu m g = {sim.FRICTION * sim.GRAVITY:.1f} N)")
+
+
+# --- the files ---------------------------------------------------------------------------------------------
+
+def launch_files(s: Session) -> None:
+    """launch_files: the three launch files installed, each starting its node and a ros_gz_bridge
+    parameter_bridge that carries what the node talks to (the thrust one on the world's clock)."""
+    share = s.find_share(PACKAGE)
+    problems = []
+    for name, executable, carried in LAUNCH_FILES:
+        path = share / "launch" / name if share else None
+        if path is None or not path.is_file():
+            problems.append(f"{name} not installed")
+            continue
+        found = launching.read_launch_file(path)
+        text = path.read_text(encoding="utf-8", errors="replace")
+        # the package may be a name the static reader cannot resolve (PACKAGE = '...'): the executable decides
+        nodes = [n for n in found.nodes if n.package in (PACKAGE, None) and n.executable == executable]
+        bridges = [n for n in found.nodes if n.package == "ros_gz_bridge" and n.executable == "parameter_bridge"]
+        if found.problems:
+            problems.append(f"{name}: {found.problems[0]}")
+        elif not nodes:
+            problems.append(f"{name}: no Node(package='{PACKAGE}', executable='{executable}')")
+        elif not bridges:
+            problems.append(f"{name}: no Node(package='ros_gz_bridge', executable='parameter_bridge')")
+        elif carried.endswith(".yaml"):
+            if "config_file" not in text or carried not in text:
+                problems.append(f"{name}: the bridge has no config_file parameter naming {carried}")
+            elif not any(isinstance(p, dict) and p.get("use_sim_time") is True for p in nodes[0].parameters):
+                problems.append(f"{name}: {executable} without use_sim_time: True")
+        elif not any(carried in arg for arg in bridges[0].arguments):
+            problems.append(f"{name}: the bridge's arguments do not name '{carried}'")
+    s.record("launch_files", not problems, "; ".join(problems) if problems else
+             "the three launch files installed, each with its node and its bridge",
+             "launch/send_poses_to_gazebo_launch.py, send_wrenches_to_gazebo_launch.py and "
+             "control_shape_thrust_launch.py installed in share/" + PACKAGE + "/launch, each a Node of its executable "
+             "and a ros_gz_bridge parameter_bridge")
+
+
+def bridge_config(s: Session) -> None:
+    """bridge_config: config_bridge/control_shape_thrust.yaml installed, bridging /clock and the box's pose
+    from Gazebo and the wrench topic to it."""
+    share = s.find_share(PACKAGE)
+    path = share / "config_bridge" / BRIDGE_FILE if share else None
+    expected = ("share/" + PACKAGE + f"/config_bridge/{BRIDGE_FILE}: "
+                + "; ".join(f"{ros} <- {gz} ({direction})" for ros, gz, _, _, direction in BRIDGE))
+    if path is None or not path.is_file():
+        s.record("bridge_config", False, f"no config_bridge/{BRIDGE_FILE} installed", expected)
+        return
+    try:
+        entries = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as exc:
+        s.record("bridge_config", False, f"{BRIDGE_FILE} does not load: {str(exc).splitlines()[0]}", expected)
+        return
+    found = {tuple(str(e.get(key, "")) for key in BRIDGE_KEYS) for e in entries or [] if isinstance(e, dict)}
+    missing = [entry for entry in BRIDGE if entry not in found]
+    s.record("bridge_config", not missing,
+             f"{len(found)} entries; missing: " + "; ".join(f"{ros} ({gz}, {direction})" for ros, gz, _, _, direction
+                                                            in missing) if missing else f"{len(found)} entries, all "
+             "three bridged the right way", expected)
