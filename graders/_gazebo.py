@@ -25,6 +25,7 @@ alone (``ros2course list``, ``hint``), where ROS is not needed.
 from __future__ import annotations
 
 import math
+import re
 import time
 from collections.abc import Callable
 from typing import Any
@@ -79,6 +80,9 @@ THROTTLE_WINDOW = 2.5
 SEND_TIMEOUT = 3.0
 END_TIMEOUT = 3.0
 ANSWER_TIMEOUT = 15.0
+#: A log record of the wrench node that gives the force it sent: 1000 (N) as a number ("1000", "1000.0", "1e3"
+#: and "1.0e+03" too), not part of a longer one.
+SENT_FORCE = re.compile(r"(?<![\d.])(1000(\.0*)?|1(\.0*)?e\+?0*3)(?![\d])", re.IGNORECASE)
 #: Wall seconds the world takes to answer the pose client (gz-sim answers a bridged request after its next
 #: update): a client that does not wait for its answer has ended by then (rclpy's shutdown takes ~0.1 s).
 ANSWER_DELAY = 1.5
@@ -221,8 +225,8 @@ def pose_run(s: Session, path: Any) -> None:
 # --- the wrench publisher ------------------------------------------------------------------------------------
 
 def wrench_run(s: Session, path: Any) -> None:
-    """wrench_node_name, wrench_waits, wrench_waits_throttled, wrench_sent, wrench_once, wrench_values,
-    wrench_spins (and wrench_sigint_exit when the part ends): nothing subscribes to the wrench topic until
+    """wrench_node_name, wrench_waits, wrench_waits_throttled, wrench_sent, wrench_once, wrench_logged,
+    wrench_values, wrench_spins (and wrench_sigint_exit when the part ends): nothing subscribes to the wrench topic until
     :data:`THROTTLE_WINDOW` s after it said it waits."""
     rosout = s.graph.rosout()
     node = kit.start_node(s, "wrench_node_name", path, WRENCH_NODE, sigint_check="wrench_sigint_exit")
@@ -253,6 +257,11 @@ def wrench_run(s: Session, path: Any) -> None:
         problems.append(f"force {_shown(first.force)} N")
     if not _close(first.torque, (0.0, 0.0, 0.0)):
         problems.append(f"torque {_shown(first.torque)} N m")
+    logged = rosout.records(node=node.name or WRENCH_NODE,
+                            match=lambda text: services.WAITING.search(text) is None and SENT_FORCE.search(text))
+    s.record("wrench_logged", bool(logged), f"logged '{logged[0].msg.strip()[:120]}'" if logged else
+             f"no record with the force (1000) among its records: {_last(rosout, node.name or WRENCH_NODE)}",
+             "a log record, after the wait, of what it sent: the force, 1000 N (any wording)")
     x = world.box_state().position[0]
     s.record("wrench_values", not problems, ("; ".join(problems) if problems else
              f"entity {first.entity[0]}, force {_shown(first.force)} N, no torque")
@@ -289,11 +298,15 @@ def _plot(s: Session, steps: list[sim.StepRecord], ideal: list[sim.StepRecord], 
 
 
 def thrust_run(s: Session, path: Any) -> None:
-    """thrust_node_name, thrust_entity, thrust_rate, thrust_law, thrust_settles (and thrust_sigint_exit when the
-    part ends): the controller on the world's clock, in lockstep, from the box at rest at x = 0."""
-    world = sim.physics_world(s, real_time_factor=None, wait_for_input=STARTUP_WAIT)
+    """thrust_node_name, thrust_waits, thrust_entity, thrust_rate, thrust_law, thrust_settles (and
+    thrust_sigint_exit when the part ends): with no world, the controller must say it waits for a subscriber
+    (within :data:`WAIT_WINDOW` s); then the world appears and runs the controller on the world's clock, in
+    lockstep, from the box at rest at x = 0."""
+    rosout = s.graph.rosout()
     node = kit.start_node(s, "thrust_node_name", path, THRUST_NODE, sigint_check="thrust_sigint_exit",
                           args=["--ros-args", "-p", "use_sim_time:=true"])
+    says_it_waits(s, "thrust_waits", rosout, node, node.name or THRUST_NODE, f"a subscriber on {WRENCH_TOPIC}")
+    world = sim.physics_world(s, real_time_factor=None, wait_for_input=STARTUP_WAIT)
     with s.phase("observe"):
         kit.wait_until(lambda: bool(world.wrenches), ANSWER_TIMEOUT, abort=node.ended)
     if not world.wrenches:

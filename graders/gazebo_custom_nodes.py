@@ -91,10 +91,16 @@ CHECKS = [
     Check("wrench_values", f"The wrench: entity id {ENTITY_ID}, 1000 N along x, no torque", 2,
           f"message.entity.id = {ENTITY_ID} (Gazebo finds the entity by its id; a name alone is ignored); "
           "message.wrench.force.x = 1000.0; leave torque at 0", **WRENCH),
+    Check("wrench_logged", "It logs what it sent (the force)", 1,
+          "after publishing: self.get_logger().info(f'sent entity {ENTITY_ID} a force of {FORCE} N')", **WRENCH),
     Check("wrench_spins", "After sending, the node keeps spinning until Ctrl+C", 1,
           "call rclpy.spin(node) after send_wrench(), so the node stays until Ctrl+C", **WRENCH),
     checks.ctrl_c("wrench_sigint_exit", "the wrench publisher", needs=("wrench_executable",), part="wrench"),
     *checks.started("thrust", PACKAGE, THRUST_EXECUTABLE, THRUST_NODE, part="thrust"),
+    Check("thrust_waits", f"Before it starts, while nothing subscribes to {WRENCH_TOPIC}, it says in its log that "
+          "it waits", 1, "as send_wrenches_to_gazebo_node does, in __init__ before the timer: while "
+          "self.publisher.get_subscription_count() == 0: log, then rclpy.spin_once(self, timeout_sec=1.0)",
+          needs=("thrust_executable",), part="thrust"),
     Check("thrust_entity", f"Each force is for entity {ENTITY_ID}, along x only", 1,
           f"message.entity.id = {ENTITY_ID}; only message.wrench.force.x set", **THRUST),
     Check("thrust_rate", "It answers every step of the world (a 1 kHz timer on the world's clock)", 2,
