@@ -97,8 +97,8 @@ CHECKS = [
           "call rclpy.spin(node) after send_wrench(), so the node stays until Ctrl+C", **WRENCH),
     checks.ctrl_c("wrench_sigint_exit", "the wrench publisher", needs=("wrench_executable",), part="wrench"),
     *checks.started("thrust", PACKAGE, THRUST_EXECUTABLE, THRUST_NODE, part="thrust"),
-    Check("thrust_waits", f"Before it starts, while nothing subscribes to {WRENCH_TOPIC}, it says in its log that "
-          "it waits", 1, "as send_wrenches_to_gazebo_node does, in __init__ before the timer: while "
+    Check("thrust_waits", f"Before it starts, while nothing subscribes to {WRENCH_TOPIC}, it waits, saying so in "
+          "its log once a second", 1, "as send_wrenches_to_gazebo_node does, in __init__ before the timer: while "
           "self.publisher.get_subscription_count() == 0: log, then rclpy.spin_once(self, timeout_sec=1.0)",
           needs=("thrust_executable",), part="thrust"),
     Check("thrust_entity", f"Each force is for entity {ENTITY_ID}, along x only", 1,
