@@ -76,21 +76,15 @@ PRETENDS = re.compile(r"succe|abort|cancel|unknown|status|result|error_code", re
 
 def navigate_to_pose(s: Session) -> type:
     """``nav2_msgs/action/NavigateToPose`` of the ROS install (the underlay's nav2 component, or a system
-    ROS 2 Jazzy's ``ros-jazzy-nav2-msgs``).
-
-    The grading process loads an installed interface package's C libraries itself (``s.installed_type``
-    preloads ``lib<package>__*.so``); nav2_msgs' need those of ``geographic_msgs`` and ``nav_msgs``, which lie in
-    other prefixes and which the dynamic loader of an already running process does not look for on the
-    ``LD_LIBRARY_PATH`` set after it started ("cannot load libnav2_msgs__rosidl_generator_c.so"). A type of
-    each is loaded first, so their libraries are there when nav2_msgs' are loaded.
+    ROS 2 Jazzy's ``ros-jazzy-nav2-msgs``). ``s.installed_type`` loads the libraries of the interface packages
+    nav2_msgs depends on (geographic_msgs, nav_msgs, from other prefixes) first
+    (:func:`ros2course.ros.interfaces.workspace_type`).
 
     Raises:
-        NotGradable: nav2_msgs (or one of the two) is not installed, or its types do not load; the hint names
-            how to install them (the lesson's "How it is checked").
+        NotGradable: nav2_msgs (or one of its dependencies) is not installed, or its types do not load; the hint
+            names how to install them (the lesson's "How it is checked").
     """
     try:
-        s.installed_type("geographic_msgs", "msg", "GeoPose")
-        s.installed_type("nav_msgs", "msg", "Path")
         return s.installed_type("nav2_msgs", "action", "NavigateToPose")
     except kit.NotGradable as exc:
         raise kit.NotGradable(f"this lesson needs the nav2 interfaces (nav2_msgs), which do not load here: {exc.message}",

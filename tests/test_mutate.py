@@ -571,6 +571,25 @@ def test_the_grader_fingerprint_follows_the_grader_its_helpers_and_the_lesson(tm
     assert grader_fingerprint(lesson) != before
 
 
+def test_the_course_fingerprint_changes_with_the_lesson_and_not_with_the_engine(tmp_path: Path, monkeypatch) -> None:
+    """Recorded beside the grader fingerprint, it tells an engine-only change from a change of the lesson."""
+    from types import SimpleNamespace
+
+    from ros2course.grade import fingerprint
+
+    lesson = SimpleNamespace(id="demo", folder=tmp_path, grader="cpp_node", packages=["cpp_package_with_a_node"],
+                             folders=[])
+    (tmp_path / "lesson.yaml").write_text("id: demo\n")
+    grader, course = fingerprint.grader_fingerprint(lesson), fingerprint.course_fingerprint(lesson)
+    assert grader != course and set(fingerprint.measurement(lesson)) == {"date", "fingerprint", "course_fingerprint"}
+    real = fingerprint._file_digest
+    monkeypatch.setattr(fingerprint, "_file_digest",  # every engine module "edited"
+                        lambda path: real(path) + (b"x" if "/kit/" in str(path) or "/run/" in str(path) else b""))
+    assert fingerprint.grader_fingerprint(lesson) != grader and fingerprint.course_fingerprint(lesson) == course
+    (tmp_path / "lesson.yaml").write_text("id: demo\ntitle: changed\n")
+    assert fingerprint.course_fingerprint(lesson) != course
+
+
 def test_the_fingerprint_covers_the_engine_modules_the_grader_reaches_and_no_others(tmp_path: Path) -> None:
     """The engine part of the fingerprint is the import closure of the grader and of the grading engine (read from
     the code, function-level imports included): the script lessons' kit step is in inspect-services' fingerprint and

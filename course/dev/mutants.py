@@ -74,7 +74,6 @@ from __future__ import annotations
 
 import ast
 import dataclasses
-import datetime as dt
 import difflib
 import fnmatch
 import functools
@@ -1145,13 +1144,13 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
     """
     if found.held_out:
         return write_held_out(lesson, found, measured)
-    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+    from ros2course.grade.fingerprint import measurement  # noqa: PLC0415 - reads the course's files
 
-    measured = measured or {"date": dt.date.today().isoformat(), "fingerprint": grader_fingerprint(lesson)}
+    measured = measured or measurement(lesson)
     fingerprint = measured["fingerprint"]
     data = _summary(found)
     data.update(date=measured["date"], course_version=course_version(), fingerprint=fingerprint,
-                survivors=found.uncovered())
+                **_course_part(measured), survivors=found.uncovered())
     # every mutant's outcome, committed with the lesson: the figure can be checked and re-derived (issue 37)
     outcomes = {"fingerprint": fingerprint, "date": data["date"], "mutants": _outcome_rows(found)}
     if keep_held_out:
@@ -1209,14 +1208,15 @@ def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, st
     samples recorded before it, which it left out); the first sample's figures stay. None when
     the lesson has no recorded first sample (a held-out sample is drawn after it) or its folder is read-only.
     """
-    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+    from ros2course.grade.fingerprint import measurement  # noqa: PLC0415 - reads the course's files
 
     score, outcomes = read_json_object(lesson.folder / SCORE_FILE), read_json_object(lesson.folder / OUTCOMES_FILE)
     if not score or not outcomes:
         return None
-    measured = measured or {"date": dt.date.today().isoformat(), "fingerprint": grader_fingerprint(lesson)}
+    measured = measured or measurement(lesson)
     section = _summary(found)
-    section.update(date=measured["date"], fingerprint=measured["fingerprint"], survivors=found.uncovered())
+    section.update(date=measured["date"], fingerprint=measured["fingerprint"], **_course_part(measured),
+                   survivors=found.uncovered())
     section["earlier"] = held_out_history(score)  # a new sample never hides what the ones before it scored
     score.pop(EARLIER_KEY, None)
     score["held_out"] = section
@@ -1225,6 +1225,12 @@ def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, st
     outcomes["held_out"] = {"fingerprint": measured["fingerprint"], "date": measured["date"], "seed": found.seed,
                             "mutants": rows, **({"earlier": earlier} if earlier else {})}
     return _write_records(lesson, score, outcomes)
+
+
+def _course_part(record: dict) -> dict[str, str]:
+    """``{"course_fingerprint": ...}`` from a measurement or a recorded run, {} when it has none (runs recorded
+    before course fingerprints were: :func:`ros2course.grade.fingerprint.course_fingerprint`)."""
+    return {"course_fingerprint": record["course_fingerprint"]} if record.get("course_fingerprint") else {}
 
 
 #: ``mutation-score.json``'s key for the figures of held-out samples drawn before its first sample was measured
@@ -1242,7 +1248,8 @@ def held_out_history(score: dict) -> list[dict]:
         return before + (list(held.get("earlier", [])) if isinstance(held, dict) else [])
     counted = held.get("graded", 0) - held.get("killed_by_build", 0) - held.get("triaged", 0)
     return [*before, *held.get("earlier", []), {"seed": held.get("seed"), "date": held.get("date"),
-                                       "fingerprint": held.get("fingerprint"), "graded": held.get("graded"),
+                                       "fingerprint": held.get("fingerprint"), **_course_part(held),
+                                       "graded": held.get("graded"),
                                        "counted": counted, "killed": held.get("killed"),
                                        "score": held.get("killed", 0) / counted if counted > 0 else None}]
 

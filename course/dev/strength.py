@@ -7,7 +7,6 @@ lesson table show both (:func:`ros2course.dev.validate.lessons_markdown`).
 
 from __future__ import annotations
 
-import datetime as dt
 import json
 from pathlib import Path
 from typing import Any
@@ -27,10 +26,9 @@ def write_steadiness(lesson: Lesson, row: Any) -> Path | None:
     What docs/grader-strength.md and the README's lesson table show as the reference's
     steadiness (issue 24). None when the lesson folder is read-only (an installed course).
     """
-    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+    from ros2course.grade.fingerprint import measurement  # noqa: PLC0415 - reads the course's files
 
-    data = {**row.to_dict(), "date": dt.date.today().isoformat(), "course_version": course_version(),
-            "fingerprint": grader_fingerprint(lesson)}
+    data = {**row.to_dict(), **measurement(lesson), "course_version": course_version()}
     data.pop("lesson", None)
     path = lesson.folder / STEADINESS_FILE
     try:

@@ -201,6 +201,29 @@ def grader_fingerprint(lesson: Lesson) -> str:
     (``course/kit/checks.py``), whether the engine is the checkout's (an editable install, inside the
     bundled course's root) or an installed copy (a wheel, a course in another folder): one engine, one name.
     """
+    return _fingerprint(lesson, with_engine=True)
+
+
+def course_fingerprint(lesson: Lesson) -> str:
+    """The part of :func:`grader_fingerprint` that is the course's own: the same digest over the lesson's
+    files only (grader and course modules, data, lesson.yaml, reference), the engine left out.
+
+    Recorded beside the grader fingerprint with every measurement, it tells two kinds of change apart
+    afterwards: a grader fingerprint that changed while this one did not means only the engine changed
+    under the lesson, nothing of the lesson was changed after its survivors were seen (issue 37: whether an
+    earlier held-out sample may be graded again and still count as held out)."""
+    return _fingerprint(lesson, with_engine=False)
+
+
+def measurement(lesson: Lesson) -> dict[str, str]:
+    """What a figure is recorded with: ``{"date": today (ISO), "fingerprint": ..., "course_fingerprint": ...}``."""
+    import datetime as dt  # noqa: PLC0415 - only the author tools record measurements
+
+    return {"date": dt.date.today().isoformat(), "fingerprint": grader_fingerprint(lesson),
+            "course_fingerprint": course_fingerprint(lesson)}
+
+
+def _fingerprint(lesson: Lesson, with_engine: bool) -> str:
     import ros2course  # noqa: PLC0415
 
     engine = Path(ros2course.__file__).resolve().parent
@@ -208,6 +231,8 @@ def grader_fingerprint(lesson: Lesson) -> str:
     named = []
     for path in grader_files(lesson):
         where = path.resolve()
+        if where.is_relative_to(engine) and not with_engine:
+            continue
         named.append((f"{ENGINE_FOLDER}/{where.relative_to(engine).as_posix()}" if where.is_relative_to(engine)
                       else where.relative_to(root).as_posix() if where.is_relative_to(root) else path.name, path))
     digest = hashlib.sha256()
