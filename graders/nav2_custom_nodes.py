@@ -59,9 +59,10 @@ CHECKS = [
     Check("pose_waits_throttled", "It says so at most once a second", 1,
           "log the waiting record with throttle_duration_sec=1.0 (the timer may tick faster; the log must not)",
           needs=("pose_waits",), part="pose"),
-    Check("pose_published", f"It publishes a PoseWithCovarianceStamped on {TOPIC}", 1,
+    Check("pose_published", f"It publishes a PoseWithCovarianceStamped on {TOPIC} that amcl, the second subscriber, "
+          "receives", 1,
           f"self.create_publisher(PoseWithCovarianceStamped, '{TOPIC}', 1), then publish once the two subscribers "
-          "are there (a message published before anyone subscribes is lost: the topic is VOLATILE)", **POSE),
+          "are there (one published before amcl subscribes never reaches it: the topic is VOLATILE)", **POSE),
     Check("after_second", "It publishes only once the second subscriber (amcl) has joined", 2,
           "wait for two subscribers, not one: rviz2 is there first, amcl joins later and must get the pose "
           "(self.publisher.get_subscription_count() >= 2)", **PUBLISHED),
