@@ -408,9 +408,6 @@ def launch_files(s: Session) -> None:
             problems.append(f"{name}: no Node(package='{PACKAGE}', executable='{executable}')")
         elif not bridges:
             problems.append(f"{name}: no Node(package='ros_gz_bridge', executable='parameter_bridge')")
-        elif renamed := [u for u in nodes[0].unsupported if u.startswith("name=")]:
-            # launch_ros validates a given name (name='' stops the launch: "invalid node name")
-            problems.append(f"{name}: {executable}'s {renamed[0]}")
         elif carried.endswith(".yaml"):
             if "config_file" not in text or carried not in text:
                 problems.append(f"{name}: the bridge has no config_file parameter naming {carried}")

@@ -290,3 +290,47 @@ def test_with_launch_ros_the_file_is_run_as_ros2_launch_runs_it(tmp_path, monkey
     compile(args[1], "<launch script>", "exec")
     # the static reading is kept for feedback only
     assert "Node(package='python_package_that_uses_parameters_and_launch_files'" in run.file_contents()
+
+
+REFUSED_OUTPUTS = ["output=''", "output='screenn'", "output=3", "output={'out': 'screen'}",
+                   "output={'stdout': 'sceen'}", "output={'both': ['log', 'terminal']}"]
+ACCEPTED_OUTPUTS = ["output='screen'", "output='full'", "output='own_log'", "output={'both': ['log', 'screen']}",
+                    "output={'stderr': 'own_log'}", "output=OUTPUT"]
+
+
+@pytest.mark.parametrize(("argument", "refused"), [*((a, True) for a in REFUSED_OUTPUTS),
+                                                   *((a, False) for a in ACCEPTED_OUTPUTS),
+                                                   ("name=''", True), ("name='quote-node'", True),
+                                                   ("name='2nd'", True), ("name='quote_node'", False)])
+def test_an_argument_launch_refuses_ends_the_whole_launch(tmp_path, argument, refused):
+    """launch raises ValueError for an output it does not know, launch_ros InvalidNodeNameException for a name
+    rcl refuses: the whole launch ends, so the reader lists it among the file's problems (issue 40: a held-out
+    mutant of gazebo-custom-nodes, output='', passed launch_files)."""
+    found = read_launch_file(write(tmp_path, f"""
+        from launch import LaunchDescription
+        from launch_ros.actions import Node
+        OUTPUT = 'screen'
+
+        def generate_launch_description():
+            return LaunchDescription([Node(package='p', executable='e', {argument})])
+        """))
+    (node,) = found.nodes
+    assert bool(node.refused) == refused, node.refused
+    assert bool(found.problems) == refused, found.problems
+    if refused:
+        assert found.problems[0].startswith("line 7: Node(...) ") and "the whole launch ends" in found.problems[0]
+
+
+@pytest.mark.parametrize("argument", REFUSED_OUTPUTS + ACCEPTED_OUTPUTS[:-1])
+def test_the_outputs_refused_are_those_launch_refuses(argument):
+    """The reader's rule against launch's own (launch.logging.get_output_loggers, which ExecuteLocal calls)."""
+    logging = pytest.importorskip("launch.logging", reason="ROS 2's launch is not importable here")
+    if not hasattr(logging, "get_output_loggers"):
+        pytest.skip("the launch importable here is not ROS 2's")
+    config = eval(argument.removeprefix("output="))  # noqa: S307 - the literals above
+    try:
+        logging.get_output_loggers("p", config)
+        launch_refuses = False
+    except (ValueError, TypeError):
+        launch_refuses = True
+    assert launch_refuses == (argument in REFUSED_OUTPUTS)

@@ -40,7 +40,8 @@ MODE_LAUNCH_ROS = "run with launch_ros"
 #: that the static reader reproduces.
 _STARTING_KWARGS = ("package", "executable", "name", "namespace", "parameters", "remappings",
                     "arguments", "ros_arguments")
-#: Keyword arguments that only change how launch shows or supervises the process; accepted and ignored.
+#: Keyword arguments that only change how launch shows or supervises the process; accepted and ignored
+#: (``output`` is checked first: a value launch refuses ends the whole launch, see :func:`_output_refused`).
 _IGNORED_KWARGS = ("output", "emulate_tty", "exec_name", "respawn", "respawn_delay", "sigterm_timeout",
                    "sigkill_timeout", "log_cmd", "output_format")
 
@@ -72,6 +73,9 @@ class NodeAction:
         arguments: ``arguments=[...]`` (before ``--ros-args``).
         ros_arguments: ``ros_arguments=[...]`` (after their own ``--ros-args``).
         unsupported: one sentence per argument that is not a literal of the right shape.
+        refused: one sentence per literal argument that launch itself refuses when it runs the action (the
+            whole launch then ends with an error, every node of the file with it); :func:`read_launch_file`
+            lists them in :attr:`StaticLaunch.problems` too.
     """
 
     line: int
@@ -84,6 +88,7 @@ class NodeAction:
     arguments: list[str] = dataclasses.field(default_factory=list)
     ros_arguments: list[str] = dataclasses.field(default_factory=list)
     unsupported: list[str] = dataclasses.field(default_factory=list)
+    refused: list[str] = dataclasses.field(default_factory=list)
 
     @property
     def supported(self) -> bool:
@@ -138,7 +143,8 @@ class StaticLaunch:
         path: the launch file read.
         nodes: every ``Node(...)`` call inside ``generate_launch_description``, in source order.
         problems: reasons the file cannot be launched at all (syntax error, no
-            ``generate_launch_description``, ``Node`` not imported from ``launch_ros.actions``).
+            ``generate_launch_description``, ``Node`` not imported from ``launch_ros.actions``, an
+            argument launch refuses when it runs the action: :attr:`NodeAction.refused`).
         other_calls: names of other calls in ``generate_launch_description`` that
             the static reader does not run (e.g. ``ExecuteProcess``), for the report.
     """
@@ -232,6 +238,56 @@ def _source(path_text: str, node: ast.AST) -> str:
     return text if len(text) <= 60 else text[:57] + "..."
 
 
+#: The output configurations launch accepts, as a string (launch.logging._normalize_output_configuration in
+#: ros2/launch, the Jazzy pin in ../shared/ros-src) and as a dict's sources and destinations.
+OUTPUT_NAMES = ("screen", "log", "both", "own_log", "full")
+OUTPUT_SOURCES = ("stdout", "stderr", "both")
+OUTPUT_DESTINATIONS = ("screen", "log", "own_log")
+
+
+def _output_refused(value: ast.AST) -> str | None:
+    """Why launch would refuse ``output=value`` when it runs the action (it raises ValueError from
+    ``launch.logging.get_output_loggers``, and the launch ends), or None: the value is accepted, or it is no
+    literal (a substitution, evaluated only when launch runs)."""
+    ok, config = _literal(value)
+    if not ok:
+        return None
+    accepted = "'screen', 'log', 'both', 'own_log' or 'full'"
+    if isinstance(config, str):
+        return None if config in OUTPUT_NAMES else f"{config!r} is no output launch knows ({accepted})"
+    if not isinstance(config, dict):
+        return f"{config!r} is no output configuration (a string: {accepted})"
+    for source, destinations in config.items():
+        if source not in OUTPUT_SOURCES:
+            return f"{source!r} is no output source ('stdout', 'stderr' or 'both')"
+        if not isinstance(destinations, (str, list, tuple, set)):
+            return f"{destinations!r} is no list of output destinations"
+        for destination in [destinations] if isinstance(destinations, str) else destinations:
+            if destination not in OUTPUT_DESTINATIONS:
+                return f"{destination!r} is no output destination ('screen', 'log' or 'own_log')"
+    return None
+
+
+def _node_name_refused(name: str) -> str | None:
+    """Why launch_ros would refuse ``Node(name=name)`` when it runs the action, or None.
+
+    launch_ros's ``Node._perform_substitutions`` calls rclpy's ``validate_node_name`` on the name as given
+    (an empty name, one with a ``/`` or a ``-``, one that starts with a digit raise InvalidNodeNameException,
+    and the launch ends); the rule is rcl's, so rclpy's own function judges it here. Without rclpy (a grader
+    module loaded for its checks alone) nothing is refused: the launch, when it runs, says it itself."""
+    try:
+        from rclpy.exceptions import InvalidNodeNameException  # noqa: PLC0415 - ROS only where a file is read
+        from rclpy.validate_node_name import validate_node_name  # noqa: PLC0415
+    except ImportError:
+        return None
+    try:
+        validate_node_name(name)
+    except InvalidNodeNameException as exc:
+        reason = (str(exc).splitlines() or ["invalid node name"])[0].rstrip(": ")
+        return f"launch_ros refuses the node name {name!r} ({reason})"
+    return None
+
+
 def _read_node_call(call: ast.Call, text: str) -> NodeAction:
     action = NodeAction(line=call.lineno)
     if call.args:
@@ -243,6 +299,8 @@ def _read_node_call(call: ast.Call, text: str) -> NodeAction:
         if key is None:
             action.unsupported.append(f"line {call.lineno}: **{_source(text, keyword.value)} is not a literal")
             continue
+        if key == "output" and (refused := _output_refused(keyword.value)):
+            action.refused.append(f"{where}: {refused}: launch raises ValueError and the whole launch ends")
         if key in _IGNORED_KWARGS:
             continue
         if key not in _STARTING_KWARGS:
@@ -252,7 +310,9 @@ def _read_node_call(call: ast.Call, text: str) -> NodeAction:
         if not ok:
             action.unsupported.append(f"{where}: {_source(text, keyword.value)} is not a literal value")
             continue
-        if key in ("package", "executable", "name", "namespace"):
+        if key == "name" and isinstance(value, str) and (refused := _node_name_refused(value)):
+            action.refused.append(f"{where}: {refused}: the whole launch ends")
+        elif key in ("package", "executable", "name", "namespace"):
             if not isinstance(value, str) or not value:
                 action.unsupported.append(f"{where}: expected a non-empty string, got {value!r}")
             else:
@@ -344,7 +404,9 @@ def read_launch_file(path: Path) -> StaticLaunch:
                                   "from launch_ros.actions")
             continue
         if is_node:
-            found.nodes.append(_read_node_call(call, text))
+            action = _read_node_call(call, text)
+            found.nodes.append(action)
+            found.problems += [f"line {call.lineno}: Node(...) {why}" for why in action.refused]
         elif name and name.split(".")[-1] != "LaunchDescription":
             found.other_calls.append(f"{name}(...) at line {call.lineno}")
     found.nodes.sort(key=lambda n: n.line)
