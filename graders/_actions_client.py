@@ -180,7 +180,8 @@ def _ends(s: Session, check_id: str, proc: kit.LearnerProcess, when: str) -> boo
 
 
 def _started(s: Session, path: Any, xy: tuple[float, float], label: str) -> kit.LearnerProcess:
-    """Start the client with goal ``xy`` (the server is already there); it may end before the graph shows it."""
+    """Start the client with goal ``xy`` (the server is offered once it has logged); it may end before the graph
+    shows it."""
     return s.launch(path, label, _params(xy))
 
 
@@ -191,8 +192,8 @@ def aborted_run(s: Session, action: Any, path: Any) -> None:
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
         action, final, [0.6, 0.5], act.ABORTED))
     rosout = s.graph.rosout()
-    server.offer()
     proc = _started(s, path, xy, f"{EXECUTABLE}.aborted")
+    act.offer_once_it_waits(s, server, rosout, NODE, proc, WAIT_WINDOW)
     with s.phase("observe"):
         kit.wait_until(lambda: any(re.search(r"abort", text, re.IGNORECASE) for text in _records(rosout)),
                        2 * LOG_TIMEOUT, abort=_gone(proc))
@@ -215,8 +216,8 @@ def rejected_run(s: Session, action: Any, path: Any) -> None:
     xy = _goal_xy(s)
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: act.Script(accept=False))
     rosout = s.graph.rosout()
-    server.offer()
     proc = _started(s, path, xy, f"{EXECUTABLE}.rejected")
+    act.offer_once_it_waits(s, server, rosout, NODE, proc, WAIT_WINDOW)
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.goals), 2 * LOG_TIMEOUT, abort=lambda: proc.poll() is not None)
         if not server.goals:

@@ -43,8 +43,11 @@ PROFILE_VARIABLES = ("FASTRTPS_DEFAULT_PROFILES_FILE", "FASTDDS_DEFAULT_PROFILES
 _ANSI = re.compile(r"\x1b\[[0-9;]*m")
 _XML_ERROR = re.compile(r"\[XMLPARSER Error\]\s*(.*?)(?:\s*->\s*Function\s+\w+)?\s*$")
 
+#: Seconds the talker waits for the listener to match before it publishes (two of Fast DDS's announcement
+#: periods of a participant past its first announcements, so one missed exchange is repeated in time).
+MATCH_WAIT = 6.0
 #: One child: ``python -c _CHILD ROLE TOPIC SECONDS``; prints one JSON line at the end.
-_CHILD = r"""
+_CHILD = f"MATCH_WAIT = {MATCH_WAIT}\n" + r"""
 import json, os, sys, time
 import rclpy
 from std_msgs.msg import String
@@ -54,6 +57,12 @@ node = rclpy.create_node(f"dds_{role}_{os.getpid()}")
 got = []
 if role == "talker":
     pub = node.create_publisher(String, topic, 10)
+    # publish once the listener is matched (or MATCH_WAIT s): a first discovery exchange missed on a loaded
+    # machine is repeated only after a period, and a talker that published for its seconds from its start
+    # could end before it ever matched (a correct profile failing)
+    end = time.monotonic() + MATCH_WAIT
+    while time.monotonic() < end and not pub.get_subscription_count():
+        rclpy.spin_once(node, timeout_sec=0.05)
     node.create_timer(0.1, lambda: pub.publish(String(data="hello over UDP")))
 else:
     node.create_subscription(String, topic, lambda m: got.append(m.data), 10)
@@ -108,7 +117,8 @@ def exchange(s: Session, profile: Path, seconds: float = 3.0) -> DdsRun:
 
     Args:
         profile: the learner's XML file (absolute path).
-        seconds: how long the talker publishes (every 0.1 s); the listener waits ``seconds + 3`` s at most.
+        seconds: how long the talker publishes (every 0.1 s), once the listener has matched (or after
+            :data:`MATCH_WAIT` s); the listener waits ``seconds + 3 + MATCH_WAIT`` s at most.
 
     They join the check's domain (``s.ros.domain_id``) on a random topic, each in
     its own process group with a deadline (:meth:`Session.start_program`).
@@ -122,9 +132,9 @@ def exchange(s: Session, profile: Path, seconds: float = 3.0) -> DdsRun:
     env.update({name: str(profile) for name in PROFILE_VARIABLES})
     procs = [s.start_program([sys.executable, "-c", _CHILD, role, topic, str(wait)], f"dds_{role}", env=env,
                              cwd=profile.parent, deadline=wait + 20.0)
-             for role, wait in (("listener", seconds + 3.0), ("talker", seconds))]
+             for role, wait in (("listener", seconds + 3.0 + MATCH_WAIT), ("talker", seconds))]
     with s.phase("run"):
-        wait_until(lambda: all(p.poll() is not None for p in procs), seconds + 15.0, interval=0.05)
+        wait_until(lambda: all(p.poll() is not None for p in procs), seconds + 15.0 + MATCH_WAIT, interval=0.05)
     reports, failure = [], ""
     for proc in procs:
         proc.stop(sigint_timeout=1.0, sigterm_timeout=1.0)

@@ -162,12 +162,13 @@ def ends(s: Session, check_id: str, proc: kit.LearnerProcess, when: str, *, afte
     """Record ``check_id``: ``proc`` ends by itself within :data:`END_TIMEOUT` s, exit code 0, no traceback
     (and, with ``after``, a callable giving the ``time.monotonic()`` of what it must wait for or None, not
     before that)."""
+    waited = END_TIMEOUT + (ANSWER_DELAY if after else 0.0)  # the world answers ANSWER_DELAY s after a request
     with s.phase("observe"):
-        kit.wait_until(lambda: proc.poll() is not None, END_TIMEOUT + (ANSWER_DELAY if after else 0.0))
+        kit.wait_until(lambda: proc.poll() is not None, waited)
     expected = expected or f"the process ends by itself within {END_TIMEOUT:.0f} s, exit code 0, no traceback"
     ended = proc.exit_state()
     if ended is None:
-        return s.record(check_id, False, f"still running {END_TIMEOUT:.0f} s {when}", expected)
+        return s.record(check_id, False, f"still running {waited:g} s {when}", expected)
     waited_for = after() if after else None
     ended_at = proc.ended_at or time.monotonic()  # None: reaped by poll() just now
     if after and (waited_for is None or ended_at < waited_for):

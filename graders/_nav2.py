@@ -254,17 +254,23 @@ def pose_run(s: Session, message_type: type, path: Any) -> None:
         s.require("pose_published")
     s.record("pose_published", True, f"amcl got a PoseWithCovarianceStamped on {TOPIC}",
              f"one PoseWithCovarianceStamped on {TOPIC} that amcl receives")
-    # the first subscriber's first message: anything the node sent before amcl joined (or amcl's, not there yet)
+    # the first subscriber's first message: anything the node sent before amcl joined (or amcl's, not there yet);
+    # and amcl's first by its publication sequence number: number k > 1 means k - 1 were written before it, which
+    # neither subscriber may have heard (sent before discovery matched them), so before the node counted amcl
     early = joined - (first.send_stamps() or received_stamps)[0]
-    s.record("after_second", early <= 0,
+    unheard = (second.sequence_numbers()[0] or 1) - 1
+    s.record("after_second", early <= 0 and not unheard,
              f"published {early:.2f} s before the second subscriber joined (one subscriber then)" if early > 0 else
+             f"{unheard} message(s) written before the one amcl got first (its publication sequence number is "
+             f"{unheard + 1}), none of which amcl got" if unheard else
              f"published {-early:.2f} s after the second subscriber joined",
              f"published once {SUBSCRIBERS} nodes subscribe to {TOPIC} (the second joined "
              f"{THROTTLE_WINDOW} s after your first 'waiting' record)")
     _judge_pose(s, received[0], received_stamps[0])
     with s.phase("observe"):  # every message it publishes until it ends (or END_TIMEOUT)
         kit.wait_until(_gone(node.proc), END_TIMEOUT + kit.LATE_DELIVERY)
-    count = len(first.messages())
+    # what the node wrote, heard or not: the highest publication sequence number heard, when the middleware says
+    count = max([len(first.messages()), *(n for n in first.sequence_numbers() + second.sequence_numbers() if n)])
     s.record("published_once", count == 1,
              f"{count} message(s) on {TOPIC} from the start until "
              + ("the process ended" if node.proc.poll() is not None else f"{END_TIMEOUT:.0f} s after the first"),
@@ -413,8 +419,8 @@ def aborted_run(s: Session, action: Any, path: Any) -> None:
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _script(
         action, [0.6, 0.5], act.ABORTED, code, text))
     rosout = s.graph.rosout()
-    server.offer()
     proc = s.launch(path, f"{CLIENT_EXECUTABLE}.aborted", [])
+    act.offer_once_it_waits(s, server, rosout, CLIENT_NODE, proc, WAIT_WINDOW)
 
     def shown() -> bool:
         records = _records(rosout, CLIENT_NODE)
@@ -461,8 +467,8 @@ def rejected_run(s: Session, action: Any, path: Any) -> None:
     """handles_rejection: the grader's server rejects the goal."""
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: act.Script(accept=False))
     rosout = s.graph.rosout()
-    server.offer()
     proc = s.launch(path, f"{CLIENT_EXECUTABLE}.rejected", [])
+    act.offer_once_it_waits(s, server, rosout, CLIENT_NODE, proc, WAIT_WINDOW)
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.goals), 2 * LOG_TIMEOUT, abort=lambda: proc.poll() is not None)
         if not server.goals:

@@ -12,10 +12,11 @@ given as the parameters ``x`` and ``y``:
   must show every distance, each in a record of its own in the order sent, before
   the result's record (logged as each arrives), the final position and the status;
   the process must then end by itself with exit code 0.
-* **aborted**: the server accepts, sends two feedback messages and ABORTS: the log
+* **aborted**: the server, offered once the client has logged its first record, accepts, sends two feedback
+  messages and ABORTS: the log
   must name that status with the final position (a client that always says
   "succeeded" fails).
-* **rejected**: the server rejects the goal: the client must say so and end cleanly,
+* **rejected**: the server, offered as in **aborted**, rejects the goal: the client must say so and end cleanly,
   without a record that pretends the goal ended (a rejected goal has no result: asking
   for it gets an empty answer with status UNKNOWN).
 * **interrupted**: no server at all; Ctrl+C while the client waits must end it with

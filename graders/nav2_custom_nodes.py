@@ -14,7 +14,7 @@ it (graders/_nav2.py), each run in a graph of its own.
   one goal, the lesson's pose in ``map``, stamped as it is sent, an empty behavior_tree), sends five feedback
   messages with random distances and succeeds: the log must show every distance_remaining and SUCCEEDED,
   and the node must end by itself.
-* **aborted** / **rejected**: the server aborts the goal (an error code and message of its own) or rejects
+* **aborted** / **rejected**: the server, offered once the client has logged its first record, aborts the goal (an error code and message of its own) or rejects
   it: the client must say so and end by itself, never hang.
 * **interrupted**: no server; Ctrl+C while the client waits.
 """

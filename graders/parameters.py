@@ -100,7 +100,8 @@ def _defaults(s: Session, path) -> None:
     node = kit.start_node(s, "node_name", path, NODE, sigint_check="sigint_exit", need_node=False)
     _default_messages(s, probe, node.proc, began)
     counts_from_zero(s, "default_ids_from_zero", [m for _, m in probe.samples()], path, DEFAULT_TOPIC,
-                     amazing_quote(s), DEFAULT_PERIOD, where=f" on {DEFAULT_TOPIC}")
+                     amazing_quote(s), DEFAULT_PERIOD, where=f" on {DEFAULT_TOPIC}",
+                     sequence=next(iter(probe.sequence_numbers()), None))
     services = params.connect(s, node.name, proc=node.proc, why=s.results["node_name"].observed)
     params.declared(s, "declared", "defaults", services, DEFAULTS)
     set_at_runtime(s, "runtime_change", services, probe, node.proc, quote=RUNTIME_QUOTE,

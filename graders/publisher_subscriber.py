@@ -101,7 +101,8 @@ def _grade_publisher(s: Session, msg_type: type) -> None:
     s.record("pub_contents", share == 1.0, observed + where,
              f"quote: {QUOTE!r}, philosopher_name: {PHILOSOPHER!r} in every message", fraction=share)
     quotes.id_counts(s, "pub_id_counts", messages, where)
-    quotes.counts_from_zero(s, "pub_id_from_zero", messages, path, target, msg_type, PERIOD, where=where)
+    quotes.counts_from_zero(s, "pub_id_from_zero", messages, path, target, msg_type, PERIOD, where=where,
+                            sequence=probe.sequence_numbers()[0])
     kit.rate(s, "pub_rate", probe.send_stamps(SAMPLES), period=PERIOD, needed=SAMPLES, waited=window,
              noun="message", source="the messages' send stamps", where=where)
 

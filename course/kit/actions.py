@@ -13,6 +13,9 @@ with rclpy's own :class:`rclpy.action.ActionClient` and :class:`rclpy.action.Act
   its own, so an executing goal never blocks the grader's /rosout subscription; nothing of it
   exists in the graph before :meth:`StandInActionServer.offer`.
 
+:func:`offer_once_it_waits` offers a stand-in server only once the learner's client has said something, so a
+client that sends without waiting for the server never reaches it, in any run.
+
 :func:`action_endpoints` lists a node's action servers or clients, as ``ros2 node info`` does.
 """
 
@@ -373,6 +376,31 @@ class StandInActionServer:
         if self._node is not None:
             self._node.destroy_node()
         self._node = self._executor = self._thread = self._server = None
+
+
+def offer_once_it_waits(s: GradingSession, server: StandInActionServer, rosout: Any, node: str, proc: Any,
+                        timeout: float) -> None:
+    """Offer ``server`` once the learner's client has started and logged its first record, not before.
+
+    A goal request written before the client's request writer has matched the server's reader is lost,
+    and whether discovery matched them first is a race: with the server offered before the client starts,
+    a client that sends at once, without waiting for the server as the lessons ask, reached it in one run
+    and not in another (``check`` and ``grade`` gave it different verdicts). Offered only once the client
+    has logged (a client that waits says so), a goal sent without waiting goes into nothing in every run,
+    and a client that waits sends its goal once the server is there, as with nav2 or any server that
+    starts late.
+
+    Args:
+        server: the stand-in server, not offered yet.
+        rosout: the session's :class:`~ros2course.run.probes.RosoutProbe`.
+        node: the client's node (logger) name, e.g. ``"nav2_navigate_to_pose_action_client"``.
+        proc: the client's :class:`~ros2course.run.process.LearnerProcess`.
+        timeout: seconds to wait for that first record (the lesson's time to say it waits); the server is
+            offered then, or as soon as the process ends, whatever it logged.
+    """
+    with s.phase("observe"):
+        wait_until(lambda: bool(rosout.records(node=node)) or proc.poll() is not None, timeout)
+    server.offer()
 
 
 def stand_in_action_server(s: GradingSession, action_type: type, name: str, script: Callable[[int, Any], Script],

@@ -266,19 +266,24 @@ FRESH_START_TIMEOUT = 10.0
 
 
 def counts_from_zero(s: GradingSession, check_id: str, messages: list, path: Path, topic: str, msg_type: type,
-                     period: float, args: list[str] | None = None, where: str = "") -> bool:
+                     period: float, args: list[str] | None = None, where: str = "",
+                     sequence: int | None = None) -> bool:
     """Record ``check_id``: the publisher's first AmazingQuote has ``id`` 0 (publisher-subscriber: "the id starts at
     0"; parameters: "the id field counts up from 0, as before").
 
     ``messages`` (in arrival order) came to a subscription made before the
-    node started, which hears the first message in nearly every run (the
-    first goes out one timer period after the node starts: 20 of 20 runs at
-    load 2 heard id 0 first). A publisher is volatile, though: a message it
-    sends before the subscription is matched is lost (ROS 2 QoS, durability),
-    so a first id other than 0 may be a missed message. Then a fresh instance
-    of ``path`` (``args``: its ``--ros-args``), in a graph of its own with the
-    grader's subscription made first, is asked again (stopped at the end of
-    the check); the check fails only when neither run heard 0 first.
+    node started. A publisher is volatile, though: a message it sends before
+    the subscription is matched is lost (ROS 2 QoS, durability), and whether
+    discovery matched them before the node's first write is a race (a node
+    that publishes at once, before spinning, loses its first message in some
+    runs and not in others). So the first id heard is judged against the
+    publication sequence number of that message (``sequence``: the writer's
+    count, 1 for its first): a first message heard with number k was the
+    node's k-th, and its counter started at 0 when its id is k - 1, whichever
+    messages discovery lost. Only when the middleware gives no sequence
+    number and the first id heard is not 0 is a fresh instance of ``path``
+    (``args``: its ``--ros-args``), in a graph of its own with the grader's
+    subscription made first, asked again (stopped at the end of the check).
 
     Args:
         messages: what the first run's subscription received, oldest first.
@@ -287,6 +292,8 @@ def counts_from_zero(s: GradingSession, check_id: str, messages: list, path: Pat
         msg_type: the workspace's AmazingQuote class.
         period: the publisher's timer period, seconds.
         where: appended to what was observed (e.g. the topic).
+        sequence: the publication sequence number of ``messages[0]``
+            (:meth:`ros2course.run.probes.TopicProbe.sequence_numbers`), None when unknown.
 
     Returns whether it passed; no message in the first run is failed (nothing to tell).
     """
@@ -296,6 +303,13 @@ def counts_from_zero(s: GradingSession, check_id: str, messages: list, path: Pat
     first = int(messages[0].id)
     if first == 0:
         return s.record(check_id, True, f"the first message has id 0 (ids {_ids(messages)})" + where, expected)
+    if sequence:
+        start = first - (sequence - 1)
+        lost = (f"; the {sequence - 1} sent before it were lost before this subscription matched the publisher"
+                if sequence > 1 else "")
+        return s.record(check_id, start == 0, f"the first message heard has id {first} (ids {_ids(messages)}) and was "
+                        f"the publisher's message number {sequence}, so its first had id {start}{lost}{where}",
+                        expected)
     graph = s.new_graph()
     probe = graph.topic(topic, msg_type)
     proc = s.launch(path, f"{path.name}.from-zero", args, graph=graph)

@@ -522,6 +522,7 @@ class TopicProbe:
         self._session = session
         self._lock = threading.Lock()
         self._samples: list[tuple[float, float, Any]] = []
+        self._sequence: list[int | None] = []  # the publisher's publication sequence number per sample
         from rclpy.event_handler import SubscriptionEventCallbacks  # noqa: PLC0415 - rclpy only when grading
 
         # DDS's own "matched" event (a publisher of the same type with compatible QoS connected):
@@ -540,8 +541,10 @@ class TopicProbe:
         now = time.monotonic()
         # rclpy passes MessageInfo as a dict of rmw_message_info_t fields (nanoseconds).
         stamp = info.get("source_timestamp", 0) * 1e-9 if isinstance(info, dict) else 0.0
+        sequence = info.get("publication_sequence_number") if isinstance(info, dict) else None
         with self._lock:
             self._samples.append((now, stamp or time.time(), msg))
+            self._sequence.append(sequence or None)  # 0: the middleware does not say
         record(self._session, self.topic, msg, int(stamp * 1e9) if stamp else None)
 
     def samples(self) -> list[tuple[float, Any]]:
@@ -554,6 +557,15 @@ class TopicProbe:
         with self._lock:
             stamps = [stamp for _, stamp, _ in self._samples]
         return stamps[:count] if count else stamps
+
+    def sequence_numbers(self) -> list[int | None]:
+        """Per message so far, oldest first, its publication sequence number: the writer's count of what it had
+        written, 1 for its first message (rmw_message_info_t.publication_sequence_number; Fast DDS numbers each
+        writer's samples from 1), or None where the middleware gives none. A first message heard with number
+        k means k - 1 were written before it, sent before this subscription matched the publisher (lost: a
+        VOLATILE publisher keeps nothing for late subscriptions)."""
+        with self._lock:
+            return list(self._sequence)
 
     def messages(self) -> list[Any]:
         """Messages so far, oldest first."""
