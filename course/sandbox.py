@@ -168,6 +168,18 @@ def parent_alive_guard(parent_pid: int | None = None) -> list[str]:
     return ["/bin/sh", "-c", '[ "$PPID" = "$0" ] || exit 137; exec "$@"', str(pid)]
 
 
+def die_with_parent() -> list[str]:
+    """A command prefix that makes the program die with this process: ``setpriv --pdeathsig KILL --`` and
+    :func:`parent_alive_guard` (which closes the race the first leaves open), or ``[]`` where util-linux's
+    ``setpriv`` is missing (the process group is then what stops the program). For a program that keeps this
+    process's uid; :func:`command` (``pdeathsig=True``) arms the same signal after a uid drop.
+
+    The signal is sent when the *thread* that forked the child ends (prctl(2)), so start children from the
+    main thread or a thread that outlives them."""
+    setpriv = shutil.which("setpriv")
+    return [setpriv, "--pdeathsig", "KILL", "--", *parent_alive_guard()] if setpriv else []
+
+
 def command(argv: list[str], env: dict[str, str], pdeathsig: bool = False,
             identity: SubmissionIdentity | None = None) -> tuple[list[str], dict[str, str]]:
     """``(argv, env)`` to give ``subprocess`` so that ``argv`` runs as the submission.

@@ -360,8 +360,7 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], 
         walls, memory=f"RLIMIT_AS {job.memory_limit / 2**20:.0f} MiB per process" if job.memory_limit else "none")
     # parent-death signal: the worker dies with the thread that started it (a pool thread lives as long as
     # the batch), so a SIGKILLed batch leaves no worker behind
-    setpriv = shutil.which("setpriv")
-    argv = ([setpriv, "--pdeathsig", "KILL", "--", *sandbox.parent_alive_guard()] if setpriv else []) + prefix + cmd
+    argv = sandbox.die_with_parent() + prefix + cmd
     env = dict(os.environ)
     env.update({BATCH_MARKER_VAR: marker, "HOME": str(scratch / "home"), "ROS_LOG_DIR": str(logs / "ros"),
                 "ROS2COURSE_CONTENT": str(content_root()),  # the worker grades on this batch's course

@@ -32,8 +32,10 @@ __all__ = ["BOX", "BOX_ID", "BOX_LINK_ID", "FRICTION", "GRAVITY", "STEP_SIZE", "
 
 def physics_world(s: GradingSession, *, paused: bool = False, graph: Any = None, **options: Any) -> PhysicsWorld:
     """A :class:`~ros2course.run.world.PhysicsWorld` serving in ``graph`` (default ``s.graph``), started
-    (stepping unless ``paused``), closed when the part ends (create it before the learner's node: closers
-    run newest first, so the node's Ctrl+C is judged while the world still exists).
+    (stepping unless ``paused``), closed when the part ends. Closers run newest first: a world created
+    before the learner's node is still there while the node's Ctrl+C is judged; one created after it (a node
+    that must first run with no world to find, and say that it waits, as in gazebo-custom-nodes) is closed
+    first, and the Ctrl+C is judged with no world, which a node that waits for one must survive anyway.
 
     Args:
         options: :class:`~ros2course.run.world.PhysicsWorld`'s keywords (``world``, ``friction``,

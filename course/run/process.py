@@ -273,9 +273,7 @@ class LearnerProcess:
         if sandbox.current() is not None:
             self.argv, self._popen_env = sandbox.command(wrapped, self.env, pdeathsig=main_thread)
         else:
-            setpriv = shutil.which("setpriv") if main_thread else None
-            self.argv = [setpriv, "--pdeathsig", "KILL", "--", *sandbox.parent_alive_guard(), *wrapped] if setpriv \
-                else wrapped
+            self.argv = [*(sandbox.die_with_parent() if main_thread else []), *wrapped]
             self._popen_env = self.env
         self.log_dir = log_dir
         self.output_cap = output_cap
