@@ -34,6 +34,9 @@ STATE_LABELS = {0: "unknown", UNCONFIGURED: "unconfigured", INACTIVE: "inactive"
 #: shutdown has one id per primary state it leaves.
 CONFIGURE, CLEANUP, ACTIVATE, DEACTIVATE = 1, 2, 3, 4
 SHUTDOWN_FROM = {UNCONFIGURED: 5, INACTIVE: 6, ACTIVE: 7}
+#: Seconds the grader's probe may take to match a publisher the node makes in a transition (discovery of a
+#: new writer on one machine: well under a second, also at load 2).
+MATCH_TIMEOUT = 2.0
 #: Seconds for a transition's answer (the learner's callback runs inside the service call).
 ANSWER_TIMEOUT = 3.0
 #: Seconds for the node's publisher to leave the graph after cleanup (DDS announces a
@@ -219,12 +222,25 @@ def sent_in(probe: Any, since: float, until: float | None = None) -> list[tuple[
     return [(t, m) for t, m in zip(stamps, messages) if t >= since and (until is None or t < until)]
 
 
-def quiet(s: Session, check_id: str, stream: Stream, node: kit.StartedNode, since: float, state: str) -> bool:
+def quiet(s: Session, check_id: str, stream: Stream, node: kit.StartedNode, since: float, state: str, *,
+          after_match: bool = False) -> bool:
     """Record ``check_id``: no message sent on the stream's topic for ``stream.quiet`` seconds from ``since``
     (wall clock) while the node is in ``state`` (a phrase: ``inactive (after configure)``).
 
-    Ends early at the first message sent in the window.
+    Ends early at the first message sent in the window. With ``after_match`` (the state follows the
+    transition that makes the node's publisher), the window starts no earlier than the moment the probe
+    matched a publisher on the topic (waited for up to :data:`MATCH_TIMEOUT` s; none: a node that made no
+    publisher, quiet from ``since``): what a new publisher writes before discovery has matched it is lost,
+    so a window that ended before the match showed a plain publisher, which writes while inactive, as quiet
+    in some runs (the audit after 303e818).
     """
+    if after_match:
+        matched = s.graph.matched  # the probe is the session graph's (ts.listen)
+        with s.phase("observe"):
+            wait_until(lambda: stream.probe.topic in matched, MATCH_TIMEOUT, abort=node.ended)
+        at = matched.get(stream.probe.topic)
+        if at is not None:
+            since = max(since, time.time() - (time.monotonic() - at))
     with s.phase("observe"):
         wait_until(lambda: bool(sent_in(stream.probe, since)), stream.quiet, abort=node.ended)
     until = time.time()

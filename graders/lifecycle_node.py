@@ -110,7 +110,7 @@ def grade(s: Session) -> None:
     try:
         _lifecycle.quiet(s, "quiet_unconfigured", stream, node, since, "unconfigured")
         since = _lifecycle.transition(s, "configure", life, _lifecycle.CONFIGURE, _lifecycle.INACTIVE)
-        _lifecycle.quiet(s, "quiet_inactive", stream, node, since, "inactive (after configure)")
+        _lifecycle.quiet(s, "quiet_inactive", stream, node, since, "inactive (after configure)", after_match=True)
         since = _lifecycle.transition(s, "activate", life, _lifecycle.ACTIVATE, _lifecycle.ACTIVE)
         _lifecycle.active(s, stream, node, since)
         since = _lifecycle.transition(s, "deactivate", life, _lifecycle.DEACTIVATE, _lifecycle.INACTIVE)
