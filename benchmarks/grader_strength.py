@@ -334,9 +334,9 @@ def retriage(lesson_ids: list[str], out: Path) -> list:
                                         sample=row.get("sample"), seed=row.get("seed", 1), pool=row.get("pool", 0)))
         before = mut.recorded_score(lesson)
         # the outcomes are that run's: its date and fingerprint stay (none recorded: stale, as it should read)
-        kept = {key: before.data[key] for key in ("course_fingerprint",) if before is not None and before.data.get(key)}
         mut.write_score(lesson, found[-1], measured={"date": before.data.get("date", "?"),
-                                                     "fingerprint": before.data.get("fingerprint", ""), **kept}
+                                                     "fingerprint": before.data.get("fingerprint", ""),
+                                                     **mut.course_part(before.data)}
                         if before is not None else {"date": "?", "fingerprint": ""}, keep_held_out=True)
     return found
 

@@ -1150,7 +1150,7 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
     fingerprint = measured["fingerprint"]
     data = _summary(found)
     data.update(date=measured["date"], course_version=course_version(), fingerprint=fingerprint,
-                **_course_part(measured), survivors=found.uncovered())
+                **course_part(measured), survivors=found.uncovered())
     # every mutant's outcome, committed with the lesson: the figure can be checked and re-derived (issue 37)
     outcomes = {"fingerprint": fingerprint, "date": data["date"], "mutants": _outcome_rows(found)}
     if keep_held_out:
@@ -1215,7 +1215,7 @@ def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, st
         return None
     measured = measured or measurement(lesson)
     section = _summary(found)
-    section.update(date=measured["date"], fingerprint=measured["fingerprint"], **_course_part(measured),
+    section.update(date=measured["date"], fingerprint=measured["fingerprint"], **course_part(measured),
                    survivors=found.uncovered())
     section["earlier"] = held_out_history(score)  # a new sample never hides what the ones before it scored
     score.pop(EARLIER_KEY, None)
@@ -1227,7 +1227,7 @@ def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, st
     return _write_records(lesson, score, outcomes)
 
 
-def _course_part(record: dict) -> dict[str, str]:
+def course_part(record: dict) -> dict[str, str]:
     """``{"course_fingerprint": ...}`` from a measurement or a recorded run, {} when it has none (runs recorded
     before course fingerprints were: :func:`ros2course.grade.fingerprint.course_fingerprint`)."""
     return {"course_fingerprint": record["course_fingerprint"]} if record.get("course_fingerprint") else {}
@@ -1248,7 +1248,7 @@ def held_out_history(score: dict) -> list[dict]:
         return before + (list(held.get("earlier", [])) if isinstance(held, dict) else [])
     counted = held.get("graded", 0) - held.get("killed_by_build", 0) - held.get("triaged", 0)
     return [*before, *held.get("earlier", []), {"seed": held.get("seed"), "date": held.get("date"),
-                                       "fingerprint": held.get("fingerprint"), **_course_part(held),
+                                       "fingerprint": held.get("fingerprint"), **course_part(held),
                                        "graded": held.get("graded"),
                                        "counted": counted, "killed": held.get("killed"),
                                        "score": held.get("killed", 0) / counted if counted > 0 else None}]
