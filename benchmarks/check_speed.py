@@ -49,7 +49,7 @@ from typing import Any
 from rich.console import Console
 from rich.table import Table
 
-from ros2course.build import colcon as build_mod
+from ros2course.builder import colcon as build_mod
 from ros2course.errors import CourseError
 from ros2course.grade.engine import grade_lesson, load_grader
 from ros2course.grade.results import LessonResult, Status
@@ -400,7 +400,7 @@ def learner_shell_env_from(env: dict[str, str]) -> dict[str, str]:
 def measure_source_digest(runs: int) -> dict[str, Any]:
     """The build record's content digest of every package of the course's reference (``solutions/src``, the
     largest package set a check reads), as a warm check computes it; milliseconds, median of ``runs``."""
-    from ros2course.build.sources import scan_package  # noqa: PLC0415
+    from ros2course.builder.sources import scan_package  # noqa: PLC0415
     from ros2course.lesson import content_root  # noqa: PLC0415
     from ros2course.ros.manifests import find_packages  # noqa: PLC0415
 

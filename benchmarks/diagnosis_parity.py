@@ -35,7 +35,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent.parent))
 
 from ros2course.grade import session as session_mod  # noqa: E402
 from ros2course.grade.engine import grade_lesson  # noqa: E402
-from ros2course.grade.session import DIAGNOSE_ENV  # noqa: E402
+from ros2course.grade.observer import DIAGNOSE_ENV  # noqa: E402
 from ros2course.grade.results import LessonResult  # noqa: E402
 from ros2course.dev.validate import build_underlay, lesson_cases  # noqa: E402
 from ros2course.lesson.catalog import load_catalog  # noqa: E402

@@ -235,10 +235,9 @@ def quiet(s: Session, check_id: str, stream: Stream, node: kit.StartedNode, sinc
     in some runs (the audit after 303e818).
     """
     if after_match:
-        matched = s.graph.matched  # the probe is the session graph's (ts.listen)
         with s.phase("observe"):
-            wait_until(lambda: stream.probe.topic in matched, MATCH_TIMEOUT, abort=node.ended)
-        at = matched.get(stream.probe.topic)
+            wait_until(lambda: stream.probe.matched_since() is not None, MATCH_TIMEOUT, abort=node.ended)
+        at = stream.probe.matched_since()
         if at is not None:
             since = max(since, time.time() - (time.monotonic() - at))
     with s.phase("observe"):

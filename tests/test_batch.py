@@ -422,7 +422,7 @@ def test_a_batch_hides_the_shared_reference_builds_and_the_authors_folders(tmp_p
     """The venv is read-only but visible to a submission; its shared reference builds hold reference sources,
     so they are hidden, and so are the course's .git, docs, tests and benchmarks (solutions/ too)."""
     from ros2course.batch.runner import default_hidden
-    from ros2course.build.reference import reference_cache_folder
+    from ros2course.builder.reference import reference_cache_folder
     from ros2course.lesson.catalog import content_root
 
     reference_cache_folder().mkdir(parents=True, exist_ok=True)

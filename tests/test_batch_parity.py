@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from ros2course.build.reference import trusted_interface_packages
+from ros2course.builder.reference import trusted_interface_packages
 from ros2course.errors import CourseError
 from ros2course.grade.checklist import Check
 from ros2course.grade.engine import load_grader
@@ -130,7 +130,7 @@ def test_gradescope_autograder_gives_the_references_full_marks(tmp_path: Path) -
     """The Gradescope path (one upload graded for several lessons, as root with full isolation) on three of the
     lessons that used to differ: an interface the lesson teaches, a probe's trace, a CMake build and g++."""
     from ros2course.batch.gradescope import run_gradescope  # noqa: PLC0415
-    from ros2course.build.reference import reference_workspace  # noqa: PLC0415
+    from ros2course.builder.reference import reference_workspace  # noqa: PLC0415
     from ros2course.dev.validate import run_commands  # noqa: PLC0415
 
     lessons = ["python-asyncio", "inspect-services", "cpp-demystified"]
@@ -151,7 +151,7 @@ def test_gradescope_autograder_gives_the_references_full_marks(tmp_path: Path) -
 
 def test_a_reference_cache_folder_others_can_write_is_never_used(tmp_path: Path, monkeypatch) -> None:
     """Trusted interface builds are code the grader imports: never from a folder another user could swap."""
-    from ros2course.build import reference  # noqa: PLC0415
+    from ros2course.builder import reference  # noqa: PLC0415
 
     monkeypatch.setattr(reference.sys, "prefix", str(tmp_path))
     root = reference.reference_cache_root()
@@ -163,7 +163,7 @@ def test_a_reference_cache_folder_others_can_write_is_never_used(tmp_path: Path,
 @pytest.mark.ros
 def test_reference_interfaces_are_built_once_and_shared(tmp_path: Path, monkeypatch) -> None:
     """dev validate's underlay and the batch's trusted interfaces: one build while the sources stay the same."""
-    from ros2course.build import reference  # noqa: PLC0415
+    from ros2course.builder import reference  # noqa: PLC0415
 
     lesson = load_catalog().get("publisher-subscriber")
     first = reference.shared_reference_build(lesson, ["package_with_interfaces"])
@@ -244,7 +244,7 @@ def test_the_graders_random_draws_follow_the_files_not_their_times_or_modes(tmp_
 
 def test_a_built_lessons_draws_follow_its_packages_contents_as_the_build_read_them(tmp_path: Path) -> None:
     """With packages, the seed is the build's content digest (no second scan): a copy with other modes keeps it."""
-    from ros2course.build.sources import scan_package  # noqa: PLC0415
+    from ros2course.builder.sources import scan_package  # noqa: PLC0415
 
     lesson = load_catalog().get("actions-server")
     pkg = tmp_path / "src" / "pkg"

@@ -14,7 +14,7 @@ from typing import Any
 
 import pytest
 
-from ros2course.build.colcon import build_log_excerpt, build_packages, overlay_env
+from ros2course.builder.colcon import build_log_excerpt, build_packages, overlay_env
 from ros2course.errors import NotGradable
 from ros2course.ros import env as env_mod
 from ros2course.ros.manifests import find_packages
@@ -320,7 +320,7 @@ def test_overlay_is_sourced_once_whatever_order_the_wheels_give_ld_library_path(
     """A fresh `check` process reuses build/.ros2course-overlay.json (issue 36): the wheels' bootstrapper
     lists its library folders in a different order in every interpreter, which must not miss the cache,
     and the cached prepends are applied to the new process's own values."""
-    from ros2course.build import colcon as colcon_mod
+    from ros2course.builder import colcon as colcon_mod
 
     root, count = _fake_overlay(tmp_path)
     base = {"PATH": os.environ["PATH"], "HOME": str(tmp_path), "LD_LIBRARY_PATH": "/a/libs:/b/libs:/c/libs"}
@@ -356,8 +356,8 @@ def test_only_a_package_with_exactly_the_courses_files_is_taken_from_its_build(t
     """same_as_prebuilt (batch grading: a hand-in's unchanged package of an earlier lesson is not built again)
     names a package only when path, permission bits and bytes of every file equal the course's copy, and the
     course's build installed it."""
-    from ros2course.build.colcon import same_as_prebuilt
-    from ros2course.build.sources import scan_package
+    from ros2course.builder.colcon import same_as_prebuilt
+    from ros2course.builder.sources import scan_package
 
     course, hand_in = tmp_path / "course", tmp_path / "hand_in"
     msg = {"msg/Quote.msg": "string quote\nint64 id\n"}

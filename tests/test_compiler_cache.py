@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 from ros2course import sandbox
-from ros2course.build import colcon
-from ros2course.build.colcon import build_packages
+from ros2course.builder import colcon
+from ros2course.builder.colcon import build_packages
 from ros2course.ros import compiler_cache
 from ros2course.ros import env as env_mod
 

@@ -20,8 +20,8 @@ from pathlib import Path
 
 import pytest
 
-from ros2course.build.colcon import RECORDS, BuildRecords, build_packages, overlay_env
-from ros2course.build.sources import (
+from ros2course.builder.colcon import RECORDS, BuildRecords, build_packages, overlay_env
+from ros2course.builder.sources import (
     MAX_SOURCE_BYTES,
     PackageRecord,
     PackageSources,

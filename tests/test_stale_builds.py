@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from ros2course.build.colcon import build_packages, colcon_command, stale_metadata
+from ros2course.builder.colcon import build_packages, colcon_command, stale_metadata
 from ros2course.errors import NotGradable
 from ros2course.grade.engine import grade_lesson
 from ros2course.grade.results import Status

@@ -183,7 +183,7 @@ def test_a_fixture_case_judges_its_skips_and_notes_what_else_it_lost(monkeypatch
 def test_every_lesson_has_a_reference_workspace_with_and_without_tests(tmp_path) -> None:
     """reference_workspace copies each lesson's packages and folders (a lesson may have no package, only folders);
     shared builds (with_tests=False) leave out each package's own test/ folder and nothing else."""
-    from ros2course.build.reference import reference_workspace
+    from ros2course.builder.reference import reference_workspace
 
     for lesson in load_catalog().lessons:
         whole = reference_workspace(lesson, tmp_path / lesson.id / "whole")

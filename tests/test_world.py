@@ -1,4 +1,4 @@
-"""The simulated Gazebo world of the gazebo-custom-nodes lesson (``ros2course.run.world``, issue 40).
+"""The simulated Gazebo world of the gazebo-custom-nodes lesson (``ros2course.run.physics``, issue 40).
 
 Without ROS: the physics (:class:`BoxWorld`: rest, Coulomb friction, one-step wrench impulses, set_state,
 determinism) and Gazebo's entity rules. With ROS (marked ``ros``; each scenario in a child process with ROS's
@@ -18,8 +18,8 @@ import sys
 import pytest
 
 from ros2course.errors import MissingRequirement
-from ros2course.run import world as world_mod
-from ros2course.run.world import (
+from ros2course.run import physics as world_mod
+from ros2course.run.physics import (
     BOX_ID,
     BOX_LINK_ID,
     GRAVITY,
@@ -163,7 +163,7 @@ import rclpy, tf2_ros
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from ros2course.run.probes import RosSession, wait_until
-from ros2course.run.world import PhysicsWorld, load_types, WORLD
+from ros2course.run.physics import PhysicsWorld, load_types, WORLD
 
 TYPES = load_types()
 WRENCH, SET_POSE = f"/world/{WORLD}/wrench", f"/world/{WORLD}/set_pose"

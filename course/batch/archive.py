@@ -24,7 +24,7 @@ import tarfile
 import zipfile
 from pathlib import Path, PurePosixPath
 
-from ros2course.build.colcon import RECORDS
+from ros2course.builder.colcon import RECORDS
 from ros2course.errors import NotGradable
 
 #: Archive suffixes recognised, longest first.
@@ -211,7 +211,7 @@ def prepare(submission: Submission, scratch: Path) -> Path:
 
     A ``build/`` or ``install/`` the submission holds is kept (workspace-setup grades it), but
     never trusted: the engine's build record is removed, so each lesson's packages are rebuilt
-    from clean (:func:`ros2course.build.colcon.build_packages`).
+    from clean (:func:`ros2course.builder.colcon.build_packages`).
 
     The workspace is ``scratch/ws``: the submission's workspace as is (``src/``
     and whatever else it holds, symbolic links kept as links), or a folder of

@@ -37,7 +37,7 @@ from typing import Any
 import psutil
 
 from ros2course.batch.archive import Submission, prepare
-from ros2course.build.reference import lesson_dependencies
+from ros2course.builder.reference import lesson_dependencies
 from ros2course.errors import CourseError, NotGradable
 from ros2course.grade.checklist import StopWhen
 from ros2course.grade.engine import load_grader
@@ -329,7 +329,7 @@ def _dependencies_of(course: Path, lesson_id: str) -> tuple[str, ...]:
 
 
 def _reference_dependencies(lesson_id: str) -> tuple[str, ...]:
-    """The reference packages ``lesson_id``'s packages depend on (:func:`~ros2course.build.reference.lesson_dependencies`),
+    """The reference packages ``lesson_id``'s packages depend on (:func:`~ros2course.builder.reference.lesson_dependencies`),
     which the worker builds too when the submission holds them (``grade_lesson(build_also=...)``)."""
     return _dependencies_of(content_root(), lesson_id)
 

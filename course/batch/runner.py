@@ -65,7 +65,7 @@ from ros2course.batch.job import (
     run_job,
     unfinished_result,
 )
-from ros2course.build.reference import (
+from ros2course.builder.reference import (
     ReferenceBuild,
     lesson_dependencies,
     reference_cache_folder,
@@ -127,7 +127,7 @@ def submission_walls(submissions: Path, out_dir: Path, scratch_root: Path) -> Su
 def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
     """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions
     and wrong ones, the course's :data:`AUTHOR_FOLDERS` (``.git`` holds every version of ``solutions/``), and the
-    shared reference builds (:func:`ros2course.build.reference.reference_cache_folder`: they
+    shared reference builds (:func:`ros2course.builder.reference.reference_cache_folder`: they
     sit in the venv, which is read-only but visible, and hold the reference sources of every lesson a check, a
     validation or an earlier batch built on; the job's own trusted build is bound back read-only, see
     :func:`ros2course.batch.job.job_walls`); for a course merged from a private one
@@ -176,12 +176,12 @@ def build_trusted_interfaces(lessons: list[Any]) -> ReferenceBuild | None:
     isolation the grader imports these reference builds instead (same
     definitions as the contract in shared/LESSONS.md, so the same wire types).
     Which packages: each lesson's ``interfaces`` and ``references`` (lesson.yaml) and their
-    dependencies (:func:`ros2course.build.reference.trusted_interface_packages`), and the reference
-    packages its own depend on (:func:`ros2course.build.reference.lesson_dependencies`): a hand-in that
+    dependencies (:func:`ros2course.builder.reference.trusted_interface_packages`), and the reference
+    packages its own depend on (:func:`ros2course.builder.reference.lesson_dependencies`): a hand-in that
     holds one of those unchanged is built against this build of it rather than building it again
-    (``prebuilt`` of :func:`ros2course.build.colcon.build_packages`).
+    (``prebuilt`` of :func:`ros2course.builder.colcon.build_packages`).
     Built once and shared while their files and the ROS install stay the same
-    (:func:`ros2course.build.reference.shared_reference_build`); call ``discard()`` when done.
+    (:func:`ros2course.builder.reference.shared_reference_build`); call ``discard()`` when done.
 
     Returns:
         the build (``path``: a workspace with ``install/``), or None when no grader imports interface types

@@ -635,7 +635,7 @@ def lesson_files(lesson: Lesson, reference: Path, config: MutationConfig | None 
     sas-robot-driver's ``sas_lite.py``, "do not change it").
 
     Args:
-        reference: a reference workspace of the lesson (:func:`ros2course.build.reference.reference_workspace`).
+        reference: a reference workspace of the lesson (:func:`ros2course.builder.reference.reference_workspace`).
         config: the lesson's ``mutation.yaml`` (None: read it).
 
     Raises:

@@ -25,7 +25,7 @@ from pathlib import Path
 
 from ros2course.dev import first_line
 from ros2course.batch.runner import run_batch
-from ros2course.build.reference import reference_workspace
+from ros2course.builder.reference import reference_workspace
 from ros2course.grade.checklist import StopWhen
 from ros2course.grade.results import LessonResult
 from ros2course.dev.validate import (

@@ -58,13 +58,13 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 from ros2course.dev import first_line
-from ros2course.build.reference import (
+from ros2course.builder.reference import (
     ReferenceBuild,
     lesson_dependencies,
     reference_workspace,
     shared_reference_build,
 )
-from ros2course.build.sources import scan_package
+from ros2course.builder.sources import scan_package
 from ros2course.errors import CourseError, LessonFormatError, ValidationFailed
 from ros2course.dev.child import grade_in_child
 from ros2course.dev.coverage import lesson_coverage
@@ -218,7 +218,7 @@ def apply_edits(workspace_root: Path, edits: list[Edit]) -> None:
 
 def build_underlay(lesson: Lesson) -> ReferenceBuild | None:
     """The lesson's dependencies, built as an underlay for every validation case (shared between
-    lessons and runs while their files do not change: :func:`~ros2course.build.reference.shared_reference_build`).
+    lessons and runs while their files do not change: :func:`~ros2course.builder.reference.shared_reference_build`).
 
     The standard ROS overlay mechanism: each case's workspace is built and
     sourced on top of this one, so an interface package is built once

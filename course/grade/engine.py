@@ -26,8 +26,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ros2course.build import colcon as build_mod
-from ros2course.build.reference import lesson_dependencies
+from ros2course.builder import colcon as build_mod
+from ros2course.builder.reference import lesson_dependencies
 from ros2course.errors import CourseError, NotGradable
 from ros2course.grade.results import LessonResult, Status
 from ros2course.lesson.catalog import Lesson, content_root
@@ -132,7 +132,7 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
 
     ``build_also`` names packages built too when the workspace holds them: by default the
     course's reference dependencies of the lesson's packages
-    (:func:`~ros2course.build.reference.lesson_dependencies`, read from ``solutions/``); batch
+    (:func:`~ros2course.builder.reference.lesson_dependencies`, read from ``solutions/``); batch
     grading passes them in, since its worker cannot see ``solutions/``.
 
     ``hand_in`` (batch grading): the workspace is a submission unpacked by ``grade``, whose
@@ -223,7 +223,7 @@ def _build(lesson: Lesson, workspace_root: Path, base_env: dict[str, str], log_d
 
     With ``trusted_interfaces`` (batch grading), a package of an earlier lesson that the hand-in holds
     unchanged from the course's copy is not built again: the course's build of it is used
-    (:func:`ros2course.build.colcon.build_packages`' ``prebuilt``); the lesson's own packages always are.
+    (:func:`ros2course.builder.colcon.build_packages`' ``prebuilt``); the lesson's own packages always are.
 
     Raises:
         NotGradable: colcon could not be run on the workspace.

@@ -7,13 +7,14 @@ The fingerprint is one sha256 over the contents of:
 * the lesson's grader module and every course module it imports (``graders/_*.py``, another
   lesson's grader), transitively, and the grader's data folder (``graders/data/<grader>/``);
 * the engine code a grader runs on: the modules of the kit (``ros2course.kit``), the grading
-  session and engine (``ros2course.grade``'s ``engine``, ``session``, ``checks``, ``results``) and
+  session and engine (``ros2course.grade``'s ``engine``, ``session``, ``verdicts``, ``observer``, ``machine``,
+  ``checklist``, ``results``) and
   the runtime (``ros2course.run``) that the grader's imports and the grading engine's reach,
   transitively (:func:`engine_modules`): a kit step only another lesson's grader imports is not
   part of this lesson's fingerprint, so adding one leaves this lesson's figures current;
 * the lesson's ``lesson.yaml``;
 * the reference files the mutants are made from (the lesson's packages, their dependencies in
-  ``solutions/src`` and its ``folders``: what :func:`ros2course.build.reference.reference_workspace`
+  ``solutions/src`` and its ``folders``: what :func:`ros2course.builder.reference.reference_workspace`
   copies).
 
 A row of docs/grader-strength.md or a ``dev validate`` line measured under another fingerprint
@@ -36,7 +37,8 @@ from ros2course.ros.manifests import dependency_closure, find_packages
 ENGINE_FOLDER = "course"
 
 #: The engine modules (relative to the ``ros2course`` package) whose code every grader runs on.
-ENGINE_PARTS = ("kit", "run", "grade/engine.py", "grade/session.py", "grade/checklist.py", "grade/results.py")
+ENGINE_PARTS = ("kit", "run", "grade/engine.py", "grade/session.py", "grade/verdicts.py", "grade/observer.py",
+                "grade/machine.py", "grade/checklist.py", "grade/results.py")
 
 
 def _files(root: Path) -> list[Path]:

@@ -14,7 +14,7 @@ import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from ros2course.build import colcon as build_mod
+from ros2course.builder import colcon as build_mod
 from ros2course.errors import NotGradable
 from ros2course.grade.engine import check_lesson, new_log_dir
 from ros2course.grade.results import LessonResult, Status

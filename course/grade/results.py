@@ -175,7 +175,7 @@ class LessonResult:
         hint: for not gradable / grader error, what to do about it.
         timings: seconds spent per phase (``build``, ``grade``, ``teardown``, ``total``...).
         build: how the build went (``ok``, ``cached``, ``seconds``, ``log``, ``repairs``: one sentence per
-            stale install state repaired, see :func:`ros2course.build.colcon.stale_install`).
+            stale install state repaired, see :func:`ros2course.builder.colcon.stale_install`).
         log_dir: where the build and node logs of this check are.
         plots: time series the grader observed (:class:`Plot`), for people; not serialised.
         student: the student id (batch grading; "" for ``check``).

@@ -28,7 +28,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.kit.topics_services import reliable_qos
 from ros2course.run.probes import record, spin_until_shutdown, stop_spinning, wait_until
 
@@ -70,7 +70,7 @@ def action_endpoints(graph: Any, node: str | None, kind: str) -> dict[str, list[
     return {action: list(types) for action, types in found}
 
 
-def wait_for_action(s: GradingSession, node: str | None, kind: str, name: str, timeout: float,
+def wait_for_action(s: Session, node: str | None, kind: str, name: str, timeout: float,
                     abort: Callable[[], bool] | None = None, graph: Any = None) -> dict[str, list[str]]:
     """Poll :func:`action_endpoints` until ``name`` is among them (at most ``timeout`` s, phase ``start``).
 
@@ -144,10 +144,10 @@ class GoalClient:
         graph: a :class:`~ros2course.run.probes.RosSession` (default ``s.graph``).
 
     Create it before the learner's server starts: its feedback probe then
-    misses nothing. Closed with the part (:meth:`GradingSession.on_close`).
+    misses nothing. Closed with the part (:meth:`Session.on_close`).
     """
 
-    def __init__(self, s: GradingSession, action_type: type, name: str, graph: Any = None) -> None:
+    def __init__(self, s: Session, action_type: type, name: str, graph: Any = None) -> None:
         from action_msgs.msg import GoalStatusArray  # noqa: PLC0415 - ROS modules only when grading
         from rclpy.action import ActionClient  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
         from rclpy.qos import qos_profile_action_status_default  # noqa: PLC0415 - ROS modules only when grading
@@ -378,7 +378,7 @@ class StandInActionServer:
         self._node = self._executor = self._thread = self._server = None
 
 
-def offer_once_it_waits(s: GradingSession, server: StandInActionServer, rosout: Any, node: str, proc: Any,
+def offer_once_it_waits(s: Session, server: StandInActionServer, rosout: Any, node: str, proc: Any,
                         timeout: float) -> None:
     """Offer ``server`` once the learner's client has started and logged its first record, not before.
 
@@ -403,7 +403,7 @@ def offer_once_it_waits(s: GradingSession, server: StandInActionServer, rosout: 
     server.offer()
 
 
-def stand_in_action_server(s: GradingSession, action_type: type, name: str, script: Callable[[int, Any], Script],
+def stand_in_action_server(s: Session, action_type: type, name: str, script: Callable[[int, Any], Script],
                            graph: Any = None) -> StandInActionServer:
     """A :class:`StandInActionServer` in ``graph`` (default ``s.graph``), not offered yet, closed with the part.
 

@@ -23,7 +23,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from ros2course.grade.checklist import Unmet
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.kit.programs import ProgramRun, compile_errors, run_program
 
 #: Seconds for each configure, build, install or compiler call.
@@ -46,7 +46,7 @@ def tool(env: Mapping[str, str], *names: str) -> str:
     raise Unmet(f"{' or '.join(names)} is not on PATH: install it (apt-get install cmake g++)")
 
 
-def step(s: GradingSession, check_id: str, argv: list[str], label: str, *, shown: str, expected: str,
+def step(s: Session, check_id: str, argv: list[str], label: str, *, shown: str, expected: str,
          passed: str | None = None, env: dict[str, str] | None = None, cwd: Path | None = None,
          paths: Mapping[str, str] | None = None, timeout: float = BUILD_TIMEOUT) -> ProgramRun:
     """Run one build command; on failure record ``check_id`` with its error lines and raise :class:`Unmet`.
@@ -175,7 +175,7 @@ def configured_prefixes(folder: Path, source: Path) -> dict[Path, str]:
     return found
 
 
-def found_package(s: GradingSession, check_id: str, build: Path, package: str, prefix: Path, expected: str,
+def found_package(s: Session, check_id: str, build: Path, package: str, prefix: Path, expected: str,
                   paths: Mapping[str, str] | None = None) -> bool:
     """Record ``check_id``: the configured ``build`` found ``package`` (``<package>_DIR`` in its cache) under ``prefix``.
 
@@ -194,14 +194,14 @@ def found_package(s: GradingSession, check_id: str, build: Path, package: str, p
     return ok
 
 
-def installed_file(s: GradingSession, check_id: str, prefix: Path, pattern: str, expected: str) -> bool:
+def installed_file(s: Session, check_id: str, prefix: Path, pattern: str, expected: str) -> bool:
     """Record ``check_id``: an install put a file matching ``pattern`` (a glob under ``prefix``) there."""
     found = sorted(p for p in prefix.glob(pattern) if p.is_file())
     return s.record(check_id, bool(found), f"found {found[0].relative_to(prefix)}" if found
                     else f"nothing matches {pattern}; the prefix holds: {listing(prefix)}", expected)
 
 
-def package_config(s: GradingSession, check_id: str, prefix: Path, package: str, target: str) -> bool:
+def package_config(s: Session, check_id: str, prefix: Path, package: str, target: str) -> bool:
     """Record ``check_id``: ``<prefix>/lib*/cmake/<package>/<package>Config.cmake`` exists and a file beside it
     defines the imported ``target`` (what ``install(EXPORT ... NAMESPACE <package>::)`` writes, cmake-packages(7))."""
     expected = (f"{package}Config.cmake and the exported targets file defining {target} "
@@ -219,7 +219,7 @@ def package_config(s: GradingSession, check_id: str, prefix: Path, package: str,
                     expected)
 
 
-def build_and_install(s: GradingSession, checks: tuple[str, str, str], source: Path, build: Path, prefix: Path, *,
+def build_and_install(s: Session, checks: tuple[str, str, str], source: Path, build: Path, prefix: Path, *,
                       label: str, env: dict[str, str] | None = None, paths: Mapping[str, str] | None = None) -> None:
     """Configure ``source`` into ``build`` with ``CMAKE_INSTALL_PREFIX=<prefix>``, build it, install it into ``prefix``.
 

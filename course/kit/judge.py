@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.run.probes import RateStats
 
 #: Tolerance on a mean period, as a fraction (shared/LESSONS.md: rates within ±15 %).
@@ -13,7 +13,7 @@ RATE_TOLERANCE = 0.15
 STANDARD_TOPICS = frozenset({"/rosout", "/parameter_events"})
 
 
-def rate(s: GradingSession, check_id: str, times: list[float], *, period: float, needed: int = 0,
+def rate(s: Session, check_id: str, times: list[float], *, period: float, needed: int = 0,
          waited: float = 0.0, noun: str, source: str, where: str = "", few_note: str = "",
          span: float | None = None, expected_note: str = "", sequence: list[int | None] | None = None,
          median: bool = False) -> bool:

@@ -3,7 +3,7 @@
 * **run**: the launch file is run in a subprocess the way ``ros2 launch`` runs
   it (ros2launch's ``launch_a_launch_file``: a ``LaunchService`` including the
   file through ``AnyLaunchDescriptionSource``), started and stopped like every
-  learner process (``GradingSession.launch``: ros2course.run.process.LearnerProcess,
+  learner process (``Session.launch``: ros2course.run.process.LearnerProcess,
   SIGINT like Ctrl+C). ``launch``/``launch_ros`` come from a sourced system ROS
   or from the source-built underlay (course/ros/underlay.py); the verdict is what
   that real launch started.
@@ -462,7 +462,7 @@ def start_node_action(s: Any, action: NodeAction, label: str) -> tuple[Any | Non
     """Start one literal ``Node`` action the way launch_ros does.
 
     Args:
-        s: the :class:`~ros2course.grade.session.GradingSession`.
+        s: the :class:`~ros2course.grade.session.Session`.
         action: a supported :class:`NodeAction`.
         label: name for the process's log files.
 
@@ -488,7 +488,7 @@ def start_launch_file(s: Any, launch_file: Path, label: str = "launch") -> Launc
     """Run ``launch_file`` with launch_ros, as ``ros2 launch`` does; read it statically for feedback.
 
     Args:
-        s: the :class:`~ros2course.grade.session.GradingSession` (it starts the process,
+        s: the :class:`~ros2course.grade.session.Session` (it starts the process,
             a ros2course.run.process.LearnerProcess, and stops it at its end).
         launch_file: the launch file (normally the installed one in ``share/<pkg>/launch``).
         label: prefix of the log files.
@@ -517,7 +517,7 @@ def installed_launch_file(s: Any, check_id: str, package: str, name: str, source
     """Record ``check_id``: ``share/<package>/launch/<name>`` is installed (found as ``ros2 launch`` finds it).
 
     Args:
-        s: the :class:`~ros2course.grade.session.GradingSession`.
+        s: the :class:`~ros2course.grade.session.Session`.
         source: the package's source folder (``src/.../<package>``), if any.
 
     Returns:

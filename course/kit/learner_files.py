@@ -12,7 +12,7 @@ import os
 import stat
 from pathlib import Path
 
-from ros2course.kit import GradingSession, Unmet
+from ros2course.kit import Session, Unmet
 
 #: Largest file read, in bytes (the lessons' files are a few bytes long).
 MAX_READ = 64 * 1024
@@ -50,7 +50,7 @@ def outside_links(folder: Path) -> list[str]:
     return found
 
 
-def entry(s: GradingSession, check_id: str, path: Path, folder: Path, what: str, *, kind: str = "file") -> Path:
+def entry(s: Session, check_id: str, path: Path, folder: Path, what: str, *, kind: str = "file") -> Path:
     """``path`` resolved, when it is a regular file (``kind="file"``) or a folder (``kind="folder"``) inside ``folder``.
 
     Args:

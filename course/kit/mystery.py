@@ -7,7 +7,7 @@ suffix, an initial parameter value), so that only a script that really asks
 the graph prints them. Each node is a real rclpy node of the grader's process
 (visible to ``ros2 node list``, unlike the grader's hidden probe node), spun on
 a thread of its own and destroyed when the grader's part ends
-(:meth:`GradingSession.on_close`).
+(:meth:`Session.on_close`).
 
 Random values come from :class:`random.SystemRandom` (not seedable, so a
 submission cannot reproduce them). Texts avoid ``:``, quotes and ``#``, so
@@ -22,7 +22,7 @@ import time
 from typing import Any
 
 from ros2course.errors import NotGradable
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.run.probes import TopicProbe, spin_until_shutdown, stop_spinning
 
 _RANDOM = random.SystemRandom()
@@ -72,13 +72,13 @@ class MysteryNode:
     """A visible rclpy node of the grader's in ``s.graph`` (the check's domain), spinning until the part ends.
 
     Args:
-        s: the grading session; the node is destroyed by :meth:`GradingSession.on_close`.
+        s: the grading session; the node is destroyed by :meth:`Session.on_close`.
         name: the node's name (no leading ``/``).
         parameter_services: offer ``list_parameters``/``get_parameters``/... (what ``ros2 param`` calls).
         parameters: ``name -> value`` declared at start (their Python types fix the parameter types).
     """
 
-    def __init__(self, s: GradingSession, name: str, *, parameter_services: bool = False,
+    def __init__(self, s: Session, name: str, *, parameter_services: bool = False,
                  parameters: dict[str, Any] | None = None) -> None:
         import rclpy  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
         from rclpy.executors import SingleThreadedExecutor  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
@@ -125,7 +125,7 @@ class QuotePublisher(MysteryNode):
         NotGradable: the learner's AmazingQuote lacks a field (:func:`require_quote_fields`).
     """
 
-    def __init__(self, s: GradingSession, msg_type: type, *, period: float = 0.2) -> None:
+    def __init__(self, s: Session, msg_type: type, *, period: float = 0.2) -> None:
         require_quote_fields(msg_type)
         super().__init__(s, f"quote_oracle_{_RANDOM.randrange(100, 1000)}")
         self.topic = f"/amazing_quote_{_RANDOM.randrange(1000, 10000)}"
@@ -139,7 +139,7 @@ class QuotePublisher(MysteryNode):
         self.node.create_timer(period, lambda: self._pubs[0].publish(self._msg))
 
 
-def quote_inbox(s: GradingSession, msg_type: type) -> TopicProbe:
+def quote_inbox(s: Session, msg_type: type) -> TopicProbe:
     """Listen on :data:`INBOX_TOPIC` for the learner's ``ros2 topic pub --once`` (reliable, depth 10).
 
     A subscription of the grader's hidden node: ``ros2 topic pub --once`` waits
@@ -169,7 +169,7 @@ class ConfigurableQuotePublisher(MysteryNode):
         NotGradable: the learner's AmazingQuote lacks a field (:func:`require_quote_fields`).
     """
 
-    def __init__(self, s: GradingSession, msg_type: type) -> None:
+    def __init__(self, s: Session, msg_type: type) -> None:
         require_quote_fields(msg_type)
         self.initial_quote = f"{_RANDOM.choice(QUOTES)}. Fortune number {_RANDOM.randrange(1000, 10000)}"
         self.changes: list[tuple[float, str, Any]] = []

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.grade.checklist import Unmet
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.kit.programs import ProgramRun, judge_interrupted_run
 from ros2course.run.probes import wait_until
 from ros2course.run.process import LearnerProcess, rclpy_shutdown_race
@@ -26,7 +26,7 @@ from ros2course.run.process import LearnerProcess, rclpy_shutdown_race
 SETTLE = 0.5
 
 
-def executable(s: GradingSession, check_id: str, package: str, name: str, hint: str = "") -> Path:
+def executable(s: Session, check_id: str, package: str, name: str, hint: str = "") -> Path:
     """Record ``check_id`` on whether ``ros2 run package name`` finds the executable; return its path.
 
     The lookup is ros2run's: the package's prefix in the ament index of the
@@ -77,7 +77,7 @@ class StartedNode:
         return self.proc.poll() is not None
 
 
-def start_node(s: GradingSession, check_id: str, path: Path, node: str, *, sigint_check: str | None = None,
+def start_node(s: Session, check_id: str, path: Path, node: str, *, sigint_check: str | None = None,
                args: Iterable[str] = (), label: str | None = None, graph: Any = None,
                timeout: float = 10.0, grace: float = 3.0, need_node: bool = True,
                aliases: Iterable[str] = ()) -> StartedNode:
@@ -133,7 +133,7 @@ def start_node(s: GradingSession, check_id: str, path: Path, node: str, *, sigin
     return started
 
 
-def wait_for_node(s: GradingSession, check_id: str, proc: LearnerProcess, node: str, timeout: float = 10.0,
+def wait_for_node(s: Session, check_id: str, proc: LearnerProcess, node: str, timeout: float = 10.0,
                   grace: float = 3.0, before: Iterable[str] = (), graph: Any = None,
                   aliases: Iterable[str] = ()) -> bool:
     """Record ``check_id`` on whether a node called ``node`` appears within ``timeout`` seconds.
@@ -178,7 +178,7 @@ def wait_for_node(s: GradingSession, check_id: str, proc: LearnerProcess, node: 
                     f"{process_state(proc)}", f"a node named {node} (the name passed to super().__init__)")
 
 
-def sigint_exit(s: GradingSession, check_id: str, proc: LearnerProcess | ProgramRun,
+def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
                 sigint_timeout: float = 3.0, again: Callable[[], LearnerProcess | None] | None = None) -> bool:
     """Press Ctrl+C (SIGINT) and record ``check_id``: exit code 0, no traceback, within ``sigint_timeout`` s.
 

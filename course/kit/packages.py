@@ -6,11 +6,11 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.grade.checklist import Unmet
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.ros.manifests import find_packages
 
 
-def source_package(s: GradingSession, name: str) -> tuple[Any, Any] | None:
+def source_package(s: Session, name: str) -> tuple[Any, Any] | None:
     """``(folder, catkin_pkg Package)`` of package ``name`` under the workspace's ``src/``, or None."""
     return find_packages(s.workspace_root / "src").get(name)
 
@@ -20,7 +20,7 @@ def declared_dependencies(package: Any) -> set[str]:
     return {d.name for d in (*package.exec_depends, *package.build_depends, *package.build_export_depends)}
 
 
-def depends(s: GradingSession, check_id: str, package: str, needed: tuple[str, ...] | list[str]) -> bool:
+def depends(s: Session, check_id: str, package: str, needed: tuple[str, ...] | list[str]) -> bool:
     """Record ``check_id`` on whether ``package``'s package.xml declares every name in ``needed``.
 
     Partial credit per name. The rule is the tutorial's (ch. 12.1, 15.1,
@@ -39,7 +39,7 @@ def depends(s: GradingSession, check_id: str, package: str, needed: tuple[str, .
                     fraction=(len(needed) - len(missing)) / len(needed))
 
 
-def project_files(s: GradingSession, check_id: str, project: Path, files: tuple[Path, ...] | list[Path]) -> Path:
+def project_files(s: Session, check_id: str, project: Path, files: tuple[Path, ...] | list[Path]) -> Path:
     """Record ``check_id`` on whether the non-ROS project folder ``project`` holds every file in ``files``.
 
     Args:

@@ -19,9 +19,9 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from ros2course.build.colcon import colcon_command
+from ros2course.builder.colcon import colcon_command
 from ros2course.grade.checklist import Unmet
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.ros import index as ament_index
 from ros2course import sandbox
 from ros2course.run.probes import stamp_seconds
@@ -89,7 +89,7 @@ with open(out, 'w') as f:
 """
 
 
-def colcon_python(s: GradingSession) -> str:
+def colcon_python(s: Session) -> str:
     """The interpreter colcon runs ``setup.py`` with (its script's shebang), else ``sys.executable``.
 
     It has setuptools (colcon needs it to build ``ament_python`` packages); the course's own
@@ -112,7 +112,7 @@ def colcon_python(s: GradingSession) -> str:
     return sys.executable
 
 
-def setup_py_arguments(s: GradingSession, folder: Path, timeout: float = 30.0) -> tuple[dict[str, Any], str]:
+def setup_py_arguments(s: Session, folder: Path, timeout: float = 30.0) -> tuple[dict[str, Any], str]:
     """The keyword arguments ``folder/setup.py`` passes to ``setuptools.setup()``.
 
     Dry-runs the script with ``setup()`` replaced, as colcon itself does to read
@@ -157,7 +157,7 @@ def data_files_mapping(data_files: Any) -> dict[str, str]:
 
 # --- the install tree ---------------------------------------------------------------
 
-def install_prefix(s: GradingSession, package: str) -> Path:
+def install_prefix(s: Session, package: str) -> Path:
     """Where colcon installed ``package``: ``install/<package>`` (isolated layout) or ``install/`` (merged)."""
     isolated = s.workspace_root / "install" / package
     return isolated if isolated.is_dir() else s.workspace_root / "install"
@@ -168,7 +168,7 @@ def site_packages(prefix: Path) -> list[Path]:
     return sorted(prefix.glob("lib/python3*/site-packages"))
 
 
-def relative(s: GradingSession, path: Path) -> str:
+def relative(s: Session, path: Path) -> str:
     """``path`` relative to the workspace when it is inside it (shorter observations)."""
     try:
         return str(path.relative_to(s.workspace_root))
@@ -176,7 +176,7 @@ def relative(s: GradingSession, path: Path) -> str:
         return str(path)
 
 
-def ament_index_packages(s: GradingSession) -> dict[str, str]:
+def ament_index_packages(s: Session) -> dict[str, str]:
     """Package name -> prefix, as ``ros2 pkg list`` sees them with the workspace sourced.
 
     Read from the overlay itself (:mod:`ros2course.ros.index`), not the process environment.
@@ -184,7 +184,7 @@ def ament_index_packages(s: GradingSession) -> dict[str, str]:
     return {name: str(prefix) for name, prefix in ament_index.packages_with_prefixes(s.overlay()).items()}
 
 
-def run_installed_python(s: GradingSession, code: str, timeout: float = 20.0,
+def run_installed_python(s: Session, code: str, timeout: float = 20.0,
                          args: tuple[str, ...] = ()) -> tuple[dict[str, Any], str]:
     """Run ``code`` with the sourced workspace's Python, from an empty folder outside the source tree.
 
@@ -227,7 +227,7 @@ with open(sys.argv[1], "w") as f:
 """
 
 
-def installed_import(s: GradingSession, check_id: str, module: str, expected: str, note: str = "",
+def installed_import(s: Session, check_id: str, module: str, expected: str, note: str = "",
                      code: str = "") -> dict[str, Any]:
     """Record ``check_id`` on whether ``import module`` works with the workspace sourced and loads install/'s copy.
 
@@ -259,7 +259,7 @@ def installed_import(s: GradingSession, check_id: str, module: str, expected: st
     return result
 
 
-def ros2_run_executable(s: GradingSession, check_id: str, package: str, executable: str, hint: str = "") -> Path:
+def ros2_run_executable(s: Session, check_id: str, package: str, executable: str, hint: str = "") -> Path:
     """:func:`ros2course.kit.executable`, saying so when the script went to ``bin/`` instead.
 
     Records ``check_id`` on whether ``ros2 run package executable`` finds
@@ -285,7 +285,7 @@ def ros2_run_executable(s: GradingSession, check_id: str, package: str, executab
         raise
 
 
-def installed_subpackage(s: GradingSession, check_id: str, package: str, subpackage: str) -> bool:
+def installed_subpackage(s: Session, check_id: str, package: str, subpackage: str) -> bool:
     """Record ``check_id`` on whether colcon installed ``package/subpackage/__init__.py`` in site-packages.
 
     Looks under ``<prefix>/lib/python3.*/site-packages`` of the package's install
@@ -431,7 +431,7 @@ def shorten(text: str, limit: int = 110) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-def square_lines(s: GradingSession, ranges_check: str, values_check: str, records: list[Any]) -> None:
+def square_lines(s: Session, ranges_check: str, values_check: str, records: list[Any]) -> None:
     """Record ``ranges_check`` and ``values_check`` over /rosout ``records`` of square-of-sum lines.
 
     ``records`` are ``rcl_interfaces/msg/Log`` messages whose text :func:`parse_square_line`
@@ -454,7 +454,7 @@ def square_lines(s: GradingSession, ranges_check: str, values_check: str, record
     s.record(values_check, not wrong, observed, "c == (a+b)**2 (within the digits printed)")
 
 
-def name_lines(s: GradingSession, name_check: str, pairs_check: str, differ_check: str, ordered: list[Any],
+def name_lines(s: Session, name_check: str, pairs_check: str, differ_check: str, ordered: list[Any],
                max_gap: float) -> None:
     """Record the name-line checks over one node's /rosout ``records`` of both kinds, in order.
 

@@ -18,7 +18,7 @@ from typing import Any
 import yaml
 
 from ros2course.grade.checklist import Unmet
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.lesson.catalog import yaml_error_text
 from ros2course.run.probes import wait_future, wait_until
 from ros2course.kit.launch import flatten_parameters
@@ -149,7 +149,7 @@ class NodeParameters:
         return [SetResult(m.name, bool(r.successful), r.reason) for m, r in zip(messages, response.results)]
 
 
-def connect(s: GradingSession, node: str | None, *, proc: Any = None, why: str = "",
+def connect(s: Session, node: str | None, *, proc: Any = None, why: str = "",
             timeout: float = 5.0) -> NodeParameters:
     """The parameter services of ``node`` (a node name without the leading ``/``) in ``s.graph``.
 
@@ -207,7 +207,7 @@ def dump_section(data: Any, node_key: str) -> tuple[dict[str, Any] | None, str]:
 
 # --- steps over a parameters file and a node's declared parameters -----------------------------
 
-def read_dump(s: GradingSession, present_id: str, valid_id: str, key_id: str, path: Path | None, node_key: str, *,
+def read_dump(s: Session, present_id: str, valid_id: str, key_id: str, path: Path | None, node_key: str, *,
               shown: str, absent: str, search: Path, pattern: str) -> dict[str, Any] | None:
     """Record ``present_id`` (``path`` is a file), ``valid_id`` (YAML mapping) and ``key_id`` (:func:`dump_section`).
 
@@ -257,7 +257,7 @@ def _reparsed_type(text: str) -> str:
         return "string"
 
 
-def file_types(s: GradingSession, check_id: str, values: dict[str, Any], node: dict[str, tuple[str, Any]],
+def file_types(s: Session, check_id: str, values: dict[str, Any], node: dict[str, tuple[str, Any]],
                required: tuple[str, ...]) -> bool:
     """Record ``check_id``: the file's ``values`` hold every ``required`` name, each one the node declares
     (``node``: :meth:`NodeParameters.get` of all its names), with the node's type.
@@ -285,7 +285,7 @@ def file_types(s: GradingSession, check_id: str, values: dict[str, Any], node: d
                     expected)
 
 
-def load_file(s: GradingSession, check_id: str, services: NodeParameters, path: Path, node_key: str, *,
+def load_file(s: Session, check_id: str, services: NodeParameters, path: Path, node_key: str, *,
               must_set: str) -> float:
     """``ros2 param load`` ``path`` into the node; record ``check_id``: every parameter set (read-only ones
     like ``start_type_description_service`` excepted) and ``must_set`` among them.
@@ -314,7 +314,7 @@ def load_file(s: GradingSession, check_id: str, services: NodeParameters, path: 
     return loaded_at
 
 
-def declared(s: GradingSession, declared_id: str, defaults_id: str, services: NodeParameters,
+def declared(s: Session, declared_id: str, defaults_id: str, services: NodeParameters,
              defaults: dict[str, Any]) -> None:
     """Record ``declared_id`` (``ros2 param list`` has every name of ``defaults``) and ``defaults_id``
     (``ros2 param get`` of each gives its default, a float as a double and a str as a string).
@@ -338,7 +338,7 @@ def declared(s: GradingSession, declared_id: str, defaults_id: str, services: No
 SPIN_TIMEOUT = 5.0
 
 
-def record_spins(s: GradingSession, check_id: str, started: Any) -> bool:
+def record_spins(s: Session, check_id: str, started: Any) -> bool:
     """Record ``check_id`` (declared with :func:`ros2course.kit.checks.spins`): the running node
     (a :class:`~ros2course.kit.nodes.StartedNode`) answers ``list_parameters`` within
     :data:`SPIN_TIMEOUT` seconds (what ``ros2 param list`` calls).

@@ -6,11 +6,11 @@ import concurrent.futures
 import contextlib
 from collections.abc import Callable, Collection
 
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.run.probes import import_rclpy
 
 
-def at_once(s: GradingSession, background: str, grade_background: Callable[[], None], foreground: str,
+def at_once(s: Session, background: str, grade_background: Callable[[], None], foreground: str,
             grade_foreground: Callable[[], None], *, own_graphs: Collection[str] = ()) -> None:
     """Grade part ``background`` on a worker thread while part ``foreground`` is graded on this thread.
 

@@ -1,6 +1,6 @@
 """Kit steps for learner programs that are not ROS nodes: scripts, compiled binaries, pip.
 
-They run through :meth:`GradingSession.start_program`: own process group,
+They run through :meth:`Session.start_program`: own process group,
 capped output, a deadline, nothing left running (the brief's "bad input"
 rules apply to every learner program, not only to nodes).
 """
@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.run.probes import wait_until
 
 #: What a signal that ended a program usually means, for C++ programs (signal(7)).
@@ -129,7 +129,7 @@ def compile_errors(run: ProgramRun, *, paths: Mapping[str, str] | None = None, l
     return text
 
 
-def run_program(s: GradingSession, argv: list[str], label: str, *, timeout: float = 30.0,
+def run_program(s: Session, argv: list[str], label: str, *, timeout: float = 30.0,
                 env: dict[str, str] | None = None, cwd: Path | None = None) -> ProgramRun:
     """Run ``argv`` to completion (at most ``timeout`` seconds, then stopped) and return what it did.
 
@@ -145,7 +145,7 @@ def run_program(s: GradingSession, argv: list[str], label: str, *, timeout: floa
     return ProgramRun(report.returncode, proc.stdout(), proc.stderr(), not finished, seconds, report.traceback)
 
 
-def interrupt_after(s: GradingSession, argv: list[str], label: str, seconds: float, *,
+def interrupt_after(s: Session, argv: list[str], label: str, seconds: float, *,
                     exit_timeout: float = 3.0, env: dict[str, str] | None = None, cwd: Path | None = None,
                     wait_for: str | Callable[[], bool] | None = None, first_timeout: float = 10.0) -> ProgramRun:
     """Run ``argv`` for ``seconds``, press Ctrl+C (SIGINT to its group), wait ``exit_timeout`` s for it to end.
@@ -200,7 +200,7 @@ def _children(left: tuple[str, ...]) -> tuple[str, ...]:
     return tuple(p for p in left if _DAEMON not in p)
 
 
-def judge_interrupted_run(s: GradingSession, check_id: str, run: ProgramRun, exit_timeout: float = 3.0) -> bool:
+def judge_interrupted_run(s: Session, check_id: str, run: ProgramRun, exit_timeout: float = 3.0) -> bool:
     """Record ``check_id`` on a run that :func:`interrupt_after` (or ``scripts.run_script``) ended with Ctrl+C:
     exit code 0, no traceback, nothing it started still running.
 
@@ -228,7 +228,7 @@ def judge_interrupted_run(s: GradingSession, check_id: str, run: ProgramRun, exi
                     "after everything it started has stopped")
 
 
-def verdict_test(s: GradingSession, check_id: str, argv: list[str], label: str, *, expected: str,
+def verdict_test(s: Session, check_id: str, argv: list[str], label: str, *, expected: str,
                  explain: Sequence[Mapping] = (), cwd: Path | None = None, timeout: float = 10.0) -> bool:
     """Run a course test program that prints ``PASS <what it saw>`` or ``FAIL <what it saw>``; record ``check_id``.
 
@@ -258,7 +258,7 @@ def verdict_test(s: GradingSession, check_id: str, argv: list[str], label: str, 
                     hint=known.get("hint"))
 
 
-def printed_lines(s: GradingSession, check_id: str, run: ProgramRun, line: str, how: str) -> int:
+def printed_lines(s: Session, check_id: str, run: ProgramRun, line: str, how: str) -> int:
     """Record ``check_id``: the program printed lines that read exactly ``line``; return how many.
 
     Args:

@@ -20,7 +20,7 @@ from collections.abc import Mapping
 from pathlib import Path
 
 from ros2course.grade.checklist import Unmet
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.kit.programs import ProgramRun, last_line, run_program
 
 #: Variables that would make a child interpreter import something other than what the learner wrote
@@ -28,7 +28,7 @@ from ros2course.kit.programs import ProgramRun, last_line, run_program
 _FOREIGN = ("PYTHONPATH", "VIRTUAL_ENV", "PYTHONHOME", "PYTHONSTARTUP")
 
 
-def python_env(s: GradingSession, **extra: str) -> dict[str, str]:
+def python_env(s: Session, **extra: str) -> dict[str, str]:
     """The grading environment for a plain-Python child: the course's Python first on PATH, no foreign imports.
 
     ``env python3`` (a learner's shebang) then finds the course's interpreter; output
@@ -44,7 +44,7 @@ def python_env(s: GradingSession, **extra: str) -> dict[str, str]:
     return env
 
 
-def stand_in_env(s: GradingSession, name: str, files: Mapping[str, str | Path]) -> dict[str, str]:
+def stand_in_env(s: Session, name: str, files: Mapping[str, str | Path]) -> dict[str, str]:
     """The sourced workspace's environment (``s.overlay()``) with a stand-in Python library first on PYTHONPATH.
 
     For a requirement "use this library" whose output is the same without it (graders/README, "a stand-in
@@ -85,7 +85,7 @@ def json_output(run: ProgramRun, what: str) -> object:
         raise Unmet(f"{what} did not finish: {detail}") from None
 
 
-def run_probe(s: GradingSession, probe: Path, args: list[str], label: str, *, cwd: Path, what: str,
+def run_probe(s: Session, probe: Path, args: list[str], label: str, *, cwd: Path, what: str,
               timeout: float = 30.0, env: dict[str, str] | None = None) -> object:
     """Run ``python <probe> <args...>`` in ``cwd`` and return the JSON value it printed last.
 
@@ -102,7 +102,7 @@ def run_probe(s: GradingSession, probe: Path, args: list[str], label: str, *, cw
     return json_output(run, what)
 
 
-def shebang(s: GradingSession, check_id: str, script: Path, wanted: str = "#!/usr/bin/env python3") -> bool:
+def shebang(s: Session, check_id: str, script: Path, wanted: str = "#!/usr/bin/env python3") -> bool:
     """Record ``check_id``: the first line of ``script`` is exactly ``wanted`` (LF line endings).
 
     The rule is the tutorial's (ch. 2.4): ``#!/usr/bin/env python3`` runs the first
@@ -121,7 +121,7 @@ def shebang(s: GradingSession, check_id: str, script: Path, wanted: str = "#!/us
                     f"exactly {wanted!r} as the first line", hint=hint)
 
 
-def executable_bit(s: GradingSession, check_id: str, script: Path) -> bool:
+def executable_bit(s: Session, check_id: str, script: Path) -> bool:
     """Record ``check_id``: the learner may execute ``script`` (``chmod +x``; ``./script`` says "Permission denied"
     otherwise)."""
     ok = os.access(script, os.X_OK)
@@ -147,7 +147,7 @@ def matches(sent: object, wanted: object) -> bool:
     return sent == repr(wanted)
 
 
-def judge_values(s: GradingSession, check_id: str, sent: dict, rows: list[tuple[str, str, object]],
+def judge_values(s: Session, check_id: str, sent: dict, rows: list[tuple[str, str, object]],
                  expected: str) -> bool:
     """Record ``check_id``: every value a probe sent is the one wanted.
 
@@ -159,7 +159,7 @@ def judge_values(s: GradingSession, check_id: str, sent: dict, rows: list[tuple[
     return s.record(check_id, ok, "; ".join(f"{text}: {shown(sent.get(key))}" for text, key, _ in rows), expected)
 
 
-def unit_tests(s: GradingSession, check_id: str, cwd: Path, *, timeout: float = 30.0) -> ProgramRun:
+def unit_tests(s: Session, check_id: str, cwd: Path, *, timeout: float = 30.0) -> ProgramRun:
     """Run ``python -m unittest discover -v test`` in ``cwd`` (as the tutorial does, ch. 2.3) and record ``check_id``.
 
     Passes with at least one test run and exit code 0; the observed text names the
@@ -180,7 +180,7 @@ def unit_tests(s: GradingSession, check_id: str, cwd: Path, *, timeout: float = 
     return run
 
 
-def mutants_caught(s: GradingSession, check_id: str, driver: Path, mutants: list[dict], cwd: Path, *,
+def mutants_caught(s: Session, check_id: str, driver: Path, mutants: list[dict], cwd: Path, *,
                    timeout: float = 30.0) -> bool:
     """Record ``check_id``: the learner's test suite fails for each broken version of their code (mutation testing).
 

@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.grade.checklist import Unmet
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.run.probes import LATE_DELIVERY, wait_until
 from ros2course.kit.judge import topics_seen
 from ros2course.kit.launch import NodeAction, start_node_action
@@ -51,7 +51,7 @@ LAUNCH_PARAMETERS: dict[str, Any] = {
 }
 
 
-def amazing_quote(s: GradingSession) -> type:
+def amazing_quote(s: Session) -> type:
     """The workspace's ``package_with_interfaces/msg/AmazingQuote`` class (NotGradable if not built)."""
     return s.interface_type(INTERFACES, "msg", "AmazingQuote")
 
@@ -71,13 +71,13 @@ def first_difference(got: str, wanted: str) -> str:
             f"expected {wanted[start:index + 15]!r}")
 
 
-def package_source(s: GradingSession) -> Path | None:
+def package_source(s: Session) -> Path | None:
     """The learner's ``src/.../python_package_that_uses_parameters_and_launch_files`` folder, if any."""
     found = source_package(s, PACKAGE)
     return found[0] if found else None
 
 
-def quote_after(s: GradingSession, check_id: str, probe: Any, since: float, *, count: int, period: float,
+def quote_after(s: Session, check_id: str, probe: Any, since: float, *, count: int, period: float,
                 quote: str, philosopher: str, proc: Any, expected: str, prefix: str = "", stale: str = "") -> bool:
     """Record ``check_id`` on the ``count``-th AmazingQuote message sent after ``since`` (wall clock, ``time.time()``).
 
@@ -125,7 +125,7 @@ def made_up(msg_type: type, count: int, rng: random.Random | None = None) -> lis
     return out
 
 
-def subscriber_logs(s: GradingSession, quotes_id: str, details_id: str, node: Any, rosout: Any, topic: str,
+def subscriber_logs(s: Session, quotes_id: str, details_id: str, node: Any, rosout: Any, topic: str,
                     msg_type: type, *, count: int, where: str = "", graph: Any = None) -> None:
     """Publish ``count`` :func:`made_up` quotes on ``topic``; record what the subscriber logged.
 
@@ -183,7 +183,7 @@ def subscriber_logs(s: GradingSession, quotes_id: str, details_id: str, node: An
 
 # --- the configurable publisher, started and changed ---------------------------------------
 
-def start_as_launched(s: GradingSession, check_id: str, probe: Any) -> Any:
+def start_as_launched(s: Session, check_id: str, probe: Any) -> Any:
     """Start the publisher as the launch-files lesson's launch file starts it (:data:`LAUNCH_PARAMETERS`,
     node :data:`LAUNCH_NODE`, with :func:`ros2course.kit.launch.start_node_action`); record ``check_id``: the
     node appears (10 s) and its first message reaches ``probe`` (the /:data:`LAUNCH_TOPIC` TopicProbe).
@@ -220,7 +220,7 @@ def start_as_launched(s: GradingSession, check_id: str, probe: Any) -> Any:
     return proc
 
 
-def set_at_runtime(s: GradingSession, check_id: str, services: Any, probe: Any, proc: Any, *, quote: str,
+def set_at_runtime(s: Session, check_id: str, services: Any, probe: Any, proc: Any, *, quote: str,
                    philosopher: str, count: int, period: float, topic: str) -> bool:
     """``ros2 param set`` quote and philosopher_name on the running publisher; record ``check_id``:
     the ``count``-th message sent afterwards carries them (:func:`quote_after`, on send stamps).
@@ -244,7 +244,7 @@ def set_at_runtime(s: GradingSession, check_id: str, services: Any, probe: Any, 
                        stale=" -- the node still publishes the old values: does it read the parameters only once?")
 
 
-def id_counts(s: GradingSession, check_id: str, messages: list, where: str = "") -> bool:
+def id_counts(s: Session, check_id: str, messages: list, where: str = "") -> bool:
     """Record ``check_id``: the AmazingQuote ``id`` of ``messages`` (in arrival order) counts up by 1 from one
     message to the next (the publisher-subscriber lesson's counter, kept by the parameters lesson: "the id
     field counts up from 0, as before"). ``where``: appended to what was observed (e.g. the topic).
@@ -265,7 +265,7 @@ def id_counts(s: GradingSession, check_id: str, messages: list, where: str = "")
 FRESH_START_TIMEOUT = 10.0
 
 
-def counts_from_zero(s: GradingSession, check_id: str, messages: list, path: Path, topic: str, msg_type: type,
+def counts_from_zero(s: Session, check_id: str, messages: list, path: Path, topic: str, msg_type: type,
                      period: float, args: list[str] | None = None, where: str = "",
                      sequence: int | None = None) -> bool:
     """Record ``check_id``: the publisher's first AmazingQuote has ``id`` 0 (publisher-subscriber: "the id starts at
@@ -328,7 +328,7 @@ def _ids(messages: list, limit: int = 6) -> str:
     return shown + (", ..." if len(messages) > limit else "")
 
 
-def texts(s: GradingSession, check_id: str, messages: list, quote: str, philosopher: str, source: str) -> bool:
+def texts(s: Session, check_id: str, messages: list, quote: str, philosopher: str, source: str) -> bool:
     """Record ``check_id``: every AmazingQuote in ``messages`` says ``quote`` by ``philosopher``.
 
     Observed names the first message that differs and where its quote first

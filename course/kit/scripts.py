@@ -4,7 +4,7 @@ The grader starts its own "mystery" nodes in the check's private graph, then
 runs the learner's script there: ``bash <script>`` with the sourced workspace,
 the check's ``ROS_DOMAIN_ID`` and localhost discovery (``learner_env`` of the part's graph),
 in its own process group with a deadline and capped output
-(:meth:`GradingSession.start_program`). When the script's process is stopped,
+(:meth:`Session.start_program`). When the script's process is stopped,
 every process carrying its run marker is killed too, so a ``ros2`` daemon that
 the script's first ``ros2 topic list`` spawned (ros2cli's ``spawn_daemon``
 detaches it with ``setsid``) does not outlive the check. A grader whose script
@@ -36,7 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from ros2course.grade.checklist import Unmet
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.kit.programs import ProgramRun, interrupt_after, run_program
 from ros2course.run.probes import wait_until
 
@@ -44,7 +44,7 @@ from ros2course.run.probes import wait_until
 EXCERPT = 400
 
 
-def script(s: GradingSession, check_id: str, relative: str) -> Path:
+def script(s: Session, check_id: str, relative: str) -> Path:
     """Record ``check_id``: the learner's script exists in the workspace and is valid bash (``bash -n``).
 
     Args:
@@ -71,7 +71,7 @@ def script(s: GradingSession, check_id: str, relative: str) -> Path:
     return path
 
 
-def run_script(s: GradingSession, path: Path, *, timeout: float = 60.0, graph=None,
+def run_script(s: Session, path: Path, *, timeout: float = 60.0, graph=None,
                interrupt_after_s: float | None = None, exit_timeout: float = 5.0,
                args: Iterable[str] = (), daemon_sees: Iterable[str] = (),
                wait_for: Callable[[], bool] | None = None, first_timeout: float = 10.0) -> ProgramRun:
@@ -163,7 +163,7 @@ class LateRun:
         return f"{first}; the grader's node started {self.started_at:.1f} s after the script"
 
 
-def run_script_first(s: GradingSession, path: Path, start: Callable[[], Any], *, late_by: float,
+def run_script_first(s: Session, path: Path, start: Callable[[], Any], *, late_by: float,
                      timeout: float = 30.0, until: Callable[[str], bool] | None = None,
                      args: Iterable[str] = ()) -> LateRun:
     """Run ``bash path`` in a graph where what it must discover appears only after it has started looking.
@@ -233,12 +233,12 @@ class _QuickTransport(xmlrpc.client.Transport):
         return connection
 
 
-def ros2_daemon(s: GradingSession, env: dict[str, str], names: Iterable[str], label: str,
+def ros2_daemon(s: Session, env: dict[str, str], names: Iterable[str], label: str,
                 timeout: float = DAEMON_TIMEOUT) -> bool:
     """Start a ``ros2`` daemon in ``env``'s ROS domain and wait until it lists every one of ``names``.
 
     The daemon runs as the learner's programs do (``ros2 daemon start`` through
-    :meth:`GradingSession.start_program`, so it carries that run's marker and is
+    :meth:`Session.start_program`, so it carries that run's marker and is
     stopped with the check). The grader asks it over its XML-RPC interface
     (ros2cli ``daemon/__init__.py``: ``get_node_names_and_namespaces``,
     ``get_topic_names_and_types``, ``get_service_names_and_types``), the very
@@ -283,7 +283,7 @@ def excerpt(text: str, limit: int = EXCERPT) -> str:
     return flat if len(flat) <= limit else "..." + flat[-limit:]
 
 
-def ended(s: GradingSession, check_id: str, run: ProgramRun, expected: str) -> bool:
+def ended(s: Session, check_id: str, run: ProgramRun, expected: str) -> bool:
     """Record ``check_id``: the script ended by itself, with exit code 0, before its deadline.
 
     A script still running at the deadline names the usual cause (a ``ros2 topic
@@ -302,7 +302,7 @@ def ended(s: GradingSession, check_id: str, run: ProgramRun, expected: str) -> b
     return True
 
 
-def printed(s: GradingSession, check_id: str, run: ProgramRun, needles: Iterable[str], what: str,
+def printed(s: Session, check_id: str, run: ProgramRun, needles: Iterable[str], what: str,
             command: str, whole_lines: bool = False, line_text: Callable[[str], str] = str.rstrip) -> bool:
     """Record ``check_id``: every one of ``needles`` appears in the script's standard output.
 

@@ -25,7 +25,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from ros2course.kit import LATE_DELIVERY, GradingSession, call_service, wait_until
+from ros2course.kit import LATE_DELIVERY, Session, call_service, wait_until
 from ros2course.kit.judge import RATE_TOLERANCE, rate
 from ros2course.kit.nodes import StartedNode, process_state
 from ros2course.kit.topics_services import DeferredServer, has_point
@@ -56,7 +56,7 @@ def point_answers(rng: random.Random | None = None) -> Callable[[int, Any, Any],
     return answer
 
 
-def says_it_waits(s: GradingSession, check_id: str, rosout: Any, node: StartedNode, service: str,
+def says_it_waits(s: Session, check_id: str, rosout: Any, node: StartedNode, service: str,
                   timeout: float = 3.0, what: str = "service") -> bool:
     """Record ``check_id``: within ``timeout`` s, with ``service`` missing, the client logs that it waits.
 
@@ -78,7 +78,7 @@ def says_it_waits(s: GradingSession, check_id: str, rosout: Any, node: StartedNo
                     f"a log record (e.g. '{what} {service} not available, waiting...') while the {what} is missing")
 
 
-def waits_throttled(s: GradingSession, check_id: str, rosout: Any, node: StartedNode, *, node_name: str,
+def waits_throttled(s: Session, check_id: str, rosout: Any, node: StartedNode, *, node_name: str,
                     window: float, period: float = 1.0) -> bool:
     """Record ``check_id``, right after :func:`says_it_waits` passed: with what the client waits for still
     missing ``window`` seconds more, its "waiting" records (their own stamps) come at most once every
@@ -104,7 +104,7 @@ def waits_throttled(s: GradingSession, check_id: str, rosout: Any, node: Started
                     "throttle_duration_sec=1.0)")
 
 
-def calls(s: GradingSession, calls_id: str, rate_id: str, server: DeferredServer, node: StartedNode, *,
+def calls(s: Session, calls_id: str, rate_id: str, server: DeferredServer, node: StartedNode, *,
           service: str, count: int, period: float) -> None:
     """Right after :meth:`DeferredServer.offer`: record ``calls_id`` (the client calls) and ``rate_id``.
 
@@ -136,7 +136,7 @@ def _points(points: list[tuple[float, float, float]]) -> str:
     return ", ".join(f"({x:g}, {y:g}, {z:g})" for x, y, z in points)
 
 
-def logs_answers(s: GradingSession, check_id: str, server: DeferredServer, rosout: Any, node: StartedNode) -> bool:
+def logs_answers(s: Session, check_id: str, server: DeferredServer, rosout: Any, node: StartedNode) -> bool:
     """Record ``check_id``: every point answered so far shows up in the client's log records.
 
     Waits 1 s for the last answer's record (plus ``LATE_DELIVERY`` while
@@ -176,7 +176,7 @@ def logs_answers(s: GradingSession, check_id: str, server: DeferredServer, rosou
                     expected, fraction=len(found) / len(sent) if sent else 0.0)
 
 
-def keeps_calling(s: GradingSession, check_id: str, server: DeferredServer, node: StartedNode, *,
+def keeps_calling(s: Session, check_id: str, server: DeferredServer, node: StartedNode, *,
                   count: int, period: float, late: float) -> bool:
     """Answer ``late`` seconds late from now on; record ``check_id``: calls still come every ``period`` s.
 
@@ -202,7 +202,7 @@ def keeps_calling(s: GradingSession, check_id: str, server: DeferredServer, node
                     + process_state(node.proc), expected)
 
 
-def answers(s: GradingSession, check_id: str, ask: Callable[[Any], tuple[bool, str]], cases: list,
+def answers(s: Session, check_id: str, ask: Callable[[Any], tuple[bool, str]], cases: list,
             expected: str, where: str = "") -> bool:
     """Record ``check_id`` on ``ask(case)`` -> ``(answer as expected, description)`` for each case.
 
@@ -216,7 +216,7 @@ def answers(s: GradingSession, check_id: str, ask: Callable[[Any], tuple[bool, s
                     fraction=passed / len(results))
 
 
-def ask(s: GradingSession, srv_type: type, service: str, request: Any, node: StartedNode,
+def ask(s: Session, srv_type: type, service: str, request: Any, node: StartedNode,
         timeout: float = 3.0) -> tuple[Any, str]:
     """Call ``service`` once from the session's graph (``ros2 service call``): ``(response, "")``, or ``(None, why)``.
 
@@ -231,7 +231,7 @@ def ask(s: GradingSession, srv_type: type, service: str, request: Any, node: Sta
         return None, f"{exc}; {process_state(node.proc)}"
 
 
-def quote_to_point(s: GradingSession, srv_type: type, service: str, node: StartedNode, *, total: float,
+def quote_to_point(s: Session, srv_type: type, service: str, node: StartedNode, *, total: float,
                    tolerance: float, repeats: int = 1) -> Callable[[tuple[str, str, bool, int]], tuple[bool, str]]:
     """An ``ask`` for :func:`answers` on a service that takes a quote and returns a point (seed ch. 20's
     ``WhatIsThePoint``: ``request.quote.{id, quote, philosopher_name}``, ``response.point.{x, y, z}``).

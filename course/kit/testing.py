@@ -10,7 +10,7 @@ How a run is made, and why:
 
 * :func:`prepare_cases` copies, as the grader, the reference package once per case
   (``reference`` and each mutant, the edit applied) into a folder the submission then owns
-  (:meth:`GradingSession.submission_folder`), and the learner's ``test/`` folder into each
+  (:meth:`Session.submission_folder`), and the learner's ``test/`` folder into each
   copy: never a symbolic link, FIFO or device (``ros2course.sandbox.copy_logs``), so a link
   planted in ``test/`` cannot make the grader copy a file only it may read.
 * :func:`run_tests` runs ``python -m pytest test`` in a copy, as ``colcon test`` runs an
@@ -38,7 +38,7 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from ros2course import sandbox
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course.kit.packaging import colcon_python
 from ros2course.run.probes import wait_until
 
@@ -151,7 +151,7 @@ class TestRun:
         return "; ".join([text, *unsaid]) if text and unsaid else text or "; ".join(unsaid)
 
 
-def learner_tests(s: GradingSession, package: str) -> Path | None:
+def learner_tests(s: Session, package: str) -> Path | None:
     """The learner's ``src/<package>/test`` folder, or None when there is none, or it (or its package
     folder) is a symbolic link (the grader copies what it holds: it must be the learner's own files)."""
     folder = s.workspace_root / "src"
@@ -165,7 +165,7 @@ def learner_tests(s: GradingSession, package: str) -> Path | None:
     return folder
 
 
-def prepare_cases(s: GradingSession, packages: Sequence[str], mutants: Sequence[DeclaredMutant]) -> dict[str, Path]:
+def prepare_cases(s: Session, packages: Sequence[str], mutants: Sequence[DeclaredMutant]) -> dict[str, Path]:
     """Copies of the reference packages holding the learner's tests: ``{case: folder}``.
 
     ``folder/<package>`` is a package folder (the reference's files, its own ``test/``
@@ -174,7 +174,7 @@ def prepare_cases(s: GradingSession, packages: Sequence[str], mutants: Sequence[
 
     Args:
         packages: the packages whose tests are run, each declared in the lesson's ``references:``
-            (their sources come from :meth:`GradingSession.reference_package`).
+            (their sources come from :meth:`Session.reference_package`).
 
     Raises:
         ValueError: a mutant does not apply to its reference (a course bug).
@@ -203,7 +203,7 @@ def prepare_cases(s: GradingSession, packages: Sequence[str], mutants: Sequence[
     return {"reference": root / "reference", **{m.check: root / m.check for m in mutants}}
 
 
-def run_tests(s: GradingSession, package_folder: Path, label: str, *, env: dict[str, str],
+def run_tests(s: Session, package_folder: Path, label: str, *, env: dict[str, str],
               timeout: float) -> TestRun:
     """Run ``python -m pytest test`` in ``package_folder`` as ``colcon test`` would, as the submission.
 
@@ -234,7 +234,7 @@ def run_tests(s: GradingSession, package_folder: Path, label: str, *, env: dict[
     return TestRun(report.returncode if finished else None, counts, failed, errors, tail, seconds, timeout)
 
 
-def judge_reference(s: GradingSession, check_id: str, run: TestRun, where: str, expected: str) -> bool:
+def judge_reference(s: Session, check_id: str, run: TestRun, where: str, expected: str) -> bool:
     """Record ``check_id``: the learner's tests (in ``where``, e.g. ``src/pkg/test``) passed on the reference."""
     observed = f"on the course's reference, your tests in {where}: {run.summary()}"
     if run.failed:
@@ -245,7 +245,7 @@ def judge_reference(s: GradingSession, check_id: str, run: TestRun, where: str, 
     return run.passed
 
 
-def judge_mutant(s: GradingSession, mutant: DeclaredMutant, run: TestRun) -> bool:
+def judge_mutant(s: Session, mutant: DeclaredMutant, run: TestRun) -> bool:
     """Record ``mutant.check``: the learner's tests failed on the mutant (it was *caught*)."""
     if run.caught:
         observed = f"your tests failed on it, as they should: {run.summary()}" + (
@@ -259,7 +259,7 @@ def judge_mutant(s: GradingSession, mutant: DeclaredMutant, run: TestRun) -> boo
     return run.caught
 
 
-def run_cases(s: GradingSession, jobs: Sequence[Callable[[], None]], workers: int = 2) -> None:
+def run_cases(s: Session, jobs: Sequence[Callable[[], None]], workers: int = 2) -> None:
     """Run independent case jobs (each calls :func:`run_tests` and records its check), ``workers`` at once.
 
     Runs are learner programs in their own process groups: two at a time keeps a 2-core

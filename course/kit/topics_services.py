@@ -20,7 +20,7 @@ from typing import Any
 
 from ros2course.errors import NotGradable
 from ros2course.grade.checklist import Unmet
-from ros2course.grade.session import GradingSession
+from ros2course.kit.session_protocol import Session
 from ros2course import sandbox
 from ros2course.run.probes import RateStats, wait_until
 from ros2course.kit.judge import STANDARD_TOPICS
@@ -34,8 +34,8 @@ _NUMBER = re.compile(r"[-+]?(?:\d+\.\d*|\.\d+|\d+)(?:[eE][-+]?\d+)?")
 
 # --- the workspace's interface types ---------------------------------------------
 
-def workspace_types(s: GradingSession, kind: str, name: str) -> Any:
-    """``package_with_interfaces.<kind>.<name>`` of this workspace (:meth:`GradingSession.interface_type`).
+def workspace_types(s: Session, kind: str, name: str) -> Any:
+    """``package_with_interfaces.<kind>.<name>`` of this workspace (:meth:`Session.interface_type`).
 
     The learner's nodes could not import it either when it fails; the
     ``depends`` check (recorded before) tells why.
@@ -71,7 +71,7 @@ print(json.dumps(out))
 """
 
 
-def generated_fields(s: GradingSession, types: Iterable[tuple[str, str, str]], timeout: float = 60.0) -> dict:
+def generated_fields(s: Session, types: Iterable[tuple[str, str, str]], timeout: float = 60.0) -> dict:
     """Fields of generated interface types as a fresh ``python3`` in the sourced workspace imports them.
 
     A Python process holds one build of an interface package
@@ -103,7 +103,7 @@ def generated_fields(s: GradingSession, types: Iterable[tuple[str, str, str]], t
         return {f"{k}.error": last for k in keys}
 
 
-def fields(s: GradingSession, check_id: str, what: str, observed: dict | None, expected: dict,
+def fields(s: Session, check_id: str, what: str, observed: dict | None, expected: dict,
            error: str | None = None) -> bool:
     """Record ``check_id`` on whether a type has exactly the ``expected`` fields (name -> type).
 
@@ -166,7 +166,7 @@ def _listing(graph: Any, node: str | None, kind: str) -> dict[str, list[str]]:
 DISCOVERY_GRACE = 6.0
 
 
-def wait_for_endpoint(s: GradingSession, node: str | None, kind: str, name: str, timeout: float,
+def wait_for_endpoint(s: Session, node: str | None, kind: str, name: str, timeout: float,
                       abort: Callable[[], bool] | None = None, graph: Any = None) -> dict[str, list[str]]:
     """Poll :func:`endpoints` of ``node`` in ``graph`` (default ``s.graph``) until ``name`` is among them.
 
@@ -236,7 +236,7 @@ def pick_endpoint(found: dict[str, list[str]], name: str, type_name: str) -> str
 _VERBS = {"publishers": "publishes", "subscriptions": "subscribes to", "services": "serves"}
 
 
-def own_endpoint(s: GradingSession, check_id: str, node: Any, kind: str, name: str, type_name: str, *,
+def own_endpoint(s: Session, check_id: str, node: Any, kind: str, name: str, type_name: str, *,
                  none: str, where: str, graph: Any = None) -> tuple[str, str]:
     """Record ``check_id``: ``node`` (a :class:`~ros2course.kit.StartedNode`) has its own ``name`` of ``type_name``.
 
@@ -296,7 +296,7 @@ def reliable_qos(depth: int = 10) -> Any:
     return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=depth, reliability=ReliabilityPolicy.RELIABLE)
 
 
-def listen(s: GradingSession, topic: str, msg_type: type, graph: Any = None) -> Any:
+def listen(s: Session, topic: str, msg_type: type, graph: Any = None) -> Any:
     """A :class:`~ros2course.run.probes.TopicProbe` on ``topic`` in ``graph`` (default ``s.graph``), :func:`reliable_qos`.
 
     Create it before the learner's publisher starts: no message is missed.
@@ -305,7 +305,7 @@ def listen(s: GradingSession, topic: str, msg_type: type, graph: Any = None) -> 
 
 
 @contextlib.contextmanager
-def publisher(s: GradingSession, topic: str, msg_type: type, graph: Any = None) -> Iterator[Any]:
+def publisher(s: Session, topic: str, msg_type: type, graph: Any = None) -> Iterator[Any]:
     """The grader's own publisher on ``topic`` in ``graph`` (default ``s.graph``; like ``ros2 topic pub``).
 
     Removed on exit.
@@ -461,7 +461,7 @@ class DeferredServer:
             self._node = None
 
 
-def stand_in_server(s: GradingSession, srv_type: type, name: str,
+def stand_in_server(s: Session, srv_type: type, name: str,
                     handler: Callable[[int, Any, Any], Any], graph: Any = None) -> DeferredServer:
     """A :class:`DeferredServer` for ``name`` in ``graph`` (default ``s.graph``), not offered yet, closed with the part.
 

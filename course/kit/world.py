@@ -1,6 +1,6 @@
 """The grader's physics world: a simulated Gazebo world behind the author's interfaces (issue 40).
 
-Gazebo does not install on a pip-only machine; :mod:`ros2course.run.world` runs the author's
+Gazebo does not install on a pip-only machine; :mod:`ros2course.run.physics` runs the author's
 ``shapes_with_tf2_and_wrench`` box on MuJoCo and serves what Gazebo and ``ros_gz_bridge`` serve the
 learner's nodes (``set_pose``, the wrench topic, the box on ``/tf``, ``/clock``). This is the kit's door to
 it: a world in the part's graph, closed with the part, plus the names a grader judges with.
@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from ros2course.grade.session import GradingSession
-from ros2course.run.world import (
+from ros2course.kit.session_protocol import Session
+from ros2course.run.physics import (
     BOX,
     BOX_ID,
     BOX_LINK_ID,
@@ -30,15 +30,15 @@ __all__ = ["BOX", "BOX_ID", "BOX_LINK_ID", "FRICTION", "GRAVITY", "STEP_SIZE", "
            "StepRecord", "physics_world"]
 
 
-def physics_world(s: GradingSession, *, paused: bool = False, graph: Any = None, **options: Any) -> PhysicsWorld:
-    """A :class:`~ros2course.run.world.PhysicsWorld` serving in ``graph`` (default ``s.graph``), started
+def physics_world(s: Session, *, paused: bool = False, graph: Any = None, **options: Any) -> PhysicsWorld:
+    """A :class:`~ros2course.run.physics.PhysicsWorld` serving in ``graph`` (default ``s.graph``), started
     (stepping unless ``paused``), closed when the part ends. Closers run newest first: a world created
     before the learner's node is still there while the node's Ctrl+C is judged; one created after it (a node
     that must first run with no world to find, and say that it waits, as in gazebo-custom-nodes) is closed
     first, and the Ctrl+C is judged with no world, which a node that waits for one must survive anyway.
 
     Args:
-        options: :class:`~ros2course.run.world.PhysicsWorld`'s keywords (``world``, ``friction``,
+        options: :class:`~ros2course.run.physics.PhysicsWorld`'s keywords (``world``, ``friction``,
             ``real_time_factor`` in sim seconds per wall second, ``wait_for_input`` in wall seconds for
             lockstep, ``strict_set_pose``).
 

@@ -314,7 +314,7 @@ def _prune_merged(cache: Path) -> None:
 
 
 def _merged_cache() -> Path:
-    """Where merged courses are kept: beside the ROS install (:func:`ros2course.build.reference.reference_cache_root`'s
+    """Where merged courses are kept: beside the ROS install (:func:`ros2course.builder.reference.reference_cache_root`'s
     rules: ours, not writable by others), else a temporary folder removed when this process ends."""
     root = Path(sys.prefix) / "var" / "cache" / "ros2course" / "courses"
     try:

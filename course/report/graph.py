@@ -2,7 +2,7 @@
 
 The expected side is the lesson's ``graph:`` declaration
 (:class:`ros2course.lesson.catalog.LessonGraph`); the observed side is the
-check's ``graph.json`` (:data:`ros2course.grade.session.GRAPH_FILE`): what the
+check's ``graph.json`` (:data:`ros2course.grade.observer.GRAPH_FILE`): what the
 graph showed in each grader part, at its first verdict after the learner's
 nodes were launched (:class:`ros2course.run.diagnose.GraphSnapshot`). Each
 entry is marked ``matched``, ``missing`` (expected, not seen), ``other type``
@@ -26,7 +26,7 @@ from rich.console import Console
 from rich.table import Table
 
 from ros2course.errors import CourseError
-from ros2course.grade.session import GRAPH_FILE
+from ros2course.grade.observer import GRAPH_FILE
 from ros2course.run.diagnose import GraphSnapshot, clean
 
 #: How each role reads in a table (topics and services).

@@ -1,6 +1,6 @@
 """Following colcon's console output in a build log, for a progress display.
 
-Used by the lesson builds (:mod:`ros2course.build.colcon`) and the underlay build
+Used by the lesson builds (:mod:`ros2course.builder.colcon`) and the underlay build
 (:mod:`ros2course.ros.underlay_build`), so it sits in the ROS layer both may use.
 """
 

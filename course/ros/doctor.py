@@ -223,7 +223,7 @@ def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
 
 
 def physics_row() -> DoctorRow:
-    """The row "MuJoCo physics (optional)": the engine of the simulated Gazebo world (ros2course.run.world;
+    """The row "MuJoCo physics (optional)": the engine of the simulated Gazebo world (ros2course.run.physics;
     only the gazebo-custom-nodes lesson needs it; issue 40). Read from the package's metadata, not imported."""
     import importlib.metadata  # noqa: PLC0415 - only doctor reads it
 

@@ -523,6 +523,7 @@ class TopicProbe:
         self._lock = threading.Lock()
         self._samples: list[tuple[float, float, Any]] = []
         self._sequence: list[int | None] = []  # the publisher's publication sequence number per sample
+        self._matched_at: float | None = None  # time.monotonic() since this subscription has had a publisher
         from rclpy.event_handler import SubscriptionEventCallbacks  # noqa: PLC0415 - rclpy only when grading
 
         # DDS's own "matched" event (a publisher of the same type with compatible QoS connected):
@@ -531,11 +532,25 @@ class TopicProbe:
                                                      event_callbacks=SubscriptionEventCallbacks(matched=self._on_matched))
 
     def _on_matched(self, status: Any) -> None:
-        """Keep :attr:`RosSession.matched`: since when this subscription has had a matched publisher."""
+        """Keep :meth:`matched_since` and :attr:`RosSession.matched`: since when this subscription (and a
+        probe of the session on its topic) has had a matched publisher."""
         if status.current_count > 0:
-            self._session.matched.setdefault(self.topic, time.monotonic())
+            now = time.monotonic()
+            if self._matched_at is None:
+                self._matched_at = now
+            self._session.matched.setdefault(self.topic, now)
         else:
+            self._matched_at = None
             self._session.matched.pop(self.topic, None)
+
+    def matched_since(self) -> float | None:
+        """``time.monotonic()`` seconds since when this subscription has had a matched publisher (DDS's
+        ``matched`` event: a publisher of the type with compatible QoS connected), or None while it has none.
+
+        What a publisher wrote before that moment never reached this probe (VOLATILE durability), so a
+        window judging what a node writes starts no earlier than this.
+        """
+        return self._matched_at
 
     def _on_message(self, msg: Any, info: Any) -> None:
         now = time.monotonic()

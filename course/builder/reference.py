@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from ros2course.build.colcon import COLCON_ARGS, build_packages
+from ros2course.builder.colcon import COLCON_ARGS, build_packages
 from ros2course.errors import CourseError, ValidationFailed
 from ros2course.lesson.catalog import Lesson, content_root
 from ros2course.ros import env as env_mod

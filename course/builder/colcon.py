@@ -4,7 +4,7 @@
   ``catkin_pkg`` (the library colcon-ros itself uses; :mod:`ros2course.ros.manifests`,
   which keeps what it read by content), built with ``colcon build --packages-up-to``.
 * The engine records, per package it builds, what it built by content (every
-  source file's bytes and mode; :mod:`ros2course.build.sources`) in
+  source file's bytes and mode; :mod:`ros2course.builder.sources`) in
   ``build/.ros2course-builds.json``. A warm ``check`` skips colcon (a second or
   more per package) when the packages and their in-workspace dependencies are
   built from exactly the files present. When the files changed in a way colcon's
@@ -38,7 +38,7 @@ from ros2course.errors import NotGradable
 from ros2course.files import atomic_write_text
 from ros2course.ros.colcon_log import BuildProgress
 from ros2course.ros.compiler_cache import with_compiler_cache
-from ros2course.build.sources import PackageRecord, PackageSources, rebuild_reason, scan_package
+from ros2course.builder.sources import PackageRecord, PackageSources, rebuild_reason, scan_package
 from ros2course.ros.manifests import IGNORE_MARKERS, Manifest, dependency_closure, find_packages
 
 #: The engine's record of what it built (:class:`BuildRecords`), beside colcon's own state in ``build/``.
@@ -64,7 +64,7 @@ class BuildResult:
         repairs: one sentence per stale install state found and repaired by a clean
             rebuild of the package (:func:`stale_install`, :func:`stale_metadata`).
         content_digest: sha256 over the built packages' folders and file contents (no times, no modes:
-            :attr:`~ros2course.build.sources.PackageSources.content_digest`), "" when no package was scanned.
+            :attr:`~ros2course.builder.sources.PackageSources.content_digest`), "" when no package was scanned.
     """
 
     ok: bool
@@ -380,7 +380,7 @@ def build_packages(workspace_root: Path, packages: list[str], env: dict[str, str
 def same_as_prebuilt(prebuilt: Path, sources: dict[str, PackageSources]) -> list[str]:
     """The packages of ``sources`` (name -> the workspace's files now) whose files are exactly those of the
     package of that name in ``prebuilt/src`` (paths, permission bits and contents:
-    :attr:`~ros2course.build.sources.PackageSources.digest`) and that ``prebuilt/install`` holds, sorted.
+    :attr:`~ros2course.builder.sources.PackageSources.digest`) and that ``prebuilt/install`` holds, sorted.
     A package that differs in one byte, or that ``prebuilt`` lacks or cannot be read, is not among them."""
     try:
         theirs = find_packages(prebuilt / "src")
