@@ -72,10 +72,10 @@ def grade_in_child(lesson_id: str, root: Path, underlays: tuple[Path, ...], log_
 def _main(argv: list[str]) -> int:
     """The child: ``LESSON ROOT LOG_DIR [--underlay PATH]... [--judged CHECK]... [--any-loss]`` (the last two: its
     :class:`~ros2course.grade.checklist.StopWhen`); prints its result's JSON record."""
-    import argparse  # noqa: PLC0415
+    import argparse  # noqa: PLC0415 - the child's side: a parent importing this module for grade_in_child needs none of it
 
-    from ros2course.grade.engine import grade_lesson  # noqa: PLC0415
-    from ros2course.ros import env as env_mod  # noqa: PLC0415
+    from ros2course.grade.engine import grade_lesson  # noqa: PLC0415 - the child's side: a parent importing this module for grade_in_child needs none of it
+    from ros2course.ros import env as env_mod  # noqa: PLC0415 - the child's side: a parent importing this module for grade_in_child needs none of it
 
     parser = argparse.ArgumentParser(prog="python -m ros2course.dev.child")
     parser.add_argument("lesson")

@@ -1448,7 +1448,7 @@ def rule_conflicts(lesson: Lesson, config: MutationConfig | None = None, referen
     is a kind of change outside the contract, so it may never reach what the contract asks for; the mutants of
     such a line are triaged, if at all, one by one (``survivors:``), each with its own reason.
     """
-    from ros2course.lesson.contract import contract_path, implements, load_contract, requirement_lines  # noqa: PLC0415
+    from ros2course.lesson.contract import contract_path, implements, load_contract, requirement_lines  # noqa: PLC0415 - the contract reader only when rules are checked against a contract
 
     config = config if config is not None else load_config(lesson)
     if not config.rules:

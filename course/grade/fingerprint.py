@@ -229,7 +229,7 @@ def measurement(lesson: Lesson) -> dict[str, str]:
 def _fingerprint(lesson: Lesson, with_engine: bool, files: list[Path] | None = None) -> str:
     """The digest over ``files`` (default :func:`grader_files` of ``lesson``), the engine's left out unless
     ``with_engine``."""
-    import ros2course  # noqa: PLC0415
+    import ros2course  # noqa: PLC0415 - the engine's own folder
 
     engine = Path(ros2course.__file__).resolve().parent
     root = content_root().resolve()

@@ -277,7 +277,7 @@ def _node_name_refused(name: str) -> str | None:
     module loaded for its checks alone) nothing is refused: the launch, when it runs, says it itself."""
     try:
         from rclpy.exceptions import InvalidNodeNameException  # noqa: PLC0415 - ROS only where a file is read
-        from rclpy.validate_node_name import validate_node_name  # noqa: PLC0415
+        from rclpy.validate_node_name import validate_node_name  # noqa: PLC0415 - rclpy only when grading
     except ImportError:
         return None
     try:

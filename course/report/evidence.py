@@ -275,7 +275,7 @@ def plot_png(series: list[IntervalSeries], path: Path) -> None:
     import matplotlib  # noqa: PLC0415 - only for --png
 
     matplotlib.use("Agg")
-    from matplotlib import pyplot  # noqa: PLC0415
+    from matplotlib import pyplot  # noqa: PLC0415 - matplotlib only when a plot is drawn (start time)
 
     figure, axes = pyplot.subplots(len(series), 1, figsize=(8, 2.6 * len(series)), squeeze=False)
     for axis, one in zip(axes[:, 0], series):

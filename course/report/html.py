@@ -217,7 +217,7 @@ def _figure(width: float, height: float):
 
 def _svg(figure) -> str:
     """``figure`` as an inline ``<svg>`` element (text as text, no date: small and reproducible)."""
-    import matplotlib  # noqa: PLC0415
+    import matplotlib  # noqa: PLC0415 - matplotlib only when a plot is drawn (start time)
 
     buffer = io.StringIO()
     with matplotlib.rc_context({"svg.fonttype": "none", "svg.hashsalt": "ros2course"}):
@@ -326,7 +326,7 @@ def _log_folder(out_dir: Path, result: LessonResult) -> Path | None:
 
 
 def _recording(out_dir: Path, result: LessonResult) -> Path | None:
-    from ros2course.run.recording import FILE_NAME  # noqa: PLC0415
+    from ros2course.run.recording import FILE_NAME  # noqa: PLC0415 - start time: the recorder's module only for a report that shows recordings
 
     folder = _log_folder(out_dir, result)
     if folder is not None and (folder / FILE_NAME).is_file():
@@ -455,7 +455,7 @@ def _similarity(results: list[LessonResult], similarity: bool, exclude_reference
         return {"note": f"not computed: the submissions folder {submissions} recorded by the run is gone "
                         "(give --submissions SUBMISSIONS)", "pairs": []}
     try:
-        from ros2course.report.similarity import (  # noqa: PLC0415
+        from ros2course.report.similarity import (  # noqa: PLC0415 - the similarity module only when similarity is asked for
             MIN_SHARED_TOKENS,
             THRESHOLD,
             common_limit,
@@ -545,7 +545,7 @@ def write_report(out_dir: Path, *, similarity: bool = True, exclude_reference: b
         CourseError: ``out_dir`` or its results.jsonl is missing or holds no complete record.
     """
     if submissions is None and similarity:
-        import json  # noqa: PLC0415
+        import json  # noqa: PLC0415 - only with similarity
 
         try:
             recorded = json.loads((Path(out_dir) / "run.json").read_text(encoding="utf-8")).get("submissions")
@@ -607,7 +607,7 @@ def adjustments_section(out_dir: Path, class_path: Path | None = None) -> dict[s
         ``rows`` of ``{student, lesson, raw, max, score, reason}``. A class file that cannot be
         used gives a note saying why and no rows: the report is never lost to it.
     """
-    from ros2course.report.term import CLASS_FILE, adjust_out_dir  # noqa: PLC0415
+    from ros2course.report.term import CLASS_FILE, adjust_out_dir  # noqa: PLC0415 - start time: pydantic (the class file's model) only when a class file is read
 
     out_dir = Path(out_dir)
     path = Path(class_path) if class_path is not None else out_dir / CLASS_FILE
@@ -628,7 +628,7 @@ def adjustments_section(out_dir: Path, class_path: Path | None = None) -> dict[s
 
 def _late_markdown(out_dir: Path) -> list[str]:
     """Lines of late submissions per lesson (no student data) when ``OUTDIR/class.yaml`` applies; else none."""
-    from ros2course.report.term import CLASS_FILE, adjust_out_dir, late_counts  # noqa: PLC0415
+    from ros2course.report.term import CLASS_FILE, adjust_out_dir, late_counts  # noqa: PLC0415 - start time: pydantic (the class file's model) only when a class file is read
 
     if not (out_dir / CLASS_FILE).is_file():
         return []

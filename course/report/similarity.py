@@ -233,8 +233,8 @@ def boilerplate_folders(exclude_reference: bool) -> list[Path]:
     workspace legitimately holds an earlier lesson's starter), and with ``exclude_reference`` every
     reference solution (``solutions/``: the tutorial's listings, meant to be typed in).
     """
-    from ros2course.lesson import content_root  # noqa: PLC0415
-    from ros2course.lesson.catalog import load_catalog  # noqa: PLC0415
+    from ros2course.lesson import content_root  # noqa: PLC0415 - start time: the catalog (yaml) only for a course's own files
+    from ros2course.lesson.catalog import load_catalog  # noqa: PLC0415 - start time: the catalog (yaml) only for a course's own files
 
     solutions = content_root() / "solutions"
     out: list[Path] = []
@@ -278,7 +278,7 @@ def _copydetect() -> types.ModuleType:
     copydetect has no option for it, and nothing else in this process uses copydetect.
     """
     import copydetect  # noqa: PLC0415 - slow to import
-    import copydetect.utils  # noqa: PLC0415
+    import copydetect.utils  # noqa: PLC0415 - copydetect is optional (the similarity extra): only when it is used
 
     copydetect.utils.hashed_kgrams = _stable_kgram_hashes
     return copydetect
@@ -357,7 +357,7 @@ def _ros2pkg_resources():
         spec = None
     where = "ros2pkg (importable)"
     if spec is None:
-        from ros2course.ros import underlay  # noqa: PLC0415
+        from ros2course.ros import underlay  # noqa: PLC0415 - start time: the ROS install only when ros2pkg is not importable
 
         built = underlay.current()
         if built is not None:
@@ -655,7 +655,7 @@ def find_sources(results: list[LessonResult], submissions: Path | None) -> dict[
 
 
 def _lesson_paths(lesson_id: str) -> list[str]:
-    from ros2course.lesson.catalog import load_catalog  # noqa: PLC0415
+    from ros2course.lesson.catalog import load_catalog  # noqa: PLC0415 - start time: the catalog (yaml) only for a course's own files
 
     try:
         return list(load_catalog().get(lesson_id).workspace_paths)
@@ -680,7 +680,7 @@ def similar_pairs(results: list[LessonResult], submissions: Path | None, *, excl
     Raises:
         ImportError: copydetect is not installed.
     """
-    import time  # noqa: PLC0415
+    import time  # noqa: PLC0415 - only for this timing
 
     begin = time.perf_counter()
     by_lesson = find_sources(results, submissions)

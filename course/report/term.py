@@ -259,7 +259,7 @@ def load_class(path: Path | str, known_lessons: Iterable[str] | None = None) -> 
     """
     import yaml  # noqa: PLC0415 - start time: the CLI imports this module lazily anyway
 
-    from ros2course.lesson.catalog import yaml_error_text  # noqa: PLC0415
+    from ros2course.lesson.catalog import yaml_error_text  # noqa: PLC0415 - start time: the catalog (yaml), with yaml above
 
     path = Path(path)
     try:
@@ -565,7 +565,7 @@ def adjust_out_dir(out_dir: Path, class_path: Path | None = None,
             class file is missing (when given) or bad (:func:`load_class`); an extension names a
             student without a result (:func:`check_students`).
     """
-    from ros2course.report.gradebook import latest, read_results  # noqa: PLC0415
+    from ros2course.report.gradebook import latest, read_results  # noqa: PLC0415 - start time: the gradebook only when a term's results are read
 
     out_dir = Path(out_dir)
     if not out_dir.is_dir():

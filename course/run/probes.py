@@ -313,11 +313,11 @@ def import_rclpy() -> None:
     """
     with _IMPORTING:
         import rclpy  # noqa: F401, PLC0415 - rclpy only when grading
-        import rclpy.executors  # noqa: F401, PLC0415
-        import rclpy.node  # noqa: F401, PLC0415
-        import rclpy.parameter  # noqa: F401, PLC0415
-        import rclpy.qos  # noqa: F401, PLC0415
-        import rclpy.signals  # noqa: F401, PLC0415
+        import rclpy.executors  # noqa: F401, PLC0415 - rclpy only when grading
+        import rclpy.node  # noqa: F401, PLC0415 - rclpy only when grading
+        import rclpy.parameter  # noqa: F401, PLC0415 - rclpy only when grading
+        import rclpy.qos  # noqa: F401, PLC0415 - rclpy only when grading
+        import rclpy.signals  # noqa: F401, PLC0415 - rclpy only when grading
 
 
 class RosSession:
