@@ -434,6 +434,11 @@ class RosSession:
             node = rclpy.create_node(
                 GRADER_NODE, context=self._context, enable_rosout=False, start_parameter_services=False,
                 parameter_overrides=[Parameter("start_type_description_service", value=False)])
+            # Two threads: a stand-in action server's goal runs for seconds while a cancel is answered. The cost:
+            # while a callback of the node's default (mutually exclusive) group runs, rclpy's MultiThreadedExecutor
+            # finds the group's next ready entity again at once and loops (benchmarks/executor_load.py: a 500 Hz
+            # topic took a core and lost most messages; 20 Hz, the fastest a lesson probes here, 5 % of a core
+            # against 2 % single-threaded, none lost). Faster streams get a probe with an executor of its own.
             self._executor = MultiThreadedExecutor(num_threads=2, context=self._context)
             self._executor.add_node(node)
             self._thread = threading.Thread(target=self._spin, daemon=True, name="ros2course-executor")
@@ -515,6 +520,11 @@ class TopicProbe:
     may get the CPU late and receive two messages at once (CI saw a correct
     2 Hz timer measured at 3.2 Hz on arrivals: min delta 0.000 s); the send
     stamps judge the learner's timer, not the machine's scheduling.
+
+    For topics up to a few tens of Hz: its callback runs on the session's multi-threaded executor, which
+    busy-loops on a fast topic (``benchmarks/executor_load.py``: at 100 Hz 60 % of a core and a sixth of the
+    messages lost). A faster stream needs a probe with a single-threaded executor of its own
+    (``graders/_joint_stream.py``, 500 Hz).
     """
 
     def __init__(self, session: RosSession, topic: str, msg_type: type, qos: Any = 10) -> None:
