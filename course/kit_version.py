@@ -15,4 +15,5 @@ API_VERSION = "2.6"  # 2.1: kit.scripts.run_script_first (discovery steps, issue
 # 2.5: kit.actions.offer_once_it_waits, kit.quotes.counts_from_zero(sequence=) with
 # TopicProbe.sequence_numbers (verdicts no discovery race decides), kit.launch NodeAction.refused
 # 2.6 (issue 38): TopicProbe.matched_since; kit steps typed with kit.Session (the session is composed of a
-# verdict book, grade.verdicts, and a machine view, grade.machine; nothing a grader uses changed)
+# verdict book, grade.verdicts, an observer, grade.observer, and a machine view, grade.machine; nothing a grader
+# uses changed); kit.component_type (one refusal for an optional component's interface type: nav2, Gazebo)

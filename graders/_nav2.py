@@ -79,20 +79,14 @@ PRETENDS = re.compile(r"succe|abort|cancel|unknown|status|result|error_code", re
 
 def navigate_to_pose(s: Session) -> type:
     """``nav2_msgs/action/NavigateToPose`` of the ROS install (the underlay's nav2 component, or a system
-    ROS 2 Jazzy's ``ros-jazzy-nav2-msgs``). ``s.installed_type`` loads the libraries of the interface packages
-    nav2_msgs depends on (geographic_msgs, nav_msgs, from other prefixes) first
-    (:func:`ros2course.ros.interfaces.workspace_type`).
+    ROS 2 Jazzy's ``ros-jazzy-nav2-msgs``), loaded as ``s.installed_type`` loads one (the libraries of the
+    interface packages nav2_msgs depends on, geographic_msgs and nav_msgs, first).
 
     Raises:
-        NotGradable: nav2_msgs (or one of its dependencies) is not installed, or its types do not load; the hint
-            names how to install them (the lesson's "How it is checked").
+        NotGradable: nav2_msgs (or one of its dependencies) is not installed, or its types do not load
+            (:func:`ros2course.kit.component_type`: the refusal every optional component's type gets).
     """
-    try:
-        return s.installed_type("nav2_msgs", "action", "NavigateToPose")
-    except kit.NotGradable as exc:
-        raise kit.NotGradable(f"this lesson needs the nav2 interfaces (nav2_msgs), which do not load here: {exc.message}",
-                              "ros2course env --build --with nav2 (with a system ROS 2 Jazzy: sudo apt install "
-                              "ros-jazzy-nav2-msgs)") from exc
+    return kit.component_type(s.base_env, "nav2_msgs", "action", "NavigateToPose", needed_by="this lesson")
 
 
 def _gone(proc: kit.LearnerProcess) -> Callable[[], bool]:

@@ -106,3 +106,23 @@ def test_grading_process_loads_nav2_msgs_without_loading_its_dependencies_first(
     proc = subprocess.run([sys.executable, "-c", code], env=started, capture_output=True, text=True, timeout=120,
                           stdin=subprocess.DEVNULL, check=False)
     assert proc.returncode == 0 and proc.stdout.strip() == "True", proc.stderr[-2000:]
+
+
+@pytest.mark.parametrize(("package", "kind", "name", "what", "apt"), [
+    ("nav2_msgs", "action", "NavigateToPose", "the nav2 interfaces", "ros-jazzy-nav2-msgs"),
+    ("ros_gz_interfaces", "srv", "SetEntityPose", "the Gazebo interfaces", "ros-jazzy-ros-gz-interfaces"),
+])
+def test_a_missing_optional_component_is_one_refusal_that_says_how_to_install_it(package, kind, name, what, apt):
+    """kit.component_type (issue 40): the same words for nav2's and the world's types, the component to build and
+    the apt package a system ROS needs (those doctor lists too). No ROS needed: an install without the package."""
+    from ros2course import kit  # noqa: PLC0415 - the kit loads the engine; the module's other tests need ROS
+    from ros2course.errors import NotGradable  # noqa: PLC0415 - as above
+    from ros2course.ros import underlay  # noqa: PLC0415 - as above
+
+    with pytest.raises(NotGradable) as refused:
+        kit.component_type({"AMENT_PREFIX_PATH": ""}, package, kind, name, needed_by="this lesson")
+    assert refused.value.message.startswith(f"this lesson needs {what} ({package}), which do not load here: ")
+    assert refused.value.hint == f"ros2course env --build --with nav2 (with a system ROS 2 Jazzy: sudo apt install {apt})"
+    assert apt in underlay.NAV2_APT_PACKAGES
+    with pytest.raises(KeyError):
+        kit.component_type({}, "std_msgs", "msg", "String", needed_by="this lesson")

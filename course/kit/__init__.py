@@ -52,6 +52,7 @@ from ros2course.grade.session import GradingSession
 from ros2course.kit_version import API_VERSION
 from ros2course.ros.env import foreign_python_prefix
 from ros2course.ros.index import package_prefix
+from ros2course.ros.interfaces import component_type
 from ros2course.run.probes import (
     LATE_DELIVERY,
     RateStats,
@@ -81,7 +82,7 @@ from ros2course.kit.packages import (
 
 __all__ = [
     "LATE_DELIVERY", "LearnerProcess", "NotGradable", "RateStats", "call_service",
-    "foreign_python_prefix", "package_prefix", "record", "stamp_seconds", "stop_spinning",
+    "component_type", "foreign_python_prefix", "package_prefix", "record", "stamp_seconds", "stop_spinning",
     "wait_until",
     "API_VERSION", "RATE_TOLERANCE", "STANDARD_TOPICS", "Check", "GradingSession", "StartedNode", "Unmet", "declared_dependencies",
     "depends", "executable", "process_state", "project_files", "rate", "sigint_exit", "source_package", "start_node", "topics_seen",

@@ -129,6 +129,37 @@ def _forget_other_prefix(package: str, prefix: Path) -> None:
 _LOOKUP = threading.Lock()
 
 
+#: The interface packages of the optional components (issue 40): package -> (what they are, the component
+#: ``ros2course env --build --with`` builds them in, what a sourced system ROS 2 Jazzy installs instead).
+OPTIONAL_INTERFACES = {
+    "nav2_msgs": ("the nav2 interfaces", "nav2", "ros-jazzy-nav2-msgs"),
+    "ros_gz_interfaces": ("the Gazebo interfaces", "nav2", "ros-jazzy-ros-gz-interfaces"),
+}
+
+
+def component_type(env: dict[str, str], package: str, kind: str, name: str, *, needed_by: str) -> Any:
+    """The class ``package.kind.name`` of an optional component of the ROS install (:data:`OPTIONAL_INTERFACES`),
+    with one refusal, worded alike for every lesson and world that needs one, when it does not load.
+
+    Args:
+        env: the ROS install's environment (a grading session's ``base_env``), never a workspace's.
+        needed_by: who needs it, the refusal's subject (``"this lesson"``, ``"the simulated Gazebo world"``).
+
+    Raises:
+        NotGradable: the package (or one it depends on) is not installed or does not load: "<needed_by> needs
+            <what> (<package>), which do not load here: <why>", hinting ``ros2course env --build --with
+            <component>`` and, for a system ROS, the apt package.
+        KeyError: ``package`` is not an optional component's (a fault of the course).
+    """
+    what, component, apt = OPTIONAL_INTERFACES[package]
+    try:
+        return workspace_type(env, package, kind, name)
+    except NotGradable as exc:
+        raise NotGradable(f"{needed_by} needs {what} ({package}), which do not load here: {exc.message}",
+                          f"ros2course env --build --with {component} (with a system ROS 2 Jazzy: sudo apt install "
+                          f"{apt})") from exc
+
+
 def workspace_type(overlay: dict[str, str], package: str, kind: str, name: str) -> Any:
     """The generated class ``package.kind.name`` (e.g. ``package_with_interfaces``, ``msg``, ``AmazingQuote``).
 

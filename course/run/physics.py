@@ -70,7 +70,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, NamedTuple
 
-from ros2course.errors import MissingRequirement, NotGradable
+from ros2course.errors import MissingRequirement
 from ros2course.run.probes import record, spin_until_shutdown, stop_spinning
 
 # The world renders nothing: without an OpenGL backend, importing mujoco loads none (with the default, its
@@ -453,19 +453,15 @@ def load_types(env: dict[str, str] | None = None) -> WorldTypes:
             build it.
     """
     from ros2course.ros import env as env_mod  # noqa: PLC0415 - ROS only when a world is served
-    from ros2course.ros.interfaces import workspace_type  # noqa: PLC0415 - ROS only when a world is served
+    from ros2course.ros.interfaces import component_type, workspace_type  # noqa: PLC0415 - ROS only when a world is served
 
     if env is None:
         env = dict(os.environ)
         env_mod.activate(env)
-    try:
-        set_pose = workspace_type(env, "ros_gz_interfaces", "srv", "SetEntityPose")
-        wrench = workspace_type(env, "ros_gz_interfaces", "msg", "EntityWrench")
-        tf_message = workspace_type(env, "tf2_msgs", "msg", "TFMessage")
-    except NotGradable as exc:
-        raise NotGradable(f"the simulated Gazebo world needs the Gazebo interfaces (ros_gz_interfaces), which do "
-                          f"not load here: {exc.message}", "ros2course env --build --with nav2 (with a system ROS 2 "
-                          "Jazzy: sudo apt install ros-jazzy-ros-gz-interfaces)") from exc
+    needed_by = "the simulated Gazebo world"
+    set_pose = component_type(env, "ros_gz_interfaces", "srv", "SetEntityPose", needed_by=needed_by)
+    wrench = component_type(env, "ros_gz_interfaces", "msg", "EntityWrench", needed_by=needed_by)
+    tf_message = workspace_type(env, "tf2_msgs", "msg", "TFMessage")  # the underlay's (tf2), never optional
     from rosgraph_msgs.msg import Clock  # noqa: PLC0415 - ROS only when a world is served
 
     return WorldTypes(set_pose, wrench, tf_message, Clock)
