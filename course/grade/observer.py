@@ -132,7 +132,7 @@ class Observer:
 
     def part_graph(self) -> tuple[_PartState, Any] | None:
         """The calling thread's innermost open part and the graph its learner processes run in (its own
-        :meth:`launch`, else an enclosing part's); None outside a part or before any launch."""
+        launch, :meth:`launched`, else an enclosing part's); None outside a part or before any launch."""
         states = self.part_states
         if not states:
             return None
