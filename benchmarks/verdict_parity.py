@@ -4,7 +4,9 @@ Each side is a folder of ``<lesson>.json`` files, one ``ros2course dev validate 
 per lesson, graded on that side's checkout (reference, starter and every wrong solution).
 Cases are matched by (lesson, case); a case compares equal when its verdict (as the case
 expects, or not), its status, the checks it lost and its points agree on the checks both sides
-have (a check a later lesson change added is named, not counted as a difference). Prints a
+have (a check a later lesson change added is named, not counted as a difference). A check that
+``--until-settled`` left unjudged on either side is no verdict and is compared on neither (issue 38's
+table: which checks a stopped grading reached depends on a part graded at the same time). Prints a
 markdown table and, on stderr, how many cases compare equal; exit status 1 when any differs::
 
     python benchmarks/verdict_parity.py BEFORE_DIR AFTER_DIR > docs/issue-23-verdicts.md
@@ -48,21 +50,38 @@ def cell(outcome: dict | None) -> str:
     return f"{'as expected' if outcome['ok'] else 'NOT as expected'}: {score}{lost}"
 
 
+#: What a check left unjudged by ``dev validate --until-settled`` says (ros2course.grade.checklist.STOPPED_SETTLED):
+#: which checks a stopped grading reached before its stop depends on how far a part graded at the same time
+#: (kit.parts.at_once) had got, so such a check is no verdict and is compared on neither side.
+UNJUDGED = "dev validate --until-settled stopped grading"
+
+
+def unjudged(outcome: dict) -> set[str]:
+    """The checks of ``outcome`` that ``--until-settled`` left unjudged."""
+    return {i for i, c in outcome["checks"].items() if not c.get("passed") and UNJUDGED in c.get("observed", "")}
+
+
 def compare(before: dict, after: dict) -> str:
-    """``same``, ``same on the common checks; new check X`` or ``DIFFERENT``."""
+    """``same``, ``same on the common checks; new check X``, ``same on the checks judged on both sides``, or
+    ``DIFFERENT``: a check only one side's ``--until-settled`` left unjudged is compared on neither (nor are the
+    points then, which such checks change), every other check by its verdict."""
     common = set(before["checks"]) & set(after["checks"])
+    skipped = (unjudged(before) ^ unjudged(after)) & common  # unjudged on both sides: the same on both
+    common -= skipped
 
     def judged(o: dict) -> tuple:
-        return (o["ok"], o["status"], sorted(set(o["lost"]) & common),
-                round(sum(o["checks"][c]["points"] for c in common), 3))
+        return (o["ok"], sorted(set(o["lost"]) & common), round(sum(o["checks"][c]["points"] for c in common), 3),
+                *(() if skipped else (o["status"],)))
 
     if judged(before) != judged(after):
         return "DIFFERENT"
-    added, gone = sorted(set(after["checks"]) - common), sorted(set(before["checks"]) - common)
-    if not (added or gone):
+    added = sorted(set(after["checks"]) - common - skipped)
+    gone = sorted(set(before["checks"]) - common - skipped)
+    if not (added or gone or skipped):
         return "same"
-    return "same on the common checks" + (f"; new check {', '.join(added)}" if added else "") + \
-        (f"; check gone: {', '.join(gone)}" if gone else "")
+    return ("same on the checks judged on both sides" if skipped else "same on the common checks") + \
+        (f" ({len(skipped)} left unjudged by --until-settled on one side)" if skipped else "") + \
+        (f"; new check {', '.join(added)}" if added else "") + (f"; check gone: {', '.join(gone)}" if gone else "")
 
 
 def main(argv: list[str]) -> int:
@@ -75,7 +94,8 @@ def main(argv: list[str]) -> int:
     for key in sorted(set(before) | set(after)):
         b, a = before.get(key), after.get(key)
         tag = compare(b, a) if b and a else ("new case" if a else "case gone")
-        counts[tag.split(";")[0]] = counts.get(tag.split(";")[0], 0) + 1
+        kind = tag.split(";")[0].split(" (")[0]
+        counts[kind] = counts.get(kind, 0) + 1
         rows.append(f"| {key[0]} | {key[1]} | {cell(b)} | {cell(a)} | {tag} |")
     print(", ".join(f"{n} {tag}" for tag, n in sorted(counts.items())), file=sys.stderr)
     print("| lesson | case | before | after | comparison |\n|---|---|---|---|---|")
