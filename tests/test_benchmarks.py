@@ -86,6 +86,32 @@ def test_verdict_parity_names_a_new_check_and_fails_on_a_changed_verdict(tmp_pat
     assert proc.returncode == 1 and "| DIFFERENT |" in proc.stdout and "1 DIFFERENT" in proc.stderr
 
 
+def test_verdict_parity_compares_a_check_left_unjudged_on_one_side_on_neither(tmp_path: Path) -> None:
+    """--until-settled stops a grading once its verdict is settled; a part graded at the same time may have reached
+    a check on one side and not the other: no verdict, so not a difference (issue 38's table). A judged check
+    whose verdict changed still is one."""
+    unjudged = "not checked: dev validate --until-settled stopped grading once the case's verdict was settled"
+
+    def side(name: str, client: dict) -> Path:
+        folder = tmp_path / name
+        folder.mkdir()
+        checks = [{"id": "server", "points": 0, "passed": False, "observed": "wrong sum"},
+                  {"id": "client", **client}]
+        result = {"score": sum(c["points"] for c in checks), "max_score": 3, "status": "failed", "checks": checks}
+        (folder / "l.json").write_text(json.dumps([{"lesson": "l", "case": "wrong-server", "ok": True,
+                                                    "result": result}]), encoding="utf-8")
+        return folder
+
+    stopped = side("stopped", {"points": 0, "passed": False, "observed": unjudged})
+    reached = side("reached", {"points": 2, "passed": True, "observed": "it waited"})
+    proc = _bench("verdict_parity.py", str(stopped), str(reached))
+    assert "same on the checks judged on both sides (1 left unjudged by --until-settled on one side) |" in proc.stdout
+    failed = side("failed", {"points": 0, "passed": False, "observed": "it did not wait"})
+    proc = subprocess.run([sys.executable, str(BENCH / "verdict_parity.py"), str(reached), str(failed)],
+                          capture_output=True, text=True, check=False)
+    assert proc.returncode == 1 and "| DIFFERENT |" in proc.stdout
+
+
 def test_grader_strength_lists_a_lesson_with_nothing_to_mutate(tmp_path: Path) -> None:
     """workspace-setup's reference is a command (``colcon build``): a row of its own, not a crash (issue 24)."""
     doc = tmp_path / "grader-strength.md"
