@@ -22,6 +22,8 @@ import json
 import sys
 from pathlib import Path
 
+from ros2course.grade.checklist import STOPPED_SETTLED
+
 
 def load(folder: Path) -> dict[tuple[str, str], dict]:
     """``{(lesson, case): outcome}`` from a folder of ``dev validate --json`` outputs (a file that is not JSON is skipped)."""
@@ -50,10 +52,10 @@ def cell(outcome: dict | None) -> str:
     return f"{'as expected' if outcome['ok'] else 'NOT as expected'}: {score}{lost}"
 
 
-#: What a check left unjudged by ``dev validate --until-settled`` says (ros2course.grade.checklist.STOPPED_SETTLED):
-#: which checks a stopped grading reached before its stop depends on how far a part graded at the same time
-#: (kit.parts.at_once) had got, so such a check is no verdict and is compared on neither side.
-UNJUDGED = "dev validate --until-settled stopped grading"
+#: What a check left unjudged by ``dev validate --until-settled`` says: which checks a stopped grading reached
+#: before its stop depends on how far a part graded at the same time (kit.parts.at_once) had got, so such a
+#: check is no verdict and is compared on neither side.
+UNJUDGED = STOPPED_SETTLED
 
 
 def unjudged(outcome: dict) -> set[str]:

@@ -187,13 +187,6 @@ class GradingSession:
         finally:
             self.observer.close_part()
 
-    def stop_part(self, name: str, reason: str) -> None:
-        """Record every unrecorded check of part ``name`` ("" = every part) as not checked because of ``reason``.
-
-        A check whose own needs failed gets that reason instead.
-        """
-        self.book.stop_part(name, reason)
-
     def leave_unjudged(self, reason: str) -> None:
         """Record every check not recorded yet as not checked because of ``reason``, whatever its needs: the
         end of a grading stopped early (``dev validate --until-settled``), where no check after the stop was judged.

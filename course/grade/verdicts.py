@@ -258,16 +258,16 @@ class VerdictBook:
         try:
             yield
         except Unmet as stop:
-            self.run_closers(self._closers.pop())
+            self._run_closers(self._closers.pop())
             self.stop_part(name, str(stop))
         except BaseException:
             # a world, a stand-in server or a probe still spinning on the part's graph when the session
             # shuts that graph down crashed the grading process (SIGSEGV, seen twice in CI under
             # dev validate --until-settled): every closing action runs, whatever another raised
-            self.run_closers(self._closers.pop(), keep_going=True)
+            self._run_closers(self._closers.pop(), keep_going=True)
             raise
         else:
-            self.run_closers(self._closers.pop())
+            self._run_closers(self._closers.pop())
 
     def on_close(self, action: Callable[[], Any]) -> None:
         """Run ``action()`` when the current part (or ``grade()``) ends, even after ``Unmet``.
@@ -278,7 +278,7 @@ class VerdictBook:
         self._closers[-1].append(action)
 
     @staticmethod
-    def run_closers(closers: list[Callable[[], Any]], keep_going: bool = False) -> None:
+    def _run_closers(closers: list[Callable[[], Any]], keep_going: bool = False) -> None:
         """Run ``closers`` newest first; ``Unmet`` from one never stops the others (nor, with
         ``keep_going``, any ``Exception``: the part is already ending with an error of its own)."""
         for action in reversed(closers):
