@@ -130,7 +130,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--diagnosis-cost", action="store_true",
                         help="also grade each wrong solution once and report the seconds per diagnosis")
     args = parser.parse_args(argv)
-    env_mod.activate()
+    env_mod.activate_process()
     catalog = load_catalog()
     lessons = [catalog.get(i) for i in args.lessons] if args.lessons else catalog.lessons
     err = Console(file=sys.stderr)

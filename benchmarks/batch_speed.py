@@ -68,7 +68,7 @@ def main() -> int:
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--overhead", action="store_true", help="isolated vs not isolated, one job at a time")
     args = parser.parse_args()
-    env_mod.activate()
+    env_mod.activate_process()
     root = Path(tempfile.mkdtemp(prefix="ros2course-bench-batch-"))
     try:
         make_class(args.lesson, args.count, root / "subs")

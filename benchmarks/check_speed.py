@@ -224,8 +224,7 @@ def measure_floor(runs: int, folder: Path, period: float, progress: Console) -> 
     folder.mkdir(parents=True, exist_ok=True)
     script = folder / "floor_node.py"
     script.write_text(FLOOR_NODE.format(name=FLOOR_NODE_NAME, period=period), encoding="utf-8")
-    base_env = dict(os.environ)
-    env_mod.activate(base_env)
+    base_env = env_mod.activate()
     wanted = f"/{FLOOR_NODE_NAME}"
     rows: dict[str, list[float]] = {"first_record": [], "node_in_graph": [], "sigint_exit": [], "rclpy_shutdown_races": [],
                                     "session_open": [], "session_close": []}
@@ -290,8 +289,7 @@ def measure_diagnostics(runs: int, workspace: Path, folder: Path) -> dict[str, f
         [python, "-c", "import rclpy, rclpy.node, rclpy.executors"], dict(os.environ)) - out["python_start_bootstrapped"]
     out["cli_help"] = median_of([python, "-m", "ros2course", "--help"], shell)
 
-    base_env = dict(os.environ)
-    env_mod.activate(base_env)
+    base_env = env_mod.activate()
     times = []
     for _ in range(runs):
         # what a fresh CLI process pays when neither cache (in memory, build/.ros2course-overlay.json) holds it
@@ -372,8 +370,7 @@ def run_launch_test(runs: int, workspace: Path, folder: Path, samples: int) -> l
     Raises:
         BenchmarkFailed: ``launch_test`` is not installed, or a run fails.
     """
-    base_env = dict(os.environ)
-    env_mod.activate(base_env)
+    base_env = env_mod.activate()
     overlay = build_mod.overlay_env(workspace, base_env)
     launch_test = shutil.which("launch_test", path=overlay.get("PATH"))
     if launch_test is None:
@@ -604,7 +601,7 @@ def main(argv: list[str] | None = None) -> int:
     os.environ.setdefault("RCUTILS_COLORIZED_OUTPUT", "0")
     marker = uuid.uuid4().hex
     os.environ[BENCH_MARKER_VAR] = marker
-    env_mod.activate()
+    env_mod.activate_process()
     progress = Console(file=sys.stderr, highlight=False, quiet=args.json)
     root = Path(tempfile.mkdtemp(prefix="ros2course-bench-"))
     code = 0

@@ -113,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--offset", type=float, default=24 * 3600, help="seconds from now (default: a day)")
     parser.add_argument("--json", action="store_true", help="print the rows as JSON on stdout")
     args = parser.parse_args(argv)
-    env_mod.activate()
+    env_mod.activate_process()
     console = Console(file=sys.stderr, highlight=False, quiet=args.json)
     rows = walk(args.lessons, args.times, args.offset, console)
     full = sum(row["full_marks"] for row in rows)

@@ -134,7 +134,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--off-first", action="store_true", help="grade with the diagnosis off first")
     parser.add_argument("--case", action="append", default=[], help="grade only this case (repeatable)")
     args = parser.parse_args(argv)
-    env_mod.activate()
+    env_mod.activate_process()
     catalog = load_catalog()
     out = [compare_lesson(catalog.get(lesson_id), args.skip_starter, args.off_first, args.case or None)
            for lesson_id in args.lessons]

@@ -47,7 +47,7 @@ def measure(executor: str, rate: float) -> dict[str, float]:
     publisher for :data:`WINDOW` s; ``{"messages", "sent", "cpu_seconds", "core_share"}``."""
     from ros2course.ros import env as env_mod  # noqa: PLC0415 - in the child only
 
-    env_mod.activate()
+    env_mod.activate_process()
     if executor == "single":
         import rclpy.executors as executors  # noqa: PLC0415 - in the child only
 

@@ -398,7 +398,7 @@ def main() -> int:
         write_doc(args.doc, [], load_catalog().ids(), args.sample, args.seed, args.jobs)
         update_readme()
         return 0
-    env_mod.activate()
+    env_mod.activate_process()
     if args.repeat:
         return record_steadiness(args.lessons or load_catalog().ids(), args.repeat, args.load, args.doc,
                                  args.sample, args.seed, args.jobs)

@@ -143,7 +143,7 @@ def main() -> int:
     args = parser.parse_args()
     from ros2course.ros import env  # noqa: PLC0415
 
-    env.activate()
+    env.activate_process()
     with tempfile.TemporaryDirectory() as folder:
         begin = time.perf_counter()
         out, subs = make_class(Path(folder), args.count)

@@ -36,7 +36,7 @@ def main() -> int:
     parser.add_argument("--json", action="store_true", help="print only a JSON object")
     parser.add_argument("--keep", action="store_true", help="keep the temporary underlay")
     args = parser.parse_args()
-    env_mod.activate(underlay=False)
+    env_mod.activate_process(underlay=False)
     base = Path(tempfile.mkdtemp(prefix="ros2course-underlay-bench-"))
     say = (lambda line: None) if args.json else (lambda line: print(f"  {line}", file=sys.stderr))
     try:

@@ -188,7 +188,7 @@ def _ros() -> None:
     Only the commands that build, run or inspect ROS call it (check, doctor,
     env, grade, gradescope, dev validate); list/show/next/hint never pay for it.
     """
-    _env().activate()
+    _env().activate_process()
 
 
 def _workspace(workspace: Path | None) -> Workspace:

@@ -396,12 +396,11 @@ def _probe_uid_drop(unshare_flags: list[str], tools: dict[str, str]) -> tuple[bo
     """Can a fresh uid run this Python (stdlib and ROS imports) inside the job's mounts?"""
     uid = UID_BASE + UID_SPAN  # just past the range jobs use
 
-    ros_env = dict(os.environ)
-    env_mod.activate(ros_env)
+    ros_env = env_mod.activate()
     inner, inner_env = command([sys.executable, "-c", "import rclpy"], ros_env,
                                identity=SubmissionIdentity(uid, uid, 64))
     if unshare_flags:
-        plan = MountPlan(tools["ip"], own="", hide=[], read_only=read_only_paths(), keep=[],
+        plan = MountPlan(tools["ip"], own="", hide=[], read_only=read_only_paths(content_root()), keep=[],
                          private_tmp=PRIVATE_TMP, hidden_home=grader_home())
         init = [tools["dumb-init"], "--"] if "--pid" in unshare_flags else []
         argv = [tools["unshare"], *unshare_flags, *init, "/bin/sh", "-c", plan.script(), "probe", *inner]
@@ -475,15 +474,16 @@ def grader_home() -> str:
     return "" if home in ("/", "") else home
 
 
-def read_only_paths() -> list[str]:
-    """What a submission may read but never write: the course, the engine, the venv, the Python and ROS installs.
+def read_only_paths(course: Path) -> list[str]:
+    """What a submission may read but never write: the course (the folder ``course``), the engine, the venv,
+    the Python and ROS installs.
 
     The engine's own package folder is listed apart from the venv: an editable install (``pip install -e``)
     imports it from the source checkout, which may lie under a folder the job replaces (``/tmp``), and the
     grading worker the job starts imports ``ros2course`` from there.
     """
     engine = os.path.dirname(os.path.abspath(__file__))
-    paths = [str(content_root()), engine, sys.prefix, sys.base_prefix]
+    paths = [str(course), engine, sys.prefix, sys.base_prefix]
     for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH"):
         paths += [p for p in os.environ.get(var, "").split(os.pathsep) if p]
     out: list[str] = []

@@ -18,7 +18,7 @@ from ros2course.ros import env as env_mod
 ROOT = content_root()
 SOLUTIONS = ROOT / "solutions" / "src"
 
-env_mod.activate()
+env_mod.activate_process()
 
 #: Test modules whose tests each take a minute or more (the validation of every lesson,
 #: repeated grades). They are collected early so that, with pytest-xdist's work stealing,

@@ -22,6 +22,7 @@ from ros2course.batch.archive import Submission, discover, prepare
 from ros2course.batch.runner import run_batch
 from ros2course.errors import CourseError, NotGradable
 from ros2course.grade.results import LessonResult
+from ros2course.lesson.catalog import load_catalog
 from ros2course.report import gradebook
 from tests.conftest import SOLUTIONS
 
@@ -302,7 +303,7 @@ def test_the_engine_an_editable_install_imports_stays_readable_in_a_job(tmp_path
 
     monkeypatch.setattr(sandbox, "content_root", lambda: tmp_path)  # a course copied elsewhere (dev mutate's tests)
     engine = os.path.realpath(P(ros2course.__file__).parent)
-    assert any(engine == p or engine.startswith(p.rstrip("/") + "/") for p in sandbox.read_only_paths())
+    assert any(engine == p or engine.startswith(p.rstrip("/") + "/") for p in sandbox.read_only_paths(load_catalog().course.root))
 
 
 def test_copy_logs_never_copies_links_or_fifos(tmp_path: Path) -> None:
@@ -339,7 +340,7 @@ def test_require_isolation_refuses_with_the_missing_protections(tmp_path: Path, 
         batch.run_batch(tmp_path / "subs", ["workspace-setup"], tmp_path / "out", require_isolation=True)
     # the job itself refuses too (a Dask worker may be another machine): a grader error row, nothing run
     job = one_job.Job("b", "alice", str(tmp_path / "subs" / "alice"), "", ["workspace-setup"], str(tmp_path / "out2"),
-                    require_isolation=True)
+                    require_isolation=True, course=str(load_catalog().course.root))
     outcome = one_job.run_job(job)
     record = outcome.records[0]
     assert record.status == "grader error" and "not root: test" in record.message
@@ -459,7 +460,7 @@ def test_one_set_of_walls_serves_grade_and_gradescope(tmp_path: Path, monkeypatc
 
     monkeypatch.setattr(sandbox, "MountPlan", plan)
     job = job_mod.Job("b", "s", str(tmp_path), "", ["print-forever-node"], str(tmp_path / "out"),
-                      hide=walls.hide, masked=walls.masked)
+                      hide=walls.hide, masked=walls.masked, course=str(load_catalog().course.root))
     (tmp_path / "scratch").mkdir()
     if can_unshare:
         with pytest.raises(Planned):

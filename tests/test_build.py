@@ -23,8 +23,7 @@ DATA = Path(__file__).parent / "data"
 
 
 def _env() -> dict[str, str]:
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     return env
 
 
@@ -121,7 +120,7 @@ def test_system_ros_is_detected_and_left_alone(monkeypatch, tmp_path):
     install = env_mod.detect()
     assert install.kind == "system" and install.distro == "jazzy"
     env = {"AMENT_PREFIX_PATH": str(prefix), "PATH": "/usr/bin"}
-    env_mod.activate(env)
+    env = env_mod.activate(env)
     assert env == {"AMENT_PREFIX_PATH": str(prefix), "PATH": "/usr/bin"}
 
 
@@ -183,8 +182,7 @@ def test_ament_index_lookups_match_ament_index_python_without_touching_os_enviro
 
     from ros2course.ros import index
 
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     before = dict(os.environ)
     saved = os.environ.get("AMENT_PREFIX_PATH")
     os.environ["AMENT_PREFIX_PATH"] = env.get("AMENT_PREFIX_PATH", "")

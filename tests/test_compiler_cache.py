@@ -72,7 +72,7 @@ def test_the_same_cpp_package_in_another_workspace_compiles_nothing(tmp_path):
     """The cpp-node reference built in two workspaces: every compile of the second is a cache hit."""
     env = dict(os.environ, CCACHE_DIR=str(tmp_path / "ccache"))
     env.pop("ROS2COURSE_CCACHE", None)
-    env_mod.activate(env)
+    env = env_mod.activate(env)
     for number in (1, 2):
         root = tmp_path / f"ws{number}"
         shutil.copytree(SOLUTIONS / "cpp_package_with_a_node", root / "src" / "cpp_package_with_a_node")

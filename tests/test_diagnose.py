@@ -210,7 +210,7 @@ def graph():
     from ros2course.ros import env as env_mod  # noqa: PLC0415
     from ros2course.run.probes import RosSession  # noqa: PLC0415
 
-    env_mod.activate()
+    env_mod.activate_process()
     made = []
     with RosSession() as session:
         def node(name: str, namespace: str | None = None):
@@ -398,8 +398,7 @@ def test_engine_diagnoses_the_first_failed_check_of_a_part(tmp_path, monkeypatch
     (tmp_path / "install" / "setup.bash").write_text("", encoding="utf-8")
     script = tmp_path / "learner.py"
     script.write_text(textwrap.dedent(LEARNER), encoding="utf-8")
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     checks = [Check("before", "before any launch", 1, part="publisher"),
               Check("topic", "the topic", 1, part="publisher"), Check("later", "later", 1, part="publisher")]
     s = GradingSession(lesson, checks, tmp_path, tmp_path / "log", env)
@@ -497,8 +496,7 @@ def _session(tmp_path, checks, graph: LessonGraph | None):
     lesson = dataclasses.replace(load_catalog().get("publisher-subscriber"), graph=graph)
     (tmp_path / "install").mkdir(exist_ok=True)
     (tmp_path / "install" / "setup.bash").write_text("", encoding="utf-8")
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     return GradingSession(lesson, checks, tmp_path, tmp_path / "log", env)
 
 

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 from pathlib import Path
@@ -26,8 +25,7 @@ def test_setup_script_works_under_set_u_is_idempotent_and_matches_activate(tmp_p
         env=plain, capture_output=True, timeout=60, check=False)
     assert proc.returncode == 0, proc.stderr.decode()
     sourced = dict(item.split("=", 1) for item in proc.stdout.decode().split("\0") if "=" in item)
-    expected = dict(plain)
-    env_mod.activate(expected)
+    expected = env_mod.activate(plain)
     for var in ("ROS_DISTRO", "AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "LD_LIBRARY_PATH", "PATH",
                 env_mod.ENV_MARKER):
         assert sourced.get(var) == expected.get(var), var
@@ -38,8 +36,7 @@ def test_setup_script_works_under_set_u_is_idempotent_and_matches_activate(tmp_p
 
 @needs_wheels
 def test_our_own_ros_distro_is_not_mistaken_for_a_system_install(monkeypatch):
-    activated = dict(os.environ)
-    env_mod.activate(activated)
+    activated = env_mod.activate()
     for var in ("ROS_DISTRO", "AMENT_PREFIX_PATH", env_mod.ENV_MARKER):
         monkeypatch.setenv(var, activated[var])
     assert env_mod.detect().kind == "wheels"

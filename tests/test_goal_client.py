@@ -63,14 +63,12 @@ with RosSession() as graph:
 def _scenario(lost: int, accept: bool) -> dict:
     """Run :data:`SCENARIO`: the first ``lost`` answers lost, a server that accepts (or rejects) every goal."""
     import json  # noqa: PLC0415
-    import os  # noqa: PLC0415
     import subprocess  # noqa: PLC0415
     import sys  # noqa: PLC0415
 
     from ros2course.ros import env as env_mod  # noqa: PLC0415
 
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     done = subprocess.run([sys.executable, "-c", SCENARIO, str(lost), "accept" if accept else "reject"], env=env,
                           capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr[-3000:]

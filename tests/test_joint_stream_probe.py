@@ -21,7 +21,6 @@ not the probe's.
 
 from __future__ import annotations
 
-import os
 import sys
 import textwrap
 import time
@@ -77,8 +76,7 @@ def ros_env():
     pytest.importorskip("rclpy")
     from ros2course.ros import env as env_mod  # noqa: PLC0415
 
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     return env
 
 

@@ -269,8 +269,8 @@ def test_unmodified_copy_of_a_lesson_loads(tmp_path):
     path = _mutated_lesson(tmp_path, lambda d: d)
     copy = load_lesson(path)
     original = CATALOG.get("print-forever-node")
-    def fields(lesson):  # what lesson.yaml says: the loader sets folder and included_starters
-        return {k: v for k, v in dataclasses.asdict(lesson).items() if k not in ("folder", "included_starters")}
+    def fields(lesson):  # what lesson.yaml says: the loader sets folder, course and included_starters
+        return {k: v for k, v in dataclasses.asdict(lesson).items() if k not in ("folder", "included_starters", "course")}
 
     assert fields(copy) == fields(original)
     assert copy.folder == path.parent
@@ -428,9 +428,9 @@ def test_a_readme_without_the_table_markers_is_a_one_line_error() -> None:
 
 def test_the_lesson_schema_and_the_lesson_values_have_the_same_fields():
     """lesson/schema.py validates what lesson/catalog.py holds: each model names exactly its value class's
-    fields (the loader's own, folder and included_starters, aside), so nothing validated is dropped."""
+    fields (the loader's own, folder, course and included_starters, aside), so nothing validated is dropped."""
     from ros2course.lesson import catalog, schema  # noqa: PLC0415
 
     for name in ("ReferenceSolution", "GraphNode", "GraphEndpoint", "LessonGraph", "Lesson"):
-        values = {f.name for f in dataclasses.fields(getattr(catalog, name))} - {"folder", "included_starters"}
+        values = {f.name for f in dataclasses.fields(getattr(catalog, name))} - {"folder", "included_starters", "course"}
         assert set(getattr(schema, f"{name}Schema").model_fields) == values, name

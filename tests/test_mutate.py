@@ -17,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from ros2course.dev import mutants as mut
+from ros2course.lesson import active_course
 from ros2course.grade.results import CheckResult, LessonResult, Status
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -362,7 +363,7 @@ def _demo_lesson(tmp_path: Path, contract: str, triage: str):
     reference = tmp_path / "reference"
     (reference / "src" / "p" / "p").mkdir(parents=True)
     (reference / PY).write_text(NODE_SOURCE, encoding="utf-8")
-    lesson = SimpleNamespace(id="demo", folder=folder, grader="print_forever_node", packages=["p"], folders=[],
+    lesson = SimpleNamespace(id="demo", course=active_course(), folder=folder, grader="print_forever_node", packages=["p"], folders=[],
                              workspace_paths=["src/p"])
     return lesson, reference
 
@@ -448,7 +449,7 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
     import importlib.util
     from types import SimpleNamespace
 
-    lesson = SimpleNamespace(id="demo-lesson", folder=tmp_path, grader="print_forever_node",
+    lesson = SimpleNamespace(id="demo-lesson", course=active_course(), folder=tmp_path, grader="print_forever_node",
                              packages=["python_package_with_a_node"], folders=[])
     (tmp_path / "lesson.yaml").write_text("id: demo-lesson\\n")
     mutants = [mut.Mutant("f.py", i, f"x = {i}", f"x = {i + 1}", "") for i in range(60)]
@@ -529,7 +530,7 @@ def test_dev_validate_shows_the_lessons_last_mutation_score(tmp_path: Path) -> N
 
     from ros2course.grade.fingerprint import grader_fingerprint
 
-    lesson = SimpleNamespace(id="demo-lesson", folder=tmp_path, grader="print_forever_node",
+    lesson = SimpleNamespace(id="demo-lesson", course=active_course(), folder=tmp_path, grader="print_forever_node",
                              packages=["python_package_with_a_node"], folders=[])
     (tmp_path / "lesson.yaml").write_text("id: demo-lesson\n")
     assert mut.describe_score(lesson) == \
@@ -559,7 +560,7 @@ def test_the_grader_fingerprint_follows_the_grader_its_helpers_and_the_lesson(tm
 
     from ros2course.grade.fingerprint import grader_files, grader_fingerprint
 
-    lesson = SimpleNamespace(id="demo", folder=tmp_path, grader="cpp_node", packages=["cpp_package_with_a_node"],
+    lesson = SimpleNamespace(id="demo", course=active_course(), folder=tmp_path, grader="cpp_node", packages=["cpp_package_with_a_node"],
                              folders=[])
     (tmp_path / "lesson.yaml").write_text("id: demo\n")
     names = {p.name for p in grader_files(lesson)}
@@ -577,7 +578,7 @@ def test_the_course_fingerprint_changes_with_the_lesson_and_not_with_the_engine(
 
     from ros2course.grade import fingerprint
 
-    lesson = SimpleNamespace(id="demo", folder=tmp_path, grader="cpp_node", packages=["cpp_package_with_a_node"],
+    lesson = SimpleNamespace(id="demo", course=active_course(), folder=tmp_path, grader="cpp_node", packages=["cpp_package_with_a_node"],
                              folders=[])
     (tmp_path / "lesson.yaml").write_text("id: demo\n")
     grader, course = fingerprint.grader_fingerprint(lesson), fingerprint.course_fingerprint(lesson)
@@ -727,7 +728,7 @@ def test_a_second_held_out_sample_leaves_out_every_mutant_an_earlier_one_showed(
     held-out sample is drawn from the mutants neither the first sample nor any earlier held-out one took."""
     from types import SimpleNamespace
 
-    lesson = SimpleNamespace(id="demo-lesson", folder=tmp_path, grader="print_forever_node",
+    lesson = SimpleNamespace(id="demo-lesson", course=active_course(), folder=tmp_path, grader="print_forever_node",
                              packages=["python_package_with_a_node"], folders=[])
     (tmp_path / "lesson.yaml").write_text("id: demo-lesson\n")
     mutants = [mut.Mutant("f.py", i, f"x = {i}", f"x = {i + 1}", "") for i in range(100)]

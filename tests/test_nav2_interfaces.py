@@ -31,8 +31,7 @@ def nav2_env() -> dict[str, str]:
 
     Skips where they are not installed, or fails when ``ROS2COURSE_REQUIRE_UNDERLAY=1`` (CI).
     """
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     prefixes = [p for p in env.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p]
     index = ("share", "ament_index", "resource_index", "packages")
     absent = [name for name in ("nav2_msgs", "ros_gz_interfaces")
@@ -93,7 +92,7 @@ def test_grading_process_loads_nav2_msgs_without_loading_its_dependencies_first(
             "from ros2course.ros import env as env_mod\n"
             "from ros2course.ros.interfaces import workspace_type\n"
             "base = dict(os.environ)\n"
-            "env_mod.activate(base)\n"
+            "base = env_mod.activate(base)\n"
             "NavigateToPose = workspace_type(base, 'nav2_msgs', 'action', 'NavigateToPose')\n"
             "from rclpy.serialization import serialize_message\n"
             "goal = NavigateToPose.Goal(behavior_tree='bt.xml')\n"

@@ -624,8 +624,7 @@ def test_sweep_after_sigkilled_rclpy_node(tmp_path):
     script = tmp_path / "node.py"
     script.write_text(NODE_SCRIPT, encoding="utf-8")
     with domain_coordinator.domain_id() as domain:
-        env = dict(os.environ)
-        env_mod.activate(env)
+        env = env_mod.activate()
         env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST", PYTHONUNBUFFERED="1")
         env.pop("ROS_LOCALHOST_ONLY", None)
         proc = LearnerProcess([PY, str(script)], env, tmp_path / "logs", "shm_node").start()

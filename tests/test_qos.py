@@ -15,7 +15,6 @@ and for the same profile as made in code (``_qos.as_reported``).
 
 from __future__ import annotations
 
-import os
 import sys
 import textwrap
 import threading
@@ -62,8 +61,7 @@ def ros_env():
     pytest.importorskip("rclpy")
     from ros2course.ros import env as env_mod
 
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     return env
 
 

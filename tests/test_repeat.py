@@ -8,6 +8,7 @@ import pytest
 
 from ros2course.dev.repeat import Steadiness, unsteady
 from ros2course.grade.results import CheckResult, LessonResult, Status
+from ros2course.lesson import active_course
 
 
 def _result(listed: bool, status: Status = Status.PASSED, observed: str = "") -> LessonResult:
@@ -72,7 +73,7 @@ def test_a_reference_s_repeat_run_is_recorded_and_shown(tmp_path) -> None:
     from ros2course.dev.repeat import Flake
     from ros2course.dev.strength import STEADINESS_FILE, steadiness_text, write_steadiness
 
-    lesson = types.SimpleNamespace(folder=tmp_path, grader="inspect_services", packages=["package_with_interfaces"],
+    lesson = types.SimpleNamespace(folder=tmp_path, course=active_course(), grader="inspect_services", packages=["package_with_interfaces"],
                                    folders=["cli"])
     assert steadiness_text(lesson) == "not measured"
     write_steadiness(lesson, Steadiness("inspect-services", "reference", 20, 2, [], 20, 300.0))

@@ -58,8 +58,7 @@ def session():
 
 @pytest.fixture
 def ros_env(session) -> dict[str, str]:
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     return session.learner_env(env)
 
 

@@ -42,8 +42,7 @@ PKG = "drift_demo"
 
 
 def _env() -> dict[str, str]:
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     return env
 
 

@@ -27,7 +27,7 @@ PKG = "stale_demo"
 
 def _env() -> dict[str, str]:
     env = dict(__import__("os").environ)
-    env_mod.activate(env)
+    env = env_mod.activate(env)
     return env
 
 

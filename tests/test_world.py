@@ -308,8 +308,7 @@ def ros_env() -> dict[str, str]:
     when ``ROS2COURSE_REQUIRE_UNDERLAY=1`` (CI builds it)."""
     from ros2course.ros import env as env_mod  # noqa: PLC0415
 
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     index = ("share", "ament_index", "resource_index", "packages", "ros_gz_interfaces")
     if not any(os.path.isfile(os.path.join(p, *index)) for p in env.get("AMENT_PREFIX_PATH", "").split(os.pathsep) if p):
         why = "ros_gz_interfaces not installed: ros2course env --build --with nav2"

@@ -103,7 +103,8 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
     trusted = (build_trusted_interfaces([catalog.get(lesson_id) for lesson_id in lessons])
                if sandbox.capabilities().uid_drop or needs_reference_sources(lessons) else None)
     job = Job(uuid.uuid4().hex, "submission", str(entry.absolute()), "", lessons, str(results.parent), timeout,
-              hide=walls.hide, masked=walls.masked, pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""), require_isolation=require_isolation)
+              hide=walls.hide, masked=walls.masked, pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""), require_isolation=require_isolation,
+              course=str(catalog.course.root))
     try:
         outcome = run_job(job)
     finally:

@@ -42,7 +42,7 @@ from ros2course.errors import CourseError, NotGradable
 from ros2course.grade.checklist import StopWhen
 from ros2course.grade.engine import load_grader
 from ros2course.grade.results import LessonResult, Status
-from ros2course.lesson.catalog import content_root, load_catalog
+from ros2course.lesson.catalog import load_catalog
 from ros2course import sandbox
 from ros2course.run.process import OutputDrain, kill_marked, sweep_stale_fastdds_shm
 
@@ -99,6 +99,8 @@ class Job:
             (:class:`~ros2course.grade.checklist.StopWhen`): the author's tools only, never a class's batch
             (``dev validate --batch --until-settled``: once a wrong solution's named checks are judged;
             ``dev mutate --first-loss``: at a mutant's first lost point); None: graded whole.
+        course: the course folder the submission is graded on, resolved once by the command that made the
+            batch (the worker is told it through ``ROS2COURSE_CONTENT``; the sandbox shows it read-only).
     """
 
     batch_id: str
@@ -119,6 +121,7 @@ class Job:
     trusted_interfaces: str = ""
     require_isolation: bool = False
     stop_when: StopWhen | None = None
+    course: str = ""
 
 
 # --- one job ------------------------------------------------------------------------------------
@@ -280,7 +283,7 @@ def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Is
     protections: dict[str, str | None] = {}
     prefix: list[str] = []
     if caps.unshare:
-        read_only = sandbox.read_only_paths() + ([job.trusted_interfaces] if job.trusted_interfaces else [])
+        read_only = sandbox.read_only_paths(Path(job.course)) + ([job.trusted_interfaces] if job.trusted_interfaces else [])
         plan = sandbox.MountPlan(caps.tools["ip"], own=str(scratch), hide=job.hide, read_only=read_only, keep=[],
                                  private_tmp=sandbox.PRIVATE_TMP, hidden_home=sandbox.grader_home(),
                                  secrets=sandbox.SECRETS + tuple(job.masked))
@@ -324,14 +327,11 @@ def job_walls(job: Job, scratch: Path) -> tuple[list[str], list[str], sandbox.Is
 
 
 @functools.lru_cache(maxsize=64)
-def _dependencies_of(course: Path, lesson_id: str) -> tuple[str, ...]:
-    return tuple(lesson_dependencies(load_catalog().get(lesson_id)))
-
-
-def _reference_dependencies(lesson_id: str) -> tuple[str, ...]:
+def _reference_dependencies(course: Path, lesson_id: str) -> tuple[str, ...]:
     """The reference packages ``lesson_id``'s packages depend on (:func:`~ros2course.builder.reference.lesson_dependencies`),
-    which the worker builds too when the submission holds them (``grade_lesson(build_also=...)``)."""
-    return _dependencies_of(content_root(), lesson_id)
+    in the course at ``course``, which the worker builds too when the submission holds them
+    (``grade_lesson(build_also=...)``)."""
+    return tuple(lesson_dependencies(load_catalog(course).get(lesson_id)))
 
 
 def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], sandbox.Isolation, int, bool]:
@@ -352,7 +352,7 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], 
            *worker_args]
     for lesson in job.lessons:
         # the course's reference dependencies, read here: solutions/ is hidden from the worker
-        cmd += ["--lesson", lesson, "--build-also", f"{lesson}={','.join(_reference_dependencies(lesson))}"]
+        cmd += ["--lesson", lesson, "--build-also", f"{lesson}={','.join(_reference_dependencies(Path(job.course), lesson))}"]
     if job.stop_when:
         cmd += [arg for check_id in sorted(job.stop_when.judged) for arg in ("--until-judged", check_id)]
         cmd += ["--until-first-loss"] if job.stop_when.any_loss else []
@@ -363,7 +363,7 @@ def _run_worker(job: Job, scratch: Path, ws: Path) -> tuple[list[LessonResult], 
     argv = sandbox.die_with_parent() + prefix + cmd
     env = dict(os.environ)
     env.update({BATCH_MARKER_VAR: marker, "HOME": str(scratch / "home"), "ROS_LOG_DIR": str(logs / "ros"),
-                "ROS2COURSE_CONTENT": str(content_root()),  # the worker grades on this batch's course
+                "ROS2COURSE_CONTENT": job.course,  # the worker grades on this batch's course
                 "PYTHONDONTWRITEBYTECODE": "1", "RCUTILS_COLORIZED_OUTPUT": "0"})
     if walls.uid is not None:
         # Fast DDS's shared-memory segments are made 0644 by their creator, so a grader (root)

@@ -415,7 +415,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
                         memory_limit, hide=walls.hide, masked=walls.masked, isolate=isolate, scratch_root=str(scratch_root),
                         pids_limit=pids_limit, trusted_interfaces=str(trusted.path if trusted else ""),
                         require_isolation=require_isolation,
-                        stop_when=(stop_when or {}).get(entry.student)))
+                        stop_when=(stop_when or {}).get(entry.student), course=str(catalog.course.root)))
     skipped = len(entries) - len(todo)
     records = list(existing)
     peaks: list[int] = []

@@ -74,7 +74,7 @@ def main(argv: list[str] | None = None) -> int:
     _limit(resource.RLIMIT_AS, args.memory_limit)
     _limit(resource.RLIMIT_FSIZE, args.file_limit)
 
-    env_mod.activate()
+    env_mod.activate_process()
     if args.run_as:
         uid, _, gid = args.run_as.partition(":")
         sandbox.configure(sandbox.SubmissionIdentity(int(uid), int(gid or uid), args.nproc or 256, args.pids_cgroup))

@@ -20,14 +20,16 @@ from pathlib import Path
 
 from ros2course.builder.colcon import COLCON_ARGS, build_packages
 from ros2course.errors import CourseError, ValidationFailed
-from ros2course.lesson.catalog import Lesson, content_root
+from ros2course.lesson import Course
+from ros2course.lesson.catalog import Lesson
 from ros2course.ros import env as env_mod
 from ros2course.ros.manifests import Manifest, dependency_closure, find_packages
 
 
-def solution_packages() -> dict[str, tuple[Path, Manifest]]:
-    """Every package under ``solutions/src``: name -> (folder, its :class:`~ros2course.ros.manifests.Manifest`)."""
-    return find_packages(content_root() / "solutions" / "src")
+def solution_packages(course: Course) -> dict[str, tuple[Path, Manifest]]:
+    """Every package under ``course``'s ``solutions/src``: name -> (folder, its
+    :class:`~ros2course.ros.manifests.Manifest`)."""
+    return find_packages(course.solutions / "src")
 
 
 def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None = None, *,
@@ -45,8 +47,8 @@ def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None =
     Raises:
         ValidationFailed: a folder the lesson names is not in ``solutions/``.
     """
-    solutions = content_root() / "solutions"
-    found = solution_packages()
+    solutions = lesson.course.solutions
+    found = solution_packages(lesson.course)
     (dest / "src").mkdir(parents=True, exist_ok=True)
     ignore = shutil.ignore_patterns("__pycache__", "*.egg-info")
     for name in (dependency_closure(lesson.packages, found) if packages is None else packages):
@@ -68,7 +70,7 @@ def reference_workspace(lesson: Lesson, dest: Path, packages: list[str] | None =
 
 def lesson_dependencies(lesson: Lesson) -> list[str]:
     """Reference packages the lesson's packages depend on but does not itself teach (e.g. interfaces)."""
-    return [name for name in dependency_closure(lesson.packages, solution_packages()) if name not in lesson.packages]
+    return [name for name in dependency_closure(lesson.packages, solution_packages(lesson.course)) if name not in lesson.packages]
 
 
 def trusted_interface_packages(lessons: list[Lesson]) -> list[str]:
@@ -82,13 +84,14 @@ def trusted_interface_packages(lessons: list[Lesson]) -> list[str]:
         CourseError: a lesson declares an interface or reference package ``solutions/src`` does not have
             (the course is broken; no class can be graded on it).
     """
-    found = solution_packages()
+    found = {name: package for course in dict.fromkeys(lesson.course for lesson in lessons)
+             for name, package in solution_packages(course).items()}
     for lesson in lessons:
         unknown = [name for name in [*lesson.interfaces, *lesson.references] if name not in found]
         if unknown:
             raise CourseError(f"lesson {lesson.id} cannot be graded in batch: its grader reads the reference "
                               f"package {', '.join(unknown)}, and the course has no package of that name "
-                              f"in {content_root() / 'solutions' / 'src'}",
+                              f"in {lesson.course.solutions / 'src'}",
                               "a fault of the course: add the package to solutions/src or fix 'interfaces:' "
                               "or 'references:' in lesson.yaml")
     return dependency_closure(list(dict.fromkeys(p for lesson in lessons for p in [*lesson.interfaces,
@@ -106,8 +109,7 @@ def build_reference(lesson: Lesson, dest: Path, packages: list[str], log_name: s
             in the message.
     """
     reference_workspace(lesson, dest, packages, with_folders=False, with_tests=False)
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     built = build_packages(dest, packages, env, dest / "log" / log_name)
     if not built.ok:
         raise CourseError(f"the course's own packages {', '.join(packages)} do not build:\n{built.excerpt}",
@@ -159,9 +161,10 @@ def reference_cache_root() -> Path | None:
     return root
 
 
-def _cache_key(packages: list[str], env: dict[str, str]) -> str:
-    """Hash of the packages' file contents and of the ROS install they build against."""
-    found = solution_packages()
+def _cache_key(course: Course, packages: list[str], env: dict[str, str]) -> str:
+    """Hash of the packages' file contents (``course``'s reference packages) and of the ROS install they
+    build against."""
+    found = solution_packages(course)
     digest = hashlib.sha256()
     for name in sorted(packages):
         folder = found[name][0]
@@ -195,8 +198,7 @@ def shared_reference_build(lesson: Lesson, packages: list[str], log_name: str = 
     Raises:
         CourseError: the packages do not build (a fault of the course or machine).
     """
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     root = reference_cache_root()
     if root is None:
         dest = Path(tempfile.mkdtemp(prefix="ros2course-reference-")) / "ws"
@@ -207,7 +209,7 @@ def shared_reference_build(lesson: Lesson, packages: list[str], log_name: str = 
             shutil.rmtree(dest.parent, ignore_errors=True)
             raise
     _prune(root)
-    key = _cache_key(packages, env)
+    key = _cache_key(lesson.course, packages, env)
     folder = root / key
     with open(root / f"{key}.lock", "w") as lock:
         fcntl.flock(lock, fcntl.LOCK_EX)  # another check or batch building the same packages: wait for it

@@ -85,7 +85,7 @@ def _main(argv: list[str]) -> int:
     parser.add_argument("--judged", action="append", default=[])
     parser.add_argument("--any-loss", action="store_true")
     args = parser.parse_args(argv)
-    env_mod.activate()
+    env_mod.activate_process()
     lesson = load_catalog().get(args.lesson)
     args.log_dir.mkdir(parents=True, exist_ok=True)
     result = grade_lesson(lesson, args.root, log_dir=args.log_dir, underlays=tuple(args.underlay),

@@ -42,7 +42,6 @@ from __future__ import annotations
 
 import concurrent.futures
 import dataclasses
-import os
 import queue
 import shutil
 import subprocess
@@ -238,8 +237,7 @@ def build_underlay(lesson: Lesson) -> ReferenceBuild | None:
 
 def run_commands(workspace_root: Path, commands: list[str]) -> None:
     """Run shell commands in the workspace as a learner would (errors are the grader's to see)."""
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     for command in commands:
         subprocess.run(["bash", "-c", command], cwd=workspace_root, env=env, stdin=subprocess.DEVNULL,
                        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, timeout=600, check=False)

@@ -18,7 +18,6 @@ import hashlib
 import importlib
 import importlib.util
 import json
-import os
 import sys
 import time
 import traceback
@@ -149,12 +148,11 @@ def grade_lesson(lesson: Lesson, workspace_root: Path, log_dir: Path | None = No
     """
     env_mod.require(lesson.requires, f"lesson {lesson.id}")
     sweep_stale_fastdds_shm()  # leftovers of an earlier run that was SIGKILLed
-    module = load_grader(lesson.grader)
+    module = load_grader(lesson.grader, lesson.course.root)
     checks: list[Check] = list(module.CHECKS)
     max_score = float(sum(c.points for c in checks))
     log_dir = log_dir or new_log_dir(workspace_root, lesson.id)
-    base_env = dict(os.environ)
-    env_mod.activate(base_env)
+    base_env = env_mod.activate()
     for underlay in underlays:
         base_env = build_mod.overlay_env(Path(underlay), base_env)
     timings: dict[str, float] = {}

@@ -28,7 +28,6 @@ import hashlib
 from collections.abc import Callable
 from pathlib import Path
 
-from ros2course.lesson import content_root
 from ros2course.lesson.catalog import Lesson
 from ros2course.ros.manifests import dependency_closure, find_packages
 
@@ -164,8 +163,8 @@ def engine_modules(course_modules: list[Path]) -> list[Path]:
 
 def grader_files(lesson: Lesson) -> list[Path]:
     """Every file :func:`grader_fingerprint` covers for ``lesson``, sorted, each once."""
-    root = content_root()
-    graders = root / "graders"
+    root = lesson.course.root
+    graders = lesson.course.graders
     modules = _closure([graders / f"{lesson.grader}.py"], lambda module: _course_imports(module, graders))
     files = set(modules)
     files.update(_files(graders / "data" / lesson.grader) if (graders / "data" / lesson.grader).is_dir() else [])
@@ -232,7 +231,7 @@ def _fingerprint(lesson: Lesson, with_engine: bool, files: list[Path] | None = N
     import ros2course  # noqa: PLC0415 - the engine's own folder
 
     engine = Path(ros2course.__file__).resolve().parent
-    root = content_root().resolve()
+    root = lesson.course.root
     named = []
     for path in (grader_files(lesson) if files is None else files):
         where = path.resolve()

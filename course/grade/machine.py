@@ -22,7 +22,7 @@ from typing import Any
 from ros2course import sandbox
 from ros2course.builder import colcon as build_mod
 from ros2course.errors import CourseError
-from ros2course.lesson.catalog import Lesson, content_root
+from ros2course.lesson.catalog import Lesson
 from ros2course.ros import index as ament_index
 from ros2course.ros.interfaces import workspace_type
 from ros2course.ros.manifests import find_packages
@@ -113,7 +113,7 @@ class MachineView:
             raise CourseError(f"the grader of {self.lesson.id} reads the reference of {package} but its lesson.yaml "
                               "does not declare it", f"a fault of the course: add 'references: [{package}]' to lesson.yaml")
         src = (self.trusted_interfaces / "src" if self.trusted_interfaces is not None
-               else content_root() / "solutions" / "src")
+               else self.lesson.course.solutions / "src")
         found = find_packages(src)
         if package not in found:
             raise CourseError(f"the course has no reference package {package} in {src}",

@@ -10,7 +10,6 @@ progress says "done" (full marks once) and whose new grade is not full marks.
 from __future__ import annotations
 
 import dataclasses
-import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
@@ -58,8 +57,7 @@ def build_once(lessons: Sequence[Lesson], workspace_root: Path) -> build_mod.Bui
     packages = sorted({name for lesson in lessons for name in lesson.packages})
     if not packages:
         return None
-    env = dict(os.environ)
-    env_mod.activate(env)
+    env = env_mod.activate()
     try:
         return build_mod.build_packages(workspace_root, packages, env,
                                         new_log_dir(workspace_root, "check-all") / "build.log")

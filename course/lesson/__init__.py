@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import os
 from pathlib import Path
 
@@ -47,3 +48,44 @@ def content_root() -> Path:
         return _active
     override = os.environ.get("ROS2COURSE_CONTENT")
     return Path(override).resolve() if override else bundled_course()
+
+
+@dataclasses.dataclass(frozen=True)
+class Course:
+    """A course: the folder holding ``course.yaml``, ``chapters/``, ``graders/`` and ``solutions/``.
+
+    The CLI resolves the course of a command once (``--course``, the workspace's record, the bundled
+    tutorial: :func:`use_course`); every lesson of its catalog carries it
+    (:attr:`ros2course.lesson.catalog.Lesson.course`), and the grading pipeline (the grader's package,
+    the reference packages, the starters, the fingerprint of what a figure was measured on) reads the
+    course from the lesson it grades, never from the process.
+
+    Attributes:
+        root: the course folder, resolved (no symlink left), so two spellings of one folder are one course.
+    """
+
+    root: Path
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "root", Path(self.root).resolve())
+
+    @property
+    def graders(self) -> Path:
+        """``graders/``: one grader module per lesson, imported as a package of its own
+        (:func:`ros2course.grade.engine.graders_package`)."""
+        return self.root / "graders"
+
+    @property
+    def chapters(self) -> Path:
+        """``chapters/``: one ``<lesson id>/lesson.yaml`` folder per lesson, with its starter."""
+        return self.root / "chapters"
+
+    @property
+    def solutions(self) -> Path:
+        """``solutions/``: the reference workspace (``src/`` packages and the lessons' other folders)."""
+        return self.root / "solutions"
+
+
+def active_course() -> Course:
+    """The :class:`Course` of this command (:func:`content_root`'s folder): what the CLI chose, once."""
+    return Course(content_root())

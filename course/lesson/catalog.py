@@ -23,7 +23,7 @@ import sys
 from pathlib import Path
 
 from ros2course.errors import LessonFormatError, UnknownLesson
-from ros2course.lesson import MANIFEST, content_root  # noqa: F401 - re-exported: callers import it from here
+from ros2course.lesson import MANIFEST, Course, content_root  # noqa: F401 - content_root re-exported: callers import it from here
 
 
 
@@ -167,6 +167,9 @@ class Lesson:
 
     #: The lesson's folder; set by the loader, not read from YAML.
     folder: Path = Path(".")
+    #: The course the lesson belongs to (its graders, solutions and other lessons); set by the loader: the
+    #: folder holding ``chapters/<lesson folder>``.
+    course: Course = dataclasses.field(default_factory=lambda: Course(Path(".")))
     #: Starter folders of ``starter_includes`` (oldest first); set by :class:`Catalog`.
     included_starters: list[Path] = dataclasses.field(default_factory=list)
 
@@ -234,6 +237,7 @@ def load_lesson(path: Path) -> Lesson:
     values["graph"] = None if values["graph"] is None else LessonGraph.from_values(values["graph"])
     lesson = Lesson(**values)
     lesson.folder = path.parent
+    lesson.course = Course(path.parent.parent.parent)
     folder_id = re.sub(r"^\d+-", "", path.parent.name)
     if folder_id != lesson.id:
         raise LessonFormatError(f"{path}: id: {lesson.id!r} does not match its folder name {path.parent.name!r}",
@@ -250,6 +254,8 @@ class Catalog:
 
     def __init__(self, chapters_dir: Path) -> None:
         self.chapters_dir = chapters_dir
+        #: the course these lessons belong to (every lesson's :attr:`Lesson.course`)
+        self.course = Course(chapters_dir.parent)
         if not chapters_dir.is_dir():
             raise LessonFormatError(f"no chapters folder at {chapters_dir}", "give the course folder with --course PATH")
         folders = sorted((p for p in chapters_dir.iterdir() if (p / "lesson.yaml").is_file()),
@@ -362,7 +368,7 @@ def _catalog_of(root: Path) -> Catalog:
 # owns it and no one else may write it (like ssh's own files); anything else, or any error, means a full load.
 
 #: Bumped when what the cache holds changes.
-_CACHE_FORMAT = 2
+_CACHE_FORMAT = 3
 
 
 def _catalog_key(chapters_dir: Path) -> str | None:

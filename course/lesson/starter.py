@@ -6,7 +6,6 @@ import datetime as dt
 import shutil
 from pathlib import Path
 
-from ros2course.lesson import content_root
 from ros2course.lesson.catalog import Lesson
 
 
@@ -18,7 +17,7 @@ def starter_sources(lesson: Lesson) -> dict[Path, Path]:
     starters of ``starter_includes``, the lesson's own last (a later layer's
     file wins on the same path).
     """
-    solutions = content_root() / "solutions"
+    solutions = lesson.course.solutions
     trees = [(solutions, solutions / folder) for folder in lesson.starter_solutions]
     trees += [(root, root) for root in lesson.starter_layers]
     sources: dict[Path, Path] = {}

@@ -131,7 +131,7 @@ def _underlay_rows(fix: bool, sources: Path | None) -> list[DoctorRow]:
             underlay_build.build(sources)
         except CourseError as exc:
             failure = exc.message
-        env_mod.activate()
+        env_mod.activate_process()
     built = _underlay.current()
     wanted = _underlay.cache_key()
     if built is not None:
@@ -162,7 +162,7 @@ def _underlay_rows(fix: bool, sources: Path | None) -> list[DoctorRow]:
                 underlay_build.build(sources, component=component)
             except CourseError as exc:
                 component_failure = exc.message
-            env_mod.activate()
+            env_mod.activate_process()
         row = component_row(component, env_mod.detect(), component_failure)
         if row is not None:
             rows.append(row)
@@ -183,7 +183,7 @@ def doctor(fix: bool = False, sources: Path | None = None) -> list[DoctorRow]:
         one :class:`DoctorRow` per component, in a stable order. A sourced system
         ROS is reported as it is and never changed.
     """
-    install = env_mod.activate()
+    install = env_mod.activate_process()
     rows = [
         DoctorRow(
             "ROS 2",
@@ -301,5 +301,5 @@ def ensure_components_for(workspace_root: Path, packages: list[str],
             raise MissingRequirement(f"your package depends on {what}: {exc.message}",
                                      f"ros2course env --build --with {component.name}") from None
         built.append(component.name)
-    env_mod.activate()
+    env_mod.activate_process()
     return built

@@ -16,6 +16,7 @@ Two supported set-ups (shared/ROS_ENV.md):
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 import importlib.util
 import os
 import re
@@ -158,28 +159,51 @@ def activation(install: RosInstall | None = None, underlay: bool = True, sas: bo
     return ops
 
 
-def activate(environ: dict[str, str] | None = None, underlay: bool = True, sas: bool = True,
-             nav2: bool = True) -> RosInstall:
-    """Make ``environ`` (default ``os.environ``) see the ROS install, in place.
+def activate(environ: Mapping[str, str] | None = None, underlay: bool = True, sas: bool = True,
+             nav2: bool = True) -> dict[str, str]:
+    """A copy of ``environ`` (default ``os.environ``) that sees the ROS install; nothing is written in place.
 
-    For wheels this does :func:`activation`: ``ROS_DISTRO=jazzy``, the venv
-    prefix on ``AMENT_PREFIX_PATH`` and ``CMAKE_PREFIX_PATH``, the venv's
-    ``bin`` on ``PATH`` (so ``colcon`` and ``python3`` are the venv's), the
-    wheels' libraries on ``LD_LIBRARY_PATH``, and, when it is built, the
-    underlay (``ros2``, launch, rclcpp) on all of those and ``PYTHONPATH``,
-    and on top of it the optional components that are built (``sas``,
-    ``nav2``: :func:`activation`'s arguments). For the running process the
-    underlay's Python packages are also put on ``sys.path``. A system install
-    is left untouched. Idempotent.
+    For wheels this is :func:`activation` applied to the copy: ``ROS_DISTRO=jazzy``, the venv prefix on
+    ``AMENT_PREFIX_PATH`` and ``CMAKE_PREFIX_PATH``, the venv's ``bin`` on ``PATH`` (so ``colcon`` and
+    ``python3`` are the venv's), the wheels' libraries on ``LD_LIBRARY_PATH``, and, when it is built, the
+    underlay (``ros2``, launch, rclcpp) on all of those and ``PYTHONPATH``, and on top of it the optional
+    components that are built (``sas``, ``nav2``: :func:`activation`'s arguments). A system install is
+    left as it is (a sourced ROS is used as sourced). Idempotent: activating an activated environment
+    changes nothing.
+
+    Returns:
+        A new ``{variable: value}`` dict, for the ``env=`` of the processes that build or run ROS code.
     """
-    env = os.environ if environ is None else environ
-    install = detect()
-    for operation, var, value in activation(install, underlay, sas, nav2):
+    env = dict(os.environ if environ is None else environ)
+    for operation, var, value in activation(detect(), underlay, sas, nav2):
         if operation == "set":
             env[var] = value
         else:
             _prepend(env, var, value)
-        if environ is None and var == "PYTHONPATH" and value not in sys.path:
+    return env
+
+
+def activate_process(underlay: bool = True, sas: bool = True, nav2: bool = True) -> RosInstall:
+    """Make this process see the ROS install: the one process-wide write the engine makes, because ROS forces it.
+
+    A command that runs ROS in its own process (a grader's graph: ``rclpy`` nodes in the grading process;
+    ``doctor``'s imports; a batch worker) needs, in ``os.environ`` and ``sys.path`` themselves, what
+    :func:`activate` puts in a child's environment: rclpy and the rosidl type support find message libraries
+    through the ament index of ``AMENT_PREFIX_PATH`` read from the process environment
+    (``rcpputils::get_package_library_path``, ament_index_cpp), and the underlay's Python packages (the
+    tf2 and interface packages built from source) are imported from ``sys.path``. Every other caller takes
+    :func:`activate`'s returned copy instead. Idempotent.
+
+    Returns:
+        The ROS install activated (:func:`detect`).
+    """
+    install = detect()
+    wanted = activate(None, underlay, sas, nav2)
+    for var, value in wanted.items():
+        if os.environ.get(var) != value:
+            os.environ[var] = value
+    for operation, var, value in activation(install, underlay, sas, nav2):
+        if var == "PYTHONPATH" and value not in sys.path:
             sys.path.insert(0, value)
     return install
 

@@ -97,7 +97,7 @@ def _build_env(prefix: Path, component: Component) -> dict[str, str]:
     env = dict(os.environ)
     for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH", "COLCON_PREFIX_PATH", "PYTHONPATH"):
         env.pop(var, None)  # only the wheels (and what this component builds on), nothing sourced by chance
-    activate(env, underlay=component is not JAZZY_COMPONENT, sas=False, nav2=False)
+    env = activate(env, underlay=component is not JAZZY_COMPONENT, sas=False, nav2=False)
     for var in ("AMENT_PREFIX_PATH", "CMAKE_PREFIX_PATH"):
         env[var] = os.pathsep.join([str(prefix), *[p for p in env.get(var, "").split(os.pathsep) if p]])
     env.pop("COLCON_PREFIX_PATH", None)

@@ -456,8 +456,7 @@ def load_types(env: dict[str, str] | None = None) -> WorldTypes:
     from ros2course.ros.interfaces import component_type, workspace_type  # noqa: PLC0415 - ROS only when a world is served
 
     if env is None:
-        env = dict(os.environ)
-        env_mod.activate(env)
+        env = env_mod.activate()
     needed_by = "the simulated Gazebo world"
     set_pose = component_type(env, "ros_gz_interfaces", "srv", "SetEntityPose", needed_by=needed_by)
     wrench = component_type(env, "ros_gz_interfaces", "msg", "EntityWrench", needed_by=needed_by)
