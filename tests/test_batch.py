@@ -427,7 +427,7 @@ def test_a_batch_hides_the_shared_reference_builds_and_the_authors_folders(tmp_p
     from ros2course.lesson.catalog import content_root
 
     reference_cache_folder().mkdir(parents=True, exist_ok=True)
-    hidden = default_hidden(tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
+    hidden = default_hidden(load_catalog().course, tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
     assert str(reference_cache_folder().resolve()) in hidden
     root = content_root()
     for name in ("solutions", "docs", "tests", "benchmarks", ".git"):
@@ -443,8 +443,8 @@ def test_one_set_of_walls_serves_grade_and_gradescope(tmp_path: Path, monkeypatc
     from ros2course.batch import gradescope, job as job_mod, runner
     from ros2course.lesson.catalog import load_catalog
 
-    walls = runner.submission_walls(tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
-    assert walls.hide == runner.default_hidden(tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
+    walls = runner.submission_walls(load_catalog().course, tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
+    assert walls.hide == runner.default_hidden(load_catalog().course, tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
     records = [lesson.folder / runner.MUTATION_RECORD for lesson in load_catalog().lessons]
     assert walls.masked == sorted(str(p) for p in records if p.is_file()) and walls.masked
     assert "submission_walls" in gradescope.run_gradescope.__code__.co_names

@@ -147,7 +147,7 @@ def test_batch_grading_hides_the_private_course_and_the_public_solutions(tmp_pat
     assert course_sources(root) == [PRIVATE.resolve(), PUBLIC.resolve()]
     use_course(root)
     try:
-        hidden = default_hidden(tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
+        hidden = default_hidden(load_catalog().course, tmp_path / "subs", tmp_path / "out", tmp_path / "scratch")
     finally:
         use_course(None)
     for folder in (PRIVATE, PUBLIC / "solutions", PUBLIC / "fixtures", root / "solutions", root / "fixtures"):

@@ -98,7 +98,7 @@ def run_gradescope(lessons: list[str], submission: Path, results: Path, timeout:
         lesson_checks(lesson_id)
     entry = submission_entry(submission)
     results.parent.mkdir(parents=True, exist_ok=True)
-    walls = submission_walls(Path(tempfile.gettempdir()) / "ros2course-none", results.parent,
+    walls = submission_walls(catalog.course, Path(tempfile.gettempdir()) / "ros2course-none", results.parent,
                              Path(tempfile.gettempdir()) / "ros2course-none")
     trusted = (build_trusted_interfaces([catalog.get(lesson_id) for lesson_id in lessons])
                if sandbox.capabilities().uid_drop or needs_reference_sources(lessons) else None)

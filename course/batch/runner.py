@@ -77,7 +77,8 @@ from ros2course.files import atomic_write_text
 from ros2course.grade.checklist import StopWhen
 from ros2course.grade.fingerprint import grader_fingerprint
 from ros2course.grade.results import LessonResult, Status
-from ros2course.lesson.catalog import content_root, load_catalog
+from ros2course.lesson import Course
+from ros2course.lesson.catalog import load_catalog
 from ros2course.lesson.courses import course_fixtures, course_sources
 from ros2course.report import gradebook
 from ros2course.ros import env as env_mod
@@ -85,10 +86,11 @@ from ros2course import sandbox
 
 # --- isolation (ros2course.sandbox) -------------------------------------------------------------
 
-def _hideable(folder: Path) -> bool:
-    """A folder may be hidden unless it holds what the worker itself needs (Python, this package, HOME)."""
-    needed = [Path(sys.prefix), Path(sys.executable).resolve(), Path(__file__).resolve().parents[1], content_root() / "graders",
-              content_root() / "chapters"]
+def _hideable(course: Course, folder: Path) -> bool:
+    """A folder may be hidden unless it holds what the worker itself needs (Python, this package, HOME,
+    ``course``'s graders and lessons)."""
+    needed = [Path(sys.prefix), Path(sys.executable).resolve(), Path(__file__).resolve().parents[1], course.graders,
+              course.chapters]
     folder = folder.resolve()
     return folder != Path("/") and not any(p.resolve() == folder or p.resolve().is_relative_to(folder) for p in needed)
 
@@ -116,15 +118,15 @@ class SubmissionWalls:
     masked: list[str]
 
 
-def submission_walls(submissions: Path, out_dir: Path, scratch_root: Path) -> SubmissionWalls:
-    """The folders hidden from and the files masked for every submission of a batch (``grade`` and
-    ``gradescope`` alike): :func:`default_hidden` and the course's mutation records."""
-    masked = sorted(str(lesson.folder / MUTATION_RECORD) for lesson in load_catalog().lessons
+def submission_walls(course: Course, submissions: Path, out_dir: Path, scratch_root: Path) -> SubmissionWalls:
+    """The folders hidden from and the files masked for every submission of a batch graded on ``course``
+    (``grade`` and ``gradescope`` alike): :func:`default_hidden` and the course's mutation records."""
+    masked = sorted(str(lesson.folder / MUTATION_RECORD) for lesson in load_catalog(course.root).lessons
                     if (lesson.folder / MUTATION_RECORD).is_file())
-    return SubmissionWalls(default_hidden(submissions, out_dir, scratch_root), masked)
+    return SubmissionWalls(default_hidden(course, submissions, out_dir, scratch_root), masked)
 
 
-def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
+def default_hidden(course: Course, submissions: Path, out_dir: Path, scratch_root: Path) -> list[str]:
     """Folders a submission must not see: the other submissions (scratch), the originals, OUTDIR, reference solutions
     and wrong ones, the course's :data:`AUTHOR_FOLDERS` (``.git`` holds every version of ``solutions/``), and the
     shared reference builds (:func:`ros2course.builder.reference.reference_cache_folder`: they
@@ -133,7 +135,7 @@ def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list
     :func:`ros2course.batch.job.job_walls`); for a course merged from a private one
     (:func:`ros2course.lesson.courses.course_folder`), the folders it was made from too: the private course whole,
     the solutions and fixtures of the one it extends."""
-    root = content_root()
+    root = course.root
     candidates = [scratch_root, submissions, out_dir, root / "solutions", course_fixtures(root)]
     # a course checked out from git holds every version of solutions/ in .git; its docs (the strength
     # tables list reference lines), tests and benchmarks are the author's, never the worker's
@@ -148,7 +150,7 @@ def default_hidden(submissions: Path, out_dir: Path, scratch_root: Path) -> list
     out: list[str] = []
     for folder in candidates:
         folder = folder.resolve()
-        if folder.is_dir() and _hideable(folder) and str(folder) not in out:
+        if folder.is_dir() and _hideable(course, folder) and str(folder) not in out:
             out.append(str(folder))
     return out
 
@@ -401,7 +403,7 @@ def run_batch(submissions: Path, lessons: list[str], out_dir: Path, jobs: int | 
     batch_id = uuid.uuid4().hex
     scratch_root = Path(tempfile.mkdtemp(prefix="ros2course-batch-"))
     scratch_root.chmod(0o711)
-    walls = submission_walls(submissions, out_dir, scratch_root)
+    walls = submission_walls(catalog.course, submissions, out_dir, scratch_root)
     trusted = None
     if entries and (isolate and sandbox.capabilities().uid_drop or needs_reference_sources(lessons)):
         try:

@@ -935,7 +935,7 @@ def _hash_files(paths: list[Path], root: Path) -> str:
 
 def grader_hash(lesson: Lesson) -> str:
     """sha256 of the grader's source: its module, its course's helper modules and data, the kit and the engine that runs it."""
-    root = content_root()
+    root = lesson.course.root
     paths = [root / "graders" / f"{lesson.grader}.py", *(root / "graders").glob("_*.py"),
              *(root / "graders" / "data").rglob("*"), *(Path(__file__).resolve().parents[1] / "kit").rglob("*.py"),
              *(Path(__file__).resolve().parents[1] / "grade").glob("engine.py"),
@@ -1415,7 +1415,7 @@ def reference_texts(lesson: Lesson, reference: Path | None = None,
     """``{workspace-relative file: text}`` of the files rules may cover: the lesson's files in ``reference`` (a
     reference workspace; default: the course's ``solutions/``, which holds them at the same paths), narrowed by
     ``files:`` when mutation.yaml gives it. A superset of what is mutated: the check it feeds is conservative."""
-    root = reference if reference is not None else content_root() / "solutions"
+    root = reference if reference is not None else lesson.course.solutions
     config = config if config is not None else load_config(lesson)
     out: dict[str, str] = {}
     for top in lesson.workspace_paths:

@@ -426,7 +426,7 @@ def lesson_cases(lesson: Lesson, underlay: Path | None, until_settled: bool = Fa
     for fixture in load_fixtures(lesson.id):
         # a fixture that edits a dependency builds everything itself, without the underlay
         touched = {Path(e.file or e.delete or "").parts[1:2] for e in fixture.edits}
-        uses_underlay = underlay is not None and not any(part and part[0] in _folders(deps) for part in touched)
+        uses_underlay = underlay is not None and not any(part and part[0] in _folders(lesson, deps) for part in touched)
 
         def wrong(root: Path, fixture: Fixture = fixture, uses_underlay: bool = uses_underlay) -> None:
             reference_workspace(lesson, root, own if uses_underlay else None)
@@ -658,9 +658,9 @@ def fixture_note(fails: list[str], skips: list[str], result: LessonResult) -> st
     return "; ".join(parts)
 
 
-def _folders(packages: list[str]) -> set[str]:
-    """Source folder names (under solutions/src) of these packages."""
-    found = find_packages(content_root() / "solutions" / "src")
+def _folders(lesson: Lesson, packages: list[str]) -> set[str]:
+    """Source folder names (under ``lesson``'s course's ``solutions/src``) of these packages."""
+    found = find_packages(lesson.course.solutions / "src")
     return {found[name][0].name for name in packages if name in found}
 
 

@@ -233,12 +233,12 @@ def boilerplate_folders(exclude_reference: bool) -> list[Path]:
     workspace legitimately holds an earlier lesson's starter), and with ``exclude_reference`` every
     reference solution (``solutions/``: the tutorial's listings, meant to be typed in).
     """
-    from ros2course.lesson import content_root  # noqa: PLC0415 - start time: the catalog (yaml) only for a course's own files
     from ros2course.lesson.catalog import load_catalog  # noqa: PLC0415 - start time: the catalog (yaml) only for a course's own files
 
-    solutions = content_root() / "solutions"
+    catalog = load_catalog()
+    solutions = catalog.course.solutions
     out: list[Path] = []
-    for lesson in load_catalog().lessons:
+    for lesson in catalog.lessons:
         out += [*lesson.starter_layers, *(solutions / rel for rel in lesson.starter_solutions)]
     if exclude_reference:
         out = [path for path in out if not path.is_relative_to(solutions)] + [solutions]
