@@ -87,7 +87,7 @@ def _print_version() -> None:
     from importlib.metadata import PackageNotFoundError, version  # noqa: PLC0415 - start time, see the imports
 
     from ros2course.kit_version import API_VERSION  # noqa: PLC0415 - same
-    from ros2course.lesson import content_root  # noqa: PLC0415 - same
+    from ros2course.lesson import active_course  # noqa: PLC0415 - same
 
     try:
         engine = version("ros2course")
@@ -95,10 +95,9 @@ def _print_version() -> None:
         engine = "(not installed)"
     print(f"ros2course {engine} (grading API ros2course.kit {API_VERSION})")
     try:
-        from ros2course.lesson.courses import load_manifest  # noqa: PLC0415 - same
-
-        manifest = load_manifest(content_root())
-        print(f"course {manifest.id} {manifest.version} (ROS 2 {manifest.ros_distro}) at {content_root()}")
+        course = active_course()
+        manifest = course.manifest()
+        print(f"course {manifest.id} {manifest.version} (ROS 2 {manifest.ros_distro}) at {course.root}")
     except CourseError as exc:
         print(f"course: none ({exc.message})")
 
@@ -219,16 +218,16 @@ def init(directory: Annotated[Path, typer.Argument(help="Workspace folder to cre
     """Create a workspace (DIR/src) and its progress file, following a course (default: the bundled tutorial)."""
     if directory.exists() and not directory.is_dir():
         raise CourseError(f"{directory} exists and is not a folder", "choose another name")
-    from ros2course.lesson import content_root  # noqa: PLC0415 - start time, see the imports
-    from ros2course.lesson.courses import load_manifest  # noqa: PLC0415 - same
+    from ros2course.lesson import active_course  # noqa: PLC0415 - start time, see the imports
     from ros2course.lesson.workspace import Workspace  # noqa: PLC0415 - same
 
     ws = Workspace(directory)
     _choose_course(ws, course)
-    manifest = load_manifest(content_root())
+    chosen = active_course()
+    manifest = chosen.manifest()
     created = ws.init()
     if ws.course_record() is None:
-        ws.record_course(manifest.id, manifest.version, content_root())
+        ws.record_course(manifest.id, manifest.version, chosen.root)
     out = stdout_console()
     if created:
         out.print(f"Initialised ros2course workspace at [bold]{ws.root}[/]")

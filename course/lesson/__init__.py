@@ -85,6 +85,26 @@ class Course:
         """``solutions/``: the reference workspace (``src/`` packages and the lessons' other folders)."""
         return self.root / "solutions"
 
+    def manifest(self):  # -> ros2course.lesson.courses.CourseManifest (not imported here: see below)
+        """The course's ``course.yaml``, validated (:func:`ros2course.lesson.courses.load_manifest`).
+
+        Raises:
+            CourseError: no manifest, or one that does not validate.
+        """
+        from ros2course.lesson.courses import load_manifest  # noqa: PLC0415 - pydantic only when asked (list's start time)
+
+        return load_manifest(self.root)
+
+    def catalog(self):  # -> ros2course.lesson.catalog.Catalog (same)
+        """The course's lessons in order (:func:`ros2course.lesson.catalog.load_catalog`, cached per folder).
+
+        Raises:
+            LessonFormatError: a lesson file does not validate.
+        """
+        from ros2course.lesson.catalog import load_catalog  # noqa: PLC0415 - the catalog imports this module
+
+        return load_catalog(self.root)
+
 
 def active_course() -> Course:
     """The :class:`Course` of this command (:func:`content_root`'s folder): what the CLI chose, once."""

@@ -201,8 +201,9 @@ def course_folder(root: Path, _seen: tuple[Path, ...] = ()) -> Path:
     (when given) and ``requires`` (added). It is made once per content (a hash of every file of both) in a
     folder every user can read (a batch's sandboxed worker reads it): ``<sys.prefix>/var/cache/ros2course/
     courses``, or a temporary folder removed at exit when that cannot be written. Why not a search path of
-    course folders: 26 places read files under :func:`ros2course.lesson.content_root`, and one folder keeps
-    them all right; an instructor sees exactly what was graded.
+    course folders: a :class:`ros2course.lesson.Course` is one folder (its graders, chapters and solutions side
+    by side, carried by every lesson), and one folder keeps them all right; an instructor sees exactly what was
+    graded.
 
     Raises:
         CourseError: the extended course is not found, or the chain comes back to a course already in it.
