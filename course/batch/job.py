@@ -123,6 +123,10 @@ class Job:
     stop_when: StopWhen | None = None
     course: str = ""
 
+    def __post_init__(self) -> None:
+        if not self.course:  # a worker told no course would grade on whatever course its process finds
+            raise ValueError("a batch Job names the course folder its submission is graded on (course=...)")
+
 
 # --- one job ------------------------------------------------------------------------------------
 

@@ -23,7 +23,7 @@ import sys
 from pathlib import Path
 
 from ros2course.errors import LessonFormatError, UnknownLesson
-from ros2course.lesson import MANIFEST, Course, content_root  # noqa: F401 - content_root re-exported: callers import it from here
+from ros2course.lesson import MANIFEST, Course, active_course, content_root  # noqa: F401 - content_root re-exported: callers import it from here
 
 
 
@@ -168,8 +168,8 @@ class Lesson:
     #: The lesson's folder; set by the loader, not read from YAML.
     folder: Path = Path(".")
     #: The course the lesson belongs to (its graders, solutions and other lessons); set by the loader: the
-    #: folder holding ``chapters/<lesson folder>``.
-    course: Course = dataclasses.field(default_factory=lambda: Course(Path(".")))
+    #: folder holding ``chapters/<lesson folder>`` (a lesson made in code belongs to the command's course).
+    course: Course = dataclasses.field(default_factory=active_course)
     #: Starter folders of ``starter_includes`` (oldest first); set by :class:`Catalog`.
     included_starters: list[Path] = dataclasses.field(default_factory=list)
 

@@ -202,7 +202,7 @@ def activate_process(underlay: bool = True, sas: bool = True, nav2: bool = True)
     for var, value in wanted.items():
         if os.environ.get(var) != value:
             os.environ[var] = value
-    for operation, var, value in activation(install, underlay, sas, nav2):
+    for _operation, var, value in activation(install, underlay, sas, nav2):
         if var == "PYTHONPATH" and value not in sys.path:
             sys.path.insert(0, value)
     return install
