@@ -158,10 +158,13 @@ def grade(s: Session) -> None:
     _asks_for_pytest(s)
     _test_depends(s)
     kit.executable(s, "executable", NODE_PACKAGE, EXECUTABLE)
-    cases = prepare_cases(s, (LIBRARY, NODE_PACKAGE), LIBRARY_MUTANTS + NODE_MUTANTS)
+    # every mutant when a learner is graded; under dev validate --until-settled only those a named check needs
+    library_mutants = [m for m in LIBRARY_MUTANTS if s.wanted(m.check)]
+    node_mutants = [m for m in NODE_MUTANTS if s.wanted(m.check)]
+    cases = prepare_cases(s, (LIBRARY, NODE_PACKAGE), library_mutants + node_mutants)
     overlay = s.overlay()
     # each launch run in a private ROS domain: a learner's test that listens to a topic must hear only its node
-    graphs = {case: s.new_graph() for case in ["reference", *(m.check for m in NODE_MUTANTS)]}
+    graphs = {case: s.new_graph() for case in ["reference", *(m.check for m in node_mutants)]}
     runs: dict[str, TestRun] = {}
 
     def library(case: str) -> None:
@@ -178,10 +181,10 @@ def grade(s: Session) -> None:
                                  "every test passes (pytest exit status 0) on the correct library")
     node_ok = judge_reference(s, "launch_test_passes", runs["reference/node"], where.format(NODE_PACKAGE),
                               "every test passes (pytest exit status 0) on the correct node")
-    library_jobs = [(lambda m=m: library(m.check)) for m in LIBRARY_MUTANTS] if library_ok else []
-    launch_jobs = [(lambda m=m: launch(m.check)) for m in NODE_MUTANTS] if node_ok else []
+    library_jobs = [(lambda m=m: library(m.check)) for m in library_mutants] if library_ok else []
+    launch_jobs = [(lambda m=m: launch(m.check)) for m in node_mutants] if node_ok else []
     run_cases(s, launch_jobs + library_jobs)  # the slow launch runs first: the quick library runs fill the gaps
-    for mutant in LIBRARY_MUTANTS if library_ok else []:
+    for mutant in library_mutants if library_ok else []:
         judge_mutant(s, mutant, runs[f"{mutant.check}/library"])
-    for mutant in NODE_MUTANTS if node_ok else []:
+    for mutant in node_mutants if node_ok else []:
         judge_mutant(s, mutant, runs[f"{mutant.check}/node"])

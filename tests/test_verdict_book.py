@@ -110,6 +110,31 @@ def test_stop_when_settles_at_the_next_step_on_the_grading_thread_only() -> None
     assert book.results["rate"].observed == f"{NOT_CHECKED}stopped once settled"
 
 
+def test_a_named_check_whose_need_failed_settles_the_case_at_once() -> None:
+    """--until-settled: a named check blocked by a failed need can only be "not checked" (record() would write
+    it so), so the case settles at the next step instead of grading on until the grader reaches that check."""
+    book = VerdictBook(CHECKS, StopWhen(judged=frozenset({"rate"})))
+    book.record("build", True, "built", "built")
+    book.record("starts", False, "no node", "a node")
+    with pytest.raises(VerdictSettled):
+        book.require()
+    assert book.results["rate"].skipped and book.results["rate"].observed == f"{NOT_CHECKED}'The node starts' failed"
+    # without a stop_when nothing is written ahead: the grading reaches the check itself
+    whole = VerdictBook(CHECKS)
+    whole.record("build", True, "built", "built")
+    whole.record("starts", False, "no node", "a node")
+    whole.require()
+    assert "rate" not in whole.results
+
+
+def test_only_the_named_checks_and_what_they_need_are_wanted_while_a_case_settles() -> None:
+    assert all(VerdictBook(CHECKS).wanted(c.id) for c in CHECKS)  # a learner's grading wants every check
+    assert all(VerdictBook(CHECKS, StopWhen(any_loss=True)).wanted(c.id) for c in CHECKS)  # a starter's too
+    book = VerdictBook(CHECKS, StopWhen(judged=frozenset({"rate"})))
+    assert [c.id for c in CHECKS if book.wanted(c.id)] == ["build", "starts", "rate"]  # needs followed through
+    assert not book.wanted("other")
+
+
 def test_windows_and_evidence() -> None:
     book = VerdictBook(CHECKS)
     book.record("build", True, "built", "built")

@@ -252,6 +252,9 @@ def _run_grader(module: Any, session: GradingSession, timings: dict[str, float])
         try:
             with session.part():  # Unmet in grade(): the unrecorded checks become "not checked" with its reason
                 module.grade(session)
+                # a grader whose last step was the verdict that settled a --until-settled case takes no next
+                # step to notice: the checks it left (e.g. the ones Session.wanted skipped) are unjudged too
+                session.book.stop_if_settled()
         finally:
             graded = time.monotonic()
             timings["grade"] = graded - begin

@@ -187,6 +187,10 @@ class GradingSession:
         finally:
             self.observer.close_part()
 
+    def wanted(self, check_id: str) -> bool:
+        """Whether ``check_id``'s verdict can still matter (:meth:`~ros2course.grade.verdicts.VerdictBook.wanted`)."""
+        return self.book.wanted(check_id)
+
     def leave_unjudged(self, reason: str) -> None:
         """Record every check not recorded yet as not checked because of ``reason``, whatever its needs: the
         end of a grading stopped early (``dev validate --until-settled``), where no check after the stop was judged.

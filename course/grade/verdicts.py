@@ -96,10 +96,37 @@ class VerdictBook:
         reaches for a graph, starts a process), never by :meth:`amend`: a verdict's own amendment, made
         right after it, is kept. Raises once: it disarms itself.
         """
-        if (self._stop_when and threading.current_thread() is self._grading_thread
-                and self._stop_when.reached(self.results)):
+        if not self._stop_when or threading.current_thread() is not self._grading_thread:
+            return
+        for check_id in self._stop_when.judged:
+            # a named check whose need failed can only be written "not checked" (record() would): its verdict
+            # is settled now, not when the grading reaches it
+            if check_id not in self.results and check_id in self.checks:
+                blocker = self.unmet_need(check_id)
+                if blocker is not None:
+                    self.not_checked(check_id, blocker)
+        if self._stop_when.reached(self.results):
             self._stop_when = None
             raise VerdictSettled
+
+    def wanted(self, check_id: str) -> bool:
+        """Whether ``check_id``'s verdict can still matter: False only while a ``dev validate --until-settled``
+        case waits for its named checks (:attr:`~ros2course.grade.checklist.StopWhen.judged`) and none of
+        them needs ``check_id``, directly or through other needs. Such a check is left "not checked" when the
+        case settles, so a grader may skip work that only its verdict uses (a learner's and a class's gradings
+        want every check).
+        """
+        judged = self._stop_when.judged if self._stop_when else frozenset()
+        if not judged:
+            return True
+        seen: set[str] = set()
+        todo = [c for c in judged if c in self.checks]
+        while todo:
+            current = todo.pop()
+            if current not in seen:
+                seen.add(current)
+                todo += [need for need in self.checks[current].needs if need in self.checks]
+        return check_id in seen
 
     # --- verdicts ----------------------------------------------------------------------------------
 

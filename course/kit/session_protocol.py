@@ -85,6 +85,13 @@ class Session(Protocol):
         """Why ``check_id`` cannot be judged (its first need that did not pass), or None."""
         ...
 
+    def wanted(self, check_id: str) -> bool:
+        """Whether ``check_id``'s verdict can still matter. Always True when a learner or a class is graded;
+        False only under ``dev validate --until-settled`` for a check none of the case's named checks needs
+        (it is left "not checked"): a grader may then skip work only that check's verdict uses, e.g. one
+        mutant's test run (kit 2.7)."""
+        ...
+
     def part(self, name: str = "", *, own_graph: bool = False) -> AbstractContextManager[None]:
         """A ``with`` block grading one independent part (its checks declare ``part=name``); an
         :class:`Unmet` inside ends the part only. ``own_graph``: the part's nodes run in a private
