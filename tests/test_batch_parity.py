@@ -45,6 +45,15 @@ def test_a_lesson_whose_interface_the_course_cannot_build_is_refused_up_front() 
     assert "inspect-topics cannot be graded in batch" in info.value.message and "no_such_interfaces" in info.value.message
 
 
+def test_lessons_of_two_courses_are_refused_as_one_batch(tmp_path: Path) -> None:
+    """A batch builds one course's reference packages: a package of one name in two courses would shadow the other."""
+    lesson = load_catalog().get("inspect-topics")
+    other = dataclasses.replace(lesson, course=dataclasses.replace(lesson.course, root=tmp_path))
+    with pytest.raises(CourseError) as info:
+        trusted_interface_packages([lesson, other])
+    assert "lessons of 2 courses in one batch" in info.value.message and str(tmp_path) in info.value.message
+
+
 def test_the_grader_may_import_only_declared_interfaces(tmp_path: Path) -> None:
     """The same refusal under check and batch, so dev validate finds an undeclared package before a class does."""
     lesson = load_catalog().get("print-forever-node")

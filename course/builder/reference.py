@@ -82,10 +82,13 @@ def trusted_interface_packages(lessons: list[Lesson]) -> list[str]:
 
     Raises:
         CourseError: a lesson declares an interface or reference package ``solutions/src`` does not have
-            (the course is broken; no class can be graded on it).
+            (the course is broken; no class can be graded on it), or ``lessons`` come from two courses.
     """
-    found = {name: package for course in dict.fromkeys(lesson.course for lesson in lessons)
-             for name, package in solution_packages(course).items()}
+    courses = list(dict.fromkeys(lesson.course for lesson in lessons))
+    if len(courses) > 1:  # one batch, one course: two courses' packages of one name would shadow each other
+        raise CourseError(f"lessons of {len(courses)} courses in one batch ({', '.join(str(c.root) for c in courses)})",
+                          "grade each course's lessons in a batch of their own")
+    found = solution_packages(courses[0]) if courses else {}
     for lesson in lessons:
         unknown = [name for name in [*lesson.interfaces, *lesson.references] if name not in found]
         if unknown:

@@ -174,8 +174,12 @@ def activate(environ: Mapping[str, str] | None = None, underlay: bool = True, sa
     Returns:
         A new ``{variable: value}`` dict, for the ``env=`` of the processes that build or run ROS code.
     """
-    env = dict(os.environ if environ is None else environ)
-    for operation, var, value in activation(detect(), underlay, sas, nav2):
+    return _applied(dict(os.environ if environ is None else environ), activation(detect(), underlay, sas, nav2))
+
+
+def _applied(env: dict[str, str], ops: list[tuple[str, str, str]]) -> dict[str, str]:
+    """``env`` (changed and returned) with :func:`activation`'s ``ops`` applied: set, or prepend once."""
+    for operation, var, value in ops:
         if operation == "set":
             env[var] = value
         else:
@@ -198,11 +202,11 @@ def activate_process(underlay: bool = True, sas: bool = True, nav2: bool = True)
         The ROS install activated (:func:`detect`).
     """
     install = detect()
-    wanted = activate(None, underlay, sas, nav2)
-    for var, value in wanted.items():
+    ops = activation(install, underlay, sas, nav2)  # detected and listed once, for both writes
+    for var, value in _applied(dict(os.environ), ops).items():
         if os.environ.get(var) != value:
             os.environ[var] = value
-    for _operation, var, value in activation(install, underlay, sas, nav2):
+    for _operation, var, value in ops:
         if var == "PYTHONPATH" and value not in sys.path:
             sys.path.insert(0, value)
     return install
