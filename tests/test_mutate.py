@@ -496,6 +496,13 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
     # ... but what the dropped held-out sample scored stays on record, and is shown beside the next one's
     earlier = json.loads((tmp_path / mut.SCORE_FILE).read_text())[mut.EARLIER_KEY]
     assert [(e["seed"], e["counted"], e["killed"]) for e in earlier] == [(2, 30, 27)]
+    # a re-triage of that first sample keeps what the dropped held-out sample showed and scored (it dropped
+    # both once, and the next held-out sample could have drawn mutants whose survival had been seen)
+    shown = mut.recorded_held_out(lesson)
+    assert shown == {m.key for m in mutants[30:]}
+    mut.write_score(lesson, run(mutants[:30], 0, False), keep_held_out=True)
+    assert mut.recorded_held_out(lesson) == shown
+    assert json.loads((tmp_path / mut.SCORE_FILE).read_text())[mut.EARLIER_KEY] == earlier
     later = run(mutants[30:], 6, True)
     later.seed = 3
     mut.write_score(lesson, later)

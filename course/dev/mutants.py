@@ -1154,10 +1154,14 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
     # every mutant's outcome, committed with the lesson: the figure can be checked and re-derived (issue 37)
     outcomes = {"fingerprint": fingerprint, "date": data["date"], "mutants": _outcome_rows(found)}
     if keep_held_out:
-        if "held_out" in (before := read_json_object(lesson.folder / SCORE_FILE)):
-            data["held_out"] = before["held_out"]
-        if "held_out" in (before := read_json_object(lesson.folder / OUTCOMES_FILE)):
-            outcomes["held_out"] = before["held_out"]
+        # the held-out section, and what earlier held-out samples showed and scored, stay as they were recorded
+        before_score, before_outcomes = read_json_object(lesson.folder / SCORE_FILE), read_json_object(lesson.folder / OUTCOMES_FILE)
+        for key in ("held_out", EARLIER_KEY):
+            if key in before_score:
+                data[key] = before_score[key]
+        for key in ("held_out", SHOWN_KEY):
+            if key in before_outcomes:
+                outcomes[key] = before_outcomes[key]
     else:
         if shown := recorded_held_out(lesson):
             # the held-out figures go with the old first sample, but what its samples showed stays shown: a mutant
