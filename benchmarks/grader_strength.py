@@ -336,6 +336,7 @@ def retriage(lesson_ids: list[str], out: Path) -> list:
         # the outcomes are that run's: its date and fingerprint stay (none recorded: stale, as it should read)
         mut.write_score(lesson, found[-1], measured={"date": before.data.get("date", "?"),
                                                      "fingerprint": before.data.get("fingerprint", ""),
+                                                     "course_version": before.data.get("course_version", ""),
                                                      **mut.course_part(before.data)}
                         if before is not None else {"date": "?", "fingerprint": ""}, keep_held_out=True)
     return found

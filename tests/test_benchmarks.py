@@ -164,3 +164,10 @@ def test_grader_strength_retriage_applies_todays_triage_to_the_last_runs_outcome
     outcomes.write_text(json.dumps(committed), encoding="utf-8")
     [found] = module.retriage(["print-forever-node"], out)
     assert (found.count("killed"), found.count("survived"), found.triaged, found.score) == (3, 0, 0, 1.0)
+    # a re-triage keeps the run's date, grader fingerprint and course version: an old run never reads as today's
+    score_path = course / "chapters" / "print-forever-node" / "mutation-score.json"
+    old = {**json.loads(score_path.read_text()), "date": "2026-01-02", "course_version": "0.9.0", "fingerprint": "f00"}
+    score_path.write_text(json.dumps(old), encoding="utf-8")
+    module.retriage(["print-forever-node"], out)
+    again = json.loads(score_path.read_text())
+    assert (again["date"], again["course_version"], again["fingerprint"]) == ("2026-01-02", "0.9.0", "f00"), again

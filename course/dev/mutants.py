@@ -1132,9 +1132,9 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
     The file lives with the lesson, like its ``mutation.yaml``, so that ``dev validate``
     (:func:`describe_score`) and whoever reads the course see the grader's last
     measured strength; commit it with the lesson. Every mutant's outcome goes to
-    ``mutation-outcomes.json`` beside it. ``measured`` (``date``, ``fingerprint``) names
-    the run the outcomes come from when it is not now (a re-triage of an old run keeps
-    its date and its grader fingerprint). None when the lesson folder is read-only (an
+    ``mutation-outcomes.json`` beside it. ``measured`` (``date``, ``fingerprint``, optionally
+    ``course_version``) names the run the outcomes come from when it is not now (a re-triage of an
+    old run keeps its date, its grader fingerprint and the course version it was graded under). None when the lesson folder is read-only (an
     installed course): the run's ``mutation.json`` still has it all.
 
     A held-out run (``found.held_out``) goes to the ``held_out`` section of both files, beside the
@@ -1149,7 +1149,8 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
     measured = measured or measurement(lesson)
     fingerprint = measured["fingerprint"]
     data = _summary(found)
-    data.update(date=measured["date"], course_version=course_version(), fingerprint=fingerprint,
+    data.update(date=measured["date"], course_version=measured.get("course_version") or course_version(),
+                fingerprint=fingerprint,
                 **course_part(measured), survivors=found.uncovered())
     # every mutant's outcome, committed with the lesson: the figure can be checked and re-derived (issue 37)
     outcomes = {"fingerprint": fingerprint, "date": data["date"], "mutants": _outcome_rows(found)}
