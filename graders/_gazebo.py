@@ -24,6 +24,7 @@ alone (``ros2course list``, ``hint``), where ROS is not needed.
 
 from __future__ import annotations
 
+import ast
 import math
 import re
 import time
@@ -388,6 +389,26 @@ def _judge_thrust(s: Session, world: sim.PhysicsWorld, steps: list[sim.StepRecor
 
 # --- the files ---------------------------------------------------------------------------------------------
 
+def _names_installed_bridge_file(text: str) -> bool:
+    """Whether a launch file's source names the installed ``config_bridge/<BRIDGE_FILE>``: one string literal
+    ending in it, or ``'config_bridge'`` then ``BRIDGE_FILE`` as neighbouring arguments of one call or items of
+    one list (``os.path.join(share, 'config_bridge', ...)``, ``PathJoinSubstitution([..., 'config_bridge', ...])``).
+    Read from the syntax tree, never run (the file is the learner's); False when the file does not parse."""
+    try:
+        tree = ast.parse(text)
+    except SyntaxError:
+        return False
+    whole = f"config_bridge/{BRIDGE_FILE}"
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value.endswith(whole):
+            return True
+        items = node.args if isinstance(node, ast.Call) else node.elts if isinstance(node, ast.List) else []
+        texts = [i.value if isinstance(i, ast.Constant) and isinstance(i.value, str) else None for i in items]
+        if any(a == "config_bridge" and b == BRIDGE_FILE for a, b in zip(texts, texts[1:])):
+            return True
+    return False
+
+
 def launch_files(s: Session) -> None:
     """launch_files: the three launch files installed, each starting its node and a ros_gz_bridge
     parameter_bridge that carries what the node talks to (the thrust one on the world's clock)."""
@@ -412,6 +433,9 @@ def launch_files(s: Session) -> None:
         elif carried.endswith(".yaml"):
             if "config_file" not in text or carried not in text:
                 problems.append(f"{name}: the bridge has no config_file parameter naming {carried}")
+            elif not _names_installed_bridge_file(text):
+                problems.append(f"{name}: the bridge's config_file is not the installed config_bridge/{carried} "
+                                f"(the path names {carried} without its config_bridge folder)")
             elif not any(isinstance(p, dict) and p.get("use_sim_time") is True for p in nodes[0].parameters):
                 problems.append(f"{name}: {executable} without use_sim_time: True")
         elif not any(carried in arg for arg in bridges[0].arguments):
