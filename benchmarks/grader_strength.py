@@ -85,6 +85,9 @@ def _held_out_cell(row) -> str:
     data = held.data
     if not data.get("graded"):  # nothing left to draw: the lesson's every mutant was shown by an earlier sample
         earlier = _earlier_held_out(data.get("earlier", []), data.get("fingerprint"))
+        if not earlier and row.data.get("graded") and row.data.get("graded") == row.data.get("pool"):
+            return (f"none left to draw: the first sample graded every mutant (seed {data.get('seed', '?')} drew "
+                    "0); the lesson has too few mutants for a held-out score")
         return (f"none left to draw: all the mutants the first sample left were shown by earlier held-out samples "
                 f"(seed {data.get('seed', '?')} drew 0), so any new figure would be tuned"
                 + ("; what they scored: " + ", ".join(earlier) if earlier else
