@@ -1134,8 +1134,9 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
     measured strength; commit it with the lesson. Every mutant's outcome goes to
     ``mutation-outcomes.json`` beside it. ``measured`` (``date``, ``fingerprint``, optionally
     ``course_version``) names the run the outcomes come from when it is not now (a re-triage of an
-    old run keeps its date, its grader fingerprint and the course version it was graded under). None when the lesson folder is read-only (an
-    installed course): the run's ``mutation.json`` still has it all.
+    old run keeps its date, its grader fingerprint and the course version it was graded under).
+    None when the lesson folder is read-only (an installed course): the run's ``mutation.json``
+    still has it all.
 
     A held-out run (``found.held_out``) goes to the ``held_out`` section of both files, beside the
     first sample's figures (:func:`write_held_out`). A new first sample drops the recorded held-out
@@ -1156,7 +1157,8 @@ def write_score(lesson: Lesson, found: LessonMutation, measured: dict[str, str] 
     outcomes = {"fingerprint": fingerprint, "date": data["date"], "mutants": _outcome_rows(found)}
     if keep_held_out:
         # the held-out section, and what earlier held-out samples showed and scored, stay as they were recorded
-        before_score, before_outcomes = read_json_object(lesson.folder / SCORE_FILE), read_json_object(lesson.folder / OUTCOMES_FILE)
+        before_score = read_json_object(lesson.folder / SCORE_FILE)
+        before_outcomes = read_json_object(lesson.folder / OUTCOMES_FILE)
         for key in ("held_out", EARLIER_KEY):
             if key in before_score:
                 data[key] = before_score[key]
