@@ -389,24 +389,52 @@ def _judge_thrust(s: Session, world: sim.PhysicsWorld, steps: list[sim.StepRecor
 
 # --- the files ---------------------------------------------------------------------------------------------
 
+#: Calls whose arguments are parts of one path, joined with '/' (os.path.join, pathlib.Path, launch's substitution).
+_PATH_JOINS = {"join", "Path", "PurePath", "PathJoinSubstitution"}
+
+
+def _path_text(node: ast.AST, names: dict[str, ast.AST], depth: int = 0) -> str:
+    """The path an expression of a launch file spells, read from its syntax tree (never run): string literals as
+    they are, parts of ``os.path.join``/``Path``/``PathJoinSubstitution`` and of ``/`` joined with '/', ``+`` and
+    f-strings concatenated, a name its (last) assignment's value; anything else (``get_package_share_directory``,
+    ``FindPackageShare``, an unknown value) is ``<?>``."""
+    if depth > 8:
+        return "<?>"
+    def text(n: ast.AST) -> str:
+        return _path_text(n, names, depth + 1)
+    if isinstance(node, ast.Constant) and isinstance(node.value, str):
+        return node.value
+    if isinstance(node, ast.Name) and node.id in names:
+        return text(names[node.id])
+    if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Div):
+        return f"{text(node.left)}/{text(node.right)}"
+    if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Add):
+        return text(node.left) + text(node.right)
+    if isinstance(node, ast.JoinedStr):
+        return "".join(text(v.value) if isinstance(v, ast.FormattedValue) else text(v) for v in node.values)
+    if isinstance(node, ast.Call):
+        func = node.func.attr if isinstance(node.func, ast.Attribute) else getattr(node.func, "id", "")
+        if func in _PATH_JOINS:
+            parts = [p for a in node.args for p in (a.elts if isinstance(a, ast.List) else [a])]
+            return "/".join(text(p) for p in parts)
+    return "<?>"
+
+
 def _names_installed_bridge_file(text: str) -> bool:
-    """Whether a launch file's source names the installed ``config_bridge/<BRIDGE_FILE>``: one string literal
-    ending in it, or ``'config_bridge'`` then ``BRIDGE_FILE`` as neighbouring arguments of one call or items of
-    one list (``os.path.join(share, 'config_bridge', ...)``, ``PathJoinSubstitution([..., 'config_bridge', ...])``).
-    Read from the syntax tree, never run (the file is the learner's); False when the file does not parse."""
+    """Whether a launch file's source spells a path ending in the installed ``config_bridge/<BRIDGE_FILE>``
+    (:func:`_path_text` of every expression: ``os.path.join(share, 'config_bridge', BRIDGE_FILE)``,
+    ``PathJoinSubstitution([FindPackageShare(...), 'config_bridge', ...])``, ``Path(share) / 'config_bridge' /
+    ...``, an f-string, or a name assigned any of them). Read from the syntax tree, never run (the file is the
+    learner's); False when the file does not parse."""
     try:
         tree = ast.parse(text)
     except SyntaxError:
         return False
+    names = {target.id: node.value for node in ast.walk(tree) if isinstance(node, ast.Assign)
+             for target in node.targets if isinstance(target, ast.Name)}
     whole = f"config_bridge/{BRIDGE_FILE}"
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Constant) and isinstance(node.value, str) and node.value.endswith(whole):
-            return True
-        items = node.args if isinstance(node, ast.Call) else node.elts if isinstance(node, ast.List) else []
-        texts = [i.value if isinstance(i, ast.Constant) and isinstance(i.value, str) else None for i in items]
-        if any(a == "config_bridge" and b == BRIDGE_FILE for a, b in zip(texts, texts[1:])):
-            return True
-    return False
+    return any(re.sub(r"/+", "/", _path_text(node, names)).endswith(whole) for node in ast.walk(tree)
+               if isinstance(node, ast.expr))
 
 
 def launch_files(s: Session) -> None:
