@@ -22,10 +22,24 @@ from ros2course.lesson.catalog import load_catalog
 
 pytestmark = [pytest.mark.ros, pytest.mark.timeout(600)]
 
+LESSON = "actions-server"
 
-def test_actions_server_grader_late_for_the_cancel_tries_again(tmp_path, monkeypatch):
-    lesson = load_catalog().get("actions-server")
-    steps = load_grader(lesson.grader).steps  # graders/_actions_server.py, the lesson's steps
+
+@pytest.fixture
+def steps():
+    """graders/_actions_server.py, the lesson's steps (patched per test with monkeypatch)."""
+    return load_grader(load_catalog().get(LESSON).grader).steps
+
+
+def grade_reference(tmp_path) -> dict[str, str]:
+    """Grade the reference solution with the patched steps; assert full marks; return observed per check id."""
+    lesson = load_catalog().get(LESSON)
+    result = grade_lesson(lesson, reference_workspace(lesson, tmp_path / "ws"), log_dir=tmp_path / "log")
+    assert result.status == Status.PASSED, [(c.id, c.observed) for c in result.checks if not c.passed] or result.message
+    return {c.id: c.observed for c in result.checks}
+
+
+def test_actions_server_grader_late_for_the_cancel_tries_again(tmp_path, monkeypatch, steps):
     original = steps._wait_feedback
     late = []
 
@@ -39,23 +53,19 @@ def test_actions_server_grader_late_for_the_cancel_tries_again(tmp_path, monkeyp
         return seen
 
     monkeypatch.setattr(steps, "_wait_feedback", wait_past_the_end)
-    result = grade_lesson(lesson, reference_workspace(lesson, tmp_path / "ws"), log_dir=tmp_path / "log")
+    observed = grade_reference(tmp_path)
     assert len(late) == 2, "the cancel and the preemption waited for three feedback messages"
-    assert result.status == Status.PASSED, [(c.id, c.observed) for c in result.checks if not c.passed] or result.message
-    observed = {c.id: c.observed for c in result.checks}
     assert "tried again after: the goal" in observed["cancel_accepted"], observed["cancel_accepted"]
     assert "had SUCCEEDED when the cancel request arrived" in observed["cancel_accepted"]
     assert "tried again after: the goal" in observed["preempted"], observed["preempted"]
     assert "had reached its end" in observed["preempted"]
 
 
-def test_actions_server_cancel_in_the_last_step_tries_again(tmp_path, monkeypatch):
+def test_actions_server_cancel_in_the_last_step_tries_again(tmp_path, monkeypatch, steps):
     """The cancel request arrives while a correct server's point waits out its last period a few millimetres
     short of the goal: the goal ends CANCELED 0.005 m from its end, as its last feedback said, nothing sent
     after the request. That is the grader's lateness (CI saw it with a 1.6 m goal), not a server that ignores
     the cancel: the grader tries again, cancelling at the first feedback message, and gives full marks."""
-    lesson = load_catalog().get("actions-server")
-    steps = load_grader(lesson.grader).steps
     # 1.605 m: sixteen 0.1 m steps leave 0.005 m (give or take the goal's rounding to 3 decimals, 0.0007 m),
     # so the point waits one PERIOD 0.005 m short of the goal before its last step
     monkeypatch.setattr(steps, "CANCEL_DISTANCE", 1.605)
@@ -74,10 +84,8 @@ def test_actions_server_cancel_in_the_last_step_tries_again(tmp_path, monkeypatc
         return seen
 
     monkeypatch.setattr(steps, "_wait_feedback", wait_for_the_last_step)
-    result = grade_lesson(lesson, reference_workspace(lesson, tmp_path / "ws"), log_dir=tmp_path / "log")
+    observed = grade_reference(tmp_path)
     assert late, "the cancel waited for three feedback messages"
-    assert result.status == Status.PASSED, [(c.id, c.observed) for c in result.checks if not c.passed] or result.message
-    observed = {c.id: c.observed for c in result.checks}
     assert "tried again after: the goal" in observed["cancel_accepted"], observed["cancel_accepted"]
     # the request reached the server in its last period (CANCELED at the end) or, on a slow run, after it
     assert ("m from its end: the cancel request arrived in the point's last step" in observed["cancel_accepted"]
