@@ -8,9 +8,10 @@ output, the quote the node publishes after the script's ``ros2 param set``
 (messages sent after the node accepted the change, by send stamps), and the
 file ``cli/params_dump.yaml`` (the ``ros2 param dump`` format). A second run, in
 a fresh graph with no ``ros2`` daemon, starts the node only as long after the
-script's first ``ros2`` command joined the graph as the first run took (3 to 10 s; kit.scripts.run_script_first):
-a script that waits until ``ros2 node list`` shows the node still gets its
-quote, one that asks at once does not. The first run also shows whether the
+script's first ``ros2`` command joined the graph as the first run took (3 to 10 s; kit.scripts.run_script_first),
+beside another node listed from the start (:data:`OTHER_NODE`, as in a learner's terminal where more
+than one node runs): a script that waits until ``ros2 node list`` shows *the* node still gets its
+quote; one that asks at once, or stops waiting when any node is listed, does not. The first run also shows whether the
 wait ends when the node shows: its first ``ros2 param`` command must come
 soon after the script starts (the node is listed all along), not after the
 whole loop of tries (a loop whose test never matches waits its 10 tries,
@@ -32,12 +33,17 @@ from ros2course.kit.mystery import (
     CONFIGURABLE_PERIOD,
     CONFIGURABLE_TOPIC,
     ConfigurableQuotePublisher,
+    MysteryNode,
 )
 from ros2course.kit.quotes import amazing_quote, short
 
 SCRIPT = "cli/inspect_params.sh"
 DUMP = "cli/params_dump.yaml"
 NODE = f"/{CONFIGURABLE_NODE}"
+#: Another node in the late run's graph from the start (the tutorial's demo talker's name): a wait that ends
+#: when ``ros2 node list`` shows any node, not the one the script asks about, ends too soon (held-out seed 23
+#: left ``grep -q ""`` alive while the late node was the only one to list).
+OTHER_NODE = "talker"
 #: The value the lesson names for ``ros2 param set`` (tutorial ch. 24.5, shortened).
 NEW_QUOTE = "You got a good-guy heart. That's just who you are."
 SET_COMMAND = f"ros2 param set {NODE} quote \"{NEW_QUOTE}\""
@@ -78,8 +84,8 @@ CHECKS = [
     Check("dump_after_set", "The dump holds the new quote (dumped after the set)", 1,
           "dump after the set, so the file saves the node's parameters as they are now", needs=("dump_file",)),
     Check("waits_for_node", "It waits for a node that joins only after the script's questions (as long after "
-          "its first ros2 command as its first run took, 3 to 10 s) before asking it (ros2 node list until it "
-          "shows the node)", 1, WAIT_HINT, needs=("got",)),
+          "its first ros2 command as its first run took, 3 to 10 s; another node is listed from the start) before "
+          "asking it (ros2 node list until it shows the node)", 1, WAIT_HINT, needs=("got",)),
 ]
 
 
@@ -136,8 +142,8 @@ class FirstParamCommand:
 
 def judge_late_node(s: Session, path, delay: float, asked_at: float | None) -> None:
     """Record ``waits_for_node``: run the script again in a fresh graph with no daemon; the node starts
-    ``delay`` s (``kit.scripts.late_by``) after the script's first ``ros2`` command joined the graph; its quote must be
-    printed. And the wait must end when the node shows: in the first run, where it was listed all along, the
+    ``delay`` s (``kit.scripts.late_by``) after the script's first ``ros2`` command joined the graph, while
+    :data:`OTHER_NODE` runs there from the start; its quote must be printed. And the wait must end when the node shows: in the first run, where it was listed all along, the
     script's first ``ros2 param`` command came ``asked_at`` s after the script started (None: none was seen),
     at most :data:`PROMPT`. Run after :func:`judge_dump`: the file this run may write is not the one judged."""
     if (blocker := s.unmet_need("waits_for_node")) is not None:
@@ -146,14 +152,17 @@ def judge_late_node(s: Session, path, delay: float, asked_at: float | None) -> N
     with s.part("late node", own_graph=True):
         late: list[ConfigurableQuotePublisher] = []
         msg_type = amazing_quote(s)
+        MysteryNode(s, OTHER_NODE)  # listed from the start; closed when the part ends
         run = scripts.run_script_first(s, path, lambda: late.append(ConfigurableQuotePublisher(s, msg_type)),
                                        late_by=delay, timeout=TIMEOUT,
                                        until=lambda out: bool(late) and late[0].initial_quote in out)
         got = late[0].initial_quote in run.run.stdout
         prompt = asked_at is None or asked_at <= PROMPT
         observed = f"{run.describe()}; " + ("it printed the node's quote" if got else
-                                            f"it never printed the node's quote ({short(late[0].initial_quote)}); "
-                                            f"it printed: {scripts.excerpt(run.run.stdout + run.run.stderr)}")
+                                            f"it never printed the node's quote ({short(late[0].initial_quote)}; "
+                                            f"/{OTHER_NODE} was listed from the start: does the wait look for "
+                                            f"{NODE} itself?); it printed: "
+                                            f"{scripts.excerpt(run.run.stdout + run.run.stderr)}")
         if not prompt:
             observed += (f"; in the first run, where the daemon listed {NODE} from the start, the first ros2 param "
                          f"command came only {asked_at:.1f} s after the script started: the wait did not end when "
@@ -161,7 +170,7 @@ def judge_late_node(s: Session, path, delay: float, asked_at: float | None) -> N
                          "node name, then break)")
         s.record("waits_for_node", got and prompt, observed,
                  f"the script waits for {NODE}, which joins {delay:.1f} s after its first ros2 command (as long as "
-                 f"its first run took), and prints its quote (ros2 param get); and it stops waiting once ros2 node "
+                 f"its first run took; /{OTHER_NODE} runs from the start), and prints its quote (ros2 param get); and it stops waiting once ros2 node "
                  f"list shows the node (first ros2 param command within {PROMPT:.0f} s when the node is there "
                  "from the start)")
 
