@@ -513,6 +513,13 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
     assert cell.endswith("; earlier held-out samples: seed 2 (%s): 90 %% of 30; **all 2 held-out samples under this "
                          "grader together: 85 %% of 60 counted** (seeds 2, 3)" % earlier[0]["date"]), cell
     assert mut.score_text(lesson).endswith("; held-out 80 % of 30 (all 2 under this grader: 85 % of 60)")
+    # a draw that finds no mutant left (every one shown by the first sample or a held-out one) says so,
+    # never "n/a of 0": the README's cell, dev validate's line and the doc's cell
+    spent = mut.LessonMutation("demo-lesson", 60, [], [], True, sample=30, seed=4, held_out=True, pool=0)
+    mut.write_score(lesson, spent)
+    assert mut.score_text(lesson).endswith("; held-out: none left to draw (all 2 under this grader: 85 % of 60)")
+    assert "no held-out mutant left to draw" in mut.describe_score(lesson)
+    assert module._held_out_cell(mut.recorded_score(lesson)).startswith("none left to draw: ")
 
 
 @pytest.mark.parametrize("triage,words", [

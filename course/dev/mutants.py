@@ -1358,13 +1358,17 @@ def score_text(lesson: Lesson) -> str:
     triage and its counted denominator, ``too small`` below :data:`MIN_COUNTED`, the held-out sample's score
     when one was drawn (with every held-out sample under the current grader pooled, when there are two or
     more: :func:`pooled_held_out`), ``stale`` when the grader changed since
-    (``"raw 62 %, triaged 100 % of 13 counted (too small); held-out 80 % of 25; stale"``), or ``"not measured"``."""
+    (``"raw 62 %, triaged 100 % of 13 counted (too small); held-out 80 % of 25; stale"``), ``held-out: none left to
+    draw`` when the last held-out draw found no mutant no earlier sample had shown, or ``"not measured"``."""
     row = recorded_score(lesson)
     if row is None:
         return "not measured"
     held = row.held_out
-    held_text = ("" if held is None else f"; held-out {_share(held.tuned)} of {held.counted}"
-                 + (" (too small)" if held.too_small else "") + ("" if not held.stale or row.stale else " (stale)"))
+    if held is not None and not held.data.get("graded"):  # a draw of 0: every mutant was shown by an earlier sample
+        held_text = "; held-out: none left to draw"
+    else:
+        held_text = ("" if held is None else f"; held-out {_share(held.tuned)} of {held.counted}"
+                     + (" (too small)" if held.too_small else "") + ("" if not held.stale or row.stale else " (stale)"))
     pooled = pooled_held_out(row.data, held.data.get("fingerprint") or "") if held is not None else None
     if pooled is not None and pooled.samples > 1 and not held.stale:
         held_text += f" (all {pooled.samples} under this grader: {_share(pooled.score)} of {pooled.counted})"
@@ -1387,6 +1391,9 @@ def describe_score(lesson: Lesson) -> str:
     held = row.held_out
     if held is None:
         held_text = "; no held-out sample"
+    elif not held.data.get("graded"):
+        held_text = ("; no held-out mutant left to draw (the first sample and earlier held-out samples showed every "
+                     "one; a new figure would be tuned)")
     else:
         uncovered = len(held.data.get("survivors", []))
         held_text = (f"; held-out sample {_share(held.tuned)} ({held.data['killed']} of {held.counted} counted, "
