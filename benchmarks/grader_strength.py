@@ -83,7 +83,7 @@ def _held_out_cell(row) -> str:
                     + ", ".join(earlier))
         return "not drawn"
     data = held.data
-    if not data.get("graded"):  # nothing left to draw: the lesson's every mutant was shown by an earlier sample
+    if held.spent:  # nothing left to draw: the lesson's every mutant was shown by an earlier sample
         earlier = _earlier_held_out(data.get("earlier", []), data.get("fingerprint"))
         if not earlier and row.data.get("graded") and row.data.get("graded") == row.data.get("pool"):
             return (f"none left to draw: the first sample graded every mutant (seed {data.get('seed', '?')} drew "

@@ -1319,6 +1319,11 @@ class RecordedScore:
         """Fewer than :data:`MIN_COUNTED` counted mutants."""
         return self.counted < MIN_COUNTED
 
+    @property
+    def spent(self) -> bool:
+        """A (held-out) draw that found no mutant to grade: every one was shown by an earlier sample."""
+        return not self.data.get("graded")
+
 
 def _figures(data: dict, now: str) -> RecordedScore:
     """Raises ValueError, KeyError or TypeError on a malformed record."""
@@ -1364,7 +1369,7 @@ def score_text(lesson: Lesson) -> str:
     if row is None:
         return "not measured"
     held = row.held_out
-    if held is not None and not held.data.get("graded"):  # a draw of 0: every mutant was shown by an earlier sample
+    if held is not None and held.spent:
         held_text = "; held-out: none left to draw"
     else:
         held_text = ("" if held is None else f"; held-out {_share(held.tuned)} of {held.counted}"
@@ -1391,7 +1396,7 @@ def describe_score(lesson: Lesson) -> str:
     held = row.held_out
     if held is None:
         held_text = "; no held-out sample"
-    elif not held.data.get("graded"):
+    elif held.spent:
         held_text = ("; no held-out mutant left to draw (the first sample and earlier held-out samples showed every "
                      "one; a new figure would be tuned)")
     else:
