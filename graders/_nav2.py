@@ -189,7 +189,8 @@ def interrupted_run(s: Session, check_id: str, path: Any, node: str, label: str)
     first = start()
 
     def ctrl_c() -> None:
-        if kit.sigint_exit(s, check_id, first) or not _callback_shutdown_race(first):
+        # again: the kit's rule for rclpy's race inside spin() judges a fresh run, as for the race in a callback
+        if kit.sigint_exit(s, check_id, first, again=lambda: start(".again")) or not _callback_shutdown_race(first):
             return
         kit.sigint_exit(s, check_id, start(".again"))
         s.amend(check_id, observed=f"{s.results[check_id].observed} (a fresh run: the first Ctrl+C hit rclpy's own "
