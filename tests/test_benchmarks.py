@@ -171,3 +171,23 @@ def test_grader_strength_retriage_applies_todays_triage_to_the_last_runs_outcome
     module.retriage(["print-forever-node"], out)
     again = json.loads(score_path.read_text())
     assert (again["date"], again["course_version"], again["fingerprint"]) == ("2026-01-02", "0.9.0", "f00"), again
+
+
+PRINT_FOREVER = "src/python_package_with_a_node/python_package_with_a_node/print_forever_node.py"
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(300)
+def test_sigint_window_benchmark_sorts_the_ends_of_a_node_pressed_at_once() -> None:
+    data = json.loads(_bench("sigint_window.py", "print-forever-node", PRINT_FOREVER, "--runs", "2", "--json").stdout)
+    assert sum(data["ends"].values()) == 2, data
+    # the reference catches both exceptions: each end is clean, or rclpy's own race (the kit's allowance)
+    assert set(data["ends"]) <= {"clean", "rclpy race"}, data
+
+
+def test_sigint_window_benchmark_names_an_unknown_fixture() -> None:
+    proc = subprocess.run([sys.executable, str(BENCH / "sigint_window.py"), "print-forever-node", PRINT_FOREVER,
+                           "--fixture", "no-such-fixture"], cwd=ROOT, capture_output=True, text=True, timeout=120,
+                          stdin=subprocess.DEVNULL, check=False)
+    assert proc.returncode == 2 and "no fixture 'no-such-fixture'" in proc.stderr, proc.stderr[-2000:]
+    assert "Traceback" not in proc.stderr
