@@ -715,6 +715,23 @@ def test_rclpys_own_ctrl_c_race_is_told_from_the_learners_traceback() -> None:
     assert not rclpy_shutdown_race("")
 
 
+def test_a_launched_nodes_traceback_is_read_without_launchs_prefix() -> None:
+    """CI, stop 65: under ``ros2 launch`` each line reads ``[name-1] ...``; the traceback was cut at its first
+    frame, so rclpy's race in a launched node (the launch-and-run reference) was taken for the learner's."""
+    from ros2course.run.process import last_traceback, rclpy_shutdown_race
+
+    lines = _RACE.strip().splitlines()
+    launched = "[INFO] [launch]: All log files can be found below /root/.ros/log\n" + "".join(
+        f"[talker-1] {line}\n" + ("[listener-2]   File \"other.py\", line 9\n" if i == 2 else "")
+        for i, line in enumerate(lines)) + "[ERROR] [talker-1]: process has died [pid 7, exit code 1]\n"
+    trace = last_traceback(launched)
+    assert trace == _RACE.strip() and rclpy_shutdown_race(trace)
+    learner = launched.replace("RCLError: failed to initialize wait set: the given context is not valid",
+                               "ValueError: bad")
+    assert last_traceback(learner).splitlines()[-1] == "rclpy._rclpy_pybind11.ValueError: bad, at ./src/rcl/wait.c:82"
+    assert not rclpy_shutdown_race(last_traceback(learner))
+
+
 def test_a_program_whose_parent_died_before_the_parent_death_signal_was_armed_never_runs(tmp_path):
     """prctl(PR_SET_PDEATHSIG) in the child cannot see a parent that died before it: the guard after it checks.
 

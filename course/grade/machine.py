@@ -53,6 +53,7 @@ class MachineView:
         self.base_env = base_env
         self.trusted_interfaces = trusted_interfaces
         self.processes: list[LearnerProcess] = []
+        self._tmpdir: Path | None = None
         self._overlay: dict[str, str] | None = None
 
     # --- the workspace -----------------------------------------------------------------------------
@@ -182,7 +183,15 @@ class MachineView:
             label: names its log files (``<label>.stdout.log`` in ``log_dir``).
             cwd: its working directory (default: the workspace root).
             options: :class:`~ros2course.run.process.LearnerProcess`'s own (``ros_sigint``, ``deadline`` in seconds).
+
+        Its ``TMPDIR`` is the check's own ``log_dir/tmp`` (a :meth:`submission_folder`), so what it leaves in a
+        temporary folder stays with the check's logs instead of in the machine's ``/tmp``: ``ros2 launch``
+        writes each node's parameters to a ``launch_params_*`` file there (launch_ros's
+        ``evaluate_parameters``, ``tempfile.NamedTemporaryFile(delete=False)``) and never removes it.
         """
+        if self._tmpdir is None:
+            self._tmpdir = self.submission_folder("tmp")
+        env = {**env, "TMPDIR": str(self._tmpdir)}
         proc = LearnerProcess(list(argv), env, self.log_dir, label, cwd=cwd or self.workspace_root, **options)
         self.processes.append(proc)
         return proc

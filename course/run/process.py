@@ -132,6 +132,11 @@ class OutputDrain(threading.Thread):
             return (bytes(self.head).decode(errors="replace") + "\n[...]\n" + bytes(self.tail).decode(errors="replace"))
 
 
+#: The prefix ``ros2 launch`` puts on each line a launched process prints (``[talker-1] ``: its executable's name,
+#: a dash and its process number; launch's ``launch.actions.ExecuteProcess`` output handlers).
+_LAUNCH_PREFIX = re.compile(r"^\[([^\]\s]+-\d+)\] ?")
+
+
 def last_traceback(text: str) -> str:
     """The last Python traceback (or C++ terminate message) in ``text``, or "".
 
@@ -140,14 +145,27 @@ def last_traceback(text: str) -> str:
     or from ``terminate called after throwing ...`` through its indented
     ``what():`` line. Output printed after it (the other stream, a later
     ``print``) is not part of it. Formats: CPython's ``traceback`` module,
-    libstdc++'s verbose terminate handler.
+    libstdc++'s verbose terminate handler. A traceback a process printed
+    under ``ros2 launch`` has each line prefixed with ``[<name>-<n>] ``;
+    it is read from that process's lines only (another process's lines may
+    interleave), with the prefix removed, so its exception line is found
+    (CI, stop 65: a launched node's traceback was cut at its first frame,
+    and rclpy's own shutdown race in it was taken for the learner's).
     """
     for marker, ends_with_unindented in (("Traceback (most recent call last):", True),
                                          ("terminate called after throwing", False)):
         index = text.rfind(marker)
         if index < 0:
             continue
-        first, *rest = text[index:].splitlines()
+        start = text.rfind("\n", 0, index) + 1
+        launched = _LAUNCH_PREFIX.match(text[start:index])
+        if launched and text[start:index] == launched.group(0):
+            tag = launched.group(1)
+            rest = [_LAUNCH_PREFIX.sub("", line, count=1) for line in text[index:].splitlines()[1:]
+                    if (m := _LAUNCH_PREFIX.match(line)) and m.group(1) == tag]
+        else:
+            rest = text[index:].splitlines()[1:]
+        first = text[index:].splitlines()[0]
         kept = [first]
         for line in rest:
             if line[:1] in (" ", "\t"):
