@@ -179,7 +179,8 @@ def wait_for_node(s: Session, check_id: str, proc: LearnerProcess, node: str, ti
 
 
 def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
-                sigint_timeout: float = 3.0, again: Callable[[], LearnerProcess | None] | None = None) -> bool:
+                sigint_timeout: float = 3.0, again: Callable[[], LearnerProcess | None] | None = None, *,
+                second_press: bool = True) -> bool:
     """Press Ctrl+C (SIGINT) and record ``check_id``: exit code 0, no traceback, within ``sigint_timeout`` s.
 
     The kit's one Ctrl+C step (declared with :func:`ros2course.kit.checks.ctrl_c`).
@@ -211,6 +212,13 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
       instance hits the race too (about 1 in 10,000), that exit counts as clean.
 
     A node that ignores Ctrl+C still fails (it ignores the second one too).
+    A program that starts its node again after Ctrl+C (``main()`` called twice,
+    e.g. once at import and once from the entry point) also ends only on the
+    second press; with ``again``, a run that needed a second Ctrl+C is
+    judged on a fresh instance that gets one press only (``second_press=False``),
+    so the restarting program fails and a correct node fails only when rclpy
+    misses the press in both runs (about 1 in 10,000 at the 1 % measured).
+    Without ``again`` the second press still counts, as a user would press it.
     """
     if isinstance(proc, ProgramRun):
         return judge_interrupted_run(s, check_id, proc, sigint_timeout)
@@ -222,7 +230,7 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
     presses = 0
     with s.phase("stop"):
         begin = time.monotonic()
-        for wait in (sigint_timeout / 2, sigint_timeout / 2):
+        for wait in ((sigint_timeout / 2, sigint_timeout / 2) if second_press else (sigint_timeout,)):
             presses += 1
             if not proc.interrupt():
                 break
@@ -234,9 +242,11 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
     twice = " (after a second Ctrl+C: rclpy missed the first one)" if presses > 1 else ""
     if not exited:
         return s.record(check_id, False,
-                        f"still running {sigint_timeout:.0f} s after SIGINT (sent twice); stopped with "
-                        f"{report.signal_used or 'SIGKILL'}", expected,
-                        "don't swallow Ctrl+C in a loop: let rclpy.spin() return and exit main()")
+                        f"still running {sigint_timeout:.0f} s after SIGINT (sent {'twice' if second_press else 'once'}"
+                        f"); stopped with {report.signal_used or 'SIGKILL'}", expected,
+                        "don't swallow Ctrl+C in a loop: let rclpy.spin() return and exit main()" if second_press else
+                        "one Ctrl+C must end the program: don't start the node again after it (is main() called "
+                        "twice, once at import and once by the entry point?), and don't swallow it in a loop")
     if report.traceback:
         if report.returncode != 0 and rclpy_shutdown_race(report.traceback):
             fresh = again() if again is not None else None
@@ -253,4 +263,12 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
         return s.record(check_id, False, f"exit code {report.returncode} with a traceback: {last}", expected)
     if report.returncode != 0:
         return s.record(check_id, False, f"exit code {report.returncode} after SIGINT", expected)
+    if presses > 1 and again is not None:
+        fresh = again()
+        if fresh is not None:  # rclpy missed the first press, or the program started its node again: one press now
+            passed = sigint_exit(s, check_id, fresh, sigint_timeout, second_press=False)
+            if check_id in s.results:
+                s.amend(check_id, observed=f"{s.results[check_id].observed} (a second run, given one Ctrl+C: the "
+                        "first run ended only after a second Ctrl+C)")
+            return passed
     return s.record(check_id, True, f"exit code 0, {seconds:.2f} s after SIGINT{twice}", expected)
