@@ -67,7 +67,7 @@ def _row(f, sample: int) -> str:
 def _earlier_held_out(history: list[dict], fingerprint: str | None) -> list[str]:
     """One phrase per earlier held-out sample (:func:`ros2course.dev.mutants.held_out_history`'s entries):
     its seed, date and score, and whether it was graded under another grader than ``fingerprint``."""
-    return [f"seed {e.get('seed', '?')} ({e.get('date', '?')}): " + (
+    return [f"seed {e.get('seed', '?')} ({e['family'] + ', ' if e.get('family') else ''}{e.get('date', '?')}): " + (
         f"{_pct(e['score'])} of {e.get('counted')}" if e.get("score") is not None else "none counted")
         + ("" if e.get("fingerprint") == fingerprint else " under an earlier grader")
         for e in history]
@@ -94,7 +94,9 @@ def _held_out_cell(row) -> str:
                    "; the lesson has too few mutants for a held-out score"))
     uncovered = len(data.get("survivors", []))
     text = (f"{_pct(held.tuned)} of {held.counted} counted (raw {_pct(held.raw)}; {data['graded']} graded of the "
-            f"{data.get('pool', '?')} no earlier sample took, seed {data.get('seed', '?')}; {uncovered} uncovered)")
+            f"{data.get('pool', '?')} no earlier sample took, seed {data.get('seed', '?')}"
+            f"{', ' + data['family'] + ' mutants' if data.get('family', mut.UNIVERSALMUTATOR) != mut.UNIVERSALMUTATOR else ''}"
+            f"; {uncovered} uncovered)")
     if held.too_small:
         text += f" (too small to judge: {held.counted} < {mut.MIN_COUNTED})"
     if held.stale and not row.stale:
@@ -215,7 +217,10 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "held-out sample of the lesson scored, which a new one never hides), graded afterwards with "
         "`mutation.yaml`'s rules and entries as they were, nothing added; its survivors no rule or entry covers "
         "count against it and are listed below for the author (strengthen the grader, or add a rule that "
-        "applies from the next held-out sample on). Where more than one held-out sample was graded under the lesson's current grader, the cell also gives **all of them together** (killed / counted over every one): a lesson is judged by that pooled figure, never by the best or the latest sample, since drawing samples until one scores well would narrow the sample to a lucky one. **Fingerprint**: each run records its lesson's "
+        "applies from the next held-out sample on). Where a lesson's universalmutator mutants were all shown by "
+        "earlier samples, a held-out sample can come from a second tool, cosmic-ray's core operators on the "
+        "lesson's Python files (`--held-out 30 --family cosmic-ray`; the cell says \"cosmic-ray mutants\"): "
+        "mutants nobody looked at while the rules were written, an edit both tools make counted once. Where more than one held-out sample was graded under the lesson's current grader, the cell also gives **all of them together** (killed / counted over every one): a lesson is judged by that pooled figure, never by the best or the latest sample, since drawing samples until one scores well would narrow the sample to a lucky one. **Fingerprint**: each run records its lesson's "
         "grader fingerprint (`ros2course.grade.fingerprint`: the grader and the course modules it imports, the kit "
         "and grading engine modules they or the engine import, lesson.yaml, the reference files); a row measured under another fingerprint (the "
         "grader, engine or reference changed since) is **stale**, with the date of its run, and `dev validate` "
@@ -392,6 +397,10 @@ def main() -> int:
                              "outcomes, sooner")
     parser.add_argument("--held-out-seed", type=int, default=None, metavar="S",
                         help="with --held-out: its seed (default: --seed + 1)")
+    parser.add_argument("--family", default="universalmutator", metavar="TOOL",
+                        help="with --held-out: the tool whose mutants it draws, universalmutator or cosmic-ray (its "
+                             "core operators on the Python files: fresh mutants for a lesson whose universalmutator "
+                             "pool earlier samples spent)")
     parser.add_argument("--readme", action="store_true",
                         help="only rewrite README.md's lesson table from the scores the lessons recorded (no mutants graded)")
     args = parser.parse_args()
@@ -419,7 +428,8 @@ def main() -> int:
     chosen = [lesson_id for lesson_id in chosen if not nothing_to_mutate(lesson_id)]  # listed as such in the doc
     found = mutate_lessons(chosen, args.out, sample=args.sample, seed=args.seed, jobs=args.jobs,
                            console=console, held_out=args.held_out,
-                           held_out_seed=args.held_out_seed, first_loss=args.first_loss) if chosen else []
+                           held_out_seed=args.held_out_seed, first_loss=args.first_loss,
+                           family=args.family) if chosen else []
     render(found, console, diffs=False)
     speedup_file = args.out / "speedup.txt"
     speedup = speedup_file.read_text(encoding="utf-8").strip() if speedup_file.is_file() else ""

@@ -767,6 +767,9 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
                                                "first sample, with the triage as it is, recorded beside it (issue 37).")] = None,
            held_out_seed: Annotated[Optional[int], typer.Option(
                "--held-out-seed", metavar="S", help="Random seed of --held-out (default: --seed + 1).")] = None,
+           family: Annotated[str, typer.Option(
+               "--family", metavar="TOOL", help="With --held-out: whose mutants it draws, universalmutator or "
+                                                "cosmic-ray (core operators, Python files only).")] = "universalmutator",
            jobs: Annotated[int, typer.Option("--jobs", "-j", help="Mutants graded at once.")] = 1,
            out: Annotated[Path, typer.Option("--out", "-o", metavar="DIR", help="Cache, batch outputs, mutation.json and survivors' diffs.")] = Path("mutation-out"),
            timeout: Annotated[float, typer.Option("--timeout", help="Wall-clock limit per mutant, seconds.")] = 300.0,
@@ -776,7 +779,8 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
            as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON instead of the table.")] = False,
            course: CourseOpt = None,
            ) -> None:
-    """Grade mutants of each lesson's reference (universalmutator) with its grader: killed, survived, score."""
+    """Grade mutants of each lesson's reference (universalmutator; cosmic-ray for a held-out sample) with its grader:
+    killed, survived, score."""
     _choose_course(None, course)
     _ros()
     from ros2course.dev.mutate import as_dicts, mutate_lessons, render  # noqa: PLC0415 - start time, see the imports
@@ -787,7 +791,7 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
         raise CourseError(f"--held-out must be at least 1 (got {held_out})", "e.g. --held-out 30")
     found = mutate_lessons(lesson_ids, out, sample=sample, seed=seed, jobs=jobs, timeout=timeout,
                            console=stderr_console(), held_out=held_out, held_out_seed=held_out_seed,
-                           first_loss=first_loss)
+                           first_loss=first_loss, family=family)
     if as_json:
         import json  # noqa: PLC0415 - start time, see the imports
 

@@ -772,3 +772,36 @@ def test_a_second_held_out_sample_leaves_out_every_mutant_an_earlier_one_showed(
     assert mut.recorded_held_out(lesson) == {m.key for m in second} | {m.key for m in third} | {m.key for m in fourth}
     fifth = mut.held_out_sample(mutants, first, 30, 5, mut.recorded_first_sample(lesson) | mut.recorded_held_out(lesson))
     assert not fifth
+
+
+def test_cosmic_ray_mutants_are_another_tools_edits_compiled_and_fixed_in_order(tmp_path: Path) -> None:
+    """The second family (issue 37: fresh held-out pools): cosmic-ray's core operators on a Python file, in a
+    fixed order; none that fails to compile or compiles to the original's bytecode; an edit universalmutator
+    also makes has the same key, so no sample draws it twice."""
+    pytest.importorskip("cosmic_ray")
+    source = tmp_path / "node.py"
+    source.write_text("def ready(count):\n    if count == 2:\n        return True\n    return count * 3 > 4\n")
+    made = mut.generate_cosmic_ray_mutants(tmp_path, "node.py")
+    assert made == mut.generate_cosmic_ray_mutants(tmp_path, "node.py") and len(made) > 10
+    assert len({m.content for m in made}) == len(made)
+    for m in made:
+        compile(m.content, "node.py", "exec")
+        assert m.content != source.read_text() and m.file == "node.py" and m.line in (2, 3, 4)
+    edits = {(m.line, m.original.strip(), m.mutated.strip()) for m in made}
+    assert (2, "if count == 2:", "if count != 2:") in edits  # ReplaceComparisonOperator_Eq_NotEq
+    assert (3, "return True", "return False") in edits  # ReplaceTrueWithFalse
+    same = mut.Mutant("node.py", 2, "    if count == 2:", "    if count != 2:", "")
+    assert same.key in {m.key for m in made}
+
+
+def test_a_family_other_than_universalmutator_draws_only_held_out_samples(tmp_path: Path) -> None:
+    """--family: a bad name and a first sample from cosmic-ray are one-line errors before anything is graded."""
+    from ros2course.dev.mutate import mutate_lessons
+    from ros2course.errors import CourseError
+
+    with pytest.raises(CourseError, match="unknown mutant family 'pitmutator'"):
+        mutate_lessons([LESSON], tmp_path, sample=5, family="pitmutator")
+    pytest.importorskip("cosmic_ray")
+    with pytest.raises(CourseError, match="draws a held-out sample"):
+        mutate_lessons([LESSON], tmp_path, sample=5, family="cosmic-ray")
+    assert not any(tmp_path.iterdir())

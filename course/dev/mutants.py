@@ -7,7 +7,12 @@ rules: its Python rules with its own trivial-compiler-equivalence check for
 ``.py`` files, which drops mutants that do not compile or compile to the same
 bytecode; its C/C++ rules for C and C++ sources; its universal rules for
 scripts, CMake, package.xml and anything else). This module never invents a
-mutation of its own.
+mutation of its own. A second *family* of mutants, for held-out samples of
+lessons whose universalmutator mutants every earlier sample has already shown
+(issue 37), comes from `cosmic-ray <https://github.com/sixty-north/cosmic-ray>`_'s
+core operators on the lesson's Python files (:func:`generate_cosmic_ray_mutants`):
+another tool's operators (parso syntax trees, not regular expressions), so a
+sample of them was never looked at while the rules were written.
 
 Each mutant is graded by the lesson's grader (through the batch engine,
 :mod:`ros2course.dev.mutate`) and classified (:func:`classify`):
@@ -80,6 +85,7 @@ import functools
 import hashlib
 import importlib.util
 import json
+import marshal
 import math
 import operator
 import random
@@ -88,6 +94,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import warnings
 import xml.etree.ElementTree as ET  # noqa: N817 - the standard alias
 from pathlib import Path
 from typing import Any
@@ -117,6 +124,10 @@ LANGUAGES = {".py": "python", ".c": "c", ".h": "c", ".cpp": "cpp", ".cc": "cpp",
 #: Languages whose mutants universalmutator itself checks (compiles, drops invalid and duplicate ones).
 #: C/C++ cannot be compiled alone (ROS headers): their broken mutants are counted as killed by build.
 CHECKED_LANGUAGES = {"python"}
+#: Where mutants come from: universalmutator (every sample until issue 37's pools were spent, and every first
+#: sample) and cosmic-ray (held-out samples only: ``--held-out N --family cosmic-ray``).
+UNIVERSALMUTATOR, COSMIC_RAY = "universalmutator", "cosmic-ray"
+FAMILIES = (UNIVERSALMUTATOR, COSMIC_RAY)
 #: Files never mutated: generated, binary or bookkeeping.
 _SKIP_PARTS = {"__pycache__", "build", "install", "log", ".git"}
 _SKIP_SUFFIXES = {".pyc", ".png", ".jpg", ".gif", ".zip", ".gz", ".so", ".a", ".o", ".mcap", ".db3"}
@@ -582,15 +593,19 @@ class Mutant:
                 "mutant": self.mutated}
 
 
-def require_tool() -> None:
-    """Raise unless universalmutator can be imported here.
+def require_tool(family: str = UNIVERSALMUTATOR) -> None:
+    """Raise unless the tool of ``family`` (one of :data:`FAMILIES`) can be imported here.
 
     Raises:
         MissingRequirement: with the install command as the hint.
+        CourseError: ``family`` is not one of :data:`FAMILIES`.
     """
-    if importlib.util.find_spec("universalmutator") is None:
-        raise MissingRequirement("dev mutate needs universalmutator, which is not installed",
-                                 "pip install 'ros2course[mutate]' (or pip install universalmutator)")
+    if family not in FAMILIES:
+        raise CourseError(f"unknown mutant family {family!r}", f"one of: {', '.join(FAMILIES)}")
+    module = "cosmic_ray" if family == COSMIC_RAY else "universalmutator"
+    if importlib.util.find_spec(module) is None:
+        raise MissingRequirement(f"dev mutate needs {family}, which is not installed",
+                                 f"pip install 'ros2course[mutate]' (or pip install {family})")
 
 
 def _own_starter(lesson: Lesson) -> dict[str, Path]:
@@ -853,11 +868,13 @@ def generate_file_mutants(reference: Path, rel: str) -> list[Mutant]:
     return out
 
 
-def generate_mutants(lesson: Lesson, reference: Path, config: MutationConfig | None = None) -> list[Mutant]:
-    """The mutants of every file of :func:`lesson_files`, file by file.
+def generate_mutants(lesson: Lesson, reference: Path, config: MutationConfig | None = None,
+                     family: str = UNIVERSALMUTATOR) -> list[Mutant]:
+    """The mutants of every file of :func:`lesson_files`, file by file, made by ``family``'s tool
+    (:data:`FAMILIES`; cosmic-ray mutates only the ``.py`` files among them).
 
     Raises:
-        MissingRequirement: universalmutator is not installed.
+        MissingRequirement: the family's tool is not installed.
         LessonFormatError: a malformed ``mutation.yaml``.
         CourseError: the lesson has no file to mutate, or universalmutator failed.
     """
@@ -865,7 +882,68 @@ def generate_mutants(lesson: Lesson, reference: Path, config: MutationConfig | N
     if not files:
         raise CourseError(f"lesson {lesson.id} has no reference file to mutate",
                           f"name them with 'files:' in {triage_path(lesson)}")
+    if family == COSMIC_RAY:
+        return [m for rel in files if rel.endswith(".py") for m in generate_cosmic_ray_mutants(reference, rel)]
     return [m for rel in files for m in generate_file_mutants(reference, rel)]
+
+
+def _bytecode(text: str, rel: str) -> bytes | None:
+    """The marshalled code object of Python source ``text`` (None when it does not compile)."""
+    try:
+        with warnings.catch_warnings():  # an `is` with a literal (a comparison operator's mutant) warns
+            warnings.simplefilter("ignore", SyntaxWarning)
+            return marshal.dumps(compile(text, rel, "exec", dont_inherit=True))
+    except (SyntaxError, ValueError):
+        return None
+
+
+def generate_cosmic_ray_mutants(reference: Path, rel: str) -> list[Mutant]:
+    """Every mutant cosmic-ray's core operators make of the Python file ``reference/rel``, in a fixed order
+    (operators by name, then each operator's occurrences in the file).
+
+    Each mutant is one operator applied at one place (``cosmic_ray.mutating.mutate_code``), as cosmic-ray
+    applies them. Dropped, as for universalmutator's Python mutants (its trivial-compiler-equivalence
+    check): a mutant that does not compile, that compiles to the original's bytecode, or that another
+    operator already made; the operators that need a user's variable names (``core/VariableInserter``,
+    ``core/VariableReplacer``) are not used. A mutant universalmutator also makes has the same
+    :attr:`Mutant.key` (the key is the path and the edit), so a sample never draws an edit twice.
+
+    Raises:
+        MissingRequirement: cosmic-ray is not installed.
+    """
+    require_tool(COSMIC_RAY)
+    from cosmic_ray import plugins  # noqa: PLC0415 - optional: the mutate extra
+    from cosmic_ray.mutating import mutate_code  # noqa: PLC0415
+
+    original = (reference / rel).read_text(encoding="utf-8")
+    base = _bytecode(original, rel)
+    lines = original.splitlines(keepends=True)
+    out: list[Mutant] = []
+    made: set[str] = {original}
+    seen: dict[tuple[str, str], int] = {}
+    number = 0
+    for name in sorted(plugins.operator_names()):
+        try:
+            operator = plugins.get_operator(name)()
+        except TypeError:  # needs arguments: the variable names to insert or replace
+            continue
+        occurrence = 0
+        while (content := mutate_code(original, operator, occurrence)) is not None:
+            occurrence += 1
+            if content in made:
+                continue
+            made.add(content)
+            code = _bytecode(content, rel)
+            if code is None or code == base:
+                continue
+            line, old, new = _changed_line(lines, content.splitlines(keepends=True))
+            if equivalent_mutant(rel, original, content, old, new):
+                continue
+            number += 1
+            index = seen.get((old.strip(), new.strip()), 0)
+            seen[(old.strip(), new.strip())] = index + 1
+            out.append(Mutant(rel, line, old, new, content, number, index))
+    return out
 
 
 def sample_mutants(mutants: list[Mutant], count: int | None, seed: int) -> list[Mutant]:
@@ -1029,6 +1107,7 @@ class LessonMutation:
         sample, seed: the sample's size asked for (None: all) and its seed.
         held_out: this is a held-out sample (:func:`held_out_sample`), not the first (tuned) one.
         pool: the mutants the sample was drawn from (the first sample's left out for a held-out one).
+        family: the tool that made the sample's mutants (:data:`FAMILIES`).
     """
 
     lesson: str
@@ -1043,6 +1122,7 @@ class LessonMutation:
     seed: int = 1
     held_out: bool = False
     pool: int = 0
+    family: str = UNIVERSALMUTATOR
 
     def count(self, outcome: str) -> int:
         """How many graded mutants ended with ``outcome`` (one of :data:`OUTCOMES`)."""
@@ -1089,7 +1169,7 @@ class LessonMutation:
                 "timed_out": self.count(TIMED_OUT),
                 "grader_error": self.count(GRADER_ERROR), "score": self.score, "raw": self.raw,
                 "seconds": round(self.seconds, 1), "set_aside": self.set_aside, "sample": self.sample,
-                "seed": self.seed, "held_out": self.held_out, "pool": self.pool,
+                "seed": self.seed, "held_out": self.held_out, "pool": self.pool, "family": self.family,
                 "rules_on_killed": self.rules_on_killed(),
                 "stale": [e.model_dump(exclude_none=True) for e in self.stale],
                 "mutants": [g.to_dict() for g in self.graded]}
@@ -1230,6 +1310,7 @@ def write_held_out(lesson: Lesson, found: LessonMutation, measured: dict[str, st
     rows = _outcome_rows(found)
     earlier = sorted(recorded_held_out(lesson) - {row["key"] for row in rows})  # left out of this sample
     outcomes["held_out"] = {"fingerprint": measured["fingerprint"], "date": measured["date"], "seed": found.seed,
+                            **({"family": found.family} if found.family != UNIVERSALMUTATOR else {}),
                             "mutants": rows, **({"earlier": earlier} if earlier else {})}
     return _write_records(lesson, score, outcomes)
 
@@ -1247,7 +1328,8 @@ EARLIER_KEY = "held_out_earlier"
 
 def held_out_history(score: dict) -> list[dict]:
     """The figures of every held-out sample recorded in ``score`` (a ``mutation-score.json`` object), oldest
-    first: each earlier one's ``{seed, date, fingerprint, graded, counted, killed, score}`` (``score`` None when
+    first: each earlier one's ``{seed, date, fingerprint, graded, counted, killed, score}`` (and ``family`` when
+    its mutants are not universalmutator's; ``score`` None when
     nothing was counted), then the current one's. [] when none was drawn. Drawing a new held-out sample keeps
     this list (issue 37: once looked at, a held-out sample is tuned; the figures before it still stand)."""
     held, before = score.get("held_out"), list(score.get(EARLIER_KEY, []))
@@ -1255,6 +1337,8 @@ def held_out_history(score: dict) -> list[dict]:
         return before + (list(held.get("earlier", [])) if isinstance(held, dict) else [])
     counted = held.get("graded", 0) - held.get("killed_by_build", 0) - held.get("triaged", 0)
     return [*before, *held.get("earlier", []), {"seed": held.get("seed"), "date": held.get("date"),
+                                       **({"family": held["family"]} if held.get("family", UNIVERSALMUTATOR)
+                                          != UNIVERSALMUTATOR else {}),
                                        "fingerprint": held.get("fingerprint"), **course_part(held),
                                        "graded": held.get("graded"),
                                        "counted": counted, "killed": held.get("killed"),

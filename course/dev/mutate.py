@@ -65,7 +65,8 @@ def _student(mutant: mut.Mutant) -> str:
 
 def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: int = 1, jobs: int = 1,
                   timeout: float = 300.0, console: Console | None = None, held_out: int | None = None,
-                  held_out_seed: int | None = None, first_loss: bool = False) -> mut.LessonMutation:
+                  held_out_seed: int | None = None, first_loss: bool = False,
+                  family: str = mut.UNIVERSALMUTATOR) -> mut.LessonMutation:
     """Generate, grade (what the cache does not know) and classify one lesson's mutants.
 
     Args:
@@ -80,18 +81,24 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
             (:func:`ros2course.dev.mutants.held_out_sample`): drawn with ``held_out_seed`` (default
             ``seed + 1``) from the mutants neither the first sample (``sample``, ``seed``) nor the lesson's
             recorded first run nor a held-out sample recorded before took, triaged with ``mutation.yaml`` as it is.
+        family: where the held-out sample's mutants come from (:data:`ros2course.dev.mutants.FAMILIES`); the
+            first sample is always universalmutator's.
         first_loss: each mutant's grading stops at its first lost point
             (:class:`~ros2course.grade.checklist.StopWhen` ``any_loss``): the same outcome (a mutant is killed when
             any check loses points), sooner; its ``lost`` checks are then those lost before the stop.
 
     Raises:
-        MissingRequirement: universalmutator, or what the lesson requires, is not installed.
+        MissingRequirement: universalmutator (or ``family``'s tool), or what the lesson requires, is not installed.
         LessonFormatError: a malformed ``mutation.yaml``.
         CourseError: no file to mutate; the batch refuses the lesson.
     """
     begin = time.monotonic()
     config = mut.load_config(lesson)
     mut.require_tool()
+    mut.require_tool(family)
+    if family != mut.UNIVERSALMUTATOR and held_out is None:
+        raise CourseError(f"the first sample is universalmutator's: --family {family} draws a held-out sample",
+                          f"add --held-out 30 (after the first sample: ros2course dev mutate {lesson.id} --sample 30)")
     root = Path(tempfile.mkdtemp(prefix=f"ros2course-mutate-{lesson.id}-"))
     root.chmod(0o755)
     try:
@@ -100,10 +107,15 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         candidates, aside = mut.set_aside(every, config)
         picked = mut.sample_mutants(candidates, sample, seed)
         pool = len(candidates)
+        generated = len(every)
         if held_out is not None:
             # neither the first sample nor a held-out sample recorded before (its survivors were looked at)
             recorded = mut.recorded_first_sample(lesson) | mut.recorded_held_out(lesson)
             first = picked
+            if family != mut.UNIVERSALMUTATOR:  # another tool's mutants; an edit both make has one key
+                others = mut.generate_mutants(lesson, reference, config, family)
+                candidates, aside = mut.set_aside(others, config)
+                generated, every = len(others), [*every, *others]
             picked = mut.held_out_sample(candidates, first, held_out,
                                          seed + 1 if held_out_seed is None else held_out_seed, recorded)
             taken = {m.key for m in first} | recorded
@@ -115,7 +127,8 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         this_run: dict[str, dict[str, Any]] = {}  # outcomes of this run that are never cached (UNFINISHED)
         graded_now: dict[str, dict[str, Any]] = {}  # outcomes of this run that are cached
         if console is not None:
-            console.print(f"{lesson.id}: {len(every)} mutants generated"
+            console.print(f"{lesson.id}: {generated} mutants generated"
+                          + (f" by {family}" if family != mut.UNIVERSALMUTATOR else "")
                           + (f" ({len(aside)} of rules marked set_aside, set aside)" if aside else "")
                           + f", {len(picked)} picked"
                           + (f" for the held-out sample, from the {pool} no recorded sample took"
@@ -171,18 +184,19 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
         for key, diff in diffs.items():
             folder.mkdir(parents=True, exist_ok=True)
             (folder / f"{key}.diff").write_text(diff, encoding="utf-8")
-        return mut.LessonMutation(lesson.id, len(every), graded, stale, len(picked) < len(candidates),
+        return mut.LessonMutation(lesson.id, generated, graded, stale, len(picked) < len(candidates),
                                   time.monotonic() - begin, diffs, set_aside=len(aside), sample=sample,
                                   seed=seed if held_out is None else (seed + 1 if held_out_seed is None
                                                                       else held_out_seed),
-                                  held_out=held_out is not None, pool=pool)
+                                  held_out=held_out is not None, pool=pool, family=family)
     finally:
         shutil.rmtree(root, ignore_errors=True)
 
 
 def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, seed: int = 1, jobs: int = 1,
                    timeout: float = 300.0, console: Console | None = None, held_out: int | None = None,
-                   held_out_seed: int | None = None, first_loss: bool = False) -> list[mut.LessonMutation]:
+                   held_out_seed: int | None = None, first_loss: bool = False,
+                   family: str = mut.UNIVERSALMUTATOR) -> list[mut.LessonMutation]:
     """:func:`mutate_lesson` for each lesson, then ``OUT/mutation.json`` (written even when one lesson fails).
 
     With ``held_out``, each lesson's held-out sample instead of its first one (:func:`mutate_lesson`), recorded
@@ -200,6 +214,10 @@ def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, 
         raise CourseError(f"--sample must be at least 1 (got {sample})", "e.g. --sample 30")
     if held_out is not None and held_out < 1:
         raise CourseError(f"--held-out must be at least 1 (got {held_out})", "e.g. --held-out 30")
+    mut.require_tool(family)
+    if family != mut.UNIVERSALMUTATOR and held_out is None:
+        raise CourseError(f"the first sample is universalmutator's: --family {family} draws a held-out sample",
+                          "add --held-out 30")
     catalog = load_catalog()
     lessons = [catalog.get(i) for i in lesson_ids]
     if held_out is not None:
@@ -214,7 +232,7 @@ def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, 
     try:
         for lesson in lessons:
             found.append(mutate_lesson(lesson, out, sample, seed, jobs, timeout, console, held_out, held_out_seed,
-                                       first_loss))
+                                       first_loss, family))
             mut.write_score(lesson, found[-1])
     finally:
         before = mut.read_json_object(out / RESULT_FILE)
