@@ -116,6 +116,23 @@ def test_submission_programs_write_only_into_submission_folders() -> None:
         shutil.rmtree(root, ignore_errors=True)
 
 
+def test_a_learner_programs_temporary_files_stay_in_the_checks_log_folder(tmp_path: Path) -> None:
+    """Every learner process gets TMPDIR = log_dir/tmp: ros2 launch's launch_params_* files (launch_ros never
+    removes them) stay with the check's logs, not in the machine's /tmp (found cleaning up after stop 65)."""
+    from ros2course.kit.programs import run_program  # noqa: PLC0415 - the course's kit, on the content root
+
+    log_dir = tmp_path / "log"
+    session = GradingSession(load_catalog().get("launch-files"), [Check("a", "a", 1)], tmp_path, log_dir,
+                             {"PATH": "/usr/bin:/bin", "TMPDIR": "/tmp"})
+    try:
+        made = run_program(session, ["/bin/sh", "-c", 'mktemp launch_params_XXXX --tmpdir'], "probe",
+                           env={"PATH": "/usr/bin:/bin", "TMPDIR": "/tmp"})
+        path = Path(made.stdout.strip())
+        assert made.returncode == 0 and path.parent == log_dir / "tmp" and path.is_file()
+    finally:
+        session.close()
+
+
 @pytest.mark.ros
 @pytest.mark.timeout(600)
 def test_a_forgotten_depend_on_an_earlier_lessons_package_loses_the_same_points_in_grade(tmp_path: Path) -> None:
