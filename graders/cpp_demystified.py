@@ -41,6 +41,9 @@ DEMO = "demystified_demo"
 #: The harness sources (this grader's own data folder).
 DATA = Path(__file__).resolve().parent / "data" / "cpp_demystified"
 
+#: What libstdc++'s std::out_of_range from ``vector::at(22)`` says of the index (its ``_M_range_check``: the
+#: text is the library's, not the learner's, so the demo's own wording stays free).
+WHAT_22 = "which is 22"
 RUN_TIMEOUT = 10.0  # seconds for the demo and for each harness test (each takes milliseconds)
 #: Seconds of observation the contract needs (benchmarks read it): none, every program runs to its end.
 WINDOW = 0.0
@@ -56,6 +59,10 @@ CHECKS = [
           "target_include_directories(" + DEMO + " PRIVATE include)", part="cmake"),
     Check("demo_runs", f"./{DEMO} runs to the end with exit code 0", 1,
           f"run ./build/{DEMO} yourself: an exception that nothing catches or a crash ends it with a non-zero code",
+          needs=("cmake_build",), part="cmake"),
+    Check("demo_out_of_range", f"./{DEMO} prints the what() of the std::out_of_range that .at(22) throws", 1,
+          "call values.at(22) inside try, and in catch (const std::out_of_range& e) print e.what(): the "
+          "exception's own text says which index was asked for and how many elements there are",
           needs=("cmake_build",), part="cmake"),
     Check("harness_compiles", "src/demystified.cpp compiles with the course's test harness (the fixed signatures)", 1,
           "keep the four functions of demystified.hpp exactly as the lesson declares them (namespace "
@@ -105,6 +112,13 @@ def _judge_cmake(s: Session, project: Path) -> None:
              + (f"; it printed {len(out)} line(s), the last: {out[-1].strip()[:120]!r}" if out else "")
              + (f"; stderr: {problem!r}" if run.returncode != 0 and problem else ""),
              f"exit code 0 within {RUN_TIMEOUT:.0f} s")
+    said = [line.strip() for line in (run.stdout + "\n" + run.stderr).splitlines() if WHAT_22 in line]
+    s.record("demo_out_of_range", bool(said),
+             f"it printed {said[0][:160]!r}" if said else
+             f"none of its {len(out)} line(s) holds the exception's text" + (f"; the first: {out[0].strip()[:120]!r}"
+                                                                             if out else ""),
+             f"a line with e.what() of .at(22)'s std::out_of_range (libstdc++: 'vector::_M_range_check: __n "
+             f"({WHAT_22}) >= this->size() (which is 4)')")
 
 
 def _scratch_copy(s: Session, project: Path) -> Path:
