@@ -289,3 +289,31 @@ def test_a_built_lessons_draws_follow_its_packages_contents_as_the_build_read_th
 
     assert draws(before.content_digest) == draws(after.content_digest)
     assert draws(before.content_digest) != draws("0" * 64)
+
+
+def test_processes_started_from_parts_at_once_share_one_temporary_folder(tmp_path: Path) -> None:
+    """Parts run in threads of their own (kit.parts.at_once): the folder is made once, never emptied under a
+    running process (stop 66's measurement: a FileExistsError, 'the grader failed', in 13 of 30 gradings)."""
+    import threading
+
+    log_dir = tmp_path / "log"
+    session = GradingSession(load_catalog().get("launch-files"), [Check("a", "a", 1)], tmp_path, log_dir,
+                             {"PATH": "/usr/bin:/bin"})
+    folders, failures, start = [], [], threading.Barrier(8)
+
+    def make() -> None:
+        start.wait()
+        try:
+            folders.append(session.machine.process(["/bin/true"], {"PATH": "/usr/bin:/bin"}, "p").env["TMPDIR"])
+        except Exception as error:  # noqa: BLE001 - the race shows as any exception
+            failures.append(error)
+
+    threads = [threading.Thread(target=make) for _ in range(8)]
+    try:
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        assert not failures and set(folders) == {str(log_dir / "tmp")} and (log_dir / "tmp").is_dir()
+    finally:
+        session.close()

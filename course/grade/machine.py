@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import shutil
 import subprocess
+import threading
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
@@ -54,6 +55,7 @@ class MachineView:
         self.trusted_interfaces = trusted_interfaces
         self.processes: list[LearnerProcess] = []
         self._tmpdir: Path | None = None
+        self._tmpdir_lock = threading.Lock()  # a lesson's parts start processes from threads of their own
         self._overlay: dict[str, str] | None = None
 
     # --- the workspace -----------------------------------------------------------------------------
@@ -184,13 +186,15 @@ class MachineView:
             cwd: its working directory (default: the workspace root).
             options: :class:`~ros2course.run.process.LearnerProcess`'s own (``ros_sigint``, ``deadline`` in seconds).
 
-        Its ``TMPDIR`` is the check's own ``log_dir/tmp`` (a :meth:`submission_folder`), so what it leaves in a
+        Its ``TMPDIR`` is the check's own ``log_dir/tmp`` (a :meth:`submission_folder`, made once for every
+        process of the check, whichever part's thread starts one first), so what it leaves in a
         temporary folder stays with the check's logs instead of in the machine's ``/tmp``: ``ros2 launch``
         writes each node's parameters to a ``launch_params_*`` file there (launch_ros's
         ``evaluate_parameters``, ``tempfile.NamedTemporaryFile(delete=False)``) and never removes it.
         """
-        if self._tmpdir is None:
-            self._tmpdir = self.submission_folder("tmp")
+        with self._tmpdir_lock:  # made once: a second submission_folder() would empty it under a running process
+            if self._tmpdir is None:
+                self._tmpdir = self.submission_folder("tmp")
         env = {**env, "TMPDIR": str(self._tmpdir)}
         proc = LearnerProcess(list(argv), env, self.log_dir, label, cwd=cwd or self.workspace_root, **options)
         self.processes.append(proc)
