@@ -805,3 +805,16 @@ def test_a_family_other_than_universalmutator_draws_only_held_out_samples(tmp_pa
     with pytest.raises(CourseError, match="draws a held-out sample"):
         mutate_lessons([LESSON], tmp_path, sample=5, family="cosmic-ray")
     assert not any(tmp_path.iterdir())
+
+
+def test_the_mutant_cache_is_never_wider_than_the_grader_fingerprint(monkeypatch) -> None:
+    """Stop 66: grade/machine.py was in the fingerprint but not in the cache key, so outcomes graded before a fix
+    to it were reused after it. A change to any file the fingerprint covers changes the cache key."""
+    from ros2course.grade import fingerprint
+    from ros2course.lesson.catalog import load_catalog
+
+    lesson = load_catalog().get(LESSON)
+    before = mut.grader_hash(lesson)
+    assert before == mut.grader_hash(lesson)
+    monkeypatch.setattr(fingerprint, "grader_fingerprint", lambda lesson: "0" * 16)
+    assert mut.grader_hash(lesson) != before

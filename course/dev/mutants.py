@@ -1012,13 +1012,22 @@ def _hash_files(paths: list[Path], root: Path) -> str:
 
 
 def grader_hash(lesson: Lesson) -> str:
-    """sha256 of the grader's source: its module, its course's helper modules and data, the kit and the engine that runs it."""
+    """sha256 of the grader's source: its module, its course's helper modules and data, the kit and the engine that
+    runs it, and every file the lesson's grader fingerprint covers (:func:`ros2course.grade.fingerprint.grader_files`).
+
+    A cached outcome is reused only under the same hash, so the cache can never be wider than the fingerprint:
+    stop 66 found it narrower (``grade/machine.py`` was not in it), and outcomes graded before a fix to that
+    file were reused after it.
+    """
+    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+
     root = lesson.course.root
     paths = [root / "graders" / f"{lesson.grader}.py", *(root / "graders").glob("_*.py"),
              *(root / "graders" / "data").rglob("*"), *(Path(__file__).resolve().parents[1] / "kit").rglob("*.py"),
              *(Path(__file__).resolve().parents[1] / "grade").glob("engine.py"),
              *(Path(__file__).resolve().parents[1] / "run").rglob("*.py")]
-    return _hash_files(paths, root if all(p.is_relative_to(root) for p in paths) else Path("/"))
+    files = _hash_files(paths, root if all(p.is_relative_to(root) for p in paths) else Path("/"))
+    return hashlib.sha256(f"{files}\0{grader_fingerprint(lesson)}".encode()).hexdigest()
 
 
 def course_hash(reference: Path, lesson: Lesson) -> str:
