@@ -913,7 +913,7 @@ def generate_cosmic_ray_mutants(reference: Path, rel: str) -> list[Mutant]:
     """
     require_tool(COSMIC_RAY)
     from cosmic_ray import plugins  # noqa: PLC0415 - optional: the mutate extra
-    from cosmic_ray.mutating import mutate_code  # noqa: PLC0415
+    from cosmic_ray.mutating import mutate_code  # noqa: PLC0415 - optional: the mutate extra
 
     original = (reference / rel).read_text(encoding="utf-8")
     base = _bytecode(original, rel)
