@@ -715,6 +715,40 @@ def test_rclpys_own_ctrl_c_race_is_told_from_the_learners_traceback() -> None:
     assert not rclpy_shutdown_race("")
 
 
+_TIMER_RACE = '''Traceback (most recent call last):
+  File "/ws/install/pkg/lib/python3.11/site-packages/pkg/client.py", line 80, in main
+    rclpy.spin_once(node, timeout_sec=0.1)
+  File "/venv/lib/python3.11/site-packages/rclpy/__init__.py", line 263, in spin_once
+    executor.spin_once(timeout_sec=timeout_sec)
+  File "/venv/lib/python3.11/site-packages/rclpy/executors.py", line 845, in spin_once
+    self._spin_once_impl(timeout_sec)
+  File "/venv/lib/python3.11/site-packages/rclpy/executors.py", line 568, in _wait_for_ready_callbacks
+    timeout_timer = Timer(None, None, timeout_nsec, self._clock, context=self._context)
+  File "/venv/lib/python3.11/site-packages/rclpy/timer.py", line 60, in __init__
+    self.__timer = _rclpy.Timer(
+rclpy._rclpy_pybind11.RCLError: failed to create timer: the given context is not valid, either rcl_init() was \
+not called or rcl_shutdown() was called., at /project/src/rcl/guard_condition.c:67
+'''
+
+
+def test_the_timeout_timer_of_spin_once_is_rclpys_race_too() -> None:
+    """CI of stop 66: ``spin_once(timeout_sec=)`` makes a timer inside the executor; Ctrl+C landing there raised
+    ``failed to create timer`` from rclpy/timer.py (the actions-client reference lost sigint_exit once). The same
+    RCLError from a timer the program makes in a callback (a program frame between the executor and rclpy) is
+    the program's."""
+    from ros2course.run.process import last_traceback, rclpy_shutdown_race
+
+    assert rclpy_shutdown_race(last_traceback(_TIMER_RACE))
+    in_callback = _TIMER_RACE.replace(
+        '    timeout_timer = Timer(None, None, timeout_nsec, self._clock, context=self._context)\n',
+        '    handler()\n  File "/ws/install/pkg/lib/python3.11/site-packages/pkg/client.py", line 40, in on_goal\n'
+        '    self.create_timer(1.0, self.tick)\n  File "/venv/lib/python3.11/site-packages/rclpy/node.py", '
+        'line 1600, in create_timer\n    timer = Timer(callback, callback_group, timer_period_nsec, clock)\n')
+    assert "pkg/client.py\", line 40" in last_traceback(in_callback)
+    assert not rclpy_shutdown_race(last_traceback(in_callback))
+    assert not rclpy_shutdown_race(_TIMER_RACE.replace("rclpy/executors.py", "rclpy/node.py"))
+
+
 def test_a_launched_nodes_traceback_is_read_without_launchs_prefix() -> None:
     """CI, stop 65: under ``ros2 launch`` each line reads ``[name-1] ...``; the traceback was cut at its first
     frame, so rclpy's race in a launched node (the launch-and-run reference) was taken for the learner's."""

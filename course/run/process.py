@@ -182,18 +182,33 @@ def last_traceback(text: str) -> str:
 def rclpy_shutdown_race(trace: str) -> bool:
     """Whether ``trace`` (a traceback, :func:`last_traceback`) is rclpy's own Ctrl+C race, not the program's.
 
-    A SIGINT that lands while Jazzy's rclpy (7.1) builds its wait set makes
-    ``rclpy.spin()`` raise ``RCLError: failed to initialize wait set: the given
-    context is not valid``, even in a node that catches ``KeyboardInterrupt``
-    and ``ExternalShutdownException`` (a known shutdown race, discussed in
-    ros2/ros2cli PR #854). True when the last frame is inside
-    ``rclpy/executors.py`` and the exception is that RCLError.
+    A SIGINT that lands while Jazzy's rclpy (7.1) executor makes what it
+    waits with makes ``rclpy.spin()`` / ``rclpy.spin_once()`` raise
+    ``RCLError: ... the given context is not valid``, even in a node that
+    catches ``KeyboardInterrupt`` and ``ExternalShutdownException`` (a known
+    shutdown race, discussed in ros2/ros2cli PR #854). Two places are known:
+    the wait set (``failed to initialize wait set``, raised in
+    ``rclpy/executors.py``) and the timeout timer that
+    ``Executor._wait_for_ready_callbacks`` makes for ``spin_once(timeout_sec=)``
+    (``failed to create timer``, raised in ``rclpy/timer.py`` called from
+    ``rclpy/executors.py``; CI of stop 66: the actions-client reference).
+
+    True when the exception is that RCLError and every frame after the
+    program's last one lies inside the ``rclpy`` package, one of them in
+    ``rclpy/executors.py``: the executor itself hit it, with no program code
+    (a callback making a timer after shutdown) in between.
     """
     lines = [line for line in trace.strip().splitlines() if line.strip()]
     frames = [line for line in lines if line.lstrip().startswith('File "')]
     last = lines[-1] if lines else ""
-    return (bool(frames) and "rclpy/executors.py" in frames[-1] and "RCLError" in last
-            and ("context is not valid" in last or "context is invalid" in last))
+    if not frames or "RCLError" not in last or not ("context is not valid" in last or "context is invalid" in last):
+        return False
+    inside = []  # the frames after the program's last one
+    for frame in reversed(frames):
+        if "/rclpy/" not in frame:
+            break
+        inside.append(frame)
+    return bool(inside) and any("/rclpy/executors.py" in frame for frame in inside)
 
 
 #: A ROS log line at ERROR or FATAL severity as rcutils prints it (``[ERROR] [1732000000.1] [node]: text``).
