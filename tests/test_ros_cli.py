@@ -190,7 +190,9 @@ def test_ros2_launch_of_the_courses_launch_file(built_solutions, session, ros_en
     launch = LearnerProcess(
         ["bash", "-c", "source install/setup.bash && exec ros2 launch "
          "python_package_that_uses_parameters_and_launch_files peanut_butter_falcon_quote_publisher_launch.py"],
-        ros_env, tmp_path / "logs", "ros2_launch", cwd=built_solutions).start()
+        # launch_ros writes the node's parameters to a launch_params_* file in TMPDIR and never removes it
+        # (the engine gives learner processes the check's own TMPDIR: grade/machine.py); here, the test's folder
+        {**ros_env, "TMPDIR": str(tmp_path)}, tmp_path / "logs", "ros2_launch", cwd=built_solutions).start()
     try:
         assert session.wait_for_node("peanut_butter_falcon_quote_publisher_node", 30.0,
                                      abort=lambda: launch.poll() is not None), launch.stderr()
