@@ -76,7 +76,7 @@ def grade(s: Session) -> None:
         # allows it for a node; CI, stop 54: the reference lost sigint_exit once through `grade`); the script can
         # not be run again here without its nodes' first run, so that exit counts as clean, as sigint_exit does
         s.record("sigint_exit", True, f"{run.ending()}; one of its nodes printed rclpy's own shutdown race "
-                 "(RCLError inside rclpy.spin when Ctrl+C lands as it builds its wait set: not your code)",
+                 "(RCLError inside rclpy's executor when Ctrl+C lands as it works: not your code)",
                  f"exit code 0 within {EXIT_SECONDS:.0f} s of SIGINT (Ctrl+C), no traceback, after everything it "
                  "started has stopped")
         return

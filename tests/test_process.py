@@ -734,19 +734,33 @@ not called or rcl_shutdown() was called., at /project/src/rcl/guard_condition.c:
 def test_the_timeout_timer_of_spin_once_is_rclpys_race_too() -> None:
     """CI of stop 66: ``spin_once(timeout_sec=)`` makes a timer inside the executor; Ctrl+C landing there raised
     ``failed to create timer`` from rclpy/timer.py (the actions-client reference lost sigint_exit once). The same
-    RCLError from a timer the program makes in a callback (a program frame between the executor and rclpy) is
-    the program's."""
+    shutdown landing in a callback the executor runs (the callback's publish or new timer) is the race too; rclpy
+    called from ``main`` after the program's own shutdown (no executor frame) is the program's."""
     from ros2course.run.process import last_traceback, rclpy_shutdown_race
 
     assert rclpy_shutdown_race(last_traceback(_TIMER_RACE))
-    in_callback = _TIMER_RACE.replace(
-        '    timeout_timer = Timer(None, None, timeout_nsec, self._clock, context=self._context)\n',
-        '    handler()\n  File "/ws/install/pkg/lib/python3.11/site-packages/pkg/client.py", line 40, in on_goal\n'
-        '    self.create_timer(1.0, self.tick)\n  File "/venv/lib/python3.11/site-packages/rclpy/node.py", '
-        'line 1600, in create_timer\n    timer = Timer(callback, callback_group, timer_period_nsec, clock)\n')
+    head = _TIMER_RACE.split('    timeout_timer = ')[0].rsplit("  File", 1)[0]  # main -> spin_once -> executor
+    callback = ('  File "/venv/lib/python3.11/site-packages/rclpy/executors.py", line 600, in _execute_timer\n'
+                '    await await_or_execute(tmr.callback)\n'
+                '  File "/ws/install/pkg/lib/python3.11/site-packages/pkg/client.py", line 40, in on_tick\n'
+                '    self.publisher.publish(msg)\n')
+    publish = ('  File "/venv/lib/python3.11/site-packages/rclpy/publisher.py", line 70, in publish\n'
+               '    self.__publisher.publish(msg)\n')
+    error = "rclpy._rclpy_pybind11.RCLError: Failed to publish: publisher's context is invalid, at publisher.c:284\n"
+    in_callback = head + callback + publish + error
     assert "pkg/client.py\", line 40" in last_traceback(in_callback)
-    assert not rclpy_shutdown_race(last_traceback(in_callback))
-    assert not rclpy_shutdown_race(_TIMER_RACE.replace("rclpy/executors.py", "rclpy/node.py"))
+    assert rclpy_shutdown_race(last_traceback(in_callback))
+    assert not rclpy_shutdown_race(last_traceback(head + callback + error))  # raised by the program itself
+    after_own_shutdown = '''Traceback (most recent call last):
+  File "/ws/install/pkg/lib/python3.11/site-packages/pkg/client.py", line 80, in main
+    node.create_timer(1.0, node.tick)
+  File "/venv/lib/python3.11/site-packages/rclpy/node.py", line 1600, in create_timer
+    timer = Timer(callback, callback_group, timer_period_nsec, clock, context=self.context)
+  File "/venv/lib/python3.11/site-packages/rclpy/timer.py", line 60, in __init__
+    self.__timer = _rclpy.Timer(
+rclpy._rclpy_pybind11.RCLError: failed to create timer: the given context is not valid, at guard_condition.c:67
+'''
+    assert not rclpy_shutdown_race(last_traceback(after_own_shutdown))
 
 
 def test_a_launched_nodes_traceback_is_read_without_launchs_prefix() -> None:

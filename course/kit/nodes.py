@@ -202,8 +202,8 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
     * a node with nothing to wake it (no timer: a server, a subscriber) can
       miss the shutdown and keep waiting; if it still runs after half the
       timeout it gets a second Ctrl+C, as a user would press it again;
-    * ``spin()`` can raise ``RCLError: ... context is not valid`` from inside
-      rclpy's executor instead of ``ExternalShutdownException``. That exit
+    * ``spin()`` / ``spin_once()`` can raise ``RCLError: ... context is not valid`` from inside
+      rclpy's executor (:func:`~ros2course.run.process.rclpy_shutdown_race`) instead of ``ExternalShutdownException``. That exit
       says nothing about the program (one that catches only
       ``KeyboardInterrupt`` ends the same way in that run), so with ``again``
       (a callable that starts a fresh instance of the same program, running
@@ -254,11 +254,11 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
                 passed = sigint_exit(s, check_id, fresh, sigint_timeout)
                 if check_id in s.results:
                     s.amend(check_id, observed=f"{s.results[check_id].observed} (a second run: the first Ctrl+C "
-                            "hit rclpy's own shutdown race, RCLError inside rclpy.spin, which says nothing about "
+                            "hit rclpy's own shutdown race, RCLError inside rclpy's executor, which says nothing about "
                             "your code)")
                 return passed
             return s.record(check_id, True, f"exit code {report.returncode}, {seconds:.2f} s after SIGINT{twice}, "
-                            "with rclpy's own shutdown race (RCLError inside rclpy.spin: not your code)", expected)
+                            "with rclpy's own shutdown race (RCLError inside rclpy's executor: not your code)", expected)
         last = report.traceback.strip().splitlines()[-1]
         return s.record(check_id, False, f"exit code {report.returncode} with a traceback: {last}", expected)
     if report.returncode != 0:

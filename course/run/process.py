@@ -193,22 +193,23 @@ def rclpy_shutdown_race(trace: str) -> bool:
     (``failed to create timer``, raised in ``rclpy/timer.py`` called from
     ``rclpy/executors.py``; CI of stop 66: the actions-client reference).
 
-    True when the exception is that RCLError and every frame after the
-    program's last one lies inside the ``rclpy`` package, one of them in
-    ``rclpy/executors.py``: the executor itself hit it, with no program code
-    (a callback making a timer after shutdown) in between.
+    The same shutdown can land while the executor runs one of the program's
+    callbacks, whose next rclpy call (a publish, a timer it makes) raises
+    ``RCLError: ... context is invalid`` from inside rclpy.
+
+    True when the exception is that RCLError, raised inside the ``rclpy``
+    package (its last frame), while the executor was running (a frame in
+    ``rclpy/executors.py``). A program that calls rclpy after its own
+    ``rclpy.shutdown()`` in ``main`` (no executor frame) is not matched. A
+    check that can start the program again (``kit.nodes.sigint_exit``'s
+    ``again``) judges a fresh run instead, so a program whose own callback
+    really fails this way fails there.
     """
     lines = [line for line in trace.strip().splitlines() if line.strip()]
     frames = [line for line in lines if line.lstrip().startswith('File "')]
     last = lines[-1] if lines else ""
-    if not frames or "RCLError" not in last or not ("context is not valid" in last or "context is invalid" in last):
-        return False
-    inside = []  # the frames after the program's last one
-    for frame in reversed(frames):
-        if "/rclpy/" not in frame:
-            break
-        inside.append(frame)
-    return bool(inside) and any("/rclpy/executors.py" in frame for frame in inside)
+    return (bool(frames) and "/rclpy/" in frames[-1] and any("/rclpy/executors.py" in f for f in frames)
+            and "RCLError" in last and ("context is not valid" in last or "context is invalid" in last))
 
 
 #: A ROS log line at ERROR or FATAL severity as rcutils prints it (``[ERROR] [1732000000.1] [node]: text``).
