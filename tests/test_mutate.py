@@ -807,14 +807,22 @@ def test_a_family_other_than_universalmutator_draws_only_held_out_samples(tmp_pa
     assert not any(tmp_path.iterdir())
 
 
-def test_the_mutant_cache_is_never_wider_than_the_grader_fingerprint(monkeypatch) -> None:
+def test_the_mutant_cache_is_never_wider_than_the_grader_fingerprint(monkeypatch, tmp_path) -> None:
     """Stop 66: grade/machine.py was in the fingerprint but not in the cache key, so outcomes graded before a fix
-    to it were reused after it. A change to any file the fingerprint covers changes the cache key."""
+    to it were reused after it. The key is made from the fingerprint's own list of files: a change to any of
+    them (an engine module among them) changes the key."""
     from ros2course.grade import fingerprint
     from ros2course.lesson.catalog import load_catalog
 
     lesson = load_catalog().get(LESSON)
+    files = fingerprint.grader_files(lesson)
+    assert any(p.parts[-2:] == ("grade", "machine.py") for p in files)
     before = mut.grader_hash(lesson)
     assert before == mut.grader_hash(lesson)
-    monkeypatch.setattr(fingerprint, "grader_fingerprint", lambda lesson: "0" * 16)
-    assert mut.grader_hash(lesson) != before
+    extra = tmp_path / "engine_module.py"
+    extra.write_text("A = 1\n", encoding="utf-8")
+    monkeypatch.setattr(fingerprint, "grader_files", lambda lesson: [*files, extra])
+    with_extra = mut.grader_hash(lesson)
+    assert with_extra != before
+    extra.write_text("A = 2\n", encoding="utf-8")
+    assert mut.grader_hash(lesson) != with_extra

@@ -857,15 +857,27 @@ def generate_file_mutants(reference: Path, rel: str) -> list[Mutant]:
     out: list[Mutant] = []
     seen: dict[tuple[str, str], int] = {}
     for number, content in sorted(found):
-        if content == original:
-            continue
-        line, old, new = _changed_line(lines, content.splitlines(keepends=True))
-        if invalid_mutant(rel, content) or equivalent_mutant(rel, original, content, old, new):
-            continue
-        index = seen.get((old.strip(), new.strip()), 0)
-        seen[(old.strip(), new.strip())] = index + 1
-        out.append(Mutant(rel, line, old, new, content, number, index))
+        if content != original and not invalid_mutant(rel, content):
+            if (mutant := _keyed_mutant(rel, original, lines, content, number, seen)) is not None:
+                out.append(mutant)
     return out
+
+
+def _keyed_mutant(rel: str, original: str, lines: list[str], content: str, number: int,
+                  seen: dict[tuple[str, str], int]) -> Mutant | None:
+    """The :class:`Mutant` that ``content`` (a whole mutated file) is of ``original`` (``lines``: its lines, ends
+    kept), or None when :func:`equivalent_mutant` says it changes nothing; the one keying step of both families'
+    generators, so an edit both tools make gets the same :attr:`Mutant.key`.
+
+    ``seen`` counts the file's mutants per (original line, mutated line), both stripped: the count so far is the
+    new mutant's ``line_index``, and it is updated here.
+    """
+    line, old, new = _changed_line(lines, content.splitlines(keepends=True))
+    if equivalent_mutant(rel, original, content, old, new):
+        return None
+    index = seen.get((old.strip(), new.strip()), 0)
+    seen[(old.strip(), new.strip())] = index + 1
+    return Mutant(rel, line, old, new, content, number, index)
 
 
 def generate_mutants(lesson: Lesson, reference: Path, config: MutationConfig | None = None,
@@ -936,13 +948,9 @@ def generate_cosmic_ray_mutants(reference: Path, rel: str) -> list[Mutant]:
             code = _bytecode(content, rel)
             if code is None or code == base:
                 continue
-            line, old, new = _changed_line(lines, content.splitlines(keepends=True))
-            if equivalent_mutant(rel, original, content, old, new):
-                continue
-            number += 1
-            index = seen.get((old.strip(), new.strip()), 0)
-            seen[(old.strip(), new.strip())] = index + 1
-            out.append(Mutant(rel, line, old, new, content, number, index))
+            if (mutant := _keyed_mutant(rel, original, lines, content, number + 1, seen)) is not None:
+                number += 1
+                out.append(mutant)
     return out
 
 
@@ -1012,22 +1020,19 @@ def _hash_files(paths: list[Path], root: Path) -> str:
 
 
 def grader_hash(lesson: Lesson) -> str:
-    """sha256 of the grader's source: its module, its course's helper modules and data, the kit and the engine that
-    runs it, and every file the lesson's grader fingerprint covers (:func:`ros2course.grade.fingerprint.grader_files`).
+    """sha256 (hex) over the paths and contents of every file the lesson's grader fingerprint covers
+    (:func:`ros2course.grade.fingerprint.grader_files`: the grader and its helper modules and data, the engine
+    modules they import, ``lesson.yaml``, the reference): the mutant cache's key of the grader.
 
-    A cached outcome is reused only under the same hash, so the cache can never be wider than the fingerprint:
-    stop 66 found it narrower (``grade/machine.py`` was not in it), and outcomes graded before a fix to that
-    file were reused after it.
+    One list for both, so a cached outcome is reused exactly when the fingerprint is the same: stop 66 found a
+    hand-made list here narrower than the fingerprint (``grade/machine.py`` was not in it), and outcomes graded
+    before a fix to that file were reused after it.
     """
-    from ros2course.grade.fingerprint import grader_fingerprint  # noqa: PLC0415 - reads the course's files
+    from ros2course.grade.fingerprint import grader_files  # noqa: PLC0415 - reads the course's files
 
     root = lesson.course.root
-    paths = [root / "graders" / f"{lesson.grader}.py", *(root / "graders").glob("_*.py"),
-             *(root / "graders" / "data").rglob("*"), *(Path(__file__).resolve().parents[1] / "kit").rglob("*.py"),
-             *(Path(__file__).resolve().parents[1] / "grade").glob("engine.py"),
-             *(Path(__file__).resolve().parents[1] / "run").rglob("*.py")]
-    files = _hash_files(paths, root if all(p.is_relative_to(root) for p in paths) else Path("/"))
-    return hashlib.sha256(f"{files}\0{grader_fingerprint(lesson)}".encode()).hexdigest()
+    paths = grader_files(lesson)
+    return _hash_files(paths, root if all(p.is_relative_to(root) for p in paths) else Path("/"))
 
 
 def course_hash(reference: Path, lesson: Lesson) -> str:

@@ -94,11 +94,6 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
     """
     begin = time.monotonic()
     config = mut.load_config(lesson)
-    mut.require_tool()
-    mut.require_tool(family)
-    if family != mut.UNIVERSALMUTATOR and held_out is None:
-        raise CourseError(f"the first sample is universalmutator's: --family {family} draws a held-out sample",
-                          f"add --held-out 30 (after the first sample: ros2course dev mutate {lesson.id} --sample 30)")
     root = Path(tempfile.mkdtemp(prefix=f"ros2course-mutate-{lesson.id}-"))
     root.chmod(0o755)
     try:
@@ -214,10 +209,12 @@ def mutate_lessons(lesson_ids: list[str], out: Path, sample: int | None = None, 
         raise CourseError(f"--sample must be at least 1 (got {sample})", "e.g. --sample 30")
     if held_out is not None and held_out < 1:
         raise CourseError(f"--held-out must be at least 1 (got {held_out})", "e.g. --held-out 30")
+    mut.require_tool()  # every family's sample is drawn apart from universalmutator's mutants (their keys)
     mut.require_tool(family)
     if family != mut.UNIVERSALMUTATOR and held_out is None:
         raise CourseError(f"the first sample is universalmutator's: --family {family} draws a held-out sample",
-                          "add --held-out 30")
+                          f"add --held-out 30 (after the first sample: ros2course dev mutate {' '.join(lesson_ids)} "
+                          "--sample 30)")
     catalog = load_catalog()
     lessons = [catalog.get(i) for i in lesson_ids]
     if held_out is not None:
