@@ -149,33 +149,12 @@ def ends(s: Session, check_id: str, proc: kit.LearnerProcess, when: str, timeout
                     + (f" ({ended.last_line})" if ended.last_line and not ok else ""), expected)
 
 
-#: The last line of rclpy's Ctrl+C race inside a callback: the signal handler shuts the context down while a
-#: timer callback runs, and the callback's next rclpy call (``get_subscription_count()``, ``server_is_ready()``)
-#: raises (seen in 1 of 20 reference runs at load 2: "RCLError: failed to get subscription count: publisher's
-#: context is invalid").
-_CONTEXT_GONE = re.compile(r"RCLError: .*context (is invalid|is not valid)")
-
-
-def _callback_shutdown_race(proc: kit.LearnerProcess) -> bool:
-    """Whether ``proc`` ended with rclpy's own Ctrl+C race inside a callback the executor ran: a traceback through
-    ``rclpy/executors.py`` whose last line is an RCLError about the context, which a correct node that catches
-    ``KeyboardInterrupt`` and ``ExternalShutdownException`` also hits. The kit's Ctrl+C step
-    (:func:`kit.sigint_exit`) allows the same race when the error is raised by the executor itself (the last
-    frame in executors.py); raised by the callback's own rclpy call, it is allowed here, for this lesson's
-    timers that poll the graph 5 to 10 times a second (the allowance belongs in the kit's rule)."""
-    text = proc.stderr() + proc.stdout()
-    if "Traceback (most recent call last)" not in text:
-        return False
-    trace = text[text.rindex("Traceback (most recent call last)"):]
-    lines = [line for line in trace.strip().splitlines() if line.strip()]
-    return "rclpy/executors.py" in trace and bool(lines) and _CONTEXT_GONE.search(lines[-1]) is not None
-
-
 def interrupted_run(s: Session, check_id: str, path: Any, node: str, label: str) -> None:
     """``check_id`` (a Ctrl+C check): start ``path`` with nothing it waits for in the graph; once it has logged
     (that it waits), Ctrl+C is pressed as the part ends (:func:`kit.sigint_exit`). A run that ends in rclpy's own
-    race inside a callback (:func:`_callback_shutdown_race`) is not the node's doing: a fresh run is judged
-    instead, as the kit does for the race inside ``spin()``, and observed says so."""
+    race, inside the executor or inside a timer callback it runs (``get_subscription_count()`` raising "publisher's
+    context is invalid", seen in 1 of 20 reference runs at load 2), is not the node's doing: the kit judges a
+    fresh run instead (:func:`ros2course.run.process.rclpy_shutdown_race`), and observed says so."""
     rosout = s.graph.rosout()
 
     def start(suffix: str = "") -> kit.LearnerProcess:
@@ -188,16 +167,7 @@ def interrupted_run(s: Session, check_id: str, path: Any, node: str, label: str)
 
     first = start()
 
-    def ctrl_c() -> None:
-        # again: the kit's rule for rclpy's race inside spin() judges a fresh run, as for the race in a callback
-        if kit.sigint_exit(s, check_id, first, again=lambda: start(".again")) or not _callback_shutdown_race(first):
-            return
-        kit.sigint_exit(s, check_id, start(".again"))
-        s.amend(check_id, observed=f"{s.results[check_id].observed} (a fresh run: the first Ctrl+C hit rclpy's own "
-                f"shutdown race inside a timer callback, an RCLError about the context, which says nothing about "
-                f"your code)")
-
-    s.on_close(ctrl_c)
+    s.on_close(lambda: kit.sigint_exit(s, check_id, first, again=lambda: start(".again")))
 
 
 # --- the initial pose ----------------------------------------------------------------------------------

@@ -736,18 +736,27 @@ def client_targets(s: Session, check_id: str, run: ClientRun, window: float) -> 
 
 
 def client_swing(s: Session, check_id: str, run: ClientRun, got: list[JointSample], *, amplitude: float,
-                 step: float, tolerance: float) -> bool:
+                 step: float, tolerance: float, unnumbered_tolerance: float) -> bool:
     """Record ``check_id``: the targets' offset from the initial positions follows the seed's law (ch. 31.9),
-    ``amplitude * sin(i * step + phase)`` on every joint, ``i`` the loop counter (the publications'
-    sequence numbers; their order when the middleware gives none), within ``tolerance`` radians (RMS).
+    ``amplitude * sin(i * step + phase)`` on every joint, ``i`` the loop counter, within ``tolerance``
+    radians (RMS).
 
-    The phase is fitted (a loop counted from 1, or targets the stand-in got late, still fit), the angular
-    step per target is not: ``sin(i / (50 * pi))`` against another divisor is what is judged.
+    ``i`` is read from the publications' sequence numbers, one per target sent, so a target the reader
+    missed leaves a gap in ``i``, not a shift. When the middleware gives none, ``i`` is the targets' order
+    and a missed target shifts every later one by a step (about 0.06 degrees at 10 degrees), so the
+    looser ``unnumbered_tolerance`` applies.
+
+    The phase is fitted (a loop counted from 1, or targets the stand-in got late, still fit): a grid of
+    720 phases, then a golden-section search around the best of them, so a client that follows the law
+    is within float rounding of it (about 1e-7 degrees even in float32). The angular step per target is
+    not fitted: ``sin(i / (50 * pi))`` against another divisor is what is judged (51 instead of 50 is
+    0.04 degrees RMS off over the 150 targets of 1.5 s).
     """
     offsets = [[v - i for v, i in zip(x.positions, run.initial)] for x in got if len(x.positions) == len(run.initial)]
     counter = [x.sequence for x in got if len(x.positions) == len(run.initial)]
     if any(c is None for c in counter):
         counter = list(range(len(offsets)))
+        tolerance = max(tolerance, unnumbered_tolerance)
     expected = (f"every joint's offset = {math.degrees(amplitude):.0f} * sin(i / (50 * pi)) degrees, i the loop "
                 f"counter (one target per loop), within {math.degrees(tolerance):.2f} degrees RMS")
     if len(offsets) < 10:
@@ -758,9 +767,16 @@ def client_swing(s: Session, check_id: str, run: ClientRun, got: list[JointSampl
         return math.sqrt(sum((o - amplitude * math.sin((c - first) * step + phase)) ** 2
                              for row, c in zip(offsets, counter) for o in row) / (len(offsets) * len(offsets[0])))
 
-    phases = [2.0 * math.pi * k / 720 for k in range(720)]
-    best = min(phases, key=rms)
-    error = rms(best)
+    grid = 2.0 * math.pi / 720
+    best = min((grid * k for k in range(720)), key=rms)
+    # Golden-section search on [best - grid, best + grid], where rms is unimodal; a hand-written minimiser
+    # of one smooth variable because the course's dependencies carry no optimiser (scipy is not one of them).
+    low, high = best - grid, best + grid
+    ratio = (math.sqrt(5.0) - 1.0) / 2.0
+    for _ in range(60):
+        a, b = high - ratio * (high - low), low + ratio * (high - low)
+        low, high = (low, b) if rms(a) < rms(b) else (a, high)
+    error = min(rms(best), rms((low + high) / 2.0))
     return s.record(check_id, error <= tolerance,
                     f"{len(offsets)} targets: {math.degrees(error):.3f} degrees RMS from that law at its best phase; "
                     f"offsets of joint 1: {fmt([math.degrees(row[0]) for row in offsets[:5]], 2)}... degrees",

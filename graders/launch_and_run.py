@@ -18,7 +18,7 @@ from __future__ import annotations
 
 from ros2course.kit import Check, Session, scripts
 from ._node_watch import NodeWatch, node_appeared
-from ros2course.kit.nodes import rclpy_shutdown_race, sigint_exit
+from ros2course.kit.nodes import sigint_exit
 from ros2course.kit.quotes import LAUNCH_FILE, LAUNCH_NODE
 from ros2course.kit.quotes import PACKAGE as LAUNCH_PACKAGE
 
@@ -70,16 +70,6 @@ def grade(s: Session) -> None:
     else:
         s.record("keeps_running", False, f"it ended by itself ({run.describe()}) before Ctrl+C; its last output: "
                  f"{scripts.excerpt(run.stderr or run.stdout, 200)}", expected)
-    if (run.interrupted and not run.timed_out and run.returncode == 0 and not run.left_running
-            and rclpy_shutdown_race(run.traceback)):
-        # one of the script's nodes hit rclpy's own Ctrl+C race (RCLError inside rclpy.spin: kit.nodes.sigint_exit
-        # allows it for a node; CI, stop 54: the reference lost sigint_exit once through `grade`); the script can
-        # not be run again here without its nodes' first run, so that exit counts as clean, as sigint_exit does
-        s.record("sigint_exit", True, f"{run.ending()}; one of its nodes printed rclpy's own shutdown race "
-                 "(RCLError inside rclpy's executor when Ctrl+C lands as it works: not your code)",
-                 f"exit code 0 within {EXIT_SECONDS:.0f} s of SIGINT (Ctrl+C), no traceback, after everything it "
-                 "started has stopped")
-        return
     if sigint_exit(s, "sigint_exit", run, EXIT_SECONDS):
         return
     if run.returncode is not None and run.returncode < 0:

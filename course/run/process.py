@@ -182,8 +182,8 @@ def last_traceback(text: str) -> str:
 def rclpy_shutdown_race(trace: str) -> bool:
     """Whether ``trace`` (a traceback, :func:`last_traceback`) is rclpy's own Ctrl+C race, not the program's.
 
-    A SIGINT that lands while Jazzy's rclpy (7.1) executor makes what it
-    waits with makes ``rclpy.spin()`` / ``rclpy.spin_once()`` raise
+    A SIGINT that lands while Jazzy's rclpy (7.1) executor prepares a wait
+    can make ``rclpy.spin()`` / ``rclpy.spin_once()`` raise
     ``RCLError: ... the given context is not valid``, even in a node that
     catches ``KeyboardInterrupt`` and ``ExternalShutdownException`` (a known
     shutdown race, discussed in ros2/ros2cli PR #854). Two places are known:
@@ -203,7 +203,10 @@ def rclpy_shutdown_race(trace: str) -> bool:
     ``rclpy.shutdown()`` in ``main`` (no executor frame) is not matched. A
     check that can start the program again (``kit.nodes.sigint_exit``'s
     ``again``) judges a fresh run instead, so a program whose own callback
-    really fails this way fails there.
+    really fails this way fails there, and so does a program that raises it
+    on every run (``main()`` called twice spins rclpy's global executor,
+    still bound to the context the first Ctrl+C shut down: the same error,
+    every time; ``sigint_exit`` fails it after ``RACE_RUNS`` runs in a row).
     """
     lines = [line for line in trace.strip().splitlines() if line.strip()]
     frames = [line for line in lines if line.lstrip().startswith('File "')]
