@@ -736,7 +736,7 @@ def client_targets(s: Session, check_id: str, run: ClientRun, window: float) -> 
 
 
 def client_swing(s: Session, check_id: str, run: ClientRun, got: list[JointSample], *, amplitude: float,
-                 step: float, tolerance: float, unnumbered_tolerance: float) -> bool:
+                 step: float, tolerance: float, unnumbered_tolerance: float, phase_slack: float) -> bool:
     """Record ``check_id``: the targets' offset from the initial positions follows the seed's law (ch. 31.9),
     ``amplitude * sin(i * step + phase)`` on every joint, ``i`` the loop counter, within ``tolerance``
     radians (RMS).
@@ -747,18 +747,24 @@ def client_swing(s: Session, check_id: str, run: ClientRun, got: list[JointSampl
     looser ``unnumbered_tolerance`` applies.
 
     The phase is fitted (a loop counted from 1, or targets the stand-in got late, still fit): a grid of
-    720 phases, then a golden-section search around the best of them, so a client that follows the law
-    is within float rounding of it (about 1e-7 degrees even in float32). The angular step per target is
-    not fitted: ``sin(i / (50 * pi))`` against another divisor is what is judged (51 instead of 50 is
-    0.04 degrees RMS off over the 150 targets of 1.5 s).
+    phases, then a golden-section search around the best of them, so a client that follows the law
+    is within float rounding of it (about 1e-7 degrees even in float32). With sequence numbers the phase
+    is known up to where the loop starts counting: the writer's first target (number 1) is i = 0, so the
+    fit stays within ``phase_slack`` radians of ``(first number - 1) * step`` (a loop counted from 1 is one
+    step off; an offset the other way, ``-sin``, is pi off and fails: held-out seed 29 left
+    ``joint_positions - np.deg2rad(...)`` alive under a free phase). Without them the phase is free.
+    The angular step per target is not fitted: ``sin(i / (50 * pi))`` against another divisor is what is
+    judged (51 instead of 50 is 0.04 degrees RMS off over the 150 targets of 1.5 s).
     """
     offsets = [[v - i for v, i in zip(x.positions, run.initial)] for x in got if len(x.positions) == len(run.initial)]
     counter = [x.sequence for x in got if len(x.positions) == len(run.initial)]
-    if any(c is None for c in counter):
+    numbered = bool(counter) and all(c is not None for c in counter)
+    if not numbered:
         counter = list(range(len(offsets)))
         tolerance = max(tolerance, unnumbered_tolerance)
     expected = (f"every joint's offset = {math.degrees(amplitude):.0f} * sin(i / (50 * pi)) degrees, i the loop "
-                f"counter (one target per loop), within {math.degrees(tolerance):.2f} degrees RMS")
+                f"counter (one target per loop{', from 0 at the first target' if numbered else ''}), within "
+                f"{math.degrees(tolerance):.2f} degrees RMS")
     if len(offsets) < 10:
         return s.record(check_id, False, f"only {len(offsets)} targets of {len(run.initial)} values", expected)
     first = counter[0]
@@ -768,10 +774,12 @@ def client_swing(s: Session, check_id: str, run: ClientRun, got: list[JointSampl
                              for row, c in zip(offsets, counter) for o in row) / (len(offsets) * len(offsets[0])))
 
     grid = 2.0 * math.pi / 720
-    best = min((grid * k for k in range(720)), key=rms)
+    # numbered: phases within phase_slack of the one the first number gives; else the whole circle
+    centre, span = ((first - 1) * step, phase_slack) if numbered else (math.pi, math.pi)
+    best = min((centre - span + grid * k for k in range(int(2 * span / grid) + 1)), key=rms)
     # Golden-section search on [best - grid, best + grid], where rms is unimodal; a hand-written minimiser
     # of one smooth variable because the course's dependencies carry no optimiser (scipy is not one of them).
-    low, high = best - grid, best + grid
+    low, high = max(best - grid, centre - span), min(best + grid, centre + span)
     ratio = (math.sqrt(5.0) - 1.0) / 2.0
     for _ in range(60):
         a, b = high - ratio * (high - low), low + ratio * (high - low)

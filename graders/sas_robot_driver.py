@@ -54,6 +54,9 @@ CLIENT_LAW_TOLERANCE = math.radians(0.01)
 #: Radians RMS when the middleware gives no sequence numbers and i is the targets' order: a target the reader
 #: missed shifts the later ones by one step (0.06 degrees).
 CLIENT_LAW_TOLERANCE_UNNUMBERED = math.radians(0.2)
+#: Radians the law's phase may lie from the one the targets' sequence numbers give (i = 0 at the first): a loop
+#: counted from 1 is one step (0.006) off; the other sign (-sin) is pi off.
+CLIENT_LAW_PHASE_SLACK = math.pi / 4
 CLIENT_DISABLED = 0.5  # seconds of joint states without limits: the client must stay silent
 CLIENT_WINDOW = 1.5  # seconds of targets judged
 CLIENT_STREAM_PERIOD = 0.01  # seconds between the stand-in driver's joint states
@@ -155,4 +158,5 @@ def grade(s: Session) -> None:
         sas.client_offsets(s, "client_targets", "client_moves", client, targets, amplitude=CLIENT_AMPLITUDE,
                            min_swing=CLIENT_MIN_SWING, window=CLIENT_WINDOW, label=CLIENT_EXECUTABLE)
         sas.client_swing(s, "client_swing", client, targets, amplitude=CLIENT_AMPLITUDE, step=CLIENT_STEP,
-                         tolerance=CLIENT_LAW_TOLERANCE, unnumbered_tolerance=CLIENT_LAW_TOLERANCE_UNNUMBERED)
+                         tolerance=CLIENT_LAW_TOLERANCE, unnumbered_tolerance=CLIENT_LAW_TOLERANCE_UNNUMBERED,
+                         phase_slack=CLIENT_LAW_PHASE_SLACK)
