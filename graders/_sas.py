@@ -613,7 +613,8 @@ class ClientRun:
 
     def _again(self) -> Any:
         """A fresh client for a second Ctrl+C (:func:`~ros2course.kit.nodes.sigint_exit`), once its targets reach
-        the still-enabled stand-in (it is in its loop); None without :attr:`relaunch` or when it died."""
+        the still-enabled stand-in (it is in its loop); None without :attr:`relaunch`. A fresh client that died
+        is returned all the same, and judged (it did not keep running until Ctrl+C)."""
         if self.relaunch is None:
             return None
         before = self.stand_in.targets.count()
@@ -621,7 +622,7 @@ class ClientRun:
         self.proc = fresh  # close() stops the process it judged last
         self.stand_in.targets.wait_for(lambda got: len(got) > before + 10, 10.0,
                                        abort=lambda: fresh.poll() is not None)
-        return fresh if fresh.poll() is None else None
+        return fresh
 
     def ended(self) -> bool:
         """True once the process exited."""

@@ -86,6 +86,19 @@ def test_the_race_twice_or_without_a_second_run_counts_as_clean(s):
     assert sigint_exit(s, "sigint_exit", StandInProcess(1, RACE), again=lambda: None)
 
 
+def test_the_race_then_a_fresh_run_that_exits_before_it_is_ready_fails(s):
+    """CI of stop 68: gazebo-custom-nodes' ``thrust-ctrl-c-uncaught`` (a main that catches nothing) got full marks
+    through ``check`` when its Ctrl+C hit the race and the fresh run ended before its node appeared, which
+    counted the race as clean. The fresh run is judged whatever its state: it did not keep running."""
+    fresh = StandInProcess(1, SHUTDOWN)
+    fresh.running = False
+    assert not sigint_exit(s, "sigint_exit", StandInProcess(1, RACE), again=lambda: fresh)
+    result = s.results["sigint_exit"]
+    assert not result.passed and fresh.interrupts == 0, result.observed
+    assert "already exited (code 1) before SIGINT: rclpy.executors.ExternalShutdownException" in result.observed
+    assert "a second run" in result.observed and "keep running" in result.hint
+
+
 def test_the_same_race_in_every_run_is_the_programs(s):
     """main() called twice (at import, then by the entry point): the second main() spins rclpy's global executor,
     still bound to the context Ctrl+C shut down, and raises the race's very RCLError on every run (sas held-out
