@@ -101,6 +101,9 @@ CHECKS = [
           "its log once a second", 1, "as send_wrenches_to_gazebo_node does, in __init__ before the timer: while "
           "self.publisher.get_subscription_count() == 0: log, then rclpy.spin_once(self, timeout_sec=1.0)",
           needs=("thrust_executable",), part="thrust"),
+    Check("thrust_waits_throttled", "It says so at most once a second", 1,
+          "wait a second between two looks: rclpy.spin_once(self, timeout_sec=1.0) in the loop (without it the "
+          "loop looks, and logs, as fast as it can)", needs=("thrust_waits",), part="thrust"),
     Check("thrust_entity", f"Each force is for entity {ENTITY_ID}, along x only", 1,
           f"message.entity.id = {ENTITY_ID}; only message.wrench.force.x set", **THRUST),
     Check("thrust_rate", "It answers every step of the world (a 1 kHz timer on the world's clock)", 2,
