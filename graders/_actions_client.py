@@ -87,23 +87,10 @@ def _result_script(action: Any, final: tuple[float, float], distances: list[floa
 
 
 def interrupted_run(s: Session, path: Any) -> None:
-    """sigint_exit: Ctrl+C while the client waits for a server that never comes (judged as the part ends)."""
-    rosout = s.graph.rosout()
-
-    def start(label: str) -> kit.LearnerProcess:
-        """The client started and, once it has logged (that it waits), ready for Ctrl+C."""
-        before = len(_records(rosout))
-        proc = _started(s, path, _goal_xy(s), label)
-        with s.phase("observe"):  # Ctrl+C once it says it waits (what a learner sees before pressing it)
-            kit.wait_until(lambda: len(_records(rosout)) > before, 2 * WAIT_WINDOW,
-                           abort=lambda: proc.poll() is not None)
-        return proc
-
-    first = _started(s, path, _goal_xy(s), f"{EXECUTABLE}.interrupted")
-    # again: a fresh client when the Ctrl+C ended in rclpy's shutdown race (kit.sigint_exit)
-    s.on_close(lambda: kit.sigint_exit(s, "sigint_exit", first, again=lambda: start(f"{EXECUTABLE}.interrupted.again")))
-    with s.phase("observe"):  # Ctrl+C once it says it waits (what a learner sees before pressing it)
-        kit.wait_until(lambda: bool(_records(rosout)), 2 * WAIT_WINDOW, abort=lambda: first.poll() is not None)
+    """sigint_exit: Ctrl+C while the client waits for a server that never comes (judged as the part ends,
+    :func:`kit.ctrl_c_once_it_logs`)."""
+    kit.ctrl_c_once_it_logs(s, "sigint_exit", lambda suffix: _started(
+        s, path, _goal_xy(s), f"{EXECUTABLE}.interrupted{suffix}"), NODE, patience=2 * WAIT_WINDOW)
 
 
 def goal_run(s: Session, action: Any, path: Any) -> None:

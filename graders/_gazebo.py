@@ -187,21 +187,9 @@ def ends(s: Session, check_id: str, proc: kit.LearnerProcess, when: str, *, afte
 
 def interrupted_run(s: Session, check_id: str, path: Any, node: str, label: str) -> None:
     """``check_id`` (a Ctrl+C check): start ``path`` with no world at all; once it has logged (that it waits),
-    Ctrl+C is pressed as the part ends (:func:`kit.sigint_exit`)."""
-    rosout = s.graph.rosout()
-
-    def start(suffix: str) -> kit.LearnerProcess:
-        """The program started with no world and, once it has logged (that it waits), ready for Ctrl+C."""
-        before = len(_records(rosout, node))
-        proc = s.launch(path, label + suffix, [])
-        with s.phase("observe"):
-            kit.wait_until(lambda: len(_records(rosout, node)) > before, 2 * WAIT_WINDOW,
-                           abort=lambda: proc.poll() is not None)
-        return proc
-
-    first = start("")
-    # again: a fresh run when the Ctrl+C ended in rclpy's shutdown race (kit.sigint_exit)
-    s.on_close(lambda: kit.sigint_exit(s, check_id, first, again=lambda: start(".again")))
+    Ctrl+C is pressed as the part ends (:func:`kit.ctrl_c_once_it_logs`)."""
+    kit.ctrl_c_once_it_logs(s, check_id, lambda suffix: s.launch(path, label + suffix, []), node,
+                            patience=2 * WAIT_WINDOW)
 
 
 # --- the pose client ---------------------------------------------------------------------------------------

@@ -151,23 +151,12 @@ def ends(s: Session, check_id: str, proc: kit.LearnerProcess, when: str, timeout
 
 def interrupted_run(s: Session, check_id: str, path: Any, node: str, label: str) -> None:
     """``check_id`` (a Ctrl+C check): start ``path`` with nothing it waits for in the graph; once it has logged
-    (that it waits), Ctrl+C is pressed as the part ends (:func:`kit.sigint_exit`). A run that ends in rclpy's own
-    race, inside the executor or inside a timer callback it runs (``get_subscription_count()`` raising "publisher's
-    context is invalid", seen in 1 of 20 reference runs at load 2), is not the node's doing: the kit judges a
-    fresh run instead (:func:`ros2course.run.process.rclpy_shutdown_race`), and observed says so."""
-    rosout = s.graph.rosout()
-
-    def start(suffix: str = "") -> kit.LearnerProcess:
-        before = len(_records(rosout, node))
-        proc = s.launch(path, label + suffix, [])
-        with s.phase("observe"):  # Ctrl+C once it says it waits (what a learner sees before pressing it)
-            kit.wait_until(lambda: len(_records(rosout, node)) > before, 2 * WAIT_WINDOW,
-                           abort=lambda: proc.poll() is not None)
-        return proc
-
-    first = start()
-
-    s.on_close(lambda: kit.sigint_exit(s, check_id, first, again=lambda: start(".again")))
+    (that it waits), Ctrl+C is pressed as the part ends (:func:`kit.ctrl_c_once_it_logs`). A run that ends in
+    rclpy's own race, inside the executor or inside a timer callback it runs (``get_subscription_count()`` raising
+    "publisher's context is invalid", seen in 1 of 20 reference runs at load 2), is not the node's doing: the kit
+    judges a fresh run instead (:func:`ros2course.run.process.rclpy_shutdown_race`), and observed says so."""
+    kit.ctrl_c_once_it_logs(s, check_id, lambda suffix: s.launch(path, label + suffix, []), node,
+                            patience=2 * WAIT_WINDOW)
 
 
 # --- the initial pose ----------------------------------------------------------------------------------

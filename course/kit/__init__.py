@@ -67,6 +67,7 @@ from ros2course.kit.session_protocol import Session
 from ros2course.kit.judge import RATE_TOLERANCE, STANDARD_TOPICS, rate, topics_seen
 from ros2course.kit.nodes import (
     StartedNode,
+    ctrl_c_once_it_logs,
     executable,
     process_state,
     sigint_exit,
@@ -84,7 +85,7 @@ __all__ = [
     "LATE_DELIVERY", "LearnerProcess", "NotGradable", "RateStats", "call_service",
     "component_type", "foreign_python_prefix", "package_prefix", "record", "stamp_seconds", "stop_spinning",
     "wait_until",
-    "API_VERSION", "RATE_TOLERANCE", "STANDARD_TOPICS", "Check", "GradingSession", "StartedNode", "Unmet", "declared_dependencies",
+    "API_VERSION", "RATE_TOLERANCE", "STANDARD_TOPICS", "Check", "GradingSession", "StartedNode", "ctrl_c_once_it_logs", "Unmet", "declared_dependencies",
     "depends", "executable", "process_state", "project_files", "rate", "sigint_exit", "source_package", "start_node", "topics_seen",
     "wait_for_node", "Session",
 ]

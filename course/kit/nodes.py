@@ -297,3 +297,31 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
                         "first run ended only after a second Ctrl+C)")
             return passed
     return s.record(check_id, True, f"exit code 0, {seconds:.2f} s after SIGINT{twice}", expected)
+
+
+def ctrl_c_once_it_logs(s: Session, check_id: str, launch: Callable[[str], LearnerProcess], node: str, *,
+                        patience: float) -> LearnerProcess:
+    """Start a program that waits for something missing from the graph, and judge its Ctrl+C as the part ends.
+
+    ``launch(suffix)`` starts the program (``suffix``: "" for the first run, ".again" for a fresh one) and returns
+    its process. Waits until ``node``'s logger has written one more ``/rosout`` record than before the start
+    (that it waits: what a learner sees before pressing Ctrl+C), at most ``patience`` seconds, or until the
+    process ends; then registers :func:`sigint_exit` for ``check_id`` on the part's close, with ``again`` = the
+    same start (a fresh run after rclpy's own shutdown race). Returns the first run's process.
+
+    The tutorial's rule (ch. 13: a node ends cleanly on Ctrl+C), for a client or a node blocked in a wait
+    loop (the action client, the Gazebo and Nav2 nodes, issue 37: their Ctrl+C while they wait).
+    """
+    rosout = s.graph.rosout()
+
+    def start(suffix: str) -> LearnerProcess:
+        before = len(rosout.records(node=node))
+        proc = launch(suffix)
+        with s.phase("observe"):
+            wait_until(lambda: len(rosout.records(node=node)) > before, patience,
+                       abort=lambda: proc.poll() is not None)
+        return proc
+
+    first = start("")
+    s.on_close(lambda: sigint_exit(s, check_id, first, again=lambda: start(".again")))
+    return first
