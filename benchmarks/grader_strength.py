@@ -73,6 +73,28 @@ def _earlier_held_out(history: list[dict], fingerprint: str | None) -> list[str]
         for e in history]
 
 
+def _why_too_few(data: dict, sample: int = 30) -> str:
+    """Why a sample counted fewer than ``mut.MIN_COUNTED`` mutants, from its record (``graded``, ``pool``,
+    ``killed_by_build``, ``triaged``): fewer left to draw than the sample's size, mutants a broken build
+    caught before any check (a C++, CMake or interface file), survivors triaged as equivalent by kind."""
+    graded = data.get("graded", 0)
+    why = []
+    if graded < data.get("sample", sample):
+        why.append(f"only {graded} were left to draw" if data.get("pool") == graded else f"{graded} graded")
+    if data.get("killed_by_build"):
+        why.append(f"{data['killed_by_build']} of {graded} broke the build (caught before any check)")
+    if data.get("triaged"):
+        why.append(f"{data['triaged']} triaged as equivalent")
+    return "; ".join(why)
+
+
+def _too_small(counted: int, data: dict) -> str:
+    """`` (too small to judge: 12 < 20; why)``: the phrase a row with fewer counted mutants than
+    ``mut.MIN_COUNTED`` carries (issue 37: the row says why the lesson cannot reach 20)."""
+    why = _why_too_few(data)
+    return f" (too small to judge: {counted} < {mut.MIN_COUNTED}{'; ' + why if why else ''})"
+
+
 def _held_out_cell(row) -> str:
     """The held-out sample's figures (:attr:`ros2course.dev.mutants.RecordedScore.held_out`) in a cell."""
     held = row.held_out
@@ -98,7 +120,7 @@ def _held_out_cell(row) -> str:
             f"{', ' + data['family'] + ' mutants' if data.get('family', mut.UNIVERSALMUTATOR) != mut.UNIVERSALMUTATOR else ''}"
             f"; {uncovered} uncovered)")
     if held.too_small:
-        text += f" (too small to judge: {held.counted} < {mut.MIN_COUNTED})"
+        text += _too_small(held.counted, data)
     if held.stale and not row.stale:
         text += f" **stale** ({data.get('date', '?')})"
     earlier = _earlier_held_out(data.get("earlier", []), data.get("fingerprint"))
@@ -122,7 +144,7 @@ def _recorded_row(lesson_id: str, data: dict) -> str:
               else f"{data['graded']} (all)") + (f"; {aside} set aside" if aside else "")
     tuned = _pct(row.tuned)
     if row.too_small:
-        tuned += f" (too small to judge: {row.counted} < {mut.MIN_COUNTED})"
+        tuned += _too_small(row.counted, data)
     when = f"{data.get('date', '?')}, course {data.get('course_version') or '?'}"
     current = f"**stale** ({row.stale.removeprefix('stale: ')})" if row.stale else f"current ({when})"
     by_rule = f" ({data['triaged_by_rule']})" if "triaged_by_rule" in data else ""

@@ -21,4 +21,5 @@ API_VERSION = "2.9"  # 2.1: kit.scripts.run_script_first (discovery steps, issue
 # 2.8: kit.sigint_exit fails rclpy's race error seen in RACE_RUNS runs in a row (the program's: main() called
 # twice), kit.programs.judge_interrupted_run allows a script's node's race (launch-and-run decided it by itself)
 # 2.9: kit.ctrl_c_once_it_logs (a waiting program's Ctrl+C: the actions client's, Gazebo's and Nav2's own copies);
-# sigint_exit judges a fresh run that exited before it was ready (it was skipped, and the race counted as clean)
+# sigint_exit judges a fresh run that exited before it was ready (it was skipped, and the race counted as clean);
+# run.process.rclpy_shutdown_race knows rclpy's global-executor race; kit.topics_services.fields judges the order

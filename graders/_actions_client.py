@@ -42,6 +42,9 @@ NUMBER_TOLERANCE = 0.0006
 PERIOD = 0.1  # seconds between the grader's feedback messages
 #: What a record pretending a rejected goal ended says (a status, a result).
 PRETENDS = re.compile(r"succe|abort|cancel|unknown|status|final|result", re.IGNORECASE)
+#: What a record treating a rejected goal as accepted says (the code after a forgotten `return`, which then asks
+#: for a result the goal never has: helper audit of issue 37).
+ACCEPTED = re.compile(r"(?<!not )(?<!n't )\baccept", re.IGNORECASE)
 
 
 def _goal_xy(s: Session) -> tuple[float, float]:
@@ -184,7 +187,7 @@ def _started(s: Session, path: Any, xy: tuple[float, float], label: str) -> kit.
 
 
 def aborted_run(s: Session, action: Any, path: Any) -> None:
-    """logs_aborted: the grader's server aborts the goal after two feedback messages."""
+    """logs_aborted, aborted_ends: the grader's server aborts the goal after two feedback messages."""
     xy = _goal_xy(s)
     final = (round(xy[0] / 2, 3), round(xy[1] / 2, 3))
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
@@ -207,6 +210,7 @@ def aborted_run(s: Session, action: Any, path: Any) -> None:
              (f"'{said[0][:120]}'" + ("" if said[0] in where else f"; '{where[0][:120]}'" if where else
                                      f": no record with the final position ({final[0]}, {final[1]})"))
              if said else f"the goal was aborted; its log: {_last(rosout)}", expected)
+    _ends(s, "aborted_ends", proc, "once its goal was ABORTED")
 
 
 def rejected_run(s: Session, action: Any, path: Any) -> None:
@@ -227,7 +231,8 @@ def rejected_run(s: Session, action: Any, path: Any) -> None:
     records = _records(rosout)
     said = [text for text in records if re.search(r"reject", text, re.IGNORECASE)]
     after = records[records.index(said[0]) + 1:] if said else []
-    pretends = [text for text in after if PRETENDS.search(text) and not re.search(r"reject", text, re.IGNORECASE)]
+    pretends = [text for text in after if (PRETENDS.search(text) or ACCEPTED.search(text))
+                and not re.search(r"reject", text, re.IGNORECASE)]
     ended = proc.exit_state()
     traceback = "Traceback (most recent call last)" in proc.stderr() + proc.stdout()
     problems = []
@@ -238,8 +243,8 @@ def rejected_run(s: Session, action: Any, path: Any) -> None:
     elif ended.returncode != 0 or traceback:
         problems.append(f"the process {ended.describe()}" + (f" ({ended.last_line})" if ended.last_line else ""))
     if pretends:
-        problems.append(f"after the rejection, a record that pretends the goal ended: '{pretends[0][:120]}' (a rejected "
-                        "goal has no result: do not ask for it)")
+        problems.append(f"after the rejection, a record that pretends the goal was accepted or ended: "
+                        f"'{pretends[0][:120]}' (a rejected goal has no result: return before asking for it)")
     s.record("handles_rejection", not problems, "; ".join(problems) or f"'{said[0][:120]}', then the process "
              f"{ended.describe()}", "a log record saying the goal was rejected, no status or result logged after it, then exit code 0, "
              "no traceback")

@@ -26,6 +26,8 @@ from ros2course.kit import Session
 from ros2course.kit.programs import ProgramRun, run_program
 from ros2course.kit.python_programs import python_env
 
+#: A result line of the examples, as the lesson words it: The result of task=<tag> was <result>.
+RESULT_LINE = re.compile(r"^The result of task=(?P<tag>\S+) was (?P<value>\S+)\.$")
 _NUMBER = re.compile(r"\d*\.\d+(?:[eE][-+]?\d+)?")
 
 
@@ -110,3 +112,31 @@ def run_traced(s: Session, wrapper: Path, mode: str, target: str, plans: list[li
     except (OSError, ValueError):
         events = []
     return run, Trace(events if isinstance(events, list) else [])
+
+
+def result_lines(s: Session, trace: Trace, check_id: str, wanted: list[tuple[str, float]], tolerance: float) -> None:
+    """``check_id`` (python-asyncio's ``await_result_lines``, ``callback_result_lines``): a line 'The result of
+    task=<tag> was <result>.' for each (tag, result) of ``wanted``, the result within ``tolerance``, each with its
+    own task's result (the tag is the one the example gave the task
+    that drew it: a callback bound to the wrong tag prints task 1's result as task2's)."""
+    text = "".join(str(e[2]) for e in trace.events if e[0] == "out")
+    found = {}
+    for line in text.splitlines():
+        match = RESULT_LINE.match(line.strip())
+        if match:
+            try:
+                found.setdefault(match.group("tag"), []).append(float(match.group("value")))
+            except ValueError:
+                continue
+    missing = [f"task={tag} ({value})" for tag, value in wanted
+               if not any(abs(v - value) <= tolerance for v in found.get(tag, []))]
+    printed = [line.strip() for line in text.splitlines() if line.strip()]
+    others = [line for line in printed if not RESULT_LINE.match(line) and "retry" not in line.lower()
+              and not line.endswith("Done.")]
+    s.record(check_id, not missing,
+             "both result lines were printed" if not missing else
+             f"no result line for {' and '.join(missing)}" + (
+                 f"; result lines printed: {', '.join(f'task={tag} was {v}' for tag, vs in found.items() for v in vs)}"
+                 if found else "")
+             + (f"; other lines: {'; '.join(repr(o) for o in others[:3])}" if others else ""),
+             "; ".join(f"'The result of task={tag} was {value}.'" for tag, value in wanted))

@@ -285,6 +285,35 @@ def active(s: Session, stream: Stream, node: kit.StartedNode, since: float) -> N
              source="the messages' send stamps")
 
 
+def reactivate(s: Session, life: Lifecycle, stream: Stream) -> None:
+    """Record ``reactivate``: from inactive (after a deactivate), activate succeeds again and messages come every
+    ``stream.period`` seconds; then deactivate again (cleanup is asked from inactive). The lesson's "pause without
+    losing its settings": a node that cancels its timer in on_deactivate, or creates one per activate, is seen
+    only here (helper audit of issue 37)."""
+    expected = (f"activate again after deactivate: 'Transition successful', then one message every "
+                f"{stream.period} s (± {kit.RATE_TOLERANCE:.0%}) on {stream.topic}, with no configure in between")
+    since = time.time()
+    success, why = life.change(ACTIVATE)
+    state, label = life.state()
+    if not success or state != ACTIVE:
+        s.record("reactivate", False, f"no answer to activate: {why}" if success is None else
+                 f"activate {'succeeded' if success else 'failed (success: false)'}; the node is now {label} "
+                 f"[{state}]", expected)
+    else:
+        stamps, waited = heartbeats(s, stream, life.node, since)
+        stats = kit.RateStats.from_times(stamps)
+        if stats is None or stats.samples < stream.samples - 1:
+            s.record("reactivate", False, f"activate succeeded; then only {len(stamps)} message(s) in {waited:.1f} s "
+                     f"(a timer cancelled in on_deactivate and never started again?); "
+                     f"{kit.process_state(life.node.proc)}", expected)
+        else:
+            s.record("reactivate", stats.within(1.0 / stream.period, kit.RATE_TOLERANCE),
+                     f"activate succeeded; then {stats.describe()} (from the messages' send stamps)", expected,
+                     window=(stamps[0], stamps[-1]))
+    if life.state()[0] == ACTIVE:
+        life.change(DEACTIVATE)  # cleanup is asked from inactive; a failed deactivate shows there
+
+
 def cleanup(s: Session, life: Lifecycle, topic: str) -> None:
     """Record ``cleanup``: the transition succeeds, the node is unconfigured and publishes ``topic`` no more
     (waited for up to :data:`GONE_TIMEOUT` seconds).
@@ -374,3 +403,14 @@ def shutdown(s: Session, life: Lifecycle, stream: Stream) -> None:
     s.record("shutdown", not leaked, f"shutdown from {label} succeeded, the node is {final_label}; " + (
         f"{len(leaked)} message(s) sent after it within {until - since:.1f} s (a timer still running?)" if leaked
         else f"nothing sent in the {until - since:.1f} s after it"), expected, window=(since, until))
+    def gone() -> bool:
+        return stream.topic not in ts.endpoints(s.ros, life.node.name, "publishers")
+
+    with s.phase("observe"):
+        wait_until(gone, GONE_TIMEOUT, interval=0.05, abort=life.node.ended)
+    left = ts.endpoints(s.ros, life.node.name, "publishers")
+    s.record("shutdown_destroys", gone(), f"after shutdown from {label}: " + (
+             f"its publishers now: {ts.describe_endpoints(left)}" if gone() else
+             f"{GONE_TIMEOUT:.0f} s later it still publishes {stream.topic} (publishers: {ts.describe_endpoints(left)})"),
+             f"on_shutdown destroys the publisher too: no publisher of {stream.topic} left on the node (ros2 node "
+             "info)")

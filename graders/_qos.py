@@ -477,7 +477,8 @@ def grade_monitor(s: Session, temperature: type, string: type, package: str, exe
     The grader's latched configuration is published before the monitor starts (it joins late) and its
     BEST_EFFORT readings every ``period`` seconds. Records ``monitor_executable``, ``monitor_node_name`` and
     the part's Ctrl+C check through the kit, then ``monitor_topics``, ``monitor_sensor_qos``,
-    ``monitor_config_qos``, ``monitor_logs_config`` and ``monitor_logs_sensor`` (from the node's /rosout).
+    ``monitor_config_qos``, ``monitor_logs_config``, ``monitor_logs_sensor`` and ``monitor_logs_every_reading``
+    (from the node's /rosout).
 
     Args:
         temperature, string: the generated sensor_msgs/msg/Temperature and std_msgs/msg/String classes.
@@ -557,6 +558,37 @@ def grade_monitor(s: Session, temperature: type, string: type, package: str, exe
              f"at least {logged} of the grader's random temperatures logged as 'Temperature: <value with "
              "two decimals>'",
              fraction=min(1.0, len(readings) / logged))
+    if readings:
+        _logs_every_reading(s, feed, logged_readings, node, period)
+
+
+#: Consecutive readings (from the first one the monitor logged) of which it must log at least
+#: :data:`EVERY_READING_SHARE`: "for every reading" (a BEST_EFFORT reading lost on one host is rare; a log
+#: throttled to once a second keeps about one in ten at 10 Hz).
+EVERY_READING_RUN = 20
+EVERY_READING_SHARE = 0.5
+
+
+def _logs_every_reading(s: Session, feed: Feed, logged_readings: Any, node: kit.StartedNode,
+                        period: float) -> None:
+    """``monitor_logs_every_reading``: of the :data:`EVERY_READING_RUN` readings published from the first one the
+    monitor logged, it logs :data:`EVERY_READING_SHARE` or more (the lesson: 'Temperature: ...' for every reading;
+    helper audit of issue 37: a log throttled to once a second passed the three-readings check)."""
+    def window() -> list[float]:
+        published = feed.published()
+        first = min((i for i, value in enumerate(published) if value in set(logged_readings())), default=None)
+        return published[first:first + EVERY_READING_RUN] if first is not None else []
+
+    with s.phase("observe"):
+        wait_for(lambda: len(window()) >= EVERY_READING_RUN, EVERY_READING_RUN * period * 3 + LATE_DELIVERY,
+                 abort=node.ended)
+        wait_for(lambda: False, LATE_DELIVERY)  # the last ones' records on their way
+    run = set(window())
+    shown = run & set(logged_readings())
+    s.record("monitor_logs_every_reading", bool(run) and len(shown) >= EVERY_READING_SHARE * len(run),
+             f"{len(shown)} of {len(run)} readings in a row (from the first it logged) found in its log",
+             f"'Temperature: ...' for every reading it receives: at least {EVERY_READING_SHARE:.0%} of "
+             f"{EVERY_READING_RUN} readings in a row (BEST_EFFORT may lose one now and then; no throttle)")
 
 
 def grade_cli(s: Session, temperature: type, string: type, script: str, *, timeout: float,

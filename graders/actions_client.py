@@ -64,6 +64,9 @@ CHECKS = [
     Check("logs_aborted", "A goal the server aborts is logged as ABORTED, with its final position", 1,
           "log the status the result response carries (response.status: GoalStatus.STATUS_ABORTED is 6), "
           "never a fixed 'succeeded', and the final position whatever the status", needs=RUN, part="aborted"),
+    Check("aborted_ends", "After an aborted goal too, the client ends by itself: exit code 0, no traceback", 1,
+          "end whatever the status: set the flag that ends main() in the result callback for every status, not "
+          "only for SUCCEEDED", needs=RUN, part="aborted"),
     checks.ctrl_c("sigint_exit", "the client while it waits for the server", 1, needs=RUN, part="interrupted"),
     Check("handles_rejection", "A rejected goal is logged as rejected, and the client ends cleanly", 2,
           "in goal_response_callback: if not goal_handle.accepted: log that the goal was rejected, set the flag "

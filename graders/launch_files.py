@@ -44,6 +44,10 @@ CHECKS = [
     Check("contents", "The messages carry the ch. 22.9 quote and philosopher Tyler", 2,
           "'quote' and 'philosopher_name': 'Tyler' in the parameters dict; adjacent string literals are glued "
           "without a space, so mind the spaces at the ends of the pieces", needs=("topic",)),
+    Check("launched_parameters", "The launched node's parameters are the launch file's values", 1,
+          "pass all four in Node(..., parameters=[{'topic_name': ..., 'period': 0.25, 'quote': ..., "
+          "'philosopher_name': 'Tyler'}]): not a remapping for the topic, nor a value written in the node's code",
+          needs=("node_name",)),
     Check("defaults_kept", "The values come from the launch file: the node's own defaults are unchanged", 2,
           "leave amazing_quote_configurable_publisher_node.py as the parameters lesson made it (defaults quote "
           "'Use the force, Pikachu!', philosopher_name 'Uncle Ben', topic_name 'amazing_quote', period 0.5) and "
@@ -70,6 +74,7 @@ def grade(s: Session) -> None:
     kit.rate(s, "rate", probe.send_stamps(), period=LAUNCH_PERIOD, needed=SAMPLES, waited=timeout,
              noun="message", source="the messages' send stamps")
     quotes.texts(s, "contents", [m for _, m in samples], quotes.LAUNCH_QUOTE, quotes.LAUNCH_PHILOSOPHER, "ch. 22.9")
+    _launched_parameters(s, run)
     with s.phase("stop"):
         for proc in run.processes:
             proc.stop(sigint_timeout=3.0, sigterm_timeout=2.0)
@@ -102,7 +107,28 @@ def _defaults_kept(s: Session) -> None:
     proc.stop(sigint_timeout=2.0, sigterm_timeout=2.0)
 
 
+def _launched_parameters(s: Session, run) -> None:
+    """Record ``launched_parameters``: the node the launch file started declares its four values
+    (:data:`ros2course.kit.quotes.LAUNCH_PARAMETERS`, read through its parameter services as ``ros2 param get``
+    does). What the topic shows alone can come from elsewhere: a ``remappings=`` for the topic, a period written
+    in the node's code with the launch file's 'period' left out (helper audit of issue 37); the lesson asks for
+    the values in the launch file, "with no change to the node's code"."""
+    expected = "ros2 param get on the launched node: " + ", ".join(
+        f"{name} {_show(value)}" for name, value in quotes.LAUNCH_PARAMETERS.items())
+    try:
+        services = params.connect(s, LAUNCH_NODE, proc=run.processes[0] if run.processes else None,
+                                  timeout=NODE_TIMEOUT)
+        values = services.get(list(quotes.LAUNCH_PARAMETERS))
+    except Unmet as exc:
+        s.record("launched_parameters", False, str(exc), expected)
+        return
+    wrong = {name: value for name, (_, value) in values.items() if value != quotes.LAUNCH_PARAMETERS[name]}
+    s.record("launched_parameters", not wrong, "the launched node declares the launch file's values" if not wrong
+             else "the launched node has " + "; ".join(f"{name} {_show(value)}" for name, value in wrong.items())
+             + ": pass every value as a parameter in the launch file", expected)
+
+
 def _show(value) -> str:
     """A parameter value as ros2 param get shows it: text quoted and shortened, numbers as they are."""
-    return repr(quotes.short(value)) if isinstance(value, str) else repr(value)
+    return quotes.short(value) if isinstance(value, str) else repr(value)
 

@@ -76,6 +76,10 @@ CHECKS = [
     Check("quiet_deactivated", f"Nothing is published on {TOPIC} after deactivate", 2,
           "return super().on_deactivate(state) from on_deactivate: the base class disables the lifecycle publisher",
           needs=("deactivate",)),
+    Check("reactivate", f"After deactivate, activate works again: one heartbeat every {PERIOD} s", 1,
+          "create the timer once, in on_configure, and let the lifecycle publisher decide what goes out: a timer "
+          "cancelled in on_deactivate never fires again, one created in on_activate doubles on a second activate",
+          needs=("quiet_deactivated",)),
     Check("cleanup", f"cleanup succeeds (inactive -> unconfigured) and the node's {TOPIC} publisher is gone", 2,
           "in on_cleanup destroy what on_configure created: self.destroy_timer(self.timer) and "
           "self.destroy_lifecycle_publisher(self.heartbeat_publisher)", needs=("deactivate",)),
@@ -85,6 +89,9 @@ CHECKS = [
     Check("shutdown", f"shutdown from active reaches finalized, and nothing is published on {TOPIC} after it", 2,
           "in on_shutdown destroy the timer and the publisher (shutdown may come while active: the base class does "
           "not deactivate the publisher) and return TransitionCallbackReturn.SUCCESS", needs=("managed",)),
+    Check("shutdown_destroys", f"shutdown destroys the node's {TOPIC} publisher (it leaves the graph)", 1,
+          "in on_shutdown: if self.heartbeat_publisher is not None: self.destroy_lifecycle_publisher(...), as "
+          "on_cleanup does", needs=("shutdown",)),
     checks.ctrl_c("sigint_exit", "the finalized node", 1, needs=RUN),
     Check("shutdown_any_state", "shutdown also reaches finalized from unconfigured (before any configure) and from "
           "inactive", 2, "__init__ sets self.heartbeat_publisher = None and self.timer = None, and on_shutdown "
@@ -115,6 +122,7 @@ def grade(s: Session) -> None:
         _lifecycle.active(s, stream, node, since)
         since = _lifecycle.transition(s, "deactivate", life, _lifecycle.DEACTIVATE, _lifecycle.INACTIVE)
         _lifecycle.quiet(s, "quiet_deactivated", stream, node, since, "inactive (after deactivate)")
+        _lifecycle.reactivate(s, life, stream)
         _lifecycle.cleanup(s, life, TOPIC)
         _lifecycle.reconfigure(s, life, stream)
         _lifecycle.shutdown(s, life, stream)

@@ -67,6 +67,9 @@ CHECKS = [
           needs=FILE_OK),
     Check("new_quote", "The file's quote is a new one (not the launch file's)", 1,
           "edit the quote: value in the file", needs=("node_key",)),
+    Check("kept_values", f"The file keeps the launched node's period ({LAUNCH_PERIOD}) and topic_name "
+          f"({LAUNCH_TOPIC})", 1, "dump the node started by the launch file (not one started by ros2 run with the "
+          "defaults), then edit only the quote (and philosopher_name if you want)", needs=("node_key",)),
     Check("load", "Loading the file into the running node (ros2 param load) sets its parameters", 2,
           "every parameter in the file must be accepted by the node (names and types as it declares them)",
           needs=FILE_OK),
@@ -83,6 +86,7 @@ def grade(s: Session) -> None:
                               shown=f"src/{PACKAGE}/{CONFIG}", absent=f"no package {PACKAGE} in src/",
                               search=s.workspace_root / "src", pattern=f"*{LAUNCH_NODE}*.yaml")
     _new_quote(s, values or {})  # judged on the file alone (needs node_key)
+    _kept_values(s, values or {})
     probe = s.ros.topic(f"/{LAUNCH_TOPIC}", amazing_quote(s))
     proc = start_as_launched(s, "node_running", probe)
     s.require("node_key")
@@ -107,3 +111,19 @@ def _new_quote(s: Session, values: dict[str, Any]) -> None:
     else:
         s.record("new_quote", quote.strip() != LAUNCH_QUOTE, f"quote: {short(quote)}"
                  + (" (the launch file's, unchanged)" if quote.strip() == LAUNCH_QUOTE else ""), expected)
+
+
+def _kept_values(s: Session, values: dict[str, Any]) -> None:
+    """``kept_values``: the file's period and topic_name are those of the node the launch file starts (the lesson:
+    dump the node started as the launch file starts it, then edit the quote). A file dumped from a node started
+    with the defaults (period 0.5, topic amazing_quote) loads, and changes nothing a reader of the topic sees
+    (the node reads both only at start-up), but it is not that node's file (helper audit of issue 37)."""
+    period, topic = values.get("period"), values.get("topic_name")
+    problems = []
+    if not (isinstance(period, float) and abs(period - LAUNCH_PERIOD) < 1e-9):
+        problems.append(f"period is {period!r}")
+    if not (isinstance(topic, str) and topic.lstrip("/") == LAUNCH_TOPIC):
+        problems.append(f"topic_name is {topic!r}")
+    s.record("kept_values", not problems, "; ".join(problems) or f"period {period}, topic_name {topic!r}",
+             f"period {LAUNCH_PERIOD} and topic_name '{LAUNCH_TOPIC}', as the launch file sets them (the dump of "
+             "the launched node)")

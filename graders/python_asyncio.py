@@ -16,11 +16,10 @@ task that printed it (:mod:`graders._asyncio_trace`). The checks read that trace
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 from ros2course.kit import Check, Session, Unmet
-from ._asyncio_trace import Trace, run_traced
+from ._asyncio_trace import Trace, result_lines, run_traced
 
 #: No continuous observation: each run ends by itself (about 1 s of asyncio.sleep at 0.1 s per retry).
 WINDOW = 3.0
@@ -35,8 +34,6 @@ EXAMPLE_PLANS = [[0.52, 0.81, 0.67, 0.93, 0.58, 0.74, 0.85, 0.0312], [0.61, 0.77
 EXAMPLE_RESULTS = [plan[-1] for plan in EXAMPLE_PLANS]
 #: The tags the examples give their two tasks, in creation order (the lesson's task1 and task2).
 EXAMPLE_TAGS = ["task1", "task2"]
-#: A result line of the await example, as the lesson words it: The result of task=<tag> was <result>.
-RESULT_LINE = re.compile(r"^The result of task=(?P<tag>\S+) was (?P<value>\S+)\.$")
 #: How close a printed number must be to a result to count as printing it (allows rounding to 2 decimals).
 RESULT_TOLERANCE = 0.005
 #: Median seconds between two draws of one call that count as the contract's `asyncio.sleep(0.1)`: a loaded
@@ -49,7 +46,9 @@ RUN_TIMEOUT = 20.0
 SCENARIOS = [("default", "returns_roll", "with rolls 0.5, 0.95, 0.3, 0.0777", 0.0777, 4,
               "it draws 4 times and returns 0.0777, the first roll below likelihood=0.1"),
              ("likelihood", "likelihood_param", "with likelihood=0.4 and rolls 0.5, 0.35", 0.35, 2,
-              "it returns 0.35 after 2 draws (0.35 < 0.4)")]
+              "it returns 0.35 after 2 draws (0.35 < 0.4)"),
+             ("boundary", "default_likelihood", "with rolls 0.1, 0.0999", 0.0999, 2,
+              "it draws twice and returns 0.0999: a roll of 0.1 is a miss (roll < likelihood, the default 0.1)")]
 
 CHECKS = [
     Check("module", "minimalist_package.minimalist_async.unlikely_to_return is an async function", 1,
@@ -63,6 +62,9 @@ CHECKS = [
           "print(f\"{tag} Done.\") before returning", needs=("module",)),
     Check("likelihood_param", "unlikely_to_return compares with its likelihood argument", 1,
           "compare the roll with the likelihood parameter, not with a fixed 0.1", needs=("module",)),
+    Check("default_likelihood", "Its likelihood defaults to 0.1, and a roll equal to it is a miss", 1,
+          "'likelihood: float = 0.1' in the signature, and return only when roll < likelihood (not <=)",
+          needs=("module",)),
     Check("yields_between_draws", "Between draws it awaits asyncio.sleep, so two calls run concurrently", 2,
           "use 'await asyncio.sleep(0.1)', not time.sleep(0.1): time.sleep blocks every other task",
           needs=("module",)),
@@ -85,6 +87,10 @@ CHECKS = [
     Check("callback_as_completed", "async_callback_example prints each result as soon as its task ends", 2,
           "task.add_done_callback(partial(handle_return_callback, tag)) and print the result in the callback",
           needs=("callback_runs",), part="callback"),
+    Check("callback_result_lines", "async_callback_example prints each result with its own task's tag", 1,
+          "task.add_done_callback(partial(handle_return_callback, tag)): partial binds this task's tag now (a "
+          "lambda that reads the loop variable when it runs sees the last tag, task2, for both)",
+          needs=("callback_runs",), part="callback"),
 ]
 
 
@@ -102,7 +108,7 @@ def grade(s: Session) -> None:
                  f"{finished_first} finished first; task {1 if first[0] < second[0] else 2}'s result was printed first",
                  f"task 1's result ({EXAMPLE_RESULTS[0]}) printed before task 2's ({EXAMPLE_RESULTS[1]}), "
                  "even though task 2 finishes first")
-        _result_lines(s, trace)
+        result_lines(s, trace, "await_result_lines", list(zip(EXAMPLE_TAGS, EXAMPLE_RESULTS)), RESULT_TOLERANCE)
     with s.part("callback"):
         trace = _example(s, "async_callback_example", "callback_runs", "callback_concurrent")
         second, last_first = trace.mentions(1, EXAMPLE_RESULTS[1], RESULT_TOLERANCE), trace.last_draw(0)
@@ -114,31 +120,8 @@ def grade(s: Session) -> None:
                  else "task 2's result was printed while task 1 was still retrying" if second[0] < last_first else
                  "task 2's result was printed only after task 1 had finished",
                  f"task 2's result ({EXAMPLE_RESULTS[1]}) printed as soon as task 2 ends, before task 1's last roll")
-
-
-def _result_lines(s: Session, trace: Trace) -> None:
-    """``await_result_lines``: a line 'The result of task=<tag> was <result>.' for task1 and task2, with their results."""
-    text = "".join(str(e[2]) for e in trace.events if e[0] == "out")
-    found = {}
-    for line in text.splitlines():
-        match = RESULT_LINE.match(line.strip())
-        if match:
-            try:
-                found.setdefault(match.group("tag"), []).append(float(match.group("value")))
-            except ValueError:
-                continue
-    wanted = list(zip(EXAMPLE_TAGS, EXAMPLE_RESULTS))
-    missing = [f"task={tag} ({value})" for tag, value in wanted
-               if not any(abs(v - value) <= RESULT_TOLERANCE for v in found.get(tag, []))]
-    printed = [line.strip() for line in text.splitlines() if line.strip()]
-    others = [line for line in printed if not RESULT_LINE.match(line) and "retry" not in line.lower()
-              and not line.endswith("Done.")]
-    s.record("await_result_lines", not missing,
-             "both result lines were printed" if not missing else
-             f"no result line for {' and '.join(missing)}" + (
-                 f"; result lines printed: {', '.join(f'task={tag}' for tag in found)}" if found else "")
-             + (f"; other lines: {'; '.join(repr(o) for o in others[:3])}" if others else ""),
-             "; ".join(f"'The result of task={tag} was {value}.'" for tag, value in wanted))
+        result_lines(s, trace, "callback_result_lines", list(zip(EXAMPLE_TAGS, EXAMPLE_RESULTS)),
+                     RESULT_TOLERANCE)
 
 
 def _cancelled(trace: Trace) -> str:

@@ -112,6 +112,8 @@ CHECKS = [
           "self.get_logger().info(f'Config: {msg.data}') in the configuration callback", **MONITOR),
     Check("monitor_logs_sensor", "It logs the readings it receives ('Temperature: 21.50')", 2,
           "self.get_logger().info(f'Temperature: {msg.temperature:.2f}') in the temperature callback", **MONITOR),
+    Check("monitor_logs_every_reading", "It logs every reading, not some of them", 1,
+          "log in the temperature callback, each time, with no throttle_duration_sec", **MONITOR),
     checks.ctrl_c("monitor_sigint_exit", "the monitor", **MONITOR),
     Check("cli_script", f"{SCRIPT} exists and is valid bash", 1, part="cli"),
     Check("cli_ends", "The script ends by itself, with exit code 0", 1, **CLI),

@@ -3,7 +3,10 @@
 Black-box, on the node's ``/rosout`` records while the grader itself is the tf2 tree:
 
 1. the node starts with no transform anywhere: it must keep running and say (WARN)
-   that ``world -> target`` is not available yet, never crash;
+   that ``world -> target`` is not available yet, never crash; then both frames exist, in
+   two trees that are not connected (``world -> ros2course_left``, ``target -> ros2course_right``):
+   tf2 raises ``ConnectivityException`` instead of ``LookupException``, and the node must
+   still keep running (it catches ``TransformException``, as the lesson says);
 2. the grader broadcasts ``world -> target`` on ``/tf`` at 20 Hz with a random
    translation: the node must log it (INFO, three decimals), and again at the next
    lookups while it stays (one record per lookup: never throttled, never only on change);
@@ -17,11 +20,13 @@ grading process's library path).
 
 from __future__ import annotations
 
-import threading
+import time
 
 from ros2course import kit
 from ros2course.kit import LATE_DELIVERY, Check, Session, checks, wait_until
 from ros2course.kit import topics_services as ts
+
+from ._tf2_listener import Broadcast, random_position
 
 PACKAGE = "python_package_that_uses_tf2"
 EXE = NODE = "frame_listener"
@@ -29,6 +34,10 @@ PARENT, CHILD = "world", "target"
 PERIOD = 0.5  # seconds between the node's lookups (2 Hz)
 BROADCAST_PERIOD = 0.05  # seconds between the grader's transforms (20 Hz, like a moving robot)
 UNAVAILABLE_WINDOW = 1.5  # seconds with no transform: about three lookups
+#: Seconds both frames exist in two unconnected trees: two lookups or more, each raising ConnectivityException.
+UNCONNECTED_WINDOW = 1.2
+#: The frames the grader hangs under world and under target while the two are not connected.
+UNCONNECTED_CHILDREN = ("ros2course_left", "ros2course_right")
 #: Seconds for a logged position: the node's next lookups plus discovery of the grader's publisher.
 LOG_TIMEOUT = 4.0
 TOLERANCE = 0.002  # metres: logged with three decimals
@@ -56,10 +65,15 @@ CHECKS = [
     Check("warning_says_so", f"Its warning says what is missing (names {PARENT}, {CHILD} or the transform)", 1,
           f"e.g. self.get_logger().warning(f'{PARENT} -> {CHILD} not available yet: {{exc}}'): tf2's exception "
           "text names the missing frame", part="listener", needs=("waits_for_transform",)),
+    Check("survives_unconnected", f"With {PARENT} and {CHILD} in two unconnected trees, it still keeps running", 1,
+          "catch tf2_ros.TransformException, the base class of LookupException, ConnectivityException and "
+          "ExtrapolationException: while nothing is broadcast the lookup raises LookupException, once both frames "
+          "exist but are not connected it raises ConnectivityException", part="listener",
+          needs=("waits_for_transform",)),
     Check("logs_transform", f"It logs (INFO) where {CHILD} is in {PARENT} once the transform exists", 3,
           f"t = self.buffer.lookup_transform('{PARENT}', '{CHILD}', rclpy.time.Time()); log "
           "t.transform.translation's x, y, z with three decimals with self.get_logger().info(...) (the warning is "
-          "for the failed lookups)", needs=("waits_for_transform",), part="listener"),
+          "for the failed lookups)", needs=("survives_unconnected",), part="listener"),
     Check("logs_every_lookup", "It logs the position at every lookup, not only once or when it changes", 1,
           "log the position in every timer callback, with no throttle_duration_sec, once=True or 'only if it "
           "moved' test: one record per lookup", needs=("logs_transform",), part="listener"),
@@ -68,46 +82,9 @@ CHECKS = [
           part="listener"),
     Check("lookup_rate", f"It looks the transform up every {PERIOD} s: one record per lookup", 1,
           f"create the timer with self.create_timer({PERIOD}, self.on_timer) and log once per tick (a warning "
-          "or the position)", needs=("waits_for_transform",), part="listener"),
+          "or the position)", needs=("survives_unconnected",), part="listener"),
     checks.ctrl_c("listener_sigint_exit", "the listener", **LISTENER),
 ]
-
-
-class _Broadcast:
-    """The grader's own ``world -> target`` on /tf, sent every :data:`BROADCAST_PERIOD` s from a thread."""
-
-    def __init__(self, s: Session, tf_message: type, transform_type: type) -> None:
-        self.s, self.tf_message, self.transform_type = s, tf_message, transform_type
-        self.publisher = s.graph.node.create_publisher(tf_message, "/tf", ts.reliable_qos(100))
-        self.position: tuple[float, float, float] | None = None
-        self.stop = threading.Event()
-        self.thread = threading.Thread(target=self._run, name="ros2course-tf-broadcast", daemon=True)
-        self.thread.start()
-        s.on_close(self.close)
-
-    def _run(self) -> None:
-        while not self.stop.wait(BROADCAST_PERIOD):
-            if self.position is None:
-                continue
-            t = self.transform_type()
-            t.header.stamp = self.s.graph.node.get_clock().now().to_msg()
-            t.header.frame_id, t.child_frame_id = PARENT, CHILD
-            t.transform.translation.x, t.transform.translation.y, t.transform.translation.z = self.position
-            t.transform.rotation.w = 1.0
-            self.publisher.publish(self.tf_message(transforms=[t]))
-
-    def close(self) -> None:
-        self.stop.set()
-        self.thread.join(timeout=2.0)
-
-
-def _random_position(s: Session, far_from: tuple[float, float, float] | None = None) -> tuple[float, float, float]:
-    """Three decimals each in [-3, 3] m, every coordinate at least 0.5 m from ``far_from``'s (Session.random)."""
-    while True:
-        found = tuple(round(s.random.uniform(-3.0, 3.0), 3) for _ in range(3))
-        if min(abs(v) for v in found) > 0.2 and (far_from is None or
-                                                  all(abs(a - b) > 0.5 for a, b in zip(found, far_from))):
-            return found
 
 
 def _logged(rosout, node: str, position: tuple[float, float, float]) -> list:
@@ -169,10 +146,33 @@ def _grade_listener(s: Session) -> None:
              f"a warning that names {PARENT}, {CHILD} or the transform")
     if not alive:
         return
+    from geometry_msgs.msg import TransformStamped  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+    broadcast = Broadcast(s, tf_message, TransformStamped, PARENT, CHILD, BROADCAST_PERIOD)
+    if not _survives_unconnected(s, rosout, name, node, broadcast):
+        return
     try:
-        _follow(s, rosout, name, node, tf_message)
+        _follow(s, rosout, name, node, broadcast)
     finally:
         _lookup_rate(s, rosout, name, node)
+
+
+def _survives_unconnected(s: Session, rosout, name: str, node: kit.StartedNode, broadcast: Broadcast) -> bool:
+    """Record ``survives_unconnected``: with ``world`` and ``target`` in two trees (each with a child of the
+    grader's), the node's lookups raise ConnectivityException for :data:`UNCONNECTED_WINDOW` s; it must keep
+    running (helper audit of issue 37: a node catching only LookupException, the error of step 1, passed)."""
+    broadcast.edges = list(zip((PARENT, CHILD), UNCONNECTED_CHILDREN))
+    begin = time.time()
+    with s.phase("observe"):
+        wait_until(node.ended, UNCONNECTED_WINDOW)
+    alive = not node.ended()
+    warned = [w for w in rosout.records(node=name, level=WARN) if kit.stamp_seconds(w.stamp) >= begin]
+    return s.record("survives_unconnected", alive,
+                    (f"still running after {UNCONNECTED_WINDOW:.1f} s with {PARENT} and {CHILD} in two trees"
+                     + (f"; it warned: {warned[-1].msg[:120]!r}" if warned else "")) if alive else
+                    f"it ended once {PARENT} and {CHILD} both existed, unconnected: {kit.process_state(node.proc)}",
+                    f"it keeps running while the lookup raises ConnectivityException ({PARENT} -> "
+                    f"{UNCONNECTED_CHILDREN[0]} and {CHILD} -> {UNCONNECTED_CHILDREN[1]} on /tf, no path between "
+                    f"{PARENT} and {CHILD})")
 
 
 def _lookup_rate(s: Session, rosout, name: str, node: kit.StartedNode) -> None:
@@ -193,12 +193,10 @@ def _lookup_rate(s: Session, rosout, name: str, node: kit.StartedNode) -> None:
              source="the stamps of its log records, one per lookup", few_note=f"; {kit.process_state(node.proc)}")
 
 
-def _follow(s: Session, rosout, name: str, node: kit.StartedNode, tf_message: type) -> None:
+def _follow(s: Session, rosout, name: str, node: kit.StartedNode, broadcast: Broadcast) -> None:
     """Steps 2 and 3: logs_transform and follows_changes, the grader broadcasting ``world -> target``."""
-    from geometry_msgs.msg import TransformStamped  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
     # 2. the grader becomes the tf2 tree
-    broadcast = _Broadcast(s, tf_message, TransformStamped)
-    first = _random_position(s)
+    first = random_position(s)
     broadcast.position = first
     with s.phase("observe"):
         wait_until(lambda: bool(_logged(rosout, name, first)), LOG_TIMEOUT, abort=node.ended)
@@ -215,7 +213,7 @@ def _follow(s: Session, rosout, name: str, node: kit.StartedNode, tf_message: ty
         return
     _every_lookup(s, rosout, name, node, first)
     # 3. target moves
-    second = _random_position(s, far_from=first)
+    second = random_position(s, far_from=first)
     broadcast.position = second
     with s.phase("observe"):
         wait_until(lambda: bool(_logged(rosout, name, second)), LOG_TIMEOUT, abort=node.ended)

@@ -480,7 +480,12 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
                               1.0, 1.0, "stale: graded on 2026-11-20 under grader fingerprint 0, now 1")
     assert module._held_out_cell(SimpleNamespace(held_out=small, stale="", data={})) == (
         "100 % of 12 counted (raw 100 %; 12 graded of the 12 no earlier sample took, seed 2; 0 uncovered) "
-        "(too small to judge: 12 < 20) **stale** (2026-11-20)")
+        "(too small to judge: 12 < 20; only 12 were left to draw) **stale** (2026-11-20)")
+    # the row says why the lesson cannot reach 20 (issue 37): what the sample's graded mutants became
+    assert module._too_small(2, {"graded": 30, "pool": 798, "sample": 30, "killed_by_build": 28}) == (
+        " (too small to judge: 2 < 20; 28 of 30 broke the build (caught before any check))")
+    assert module._too_small(4, {"graded": 30, "pool": 46, "sample": 30, "killed_by_build": 11, "triaged": 15}) == (
+        " (too small to judge: 4 < 20; 11 of 30 broke the build (caught before any check); 15 triaged as equivalent)")
     assert module._held_out_cell(SimpleNamespace(held_out=None, stale="", data={})) == "not drawn"
     # a first sample measured again drops its held-out one; what the earlier held-out samples scored still shows
     again = SimpleNamespace(held_out=None, stale="", data={"fingerprint": "f2", mut.EARLIER_KEY: [

@@ -763,6 +763,31 @@ rclpy._rclpy_pybind11.RCLError: failed to create timer: the given context is not
     assert not rclpy_shutdown_race(last_traceback(after_own_shutdown))
 
 
+_NO_EXECUTOR_RACE = '''Traceback (most recent call last):
+  File "/ws/install/pkg/lib/python3.11/site-packages/pkg/pose_client.py", line 40, in main
+    node = SetPoseClient()
+  File "/ws/install/pkg/lib/python3.11/site-packages/pkg/pose_client.py", line 22, in __init__
+    rclpy.spin_once(self, timeout_sec=1.0)
+  File "/venv/lib/python3.11/site-packages/rclpy/__init__.py", line 222, in spin_once
+    executor.add_node(node)
+AttributeError: 'NoneType' object has no attribute 'add_node'
+'''
+
+
+def test_the_global_executor_reset_by_the_shutdown_is_rclpys_race_too() -> None:
+    """Stop 69, gazebo-custom-nodes' reference (1 run in 20 at load 2): Ctrl+C between two spin_once() calls of
+    a wait loop resets rclpy's global executor; the next call's get_global_executor() returns None on the
+    shut-down context and rclpy/__init__.py raises AttributeError. The same error raised by the program's own
+    code (its last frame outside rclpy) is the program's."""
+    from ros2course.run.process import last_traceback, rclpy_shutdown_race
+
+    assert rclpy_shutdown_race(last_traceback(_NO_EXECUTOR_RACE))
+    own = _NO_EXECUTOR_RACE.replace("/venv/lib/python3.11/site-packages/rclpy/__init__.py", "/ws/pkg/helpers.py")
+    assert not rclpy_shutdown_race(last_traceback(own))
+    other = _NO_EXECUTOR_RACE.replace("'add_node'", "'spin_once'")
+    assert not rclpy_shutdown_race(last_traceback(other))
+
+
 def test_a_launched_nodes_traceback_is_read_without_launchs_prefix() -> None:
     """CI, stop 65: under ``ros2 launch`` each line reads ``[name-1] ...``; the traceback was cut at its first
     frame, so rclpy's race in a launched node (the launch-and-run reference) was taken for the learner's."""

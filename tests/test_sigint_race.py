@@ -12,11 +12,13 @@ printed is given, the verdict is the step's.
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import pytest
 
 from ros2course.grade.session import GradingSession
 from ros2course.kit import Check
-from ros2course.kit.nodes import sigint_exit
+from ros2course.kit.nodes import ctrl_c_once_it_logs, sigint_exit
 from ros2course.kit.programs import ProgramRun
 from ros2course.run.process import ExitReport
 
@@ -167,3 +169,46 @@ def test_a_script_run_with_another_traceback_or_exit_code_fails(s):
     assert not sigint_exit(s, "sigint_exit", _script_run(0, SHUTDOWN))
     assert "ExternalShutdownException" in s.results["sigint_exit"].observed
     assert not sigint_exit(s, "sigint_exit", _script_run(1, RACE))
+
+
+class StandInRosout:
+    """/rosout as a list of records of one logger: each launch writes its 'waiting' record."""
+
+    def __init__(self) -> None:
+        self.count = 0
+
+    def records(self, node=None):
+        return [object()] * self.count
+
+
+class LoggingSession(GradingSession):
+    """A grading session whose graph is a stand-in: only ``rosout()`` is used by the step."""
+
+    def __init__(self, tmp_path, rosout) -> None:
+        super().__init__(None, [Check("sigint_exit", "Ctrl+C", 1)], tmp_path, tmp_path / "log", {})
+        self._rosout = rosout
+
+    @property
+    def graph(self):
+        return SimpleNamespace(rosout=lambda: self._rosout)
+
+
+def test_ctrl_c_once_it_logs_judges_a_fresh_run_started_the_same_way(tmp_path):
+    """kit.ctrl_c_once_it_logs (the action client's, Gazebo's and Nav2's waiting programs): the first run's
+    Ctrl+C is judged as the part ends; after rclpy's race a fresh run, started by the same launch with the
+    suffix '.again' and waited for until it logs, is judged instead."""
+    rosout = StandInRosout()
+    runs = iter([StandInProcess(1, RACE), StandInProcess(0)])
+    suffixes = []
+
+    def launch(suffix):
+        suffixes.append(suffix)
+        rosout.count += 1  # it says it waits
+        return next(runs)
+
+    s = LoggingSession(tmp_path, rosout)
+    with s.part("interrupted"):
+        first = ctrl_c_once_it_logs(s, "sigint_exit", launch, "client", patience=1.0)
+        assert suffixes == [""] and first.running
+    result = s.results["sigint_exit"]
+    assert suffixes == ["", ".again"] and result.passed and "a second run" in result.observed, result.observed

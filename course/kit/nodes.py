@@ -274,7 +274,7 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
                 passed = sigint_exit(s, check_id, fresh, sigint_timeout, again, races=races + 1)
                 if check_id in s.results and races == 0 and _REPEATED not in s.results[check_id].observed:
                     s.amend(check_id, observed=f"{s.results[check_id].observed} (a second run: the first Ctrl+C "
-                            "ended in rclpy's own shutdown race, RCLError inside rclpy's executor, which says nothing "
+                            "ended in rclpy's own shutdown race, an error raised inside rclpy itself, which says nothing "
                             "about your code)")
                 return passed
             if races:  # the same error in every fresh run: no race, the program's own doing
@@ -284,7 +284,7 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
                                 "with no `if __name__ == '__main__':` guard, and again by the entry point)? rclpy's "
                                 "global executor (rclpy.spin, rclpy.spin_once) keeps the first, shut-down context")
             return s.record(check_id, True, f"exit code {report.returncode}, {seconds:.2f} s after SIGINT{twice}, "
-                            "with rclpy's own shutdown race (RCLError inside rclpy's executor: not your code)", expected)
+                            "with rclpy's own shutdown race (an error raised inside rclpy itself: not your code)", expected)
         return s.record(check_id, False, f"exit code {report.returncode} with a traceback: {last}", expected)
     if report.returncode != 0:
         return s.record(check_id, False, f"exit code {report.returncode} after SIGINT", expected)

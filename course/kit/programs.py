@@ -213,7 +213,7 @@ def judge_interrupted_run(s: Session, check_id: str, run: ProgramRun, exit_timeo
 
     A script whose nodes run inside it (``ros2 run``/``ros2 launch`` in bash) that exits 0 with nothing left
     running, but printed rclpy's own Ctrl+C race from one of its nodes
-    (:func:`~ros2course.run.process.rclpy_shutdown_race`: an RCLError inside rclpy's executor), passes: the
+    (:func:`~ros2course.run.process.rclpy_shutdown_race`: an error raised inside rclpy itself), passes: the
     script cannot be run again without its nodes' first run, so that exit counts as clean, as
     :func:`~ros2course.kit.nodes.sigint_exit` counts it for a node it cannot start again (CI of stop 54: the
     launch-and-run reference lost its Ctrl+C check once through ``grade``).
@@ -225,8 +225,8 @@ def judge_interrupted_run(s: Session, check_id: str, run: ProgramRun, exit_timeo
     elif run.timed_out:
         observed = f"still running {exit_timeout:.0f} s after Ctrl+C (stopped)"
     elif race:
-        observed = (f"{run.ending()}; one of its nodes printed rclpy's own shutdown race (RCLError inside rclpy's "
-                    "executor when Ctrl+C lands as it works: not your code)")
+        observed = (f"{run.ending()}; one of its nodes printed rclpy's own shutdown race (an error raised inside "
+                    "rclpy itself when Ctrl+C lands as it works: not your code)")
     elif run.traceback:
         observed = f"{run.ending()} with a traceback: {run.exception()}"
     elif run.left_running:

@@ -108,7 +108,10 @@ def fields(s: Session, check_id: str, what: str, observed: dict | None, expected
     """Record ``check_id`` on whether a type has exactly the ``expected`` fields (name -> type).
 
     Partial credit per field with the right name and type; unexpected extra
-    fields cost one share. ``observed`` None means the type cannot be
+    fields cost one share. The fields must come in ``expected``'s order (a
+    message's fields are serialized in the order its file declares them:
+    the same fields in another order are another layout); the right fields
+    in another order lose one share. ``observed`` None means the type cannot be
     imported (``error`` says why). The rule is the tutorial's (seed ch. 17.4, 17.6).
     """
     wanted = ", ".join(f"{t} {n}" for n, t in expected.items())
@@ -127,6 +130,9 @@ def fields(s: Session, check_id: str, what: str, observed: dict | None, expected
     extra = [f"{t} {n}" for n, t in observed.items() if n not in expected]
     if extra:
         problems.append("unexpected field(s): " + ", ".join(extra))
+    if not problems and list(observed) != list(expected):  # the order is the message's layout (CDR, in order)
+        problems.append("the fields are in another order than " + ", ".join(expected))
+        good -= 1
     total = len(expected) + (1 if extra else 0)
     shown = ", ".join(f"{t} {n}" for n, t in observed.items()) or "no fields"
     return s.record(check_id, not problems, f"{what}: {shown}" + (f" ({'; '.join(problems)})" if problems else ""),

@@ -195,11 +195,17 @@ def rclpy_shutdown_race(trace: str) -> bool:
 
     The same shutdown can land while the executor runs one of the program's
     callbacks, whose next rclpy call (a publish, a timer it makes) raises
-    ``RCLError: ... context is invalid`` from inside rclpy.
+    ``RCLError: ... context is invalid`` from inside rclpy. And it can land
+    between two ``rclpy.spin_once()`` calls of a wait loop: the shutdown
+    resets rclpy's global executor, and the next call's
+    ``get_global_executor()`` returns None on the shut-down context
+    (``AttributeError: 'NoneType' object has no attribute 'add_node'``,
+    raised in ``rclpy/__init__.py``): rclpy's too.
 
     True when the exception is that RCLError, raised inside the ``rclpy``
     package (its last frame), while the executor was running (a frame in
-    ``rclpy/executors.py``). A program that calls rclpy after its own
+    ``rclpy/executors.py``), or that AttributeError raised in
+    ``rclpy/__init__.py`` itself. A program that calls rclpy after its own
     ``rclpy.shutdown()`` in ``main`` (no executor frame) is not matched. A
     check that can start the program again (``kit.nodes.sigint_exit``'s
     ``again``) judges a fresh run instead, so a program whose own callback
@@ -211,8 +217,18 @@ def rclpy_shutdown_race(trace: str) -> bool:
     lines = [line for line in trace.strip().splitlines() if line.strip()]
     frames = [line for line in lines if line.lstrip().startswith('File "')]
     last = lines[-1] if lines else ""
+    if frames and "/rclpy/__init__.py" in frames[-1] and last.endswith(_NO_GLOBAL_EXECUTOR):
+        return True
     return (bool(frames) and "/rclpy/" in frames[-1] and any("/rclpy/executors.py" in f for f in frames)
             and "RCLError" in last and ("context is not valid" in last or "context is invalid" in last))
+
+
+#: The last line of rclpy's third shutdown race (Jazzy 7.1, ``rclpy/__init__.py``): Ctrl+C lands between two
+#: ``rclpy.spin_once()`` calls; the shutdown resets the global executor to None, and the next call's
+#: ``get_global_executor()`` makes a new one whose ``context.on_shutdown(reset_executor)`` runs at once on the
+#: shut-down context, so it returns None and ``executor.add_node(node)`` raises (gazebo-custom-nodes' reference,
+#: 1 run in 20 at load 2, stop 69).
+_NO_GLOBAL_EXECUTOR = "AttributeError: 'NoneType' object has no attribute 'add_node'"
 
 
 #: A ROS log line at ERROR or FATAL severity as rcutils prints it (``[ERROR] [1732000000.1] [node]: text``).

@@ -14,7 +14,8 @@ events, read by :mod:`graders._asyncio_trace`):
   ``["result", name, value]``, ``["error", name or mode, "Type: message"]``.
 
 In ``probe`` mode it imports the module, checks ``unlikely_to_return`` and calls
-it in three scenarios (default likelihood, likelihood=0.4, two calls gathered);
+it in four scenarios (default likelihood, likelihood=0.4, a roll equal to the default likelihood, two
+calls gathered);
 in ``module`` mode it runs the module as ``__main__``.
 """
 import asyncio
@@ -112,6 +113,7 @@ def _probe():
     scenarios = [
         ("default", [[0.5, 0.95, 0.3, 0.0777]], lambda: function("probe")),
         ("likelihood", [[0.5, 0.35]], lambda: function("probe", likelihood=0.4)),
+        ("boundary", [[0.1, 0.0999]], lambda: function("probe")),
         ("gather", [[0.52, 0.81, 0.67, 0.93, 0.0312], [0.61, 0.0687]],
          lambda: asyncio.gather(function("first"), function("second"))),
     ]
