@@ -83,6 +83,7 @@ def spins(check_id: str = "spins", needs: tuple[str, ...] = ("executable",), par
     ``while True`` loop with ``time.sleep`` logs and publishes the same, but never lets
     the node answer anything. print-forever-node, publisher-subscriber and use-python-library grade it.
     """
-    return Check(check_id, "The node spins: it answers a call to its parameter services (ros2 param list)", 1,
-                 "put the periodic work in a timer callback (self.create_timer) and call rclpy.spin(node) in main(): "
-                 "a while loop with time.sleep never lets the node answer anything", needs=needs, part=part)
+    return Check(check_id, "The node spins: it answers calls to its parameter services at once (ros2 param list)",
+                 1, "put the periodic work in a timer callback (self.create_timer) and call rclpy.spin(node) in "
+                 "main(): a while loop with time.sleep never lets the node answer anything, or (with a spin_once "
+                 "between sleeps) only now and then", needs=needs, part=part)

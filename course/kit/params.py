@@ -336,21 +336,48 @@ def declared(s: Session, declared_id: str, defaults_id: str, services: NodeParam
 
 #: Seconds for a node's parameter services to appear, then to answer (:func:`record_spins`).
 SPIN_TIMEOUT = 5.0
+#: Seconds between the timed calls of :func:`record_spins`: irregular, so no loop's period can meet them in step.
+SPIN_GAPS = (0.23, 0.31, 0.17, 0.37, 0.26, 0.13, 0.34, 0.21, 0.29)
+#: Median seconds a spinning node may take to answer: an executor serves a call at once (a few ms; tens under
+#: load), a loop that spins once between sleeps of ``p`` seconds answers after ``p / 2`` on average.
+SPIN_LATENCY = 0.15
 
 
 def record_spins(s: Session, check_id: str, started: Any) -> bool:
     """Record ``check_id`` (declared with :func:`ros2course.kit.checks.spins`): the running node
-    (a :class:`~ros2course.kit.nodes.StartedNode`) answers ``list_parameters`` within
-    :data:`SPIN_TIMEOUT` seconds (what ``ros2 param list`` calls).
+    (a :class:`~ros2course.kit.nodes.StartedNode`) answers ``list_parameters`` (what ``ros2 param list`` calls)
+    within :data:`SPIN_TIMEOUT` seconds, and answers it at once: of one call after each of the irregular pauses
+    :data:`SPIN_GAPS`, the median answer comes within :data:`SPIN_LATENCY` s.
 
     Every rclpy and rclcpp node offers its parameter services; the executor that spins
     the node serves them. A node whose process never spins (a ``while`` loop with
-    ``time.sleep`` instead of a timer, seed ch. 13.3) has the services but never answers.
+    ``time.sleep`` instead of a timer, seed ch. 13.3) has the services but never answers; one
+    that spins once between two sleeps (``rclpy.spin_once(node, timeout_sec=0)`` then
+    ``time.sleep(0.5)``, the ROS 1 habit) answers only between sleeps, about a quarter of a second
+    late: the lesson's "would block spin and starve every other callback" (helper audit of issue 37).
     """
-    expected = f"/{started.name or '<your node>'} answers list_parameters within {SPIN_TIMEOUT:.0f} s"
+    expected = (f"/{started.name or '<your node>'} answers list_parameters within {SPIN_TIMEOUT:.0f} s, and at "
+                f"once: the median of {len(SPIN_GAPS)} answers within {SPIN_LATENCY * 1000:.0f} ms")
     try:
-        names = connect(s, started.name, proc=started.proc, why="no node of yours appeared",
-                        timeout=SPIN_TIMEOUT).names()
+        services = connect(s, started.name, proc=started.proc, why="no node of yours appeared",
+                           timeout=SPIN_TIMEOUT)
+        names = services.names()
+        latencies = []
+        for gap in SPIN_GAPS:
+            if started.proc.poll() is not None:
+                break
+            time.sleep(gap)
+            begin = time.monotonic()
+            services.names()
+            latencies.append(time.monotonic() - begin)
     except Unmet as exc:
         return s.record(check_id, False, f"{exc}: the node does not spin", expected)
-    return s.record(check_id, True, f"/{started.name} answered with {len(names)} parameter name(s)", expected)
+    if not latencies:
+        return s.record(check_id, False, f"/{started.name} answered once, then ended: "
+                        f"{process_state(started.proc)}", expected)
+    median = sorted(latencies)[len(latencies) // 2]
+    return s.record(check_id, median <= SPIN_LATENCY,
+                    f"/{started.name} answered with {len(names)} parameter name(s), in {median * 1000:.0f} ms "
+                    f"(median of {len(latencies)} calls; slowest {max(latencies) * 1000:.0f} ms)"
+                    + ("" if median <= SPIN_LATENCY else ": it serves calls only now and then (a loop that "
+                       "sleeps between spins?)"), expected)
