@@ -122,7 +122,9 @@ def pair(key: Path, pub: Path, tmp: Path) -> Found:
     opened = tool("age", "-d", "-i", str(copy), data=locked.stdout) if locked and locked.returncode == 0 else None
     return {
         "private_key": (True, f"ssh-keygen -y reads {key.name}: {ours[0]} key, no passphrase"),
-        "private_mode": (mode & 0o077 == 0 and mode & 0o400 != 0, f"{key.name} has mode {mode:o}"),
+        # exactly 600, the lesson's mode (400 or 700 keep others out too, but the lesson and its title say 600,
+        # and script_keeps_key asks the same of the script's key: helper audit of issue 37)
+        "private_mode": (mode == 0o600, f"{key.name} has mode {mode:o}"),
         "ed25519": (listed.endswith("(ED25519)"), f"ssh-keygen -l -f {key.name}: {listed or 'nothing'}"),
         "public_matches": (ours == theirs, f"{pub.name} holds {' '.join(theirs)[:60] or 'nothing'}...; ssh-keygen -y "
                                            f"derives {' '.join(ours)[:60]}... from {key.name}"),

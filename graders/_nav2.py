@@ -197,8 +197,18 @@ def pose_run(s: Session, message_type: type, path: Any) -> None:
     with s.phase("observe"):
         kit.wait_until(lambda: bool(second.messages()), PUBLISH_TIMEOUT, abort=_gone(node.proc))
     received, received_stamps = second.messages(), second.send_stamps()
-    if not received:
-        early = len(first.messages())
+    heard, heard_stamps = first.messages(), first.send_stamps()
+    if not received and heard and heard_stamps[0] > joined:
+        # the node counted amcl and published (after amcl's subscription existed: its send stamp), and the first
+        # subscriber got it; amcl's own reader had not matched the node's writer yet on the grader's side (1 run
+        # in 60 at load 2 and more, stop 69), and the node ended before a reliable repair: the grader's race
+        s.record("pose_published", True, f"a PoseWithCovarianceStamped on {TOPIC}, sent {heard_stamps[0] - joined:.2f} s "
+                 "after amcl's subscription existed: the first subscriber got it, amcl's own had not matched yet "
+                 "(the grader's discovery under load, not your node)", f"one PoseWithCovarianceStamped on {TOPIC} "
+                 "that amcl receives")
+        received, received_stamps = heard, heard_stamps
+    elif not received:
+        early = len(heard)
         s.record("pose_published", False, f"amcl (the second subscriber) got no message on {TOPIC} in "
                  f"{PUBLISH_TIMEOUT:.0f} s after it joined"
                  + (f"; the first subscriber got {early} before amcl joined" if early else
@@ -206,13 +216,14 @@ def pose_run(s: Session, message_type: type, path: Any) -> None:
                  + f"; last log records: {_last(rosout, POSE_NODE)}; {kit.process_state(node.proc)}",
                  f"one PoseWithCovarianceStamped on {TOPIC} that amcl receives")
         s.require("pose_published")
-    s.record("pose_published", True, f"amcl got a PoseWithCovarianceStamped on {TOPIC}",
-             f"one PoseWithCovarianceStamped on {TOPIC} that amcl receives")
+    else:
+        s.record("pose_published", True, f"amcl got a PoseWithCovarianceStamped on {TOPIC}",
+                 f"one PoseWithCovarianceStamped on {TOPIC} that amcl receives")
     # the first subscriber's first message: anything the node sent before amcl joined (or amcl's, not there yet);
     # and amcl's first by its publication sequence number: number k > 1 means k - 1 were written before it, which
     # neither subscriber may have heard (sent before discovery matched them), so before the node counted amcl
     early = joined - (first.send_stamps() or received_stamps)[0]
-    unheard = (second.sequence_numbers()[0] or 1) - 1
+    unheard = ((second.sequence_numbers() or first.sequence_numbers() or [1])[0] or 1) - 1
     s.record("after_second", early <= 0 and not unheard,
              f"published {early:.2f} s before the second subscriber joined (one subscriber then)" if early > 0 else
              f"{unheard} message(s) written before the one amcl got first (its publication sequence number is "

@@ -18,6 +18,7 @@ program run goes through the kit (:mod:`ros2course.kit.cmake`).
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
@@ -68,6 +69,9 @@ CHECKS = [
     Check("app_configures", f"The app configures and find_package({PACKAGE}) finds it through the prefix only", 2,
           "in the app: find_package(Greeting REQUIRED) and target_link_libraries(greeting_app PRIVATE "
           "Greeting::greeting); configure with -DCMAKE_PREFIX_PATH=<prefix>", needs=("library_installs",)),
+    Check("app_finds_nothing_else", f"Without a prefix on the command line, find_package({PACKAGE}) finds nothing", 1,
+          "no HINTS or PATHS in find_package, no path to a prefix inside the project: the prefix comes from "
+          "-DCMAKE_PREFIX_PATH only", needs=("app_configures",)),
     Check("app_builds", "The app compiles and links against the installed library", 2,
           "link the imported target: target_link_libraries(greeting_app PRIVATE Greeting::greeting); it brings "
           "the include folder and the library file", needs=("app_configures",)),
@@ -105,6 +109,7 @@ def grade(s: Session) -> None:
     ck.step(s, "app_configures", [cmake, "-S", str(source), "-B", str(build), *ck.ISOLATED_OPTIONS],
             "cmake-configure-app", shown="cmake configure", expected=expected, **options)
     ck.found_package(s, "app_configures", build, PACKAGE, prefix, expected, paths=options["paths"])
+    _finds_nothing_else(s, env, cmake, source, scratch)
     ck.step(s, "app_builds", [cmake, "--build", str(build), "--parallel", "2"], "cmake-build-app",
             shown="cmake --build", expected=f"the app compiles and links {TARGET}", **options)
     linked = ck.links_from(build, prefix, "greeting")
@@ -121,12 +126,40 @@ def grade(s: Session) -> None:
              f"printed {out[:200]!r}, {run.describe()}", f"prints exactly {EXPECTED_OUTPUT!r}, exit code 0")
 
 
+#: find_package(...) with HINTS or PATHS, or $ENV{HOME} anywhere: a search path the project names itself.
+_OWN_SEARCH_PATH = re.compile(r"find_package\s*\([^)]*\b(?:HINTS|PATHS)\b[^)]*\)|\$ENV\{HOME\}", re.IGNORECASE)
+
+
+def _finds_nothing_else(s: Session, env: dict[str, str], cmake: str, source: Path, scratch: Path) -> None:
+    """``app_finds_nothing_else``: the app configured with no CMAKE_PREFIX_PATH at all (and an empty HOME) must not
+    find the package: the lesson's "find_package(Greeting) must find it there, and nothing else may". A project
+    that points find_package at a prefix itself (``PATHS ${CMAKE_CURRENT_SOURCE_DIR}/../prefix``, ``HINTS
+    $ENV{HOME}/...``) found the grader's prefix or the learner's and passed (helper audit of issue 37)."""
+    home = scratch / "empty-home"
+    home.mkdir(exist_ok=True)
+    bare = {k: v for k, v in env.items() if k != "CMAKE_PREFIX_PATH"} | {"HOME": str(home)}
+    build = scratch / "app-build-without-prefix"
+    run = run_program(s, [cmake, "-S", str(source), "-B", str(build), *ck.ISOLATED_OPTIONS], "cmake-configure-bare",
+                      timeout=RUN_TIMEOUT * 4, env=bare, cwd=scratch)
+    found = ck.cache_value(build / "CMakeCache.txt", f"{PACKAGE}_DIR") or ""
+    located = found and not found.endswith("-NOTFOUND")
+    s.record("app_finds_nothing_else", not located,
+             f"configured with no CMAKE_PREFIX_PATH, it found {PACKAGE} at "
+             f"{found.replace(str(scratch), '<grader>')}: the project names a prefix itself" if located else
+             f"configured with no CMAKE_PREFIX_PATH, find_package({PACKAGE}) found nothing ({run.describe()})",
+             f"cmake configure with no CMAKE_PREFIX_PATH (and an empty HOME) does not find {PACKAGE}")
+
+
 def _judge_sources(s: Session) -> None:
     """``no_hardcoded_paths``: scan the two projects' CMake files (and the app must not reach into the library)."""
     root = s.workspace_root
     problems = [f"{path.relative_to(root)}: {found}" for folder in (LIBRARY, APP) for path in ck.cmake_files(root / folder)
                 for found in ck.hardcoded_paths(path.read_text(encoding="utf-8", errors="replace"),
                                                 ("CMAKE_INSTALL_PREFIX", "CMAKE_PREFIX_PATH", f"{PACKAGE}_DIR"))]
+    # a search path of its own in find_package, or the user's home: locations that only hold on one machine
+    problems += [f"{path.relative_to(root)}: {m.group(0)[:80]}" for path in ck.cmake_files(root / APP)
+                 for m in _OWN_SEARCH_PATH.finditer(ck.strip_comments(path.read_text(encoding="utf-8",
+                                                                                    errors="replace")))]
     if any("greeting_library" in ck.strip_comments(p.read_text(encoding="utf-8", errors="replace"))
            for p in ck.cmake_files(root / APP)):
         problems.append(f"{APP}/CMakeLists.txt reaches into the library's source folder (greeting_library)")

@@ -13,7 +13,7 @@ colcon reads it). Needs rclcpp: on the PyPI install, the source-built underlay
 from __future__ import annotations
 
 from ros2course import kit
-from ros2course.kit import Check, Session
+from ros2course.kit import Check, Session, checks, params
 from . import print_forever_node
 from .print_forever_node import grade_node, make_checks
 
@@ -30,6 +30,9 @@ CHECKS = [
     Check("buildtool_depend", "package.xml declares the ament_cmake build tool", 1,
           "keep <buildtool_depend>ament_cmake</buildtool_depend> in package.xml, as ros2 pkg create --build-type "
           "ament_cmake writes it (seed ch. 25): colcon orders builds by it and rosdep installs it"),
+    # a wall timer and rclcpp::spin (seed ch. 26), as the Python twin: a sleep loop logs the same records but
+    # never serves the node's parameter services (helper audit of issue 37: it passed every check)
+    checks.spins(),
 ]
 
 
@@ -53,4 +56,4 @@ def _buildtool_depend(s: Session) -> None:
 def grade(s: Session) -> None:
     """Read package.xml's build tool, run the C++ print_forever_node, read its /rosout records, then Ctrl+C it."""
     _buildtool_depend(s)
-    grade_node(s, PACKAGE, NODE, "rclcpp", ALIASES)
+    grade_node(s, PACKAGE, NODE, "rclcpp", ALIASES, while_waiting=lambda started: params.record_spins(s, "spins", started))

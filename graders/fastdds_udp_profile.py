@@ -11,9 +11,10 @@ listener of ``/chatter`` as docker would start them, in one ROS domain.
 
 from __future__ import annotations
 
+import os
 import re
 import shlex
-from pathlib import PurePosixPath
+from pathlib import Path, PurePosixPath
 
 from ros2course.kit import Check, Session, Unmet
 from . import _dds as dds
@@ -95,7 +96,8 @@ def grade_compose(s: Session) -> None:
     s.record("compose_stop_signal", not wrong and bool(services),
              f"no `stop_signal: SIGINT` in {', '.join(wrong)}" if wrong else "every service stops with SIGINT",
              "stop_signal: SIGINT in every service (Ctrl+C, as the nodes expect)")
-    bad = [f"{n}: {why}" for n, svc in services.items() if (why := _profile_problem(svc))]
+    compose = s.workspace_root / COMPOSE
+    bad = [f"{n}: {why}" for n, svc in services.items() if (why := _profile_problem(svc, compose))]
     s.record("compose_profile", not bad and bool(services), "; ".join(bad) or
              f"every service mounts fastrtps_profile.xml and sets {VARIABLE} to it",
              f"each service mounts fastrtps_profile.xml and sets {VARIABLE} to the path inside the container")
@@ -155,12 +157,22 @@ def _domain(s: Session, services: dict[str, dict]) -> None:
              "the same ROS_DOMAIN_ID (an integer from 0 to 232) in every service, or in none")
 
 
-def _profile_problem(service: dict) -> str:
-    """Why a compose service would not use the profile ("" if it would)."""
-    mounted = [target for target, source in dds.mounts(service).items()
-               if PurePosixPath(source).name == "fastrtps_profile.xml"]
+def _profile_problem(service: dict, compose: Path) -> str:
+    """Why a compose service would not use the profile ("" if it would). A relative host path of a bind mount is
+    relative to the compose file's folder (Compose file reference, volumes): it must lead to the learner's
+    ``docker/fastrtps_profile.xml``, not merely end in that name (helper audit of issue 37: ``./docker/...``
+    from docker/compose.yml passed; Docker then mounts an empty folder it makes, and Fast DDS falls back to
+    its default transports, shared memory included)."""
+    named = {target: source for target, source in dds.mounts(service).items()
+             if PurePosixPath(source).name == "fastrtps_profile.xml"}
+    wanted = os.path.normpath(compose.parent / PurePosixPath(PROFILE).name)
+    mounted = [target for target, source in named.items()
+               if os.path.normpath(compose.parent / os.path.expanduser(source)) == wanted]
     env = dds.environment(service)
     value = env.get(VARIABLE)
+    if named and not mounted:
+        return (f"the profile is mounted from {', '.join(sorted(set(named.values())))}, which from {COMPOSE}'s "
+                f"folder is not {PROFILE} (a relative path starts at the compose file: ./fastrtps_profile.xml)")
     if not mounted:
         return "fastrtps_profile.xml is not mounted (volumes:)"
     if value is None:

@@ -80,5 +80,21 @@ def grade(s: Session) -> None:
             s.record(check_id, False, f"{name} is not installed here", f"{name} is installed",
                      hint="this is a fault of the course's ROS install, not of your script")
             continue
+        if not _named(name, found, path.read_text(encoding="utf-8", errors="replace"), run.stdout):
+            s.record(check_id, False, f"your script never names {name} and printed none of its comments: the "
+                     "field lines alone do not tell it from another type with the same fields "
+                     "(geometry_msgs/msg/Vector3 and Point both hold float64 x, y, z)",
+                     f"your script prints the definition of {name}", hint=f"`ros2 interface show {name}` prints it")
+            continue
         scripts.printed(s, check_id, run, field_lines(found), f"definition of {name}", f"ros2 interface show {name}",
                         whole_lines=True)
+
+
+def _named(name: str, definition: Path, script: str, stdout: str) -> bool:
+    """Whether the run's definition is ``name``'s: the script names the type (``pkg/kind/Name`` or the short
+    ``pkg/Name`` ros2 interface show accepts), or the output holds one of the definition's comments (helper
+    audit of issue 37: ``ros2 interface show geometry_msgs/msg/Vector3`` printed Point's three field lines)."""
+    package, _, base = name.split("/")
+    comments = [line.split("#", 1)[1].strip() for line in definition.read_text(encoding="utf-8").splitlines()
+                if "#" in line and len(line.split("#", 1)[1].strip()) > 10]
+    return name in script or f"{package}/{base}" in script or any(comment in stdout for comment in comments)

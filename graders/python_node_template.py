@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from ros2course.kit import wait_until
 from ros2course.kit import Check, Session
-from ros2course.kit.packaging import ros2_run_executable
+from ros2course.kit.packaging import ros2_run_executable, run_installed_python
 
 PACKAGE = "python_package_with_a_node"
 EXECUTABLE = "sample_python_node"
@@ -30,7 +30,29 @@ CHECKS = [
           "nothing at the module's top level calls it again)", needs=("executable",)),
     Check("exit_code", "It ends by itself with exit code 0 and no traceback", 2,
           "main() should print and return; no loop, no sys.exit() with a non-zero code", needs=("executable",)),
+    Check("greeting_in_main", "main() prints the greeting; importing the module prints nothing", 1,
+          "put the print inside main(): a print at the module's top level runs when ros2 run imports the "
+          "module, and main() then does nothing", needs=("executable",)),
 ]
+
+#: Run with the workspace's Python: import the node's module, then call main(), each with stdout captured.
+_IMPORT_THEN_MAIN = """
+import contextlib, io, json, sys
+out = {}
+buffer = io.StringIO()
+try:
+    with contextlib.redirect_stdout(buffer):
+        import python_package_with_a_node.sample_python_node as module
+    out["import"] = buffer.getvalue()
+    buffer = io.StringIO()
+    with contextlib.redirect_stdout(buffer):
+        module.main()
+    out["main"] = buffer.getvalue()
+except BaseException as exc:
+    out["error"] = f"{type(exc).__name__}: {exc}"
+with open(sys.argv[1], "w", encoding="utf-8") as handle:
+    json.dump(out, handle)
+"""
 
 
 def _lines(text: str, limit: int = 3) -> str:
@@ -55,18 +77,21 @@ def grade(s: Session) -> None:
         proc.stop(sigint_timeout=1.0, sigterm_timeout=1.0)
     out = proc.stdout()
     printed = [line.strip() for line in out.splitlines()]
-    # the lesson shows the whole output: one greeting, then the program ends (seed ch. 10)
-    ok = printed.count(GREETING) == 1
+    # the lesson shows the whole output: one line, the greeting, then the program ends (seed ch. 10)
+    ok = [line for line in printed if line] == [GREETING]
     observed = f"stdout: {_lines(out)}"
     if printed.count(GREETING) > 1:
         observed += f" (the greeting {printed.count(GREETING)} times: is main() also called when the module is imported?)"
-    if not ok and GREETING.lower() in [line.lower().rstrip(".") + "." for line in printed]:
+    if not ok and GREETING not in printed and GREETING.lower() in [line.lower().rstrip(".") + "." for line in printed]:
         observed += " (close: check capitals and the final period)"
     if not ok and proc.stderr().strip() and not report.traceback:
         observed += f"; stderr: {_lines(proc.stderr())}"
     if not ok and report.traceback:
         observed += f"; it crashed: {report.traceback.strip().splitlines()[-1]}"
-    s.record("greeting", ok, observed, f"one line {GREETING!r} on stdout")
+    if printed.count(GREETING) == 1 and not ok:
+        observed += " (other lines besides the greeting)"
+    s.record("greeting", ok, observed, f"one line {GREETING!r} on stdout, and nothing else")
+    _greeting_in_main(s)
     expected = f"exit code 0 within {EXIT_TIMEOUT:.0f} s, no traceback"
     if not ended_alone:
         s.record("exit_code", False, f"still running after {EXIT_TIMEOUT:.0f} s (stopped with {report.signal_used})",
@@ -76,3 +101,17 @@ def grade(s: Session) -> None:
                  f"{report.traceback.strip().splitlines()[-1]}", expected)
     else:
         s.record("exit_code", report.returncode == 0, f"exit code {report.returncode}", expected)
+
+
+def _greeting_in_main(s: Session) -> None:
+    """``greeting_in_main``: importing the installed module prints nothing, calling its main() prints the greeting
+    (helper audit of issue 37: a print at the module's top level and an empty main() printed the same one line
+    through ros2 run)."""
+    found, problem = run_installed_python(s, _IMPORT_THEN_MAIN)
+    expected = f"import python_package_with_a_node.sample_python_node prints nothing; main() prints {GREETING!r}"
+    if problem or "error" in found:
+        s.record("greeting_in_main", False, problem or found["error"], expected)
+        return
+    at_import, in_main = found.get("import", ""), found.get("main", "")
+    s.record("greeting_in_main", not at_import.strip() and GREETING in in_main,
+             f"the import printed {_lines(at_import)}; main() printed {_lines(in_main)}", expected)

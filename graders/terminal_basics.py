@@ -129,7 +129,10 @@ def _grade_listing(s: Session, lesson: Path) -> None:
     own = "result_of_ls.txt"
     what = f"result_of_ls.txt listing exactly the names ls shows in {FOLDER}/ now ({own} itself may be among them)"
     lines = files.lines(files.entry(s, "result_of_ls", lesson / own, lesson, what))
-    listed = {line[:-1] if line.endswith("/") and len(line) > 1 else line for line in lines if line.strip()}
+    names = [line[:-1] if line.endswith("/") and len(line) > 1 else line for line in lines if line.strip()]
+    listed = set(names)
+    # plain ls lists each name once: a name twice is a listing appended to an older one (ls >> ..., helper audit)
+    twice = sorted({name for name in names if names.count(name) > 1})
     # what plain ls shows: every entry except those whose names start with a dot
     present = {entry.name for entry in os.scandir(lesson) if not entry.name.startswith(".")}
     missing, extra = (present - {own}) - listed, listed - present
@@ -141,10 +144,14 @@ def _grade_listing(s: Session, lesson: Path) -> None:
         hint = "the lesson asks for plain ls (names only): ls > result_of_ls.txt"
     else:
         details = ([f"not in the listing: {files.names(missing)}"] if missing else []) + (
-            [f"listed but not in the folder: {files.names(extra)}"] if extra else [])
+            [f"listed but not in the folder: {files.names(extra)}"] if extra else []) + (
+            [f"listed more than once: {files.names(twice)}"] if twice else [])
         observed = f"result_of_ls.txt lists {files.names(listed)}; {FOLDER}/ holds {files.names(present)}" + (
             f" ({'; '.join(details)})" if details else ", which is what the folder holds")
         if missing and not extra:
             hint = ("the folder changed after you ran ls: run ls > result_of_ls.txt again, inside terminal_basics/, "
                     "as your last command")
-    s.record("result_of_ls", listed in (present, present - {own}) and not long_format, observed, what, hint=hint)
+        elif twice:
+            hint = "> replaces the file's contents, >> adds to them: ls > result_of_ls.txt, as your last command"
+    s.record("result_of_ls", listed in (present, present - {own}) and not long_format and not twice, observed, what,
+             hint=hint)
