@@ -574,10 +574,14 @@ def _logs_every_reading(s: Session, feed: Feed, logged_readings: Any, node: kit.
     """``monitor_logs_every_reading``: of the :data:`EVERY_READING_RUN` readings published from the first one the
     monitor logged, it logs :data:`EVERY_READING_SHARE` or more (the lesson: 'Temperature: ...' for every reading;
     helper audit of issue 37: a log throttled to once a second passed the three-readings check)."""
+    first_logged: list[int] = []  # the index, once known: what was published before it never changes
+
     def window() -> list[float]:
         published = feed.published()
-        first = min((i for i, value in enumerate(published) if value in set(logged_readings())), default=None)
-        return published[first:first + EVERY_READING_RUN] if first is not None else []
+        if not first_logged:
+            logged = set(logged_readings())
+            first_logged.extend(i for i, value in enumerate(published) if value in logged)
+        return published[first_logged[0]:first_logged[0] + EVERY_READING_RUN] if first_logged else []
 
     with s.phase("observe"):
         wait_for(lambda: len(window()) >= EVERY_READING_RUN, EVERY_READING_RUN * period * 3 + LATE_DELIVERY,

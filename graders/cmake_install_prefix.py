@@ -135,8 +135,7 @@ def _finds_nothing_else(s: Session, env: dict[str, str], cmake: str, source: Pat
     find the package: the lesson's "find_package(Greeting) must find it there, and nothing else may". A project
     that points find_package at a prefix itself (``PATHS ${CMAKE_CURRENT_SOURCE_DIR}/../prefix``, ``HINTS
     $ENV{HOME}/...``) found the grader's prefix or the learner's and passed (helper audit of issue 37)."""
-    home = scratch / "empty-home"
-    home.mkdir(exist_ok=True)
+    home = s.submission_folder("cmake-empty-home")  # made by the grader, then the submission's (never written here)
     bare = {k: v for k, v in env.items() if k != "CMAKE_PREFIX_PATH"} | {"HOME": str(home)}
     build = scratch / "app-build-without-prefix"
     run = run_program(s, [cmake, "-S", str(source), "-B", str(build), *ck.ISOLATED_OPTIONS], "cmake-configure-bare",

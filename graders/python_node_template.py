@@ -45,8 +45,12 @@ try:
         import python_package_with_a_node.sample_python_node as module
     out["import"] = buffer.getvalue()
     buffer = io.StringIO()
-    with contextlib.redirect_stdout(buffer):
-        module.main()
+    try:
+        with contextlib.redirect_stdout(buffer):
+            module.main()
+    except SystemExit as exc:  # sys.exit(0) at the end of main() is a clean end, as under ros2 run
+        if exc.code not in (None, 0):
+            raise
     out["main"] = buffer.getvalue()
 except BaseException as exc:
     out["error"] = f"{type(exc).__name__}: {exc}"
