@@ -188,29 +188,50 @@ def _started(s: Session, path: Any, xy: tuple[float, float], label: str) -> kit.
 
 def aborted_run(s: Session, action: Any, path: Any) -> None:
     """logs_aborted, aborted_ends: the grader's server aborts the goal after two feedback messages."""
+    ended_run(s, action, path, act.ABORTED, "logs_aborted", "aborted_ends")
+
+
+def canceled_run(s: Session, action: Any, path: Any) -> None:
+    """logs_canceled: the grader cancels the goal after two feedback messages (the server sends the cancel
+    request itself, :class:`ros2course.kit.actions.Script`), so it ends CANCELED."""
+    ended_run(s, action, path, act.CANCELED, "logs_canceled")
+
+
+def ended_run(s: Session, action: Any, path: Any, status: int, check_id: str, ends_id: str | None = None) -> None:
+    """Record ``check_id``: a goal the grader's server ends with ``status`` (ABORTED or CANCELED) after two
+    feedback messages is logged with that status's name and the final position (half the goal); and
+    ``ends_id`` (when given): the client then ends by itself.
+
+    Raises:
+        Unmet: no goal reached the server.
+    """
+    name = act.status_name(status)
+    word = name[:5].lower()  # 'abort', 'cance': any spelling of the name (CANCELED, cancelled, Canceled)
     xy = _goal_xy(s)
     final = (round(xy[0] / 2, 3), round(xy[1] / 2, 3))
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
-        action, final, [0.6, 0.5], act.ABORTED))
+        action, final, [0.6, 0.5], status))
     rosout = s.graph.rosout()
-    proc = _started(s, path, xy, f"{EXECUTABLE}.aborted")
+    proc = _started(s, path, xy, f"{EXECUTABLE}.{name.lower()}")
     act.offer_once_it_waits(s, server, rosout, NODE, proc, WAIT_WINDOW)
     with s.phase("observe"):
-        kit.wait_until(lambda: any(re.search(r"abort", text, re.IGNORECASE) for text in _records(rosout)),
+        kit.wait_until(lambda: any(re.search(word, text, re.IGNORECASE) for text in _records(rosout)),
                        2 * LOG_TIMEOUT, abort=_gone(proc))
     with s.phase("observe"):  # the position may be in a record of its own, just after
         kit.wait_until(lambda: any(_has(text, final[0]) and _has(text, final[1]) for text in _records(rosout)),
                        LOG_TIMEOUT, abort=_gone(proc))
-    said = [text for text in _records(rosout) if re.search(r"abort", text, re.IGNORECASE)]
+    said = [text for text in _records(rosout) if re.search(word, text, re.IGNORECASE)]
     where = [text for text in _records(rosout) if _has(text, final[0]) and _has(text, final[1])]
-    expected = f"a log record naming the status ABORTED, and the final position ({final[0]}, {final[1]})"
+    expected = f"a log record naming the status {name}, and the final position ({final[0]}, {final[1]})"
     if not server.goals:
         raise Unmet(f"no goal reached the server; last log records: {_last(rosout)}; {kit.process_state(proc)}")
-    s.record("logs_aborted", bool(said and where),
+    ended = act.status_name(server.ended[0][1]) if server.ended else "not ended yet"
+    s.record(check_id, bool(said and where),
              (f"'{said[0][:120]}'" + ("" if said[0] in where else f"; '{where[0][:120]}'" if where else
                                      f": no record with the final position ({final[0]}, {final[1]})"))
-             if said else f"the goal was aborted; its log: {_last(rosout)}", expected)
-    _ends(s, "aborted_ends", proc, "once its goal was ABORTED")
+             if said else f"the goal ended {ended}; its log: {_last(rosout)}", expected)
+    if ends_id is not None:
+        _ends(s, ends_id, proc, f"once its goal was {name}")
 
 
 def rejected_run(s: Session, action: Any, path: Any) -> None:

@@ -300,16 +300,8 @@ def reactivate(s: Session, life: Lifecycle, stream: Stream) -> None:
                  f"activate {'succeeded' if success else 'failed (success: false)'}; the node is now {label} "
                  f"[{state}]", expected)
     else:
-        stamps, waited = heartbeats(s, stream, life.node, since)
-        stats = kit.RateStats.from_times(stamps)
-        if stats is None or stats.samples < stream.samples - 1:
-            s.record("reactivate", False, f"activate succeeded; then only {len(stamps)} message(s) in {waited:.1f} s "
-                     f"(a timer cancelled in on_deactivate and never started again?); "
-                     f"{kit.process_state(life.node.proc)}", expected)
-        else:
-            s.record("reactivate", stats.within(1.0 / stream.period, kit.RATE_TOLERANCE),
-                     f"activate succeeded; then {stats.describe()} (from the messages' send stamps)", expected,
-                     window=(stamps[0], stamps[-1]))
+        _rate_after(s, "reactivate", stream, life, since, "activate succeeded", expected,
+                    "(a timer cancelled in on_deactivate and never started again?)")
     if life.state()[0] == ACTIVE:
         life.change(DEACTIVATE)  # cleanup is asked from inactive; a failed deactivate shows there
 
@@ -366,15 +358,23 @@ def reconfigure(s: Session, life: Lifecycle, stream: Stream) -> None:
             s.record("reconfigure", False, "after cleanup: " + "; ".join(steps), expected)
             return
         steps.append(f"{label} succeeded")
+    _rate_after(s, "reconfigure", stream, life, since, f"after cleanup: {', '.join(steps)}", expected)
+
+
+def _rate_after(s: Session, check_id: str, stream: Stream, life: Lifecycle, since: float, done: str, expected: str,
+                why_few: str = "") -> None:
+    """Record ``check_id``: the messages sent after ``since`` (wall clock) come every ``stream.period`` s
+    (± :data:`kit.RATE_TOLERANCE` on the mean of their send stamps' intervals); ``done`` says what came before
+    ("activate succeeded"), ``why_few`` a likely cause when too few came."""
     stamps, waited = heartbeats(s, stream, life.node, since)
     stats = kit.RateStats.from_times(stamps)
     if stats is None or stats.samples < stream.samples - 1:
-        s.record("reconfigure", False, f"after cleanup: {', '.join(steps)}; then only {len(stamps)} message(s) in "
-                 f"{waited:.1f} s; {kit.process_state(life.node.proc)}", expected)
+        s.record(check_id, False, f"{done}; then only {len(stamps)} message(s) in {waited:.1f} s"
+                 + (f" {why_few}" if why_few else "") + f"; {kit.process_state(life.node.proc)}", expected)
         return
-    s.record("reconfigure", stats.within(1.0 / stream.period, kit.RATE_TOLERANCE),
-             f"after cleanup: {', '.join(steps)}; then {stats.describe()} (from the messages' send stamps)",
-             expected, window=(stamps[0], stamps[-1]))
+    s.record(check_id, stats.within(1.0 / stream.period, kit.RATE_TOLERANCE),
+             f"{done}; then {stats.describe()} (from the messages' send stamps)", expected,
+             window=(stamps[0], stamps[-1]))
 
 
 def shutdown(s: Session, life: Lifecycle, stream: Stream) -> None:

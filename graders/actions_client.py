@@ -2,7 +2,7 @@
 
 The grader plays the action server (:class:`ros2course.kit.actions.StandInActionServer`)
 and judges the learner's client from its /rosout records and how its process ends.
-Three runs, each in a graph of its own, each with a goal of random coordinates
+Five runs, each in a graph of its own, each with a goal of random coordinates
 given as the parameters ``x`` and ``y``:
 
 * **goal**: no server at first (the client must say it waits, at most once a second:
@@ -16,6 +16,8 @@ given as the parameters ``x`` and ``y``:
   messages and ABORTS: the log
   must name that status with the final position (a client that always says
   "succeeded" fails).
+* **canceled**: as **aborted**, but the grader cancels the goal (its server sends the cancel request itself,
+  as a second client would) and the goal ends CANCELED: the log must name that status with the final position.
 * **rejected**: the server, offered as in **aborted**, rejects the goal: the client must say so and end cleanly,
   without a record that pretends the goal ended (a rejected goal has no result: asking
   for it gets an empty answer with status UNKNOWN).
@@ -33,8 +35,8 @@ from ._actions_client import ACTION, EXECUTABLE, NODE, PACKAGE, PERIOD, THROTTLE
 
 #: Seconds the contract needs the client watched (benchmarks/all_lessons.py): its first "waiting" record
 #: (rclpy's wait_for_server(timeout_sec=1.0) returns after 1 s), the records that follow while the server
-#: is still missing, a goal of five feedback messages and an aborted one of two.
-WINDOW = 1.0 + THROTTLE_WINDOW + (5 + 2) * PERIOD
+#: is still missing, a goal of five feedback messages, an aborted one of two and a canceled one of two.
+WINDOW = 1.0 + THROTTLE_WINDOW + (5 + 2 + 2) * PERIOD
 
 RUN = ("executable",)
 CHECKS = [
@@ -67,6 +69,10 @@ CHECKS = [
     Check("aborted_ends", "After an aborted goal too, the client ends by itself: exit code 0, no traceback", 1,
           "end whatever the status: set the flag that ends main() in the result callback for every status, not "
           "only for SUCCEEDED", needs=RUN, part="aborted"),
+    Check("logs_canceled", "A goal that ends canceled is logged as CANCELED, with its final position", 1,
+          "name every status the result response can carry (GoalStatus: 4 SUCCEEDED, 5 CANCELED, 6 ABORTED): a "
+          "goal another client cancels ends CANCELED, and the log must not call it anything else", needs=RUN,
+          part="canceled"),
     checks.ctrl_c("sigint_exit", "the client while it waits for the server", 1, needs=RUN, part="interrupted"),
     Check("handles_rejection", "A rejected goal is logged as rejected, and the client ends cleanly", 2,
           "in goal_response_callback: if not goal_handle.accepted: log that the goal was rejected, set the flag "
@@ -77,13 +83,15 @@ CHECKS = [
 
 
 def grade(s: Session) -> None:
-    """Three runs of the client against the grader's own server (see the module docstring)."""
+    """Five runs of the client against the grader's own server (see the module docstring)."""
     action = s.interface_type("package_with_interfaces", "action", "MoveStraightIn2D")
     path = kit.executable(s, "executable", PACKAGE, EXECUTABLE)
     with s.part("goal", own_graph=True):
         steps.goal_run(s, action, path)
     with s.part("aborted", own_graph=True):
         steps.aborted_run(s, action, path)
+    with s.part("canceled", own_graph=True):
+        steps.canceled_run(s, action, path)
     with s.part("rejected", own_graph=True):
         steps.rejected_run(s, action, path)
     with s.part("interrupted", own_graph=True):

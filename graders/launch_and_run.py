@@ -17,9 +17,10 @@ fixed 7 s landed in a node still importing rclpy, whose KeyboardInterrupt no
 from __future__ import annotations
 
 from ros2course.kit import Check, Session, scripts
+from ros2course.kit import topics_services as ts
 from ._node_watch import NodeWatch, node_appeared
 from ros2course.kit.nodes import sigint_exit
-from ros2course.kit.quotes import LAUNCH_FILE, LAUNCH_NODE
+from ros2course.kit.quotes import LAUNCH_FILE, LAUNCH_NODE, LAUNCH_TOPIC
 from ros2course.kit.quotes import PACKAGE as LAUNCH_PACKAGE
 
 SCRIPT = "cli/run_and_launch.sh"
@@ -40,8 +41,9 @@ CHECKS = [
     Check("build", "The packages build with colcon", 1),
     Check("script", f"{SCRIPT} exists and is valid bash", 1),
     Check("run_node", f"`ros2 run` starts the node /{RUN_NODE}", 2, RUN_COMMAND, needs=SCRIPTED),
-    Check("launch_node", f"`ros2 launch` starts the node /{LAUNCH_NODE}", 2,
-          f"{LAUNCH_COMMAND} (on its own line, after the `ros2 run ... &` line)", needs=SCRIPTED),
+    Check("launch_node", f"`ros2 launch` starts the node /{LAUNCH_NODE}, as the launch file configures it", 2,
+          f"{LAUNCH_COMMAND} (on its own line, after the `ros2 run ... &` line): the launch file, not "
+          "`ros2 run` of its executable under the launched node's name", needs=SCRIPTED),
     Check("keeps_running", "The script keeps running until Ctrl+C (it waits for its nodes)", 1,
           "end the script with `wait`: without it, bash reaches the end at once and the nodes lose their terminal",
           needs=SCRIPTED),
@@ -55,14 +57,29 @@ def grade(s: Session) -> None:
     path = scripts.script(s, "script", SCRIPT)
     watch = NodeWatch(s)
     nodes = (f"/{RUN_NODE}", f"/{LAUNCH_NODE}")
+    launched: list[str] = []  # what the launched node publishes, once its node is seen
+
+    def both_started() -> bool:
+        if all(node in watch.seen() for node in nodes):
+            launched[:] = sorted(ts.endpoints(s.ros, LAUNCH_NODE, "publishers"))
+            return f"/{LAUNCH_TOPIC}" in launched
+        return False
+
     run = scripts.run_script(s, path, interrupt_after_s=RUN_SECONDS, exit_timeout=EXIT_SECONDS,
-                             wait_for=lambda: all(node in watch.seen() for node in nodes),
-                             first_timeout=START_TIMEOUT)
+                             wait_for=both_started, first_timeout=START_TIMEOUT)
     watch.stop()
     # a node that only joined after Ctrl+C (a script that reached `ros2 launch` only then) does not count
     ctrl_c = run.interrupted_at if run.interrupted_at is not None else START_TIMEOUT
     node_appeared(s, "run_node", watch, nodes[0], RUN_COMMAND, before=ctrl_c)
-    node_appeared(s, "launch_node", watch, nodes[1], LAUNCH_COMMAND, before=ctrl_c)
+    if watch.seen().get(nodes[1], ctrl_c + 1) <= ctrl_c and f"/{LAUNCH_TOPIC}" not in launched:
+        # the launch file gives the node its topic_name (the launch-files lesson); its executable run alone
+        # under that name (`ros2 run ... --ros-args -r __node:=...`) publishes the parameters lesson's default
+        s.record("launch_node", False, f"{nodes[1]} appeared, but it publishes "
+                 f"{', '.join(launched) or 'nothing'}, not /{LAUNCH_TOPIC}: not as the launch file "
+                 f"{LAUNCH_FILE} starts it (its topic_name)", f"node {nodes[1]} publishing /{LAUNCH_TOPIC}, as "
+                 f"`{LAUNCH_COMMAND}` starts it")
+    else:
+        node_appeared(s, "launch_node", watch, nodes[1], LAUNCH_COMMAND, before=ctrl_c)
     expected = f"still running {RUN_SECONDS:.0f} s after its nodes joined the graph (Ctrl+C ends it)"
     if run.interrupted:
         s.record("keeps_running", True, f"it was still running when Ctrl+C came, {ctrl_c:.1f} s after it "

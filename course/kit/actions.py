@@ -38,6 +38,9 @@ STATUS_NAMES = {0: "UNKNOWN", 1: "ACCEPTED", 2: "EXECUTING", 3: "CANCELING", 4: 
 SUCCEEDED, CANCELED, ABORTED = 4, 5, 6
 #: action_msgs/srv/CancelGoal return_code: the goal had already ended when the cancel request arrived.
 GOAL_TERMINATED = 3
+#: Seconds :class:`StandInActionServer` waits for its own cancel request of a goal scripted CANCELED to be
+#: accepted (a local service call: milliseconds).
+CANCEL_TIMEOUT = 2.0
 
 
 def status_name(status: int | None) -> str:
@@ -285,7 +288,10 @@ class Script:
         accept: False rejects the goal.
         feedback: ``Action.Feedback`` messages to publish, one every ``period`` s.
         result: the ``Action.Result`` to return.
-        status: how the goal ends: :data:`SUCCEEDED` or :data:`ABORTED`.
+        status: how the goal ends: :data:`SUCCEEDED`, :data:`ABORTED` or :data:`CANCELED` (the server then
+            sends a cancel request for the goal itself, as a second client would, and ends it canceled once
+            the request is accepted: a goal ends CANCELED only after a cancel request, design.ros2.org
+            actions, "Goal State Machine").
         period: seconds between two feedback messages.
     """
 
@@ -318,7 +324,7 @@ class StandInActionServer:
         self.ended: list[tuple[float, int]] = []
         self._accepted: list[Script] = []  # scripts of accepted goals not executed yet, oldest first
         self._lock = threading.Lock()
-        self._node = self._executor = self._thread = self._server = None
+        self._node = self._executor = self._thread = self._server = self._cancel = None
 
     def offer(self) -> None:
         """Create the server (it appears in the graph) and start answering."""
@@ -332,8 +338,15 @@ class StandInActionServer:
             "_ros2course_stand_in_action_server", context=self.graph.context, enable_rosout=False,
             start_parameter_services=False,
             parameter_overrides=[Parameter("start_type_description_service", value=False)])
+        group = ReentrantCallbackGroup()
         self._server = ActionServer(self._node, self.action_type, self.name, self._execute,
-                                    goal_callback=self._on_goal, callback_group=ReentrantCallbackGroup())
+                                    goal_callback=self._on_goal, cancel_callback=self._on_cancel,
+                                    callback_group=group)
+        # the cancel requests of CANCELED scripts go through the action's own cancel_goal service, as
+        # `ros2 action` or a second client would send them (rclpy's ServerGoalHandle cannot cancel itself)
+        from action_msgs.srv import CancelGoal  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+
+        self._cancel = self._node.create_client(CancelGoal, f"{self.name}/_action/cancel_goal", callback_group=group)
         self._executor = MultiThreadedExecutor(num_threads=2, context=self.graph.context)
         self._executor.add_node(self._node)
         self._thread = threading.Thread(target=self._spin, daemon=True, name="ros2course-stand-in-action-server")
@@ -355,16 +368,32 @@ class StandInActionServer:
                 self._accepted.append(script)
         return GoalResponse.ACCEPT if script.accept else GoalResponse.REJECT
 
+    def _on_cancel(self, goal_handle: Any) -> Any:
+        from rclpy.action import CancelResponse  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+
+        return CancelResponse.ACCEPT  # the learner's client never cancels: only the server's own request comes
+
     def _execute(self, goal_handle: Any) -> Any:
+        from action_msgs.srv import CancelGoal  # noqa: PLC0415 - ROS modules only when grading (graders load for CHECKS without ROS)
+
         with self._lock:
             script = self._accepted.pop(0)
         for feedback in script.feedback:
             time.sleep(script.period)
             goal_handle.publish_feedback(feedback)
         time.sleep(script.period)
-        (goal_handle.abort if script.status == ABORTED else goal_handle.succeed)()
+        if script.status == CANCELED:
+            request = CancelGoal.Request()
+            request.goal_info.goal_id = goal_handle.goal_id
+            if self._cancel.wait_for_service(timeout_sec=CANCEL_TIMEOUT):  # a request before matching is lost
+                self._cancel.call_async(request)  # answered by the executor's other thread
+            wait_until(lambda: goal_handle.is_cancel_requested, CANCEL_TIMEOUT)
+        if script.status == CANCELED and goal_handle.is_cancel_requested:
+            goal_handle.canceled()
+        else:  # a cancel request that was never answered ends the goal aborted: the client is judged on that
+            (goal_handle.abort if script.status in (ABORTED, CANCELED) else goal_handle.succeed)()
         with self._lock:
-            self.ended.append((time.monotonic(), script.status))
+            self.ended.append((time.monotonic(), goal_handle.status))
         return script.result if script.result is not None else self.action_type.Result()
 
     def close(self) -> None:
@@ -375,7 +404,7 @@ class StandInActionServer:
             self._server.destroy()
         if self._node is not None:
             self._node.destroy_node()
-        self._node = self._executor = self._thread = self._server = None
+        self._node = self._executor = self._thread = self._server = self._cancel = None
 
 
 def offer_once_it_waits(s: Session, server: StandInActionServer, rosout: Any, node: str, proc: Any,
