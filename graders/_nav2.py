@@ -378,19 +378,43 @@ def _feedback_records(records: list[str], distances: list[float]) -> list[float]
 def aborted_run(s: Session, action: Any, path: Any) -> None:
     """handles_abort: the grader's server aborts the goal after two feedback messages, with an error code and
     message of its own; the client must log ABORTED, both, and end by itself."""
-    code = s.random.randint(101, 399)
-    token = "".join(s.random.choice(string.ascii_uppercase) for _ in range(6))
-    text = f"no path to the goal ({token})"
+    ended_run(s, action, path, act.ABORTED, "handles_abort")
+
+
+def canceled_run(s: Session, action: Any, path: Any) -> None:
+    """handles_cancel: the grader cancels the goal after two feedback messages (its server sends the cancel
+    request itself, as rviz2's Cancel button would: :class:`ros2course.kit.actions.Script`); the client must log
+    CANCELED and end by itself."""
+    ended_run(s, action, path, act.CANCELED, "handles_cancel")
+
+
+def ended_run(s: Session, action: Any, path: Any, status: int, check_id: str) -> None:
+    """Record ``check_id``: a goal the grader's server ends with ``status`` (ABORTED, with an error code and
+    message of its own that the log must hold too, or CANCELED) after two feedback messages is logged with
+    that status's name, and the client ends by itself.
+
+    Raises:
+        Unmet: no goal reached the server.
+    """
+    name = act.status_name(status)
+    word = name[:5].lower()  # 'abort', 'cance': any spelling (CANCELED, cancelled)
+    aborted = status == act.ABORTED
+    code = s.random.randint(101, 399) if aborted else 0
+    token = "".join(s.random.choice(string.ascii_uppercase) for _ in range(6)) if aborted else ""
+    text = f"no path to the goal ({token})" if aborted else ""
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _script(
-        action, [0.6, 0.5], act.ABORTED, code, text))
+        action, [0.6, 0.5], status, code, text))
     rosout = s.graph.rosout()
-    proc = s.launch(path, f"{CLIENT_EXECUTABLE}.aborted", [])
+    proc = s.launch(path, f"{CLIENT_EXECUTABLE}.{name.lower()}", [])
     act.offer_once_it_waits(s, server, rosout, CLIENT_NODE, proc, WAIT_WINDOW)
+    wanted = [(f"no log record names the status {name}", lambda r: re.search(word, r, re.IGNORECASE))]
+    if aborted:
+        wanted += [(f"no log record holds the error_code {code}", lambda r: code in numbers_in(r)),
+                   (f"no log record holds the error_msg '{text}'", lambda r: token in r)]
 
     def shown() -> bool:
         records = _records(rosout, CLIENT_NODE)
-        return all(any(test(r) for r in records) for test in (
-            lambda r: re.search(r"abort", r, re.IGNORECASE), lambda r: code in numbers_in(r), lambda r: token in r))
+        return all(any(test(r) for r in records) for _, test in wanted)
 
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.goals), 2 * LOG_TIMEOUT, abort=lambda: proc.poll() is not None)
@@ -402,19 +426,13 @@ def aborted_run(s: Session, action: Any, path: Any) -> None:
         if proc.poll() is not None:  # what it logged just before exiting may still be on its way
             kit.wait_until(lambda: False, 0.5)
     records = _records(rosout, CLIENT_NODE)
-    problems = []
-    if not any(re.search(r"abort", r, re.IGNORECASE) for r in records):
-        problems.append("no log record names the status ABORTED")
-    if not any(code in numbers_in(r) for r in records):
-        problems.append(f"no log record holds the error_code {code}")
-    if not any(token in r for r in records):
-        problems.append(f"no log record holds the error_msg '{text}'")
-    problems += _not_ended(proc, "after the abort")
-    said = [r for r in records if re.search(r"abort", r, re.IGNORECASE)]
-    s.record("handles_abort", not problems, "; ".join(problems) + f" (last records: {_last(rosout, CLIENT_NODE)})"
+    problems = [why for why, test in wanted if not any(test(r) for r in records)]
+    problems += _not_ended(proc, f"after the goal was {name}")
+    said = [r for r in records if re.search(word, r, re.IGNORECASE)]
+    s.record(check_id, not problems, "; ".join(problems) + f" (last records: {_last(rosout, CLIENT_NODE)})"
              if problems else f"'{said[0][:120]}', then the process {proc.exit_state().describe()}",
-             f"a log record naming ABORTED, the error_code ({code}) and the error_msg ('{text}'), then exit code 0, "
-             "no traceback")
+             f"a log record naming {name}" + (f", the error_code ({code}) and the error_msg ('{text}')" if aborted
+                                              else "") + ", then exit code 0, no traceback")
 
 
 def _not_ended(proc: kit.LearnerProcess, when: str) -> list[str]:

@@ -14,8 +14,9 @@ it (graders/_nav2.py), each run in a graph of its own.
   one goal, the lesson's pose in ``map``, stamped as it is sent, an empty behavior_tree), sends five feedback
   messages with random distances and succeeds: the log must show every distance_remaining and SUCCEEDED,
   and the node must end by itself.
-* **aborted** / **rejected**: the server, offered once the client has logged its first record, aborts the goal (an error code and message of its own) or rejects
-  it: the client must say so and end by itself, never hang.
+* **aborted** / **canceled** / **rejected**: the server, offered once the client has logged its first record, aborts
+  the goal (an error code and message of its own), cancels it (sending the cancel request itself, as rviz2's Cancel
+  button would) or rejects it: the client must say so and end by itself, never hang.
 * **interrupted**: no server; Ctrl+C while the client waits.
 """
 
@@ -40,8 +41,8 @@ from ._nav2 import (
 
 #: Seconds the contract needs the nodes watched (benchmarks/all_lessons.py): each node's first "waiting"
 #: record (about 1 s), the records that follow while what it waits for is missing, a goal of five feedback
-#: messages and an aborted one of two.
-WINDOW = 2 * (1.0 + THROTTLE_WINDOW) + (5 + 2) * PERIOD
+#: messages, an aborted one of two and a canceled one of two.
+WINDOW = 2 * (1.0 + THROTTLE_WINDOW) + (5 + 2 + 2) * PERIOD
 
 POSE = {"needs": ("pose_executable",), "part": "pose"}
 PUBLISHED = {"needs": ("pose_published",), "part": "pose"}
@@ -116,6 +117,10 @@ CHECKS = [
           "ends", 2, "read the status from response.status (GoalStatus.STATUS_ABORTED is 6), never assume success; log "
           "response.result.error_code and response.result.error_msg, then set the flag that ends main()",
           needs=("client_executable",), part="aborted"),
+    Check("handles_cancel", "A goal that ends canceled is logged as CANCELED, and the client ends", 1,
+          "name every status the result response can carry (GoalStatus: 4 SUCCEEDED, 5 CANCELED, 6 ABORTED): a goal "
+          "canceled from rviz2 ends CANCELED; then set the flag that ends main(), whatever the status",
+          needs=("client_executable",), part="canceled"),
     Check("handles_rejection", "A rejected goal is logged as rejected, and the client ends cleanly", 2,
           "in goal_response_callback: if not goal_handle.accepted: log that the goal was rejected, set the flag "
           "that ends main() and return before get_result_async() (a rejected goal has no result)",
@@ -126,7 +131,7 @@ CHECKS = [
 
 
 def grade(s: Session) -> None:
-    """The pose publisher's two runs, then the client's four (see the module docstring)."""
+    """The pose publisher's two runs, then the client's five (see the module docstring)."""
     kit.depends(s, "depends", PACKAGE, ("rclpy", "geometry_msgs", "nav2_msgs"))
     pose_message = s.installed_type("geometry_msgs", "msg", "PoseWithCovarianceStamped")
     action = steps.navigate_to_pose(s)  # the nav2 component of the underlay
@@ -142,6 +147,9 @@ def grade(s: Session) -> None:
     with s.part("aborted", own_graph=True):
         s.require("client_executable")
         steps.aborted_run(s, action, client_path)
+    with s.part("canceled", own_graph=True):
+        s.require("client_executable")
+        steps.canceled_run(s, action, client_path)
     with s.part("rejected", own_graph=True):
         s.require("client_executable")
         steps.rejected_run(s, action, client_path)
