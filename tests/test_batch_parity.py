@@ -238,6 +238,17 @@ def test_the_batch_sample_is_the_wrong_solutions_check_graded_fastest() -> None:
     checked[2] = Outcome(lesson.id, "grep_keeps_the_inbox", True, "", "", 7.9,
                          LessonResult(lesson.id, 1.0, 11.0, "failed", [died]))
     assert sample_fixtures(lesson, 1, checked) == ["wrong_topic_name"]
+    # ... even when it was graded whole and the others were stopped once their checks were judged
+    from ros2course.grade.checklist import STOPPED_SETTLED
+
+    from ros2course.dev.mutants import NOT_CHECKED
+
+    settled = CheckResult("echo", "echo", 0, 1, False, NOT_CHECKED + STOPPED_SETTLED, "", "", skipped=True)
+    for index in (1, 4, 5):
+        old = checked[index]
+        checked[index] = Outcome(lesson.id, old.case, True, "", "", old.seconds,
+                                 LessonResult(lesson.id, 1.0, 11.0, "failed", [settled]))
+    assert sample_fixtures(lesson, 1, checked)[0] != "grep_keeps_the_inbox"
 
 
 def test_the_graders_random_draws_follow_the_files_not_their_times_or_modes(tmp_path: Path) -> None:

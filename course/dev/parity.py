@@ -58,12 +58,14 @@ def sample_fixtures(lesson: Lesson, count: int, checked: list[Outcome] | None = 
         return names
     if count <= 0:
         return []
-    # one graded whole first (not stopped by --until-settled): its every check is compared, and its time is
-    # the batch's; a wrong solution whose program died on its own (a `process` diagnosis) last: what was
-    # observed of it depends on how far it got before it died (its node name is seen or not), a race, not parity
+    # a wrong solution whose program died on its own (a `process` diagnosis) last, whatever else: what was
+    # observed of it depends on how far it got before it died (its node name is seen or not; a state query
+    # answered or not), a race, not parity (CI of 7b4b111: lifecycle-node's timer-made-in-activate, graded whole,
+    # was picked and lost 'shutdown' under grade only); then one graded whole (not stopped by --until-settled)
+    # first: its every check is compared, and its time is the batch's
     graded = sorted((o for o in checked or [] if o.lesson == lesson.id and o.case in names
                      and o.result is not None and o.result.status.graded),
-                    key=lambda o: (bool(unjudged(o.result)), _died_on_its_own(o), o.seconds))
+                    key=lambda o: (_died_on_its_own(o), bool(unjudged(o.result)), o.seconds))
     if len(graded) >= count:
         return [o.case for o in graded[:count]]
     step = len(names) / count
