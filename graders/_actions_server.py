@@ -35,6 +35,10 @@ POSITION_TOLERANCE = 0.01
 #: Metres: where the point is after a cancel or a first step, judged to one step and a half (one
 #: more step may be taken while the request travels).
 STEP_TOLERANCE = 1.5 * SPEED * PERIOD
+#: Metres: a canceled goal's final_position against its last feedback ("as far from the goal as the last
+#: feedback said": both are where the point is after its last step). Half a step: a feedback published before
+#: its step (the distance the step starts from) is a step off (helper audit of issue 37; it was STEP_TOLERANCE).
+LAST_FEEDBACK_TOLERANCE = 0.5 * SPEED * PERIOD
 #: Metres: how far off the straight way from its start to the goal a canceled goal's final_position may be.
 #: A correct server: a rounding error, plus where goal 1 really ended, which ``result`` judged to
 #: POSITION_TOLERANCE of its goal (the grader's start of the way): a start that far off moves the straight
@@ -363,8 +367,8 @@ def cancel(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNod
     late = [d for t, d in _distances(client, goal) if t > asked + 1.5 * PERIOD]
     samples = _distances(client, goal)
     expected = (f"status CANCELED, final_position where the point stopped (short of the goal by the last "
-                f"distance_to_goal ± {STEP_TOLERANCE:.2f} m, within {OFF_THE_WAY} m of the straight way from where "
-                "it started), no feedback after the cancel")
+                f"distance_to_goal ± {LAST_FEEDBACK_TOLERANCE:.2f} m, within {OFF_THE_WAY} m of the straight way "
+                "from where it started), no feedback after the cancel")
     if goal.status is None:
         s.record("canceled", False, f"{goal.why} after the cancel; {kit.process_state(node.proc)}", expected)
         return [target]
@@ -376,7 +380,7 @@ def cancel(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNod
     problems = []
     if goal.status != act.CANCELED:
         problems.append(f"status {act.status_name(goal.status)}")
-    if abs(short - last) > STEP_TOLERANCE or short < POSITION_TOLERANCE:
+    if abs(short - last) > LAST_FEEDBACK_TOLERANCE or short < POSITION_TOLERANCE:
         problems.append(f"final_position {_show(final)} is {short:.3f} m from the goal, the last feedback said "
                         f"{last:.3f}")
     elif known_start and _passed(s, "position_kept") and all(map(math.isfinite, final)) and (off := _off_the_way(start, target, final)) > OFF_THE_WAY:

@@ -175,8 +175,9 @@ def launch_file(s: Session, check_id: str, driver: SasDriver, name: str) -> bool
         if key not in params:
             problems.append(f"no parameter {key}")
         elif isinstance(wanted, str):
-            if not isinstance(got, str):
-                problems.append(f"{key}={got!r} is not a string")
+            if got != wanted:  # the lesson's value, '127.0.0.1' (helper audit: any string passed)
+                problems.append(f"{key}={got!r} (wanted {wanted!r})" if isinstance(got, str) else
+                                f"{key}={got!r} is not a string")
         elif isinstance(wanted, list):
             if not (isinstance(got, list) and all(isinstance(x, float) for x in got) and same(got, wanted)):
                 problems.append(f"{key}={got!r} (wanted {wanted}, floats: a ROS double array)")

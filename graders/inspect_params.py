@@ -20,14 +20,14 @@ then asks whether the node came or not).
 
 from __future__ import annotations
 
-import re
-import threading
 import time
 from typing import Any
 
 import yaml
 
 from ros2course.kit import Check, Session, params, scripts
+
+from ._inspect_params import DumpPlaceholder, FirstParamCommand, get_lines
 from ros2course.kit.mystery import (
     CONFIGURABLE_NODE,
     CONFIGURABLE_PERIOD,
@@ -58,10 +58,6 @@ NEXT_MESSAGES = 2  # the change must show within this many messages (one may be 
 #: starter's loop whose test never matches takes its 10 tries, 10 pauses of 1 s and 10 ``ros2 node list``,
 #: at least 15 s.
 PROMPT = 12.0
-#: The node a ``ros2 param`` command calls the node's services from: ``_ros2cli_<pid>`` (ros2cli
-#: ``node/direct.py`` DirectNode; ``ros2param`` ``verb/*.py`` use it for every call). ``ros2 node list`` and
-#: ``ros2 daemon start`` make none while a daemon answers; the daemon is ``_ros2cli_daemon_<domain>_<uuid>``.
-PARAM_COMMAND_NODE = re.compile(r"_ros2cli_\d+")
 
 WAIT_HINT = ("the node may join after your first command (a daemon that has just started has not discovered it "
              "yet): `ros2 daemon start`, then wait until `ros2 node list` shows the node (the starter's loop) "
@@ -93,6 +89,7 @@ def grade(s: Session) -> None:
     node = ConfigurableQuotePublisher(s, amazing_quote(s))
     path = scripts.script(s, "script", SCRIPT)
     dump = s.workspace_root / DUMP
+    placeholder = DumpPlaceholder(dump)  # a file the script's `>` must replace: `>>` leaves it in (lesson: overwrites)
     started = time.time()
     # a daemon that already lists the node, as in a learner's terminal (kit.scripts.ros2_daemon); the second run
     # (judge_late_node) has none
@@ -106,38 +103,20 @@ def grade(s: Session) -> None:
     scripts.printed(s, "listed", run, [f"  {name}" for name in NAMES],  # --param-type appends " (type: ...)"
                     f"the names of {NODE}'s parameters, one per line", f"ros2 param list {NODE}", whole_lines=True,
                     line_text=lambda line: line.rstrip().split(" (type: ")[0])
-    scripts.printed(s, "got", run, [node.initial_quote], f"current quote of {NODE} ({short(node.initial_quote)})",
-                    f"ros2 param get {NODE} quote")
+    # as ros2 param get prints it ('String value is: ...', or the value alone with --hide-type): a dump's
+    # 'quote: ...' line or the topic's messages hold the same text (helper audit of issue 37)
+    if not scripts.printed(s, "got", run, [node.initial_quote], f"current quote of {NODE} "
+                           f"({short(node.initial_quote)}), as ros2 param get prints it",
+                           f"ros2 param get {NODE} quote", whole_lines=True, line_text=get_lines) \
+            and node.initial_quote in run.stdout:
+        s.amend("got", observed="the quote is in the output, but not on a line of its own as `ros2 param get` "
+                "prints it ('String value is: ...'): another command printed it")
     judge_set(s, node, run)
-    judge_dump(s, dump, started, node.parameters())
+    try:
+        judge_dump(s, dump, started, node.parameters(), placeholder)
+    finally:
+        placeholder.remove_if_left()
     judge_late_node(s, path, scripts.late_by(run), asked_at)
-
-
-class FirstParamCommand:
-    """When the first ``ros2 param`` command's node (:data:`PARAM_COMMAND_NODE`) joins the graph of ``node``
-    (an rclpy node), watched every 50 ms from a thread of its own (graph queries need no spinning)."""
-
-    def __init__(self, node: Any) -> None:
-        self._node = node
-        self._stopped = threading.Event()
-        self.seen: float | None = None  # time.monotonic() when it was first seen
-        self._thread = threading.Thread(target=self._watch, name="first-param-command", daemon=True)
-        self._thread.start()
-
-    def _watch(self) -> None:
-        while self.seen is None and not self._stopped.wait(0.05):
-            names = self._node.get_node_names_and_namespaces()
-            if any(PARAM_COMMAND_NODE.fullmatch(name) for name, _ in names):
-                self.seen = time.monotonic()
-
-    def stop(self) -> None:
-        """Stop watching (returns once the thread has ended)."""
-        self._stopped.set()
-        self._thread.join()
-
-    def seconds_after(self, start: float) -> float | None:
-        """Seconds from ``start`` (``time.monotonic()``) to the first such node; None if none joined."""
-        return None if self.seen is None else max(0.0, self.seen - start)
 
 
 def judge_late_node(s: Session, path, delay: float, asked_at: float | None) -> None:
@@ -194,22 +173,30 @@ def judge_set(s: Session, node: ConfigurableQuotePublisher, run: Any) -> None:
              if quotes else "the node accepted the new quote but sent no message after it", expected)
 
 
-def judge_dump(s: Session, dump, started: float, current: dict[str, Any]) -> None:
+def judge_dump(s: Session, dump, started: float, current: dict[str, Any], placeholder: DumpPlaceholder) -> None:
     """Record ``dump_file`` (written by this run, the dump format, every parameter of the node with its current
     value, ``quote`` aside) and ``dump_after_set``.
 
     ``current``: the node's parameters when the script has ended (``ros2 param dump`` writes all of them,
-    ``use_sim_time`` and ``start_type_description_service`` included: the lesson asks for all).
+    ``use_sim_time`` and ``start_type_description_service`` included: the lesson asks for all). ``placeholder``:
+    what was in the file before the run (its own text, or the grader's placeholder), which a dump redirected
+    with ``>`` replaces and one appended with ``>>`` keeps.
     """
 
     expected = (f"{DUMP} written by your script: '{NODE}:' -> 'ros__parameters:' -> every parameter of the node "
                 f"({', '.join(sorted(current))})")
-    if not dump.is_file() or dump.stat().st_mtime < started - 1.0:
-        state = "does not exist" if not dump.is_file() else "was not written by this run (it is older)"
+    if not dump.is_file() or placeholder.untouched() or dump.stat().st_mtime < started - 1.0:
+        state = ("does not exist" if not dump.is_file() or placeholder.untouched() else
+                 "was not written by this run (it is older)")
         s.record("dump_file", False, f"{DUMP} {state}", expected,
                  hint=f"ros2 param dump prints the parameters; redirect them: ros2 param dump {NODE} > {DUMP}")
         return
     text = dump.read_text(encoding="utf-8", errors="replace")
+    if placeholder.kept(text):
+        s.record("dump_file", False, f"{DUMP} still holds what was in it before your script ran "
+                 f"({scripts.excerpt(placeholder.before, 80)}), with the dump after it: appended (>>), not "
+                 "overwritten", expected, hint=f"`>` overwrites the file: ros2 param dump {NODE} > {DUMP}")
+        return
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as exc:

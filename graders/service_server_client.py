@@ -49,6 +49,8 @@ OTHER_CASES = [
     ("LIFE, UH, FINDS A WAY.", "Ian Malcolm", True, 4202),
     ("Life is like a box of chocolates.", "Forrest Gump", True, 4203),
     ("It is a lIfE of potatoes, always potatoes.", "a young Maltese potato farmer", True, 4204),
+    # the lesson: the quote text "contains" life: inside a longer word too (a whole-word regex failed no case)
+    ("The AFTERLIFE is overrated.", "a ghost", True, 4205),
 ]
 NO_LIFE = [
     ("So you're telling me there's a chance.", "Lloyd", False, 4301),
@@ -73,8 +75,8 @@ CHECKS = [
           "self.create_service(srv_type=WhatIsThePoint, srv_name='/what_is_the_point', callback=...)", **SERVER),
     Check("life_sum_42", "A quote containing 'life' gets a point whose coordinates sum to 42", 2,
           "in the callback, test request.quote.quote and make z = 42 - (x + y)", **SERVER),
-    Check("life_any_case", "'LIFE', 'Life', 'lIfE' count as 'life' too", 2,
-          "compare in one case: 'life' in request.quote.quote.lower()", **SERVER),
+    Check("life_any_case", "'LIFE', 'Life', 'lIfE' count as 'life' too, and so does 'AFTERLIFE' (it contains it)", 2,
+          "compare in one case, and look for the text anywhere: 'life' in request.quote.quote.lower()", **SERVER),
     Check("no_life_not_42", "Any other quote gets a point whose coordinates do not sum to 42", 2,
           "look at the quote's text (request.quote.quote), not the philosopher's name; "
           "if a random point happens to sum to 42, move it", **SERVER),
@@ -116,8 +118,8 @@ def _grade_server(s: Session, srv_type: type) -> None:
                                       repeats=SUM_REPEATS)
     with s.phase("observe"):
         services.answers(s, "life_sum_42", ask_sum, [LOWERCASE_LIFE], "coordinates summing to 42 (± 1e-6)", where)
-        services.answers(s, "life_any_case", ask, OTHER_CASES, "each point sums to 42 (± 1e-6): 'life' in any case",
-                         where)
+        services.answers(s, "life_any_case", ask, OTHER_CASES,
+                         "each point sums to 42 (± 1e-6): 'life' in any case, inside a word too", where)
         services.answers(s, "no_life_not_42", ask, NO_LIFE, "no point sums to 42 (the quote text has no 'life')",
                          where)
 
