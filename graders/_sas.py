@@ -343,6 +343,48 @@ def limits(s: Session, published_id: str, radians_id: str, run: DriverRun, timeo
              expected)
 
 
+def renamed(s: Session, prefix_id: str, limits_id: str, period_id: str, driver: SasDriver, *,
+            span: float = 0.5, timeout: float = 10.0) -> None:
+    """Start the driver as ``driver`` says (another node name and other parameters than the launch file's, as a
+    second launch file or ``-r __node:=`` would) and record ``prefix_id`` (its four topics under
+    ``/<driver.node>/``: the prefix is the node's name, never a typed 'myrobot_1'), ``limits_id`` (its limits are
+    these parameters in radians) and ``period_id`` (the median period of its joint states over ``span`` s of DDS
+    source stamps is their ``thread_sampling_time_sec``). The lesson: "builds the driver and RobotDriverROS with
+    the prefix node.get_name() (the launch file renames the node, so never type 'myrobot_1' here)", and the node
+    "declares and reads the parameters" (helper audit of issue 37: a typed prefix, typed limits or a typed period
+    passed every check at the seed's values). No Ctrl+C is judged here (sigint_exit judges the first run).
+
+    Raises:
+        Unmet: the executable is not found, or the process ended before its node appeared.
+    """
+    from std_msgs.msg import Float64MultiArray  # noqa: PLC0415 - rclpy only when grading (graders load for CHECKS without ROS)
+
+    probe = JointStreamProbe(s.ros.context, driver.joint_states, graph=s.ros)
+    s.on_close(probe.close)
+    proc, reason = start_node_action(s, driver.action(), driver.executable + "." + driver.node)
+    if proc is None:
+        raise Unmet(reason)
+    run = DriverRun(driver, proc, probe, s.ros.rosout())
+    with s.phase("start"):
+        if not s.ros.wait_for_node(driver.node, timeout, abort=run.ended):
+            raise Unmet(f"no node {driver.node} (started with -r __node:={driver.node}); {process_state(proc)}")
+        probe.wait_for(bool, 3.0, abort=run.ended)
+    if not interface(s, prefix_id, run, timeout=2.0):
+        return
+    got = probe.first_messages([driver.limits_min, driver.limits_max], Float64MultiArray, 1.0, abort=run.ended)
+    wanted = driver.limits_radians()
+    wrong = [f"{topic} = {fmt(message.data) if message is not None else 'nothing'}"
+             for topic, message in got.items() if message is None or not same(list(message.data), wanted[topic])]
+    degrees = f"{driver.parameters['joint_limits_min']} / {driver.parameters['joint_limits_max']} degrees"
+    s.record(limits_id, not wrong, "; ".join(wrong) + f": not this run's parameters ({degrees}) in radians (limits "
+             "typed in the code instead of read?)" if wrong else f"both equal the parameters ({degrees}) in radians",
+             f"min {fmt(wanted[driver.limits_min])}, max {fmt(wanted[driver.limits_max])} rad (the parameters {degrees})")
+    with s.phase("observe"):
+        window = probe.wait_for_span(span, span + 1.0, abort=run.ended)
+    span_rate(s, period_id, window, period=driver.period, span=span, noun="message", median=True,
+              extra=f" of messages: thread_sampling_time_sec was {driver.period} s this time (read the parameter)")
+
+
 def span_rate(s: Session, check_id: str, samples: list[JointSample], *, period: float, span: float,
               noun: str, extra: str = "", few_note: str = "", median: bool = False) -> bool:
     """Record ``check_id`` on the rate of ``samples`` over their DDS source timestamps: the kit's rate

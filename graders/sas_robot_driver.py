@@ -5,7 +5,8 @@ of the lesson and the seed's C++ driver built on the real ``sas`` packages:
 the installed launch file (read statically); the driver started as launch_ros
 starts its ``Node`` action with the seed's parameters (ch. 31.7): its 500 Hz
 joint states, limits in radians, how fast it follows targets, a target of the
-wrong size, Ctrl+C; the client in a graph of its own where the grader plays
+wrong size, Ctrl+C; the driver again, renamed myrobot_2 with other limits and another period (its prefix and
+values must be read, not typed); the client in a graph of its own where the grader plays
 the driver (silent until enabled, 100 Hz, within 10 degrees, moving, Ctrl+C).
 """
 
@@ -28,6 +29,14 @@ DRIVER = sas.SasDriver(PACKAGE, DRIVER_EXECUTABLE, NODE, {
     "joint_limits_min": [-360.0, -360.0, -360.0, -360.0, -360.0, -720.0],
     "joint_limits_max": [360.0, 360.0, 360.0, 360.0, 360.0, 720.0],
     "thread_sampling_time_sec": 0.002,
+})
+#: The same driver as another launch file could start it: another name (the topics' prefix) and other parameters
+#: (limits of 90 and 180 degrees, a 250 Hz loop), so the prefix and the values must be read, not typed.
+RENAMED = sas.SasDriver(PACKAGE, DRIVER_EXECUTABLE, "myrobot_2", {
+    "ip": "127.0.0.1",
+    "joint_limits_min": [-90.0, -90.0, -90.0, -90.0, -90.0, -180.0],
+    "joint_limits_max": [90.0, 90.0, 90.0, 90.0, 90.0, 180.0],
+    "thread_sampling_time_sec": 0.004,
 })
 RATE_SPAN = 1.0  # seconds of stream the rate is measured over (500 intervals at 500 Hz)
 #: Joint targets (radians) sent in turn; all inside the limits, every joint different.
@@ -62,8 +71,10 @@ CLIENT_WINDOW = 1.5  # seconds of targets judged
 CLIENT_STREAM_PERIOD = 0.01  # seconds between the stand-in driver's joint states
 #: The stand-in driver's joint positions (radians): not zeros, so a client must read them.
 INITIAL = [0.1, -0.2, 0.3, 0.4, -0.5, 0.6]
-#: Seconds of observation: stream rate, target tracking, wrong-size watch, client silent + client targets.
-WINDOW = RATE_SPAN + len(TARGETS) * TRACK_LATENCY + len(WRONG_TARGETS) * WRONG_WATCH + CLIENT_DISABLED + CLIENT_WINDOW
+#: Seconds of observation: stream rate, target tracking, wrong-size watch, the renamed driver's half second of
+#: stream, client silent + client targets.
+WINDOW = (RATE_SPAN + len(TARGETS) * TRACK_LATENCY + len(WRONG_TARGETS) * WRONG_WATCH + 0.5 + CLIENT_DISABLED
+          + CLIENT_WINDOW)
 TARGET_TOPIC = DRIVER.target
 DRIVER_PART = {"needs": ("executable",), "part": "driver"}
 CLIENT_PART = {"needs": ("client_executable",), "part": "client"}
@@ -105,6 +116,15 @@ CHECKS = [
     checks.ctrl_c("sigint_exit", "the driver", 2,
                   "catch (KeyboardInterrupt, ExternalShutdownException) around the loop, then deinitialize() and "
                   "disconnect() in finally", **DRIVER_PART),
+    Check("prefix_from_name", f"Started as {RENAMED.node} (renamed, as a launch file may), its topics are under "
+          f"/{RENAMED.node}/", 2, "build the driver and RobotDriverROS with the prefix node.get_name(), never a typed "
+          "'myrobot_1'", needs=("driver_starts",), part="renamed"),
+    Check("limits_from_parameters", "With other joint_limits_min / joint_limits_max, it publishes those (in radians)",
+          1, "read the limits with get_parameter (declare_parameter(...).value), never type the seed's values",
+          needs=("prefix_from_name",), part="renamed"),
+    Check("period_from_parameter", "With another thread_sampling_time_sec (0.004 s), it streams at that period", 1,
+          "create the loop's timer with the parameter's value, not a typed 0.002", needs=("prefix_from_name",),
+          part="renamed"),
     Check("client_executable", f"ros2 run finds {CLIENT_EXECUTABLE}", 1,
           f"add '{CLIENT_EXECUTABLE} = {PACKAGE}.{CLIENT_EXECUTABLE}:main' to console_scripts in setup.py",
           part="client"),
@@ -147,6 +167,9 @@ def grade(s: Session) -> None:
                                 resend=RESEND)
         sas.wrong_size(s, "wrong_size", driver, WRONG_TARGETS, followed, watch=WRONG_WATCH, resend=RESEND)
         sas.plot_stream(s, driver)
+    with s.part("renamed"):  # after the driver part: its run has had its Ctrl+C
+        s.require("driver_starts")
+        sas.renamed(s, "prefix_from_name", "limits_from_parameters", "period_from_parameter", RENAMED)
     with s.part("client"):
         s.require("client_executable")
         s.on_close(lambda: client.close(s))
