@@ -598,7 +598,12 @@ class StandInDriver:
     """The grader playing ``driver`` for a client in ``graph``: joint states, later limits; targets recorded.
 
     Publishes ``initial`` (radians) every ``period`` seconds once :meth:`start`
-    ed, the limits too once :attr:`enabled`; with sas's QoS (depth 1).
+    ed, the limits too once :attr:`enabled`; with sas's QoS (depth 1). Once enabled, its joint states follow
+    the latest target of the right size, as the lesson's driver does: a client that reads the positions once
+    (the lesson: "read the joint positions once, then every 10 ms ... send") aims at the initial positions
+    whatever the driver shows later; one that reads them again every iteration adds each offset to the last
+    target, and its targets run away from the initial positions (helper audit of issue 37: with positions
+    that never changed it passed).
     """
 
     def __init__(self, graph: Any, driver: SasDriver, initial: Sequence[float], period: float) -> None:
@@ -629,6 +634,10 @@ class StandInDriver:
         self._timer = self._node.create_timer(self.period, self._tick)
 
     def _tick(self) -> None:
+        if self.enabled and self.targets.count():
+            latest = self.targets.samples()[-1].positions
+            if len(latest) == len(self._state.position):
+                self._state.position = list(latest)
         self._state.header.stamp = self._node.get_clock().now().to_msg()
         self.states.publish(self._state)
         if self.enabled:

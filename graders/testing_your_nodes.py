@@ -81,6 +81,10 @@ NODE_MUTANTS = [
            "a node that logs once a second instead of twice",
            "time the records by their stamps: each line of proc_output[node] starts '[INFO] [<seconds>] "
            "[print_forever]:'; from 'Printed 0 times.' to 'Printed 4 times.' is 2 s"),
+    DeclaredMutant("catches_fast_timer", NODE_PACKAGE, NODE_FILE, "timer_period: float = 0.5",
+           "timer_period: float = 0.25", "a node that logs four times a second instead of twice",
+           "time the records both ways: from 'Printed 0 times.' to 'Printed 4 times.' is 2 s, neither less nor more "
+           "(self.assertAlmostEqual(..., 2.0, delta=0.25), not only an upper bound)"),
     DeclaredMutant("catches_other_words", NODE_PACKAGE, NODE_FILE, "f'Printed {self.print_count} times.'",
            "f'Logged {self.print_count} times.'", "a node that logs 'Logged N times.'",
            "wait for the exact text, e.g. proc_output.assertWaitFor('Printed 0 times.', process=node, timeout=10.0)"),
@@ -141,7 +145,12 @@ def _test_depends(s: Session) -> None:
         if found is None:
             missing.append(f"{package}: no such package in src/")
             continue
-        declared = {d.name for d in found[1].test_depends} | kit.declared_dependencies(found[1])
+        # <test_depend>, or <depend> (build, build_export and exec at once): an <exec_depend> or <build_depend>
+        # alone is not the test dependency the lesson asks for (helper audit of issue 37)
+        package_xml = found[1]
+        both = ({d.name for d in package_xml.build_depends} & {d.name for d in package_xml.exec_depends}
+                & {d.name for d in package_xml.build_export_depends})
+        declared = {d.name for d in package_xml.test_depends} | both
         lacking = [name for name in needed if name not in declared]
         missing += [f"{package}: {name}" for name in lacking]
         seen.append(f"{package}: {', '.join(sorted(d.name for d in found[1].test_depends)) or 'no test_depend'}"
