@@ -90,6 +90,7 @@ def grade(s: Session) -> None:
     path = scripts.script(s, "script", SCRIPT)
     dump = s.workspace_root / DUMP
     placeholder = DumpPlaceholder(dump)  # a file the script's `>` must replace: `>>` leaves it in (lesson: overwrites)
+    s.on_close(placeholder.remove_if_left)  # whatever stops the grading: the learner's folder as it was
     started = time.time()
     # a daemon that already lists the node, as in a learner's terminal (kit.scripts.ros2_daemon); the second run
     # (judge_late_node) has none
