@@ -315,9 +315,6 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
         kit.wait_until(lambda: bool(server.ended), len(distances) * PERIOD + 2.0, abort=node.ended)
         kit.wait_until(lambda: any(re.search(r"succe", text, re.IGNORECASE) for text in _records(rosout, CLIENT_NODE)),
                        LOG_TIMEOUT, abort=_gone(node.proc))
-    # counted once the goal has ended: a client that sends again at every tick has sent several by now
-    s.record("goal_sent", len(server.goals) == 1, f"{len(server.goals)} goal(s) by the time the first had ended",
-             expected)
     _judge_goal(s, server.goals[0][1], received)
     records = _records(rosout, CLIENT_NODE)
     found = _feedback_records(records, distances)
@@ -335,6 +332,10 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
              f"no record names SUCCEEDED; last log records: {_last(rosout, CLIENT_NODE)}",
              "a log record naming the status SUCCEEDED")
     ends(s, "ends", node.proc, "once its goal had SUCCEEDED")
+    # counted once the client has ended (or 3 s after its goal ended), as actions-client counts: a client that
+    # starts over (main() called at import, then by the entry point) sends its second goal a second later
+    s.record("goal_sent", len(server.goals) == 1, f"{len(server.goals)} goal(s) by the time the client had ended "
+             "(or 3 s after the first goal had)", expected)
 
 
 def _judge_goal(s: Session, goal: Any, received: float) -> None:

@@ -328,3 +328,34 @@ def test_processes_started_from_parts_at_once_share_one_temporary_folder(tmp_pat
         assert not failures and set(folders) == {str(log_dir / "tmp")} and (log_dir / "tmp").is_dir()
     finally:
         session.close()
+
+
+@pytest.mark.ros
+@pytest.mark.timeout(600)
+def test_a_wrong_solutions_own_race_is_told_apart_from_parity_by_a_second_check_run(tmp_path: Path) -> None:
+    """dev validate --batch, given a check result that lost a check grade then passes (as a wrong program racing
+    itself does: CI of 893e21c), grades the case once more with check: a check its fixture does not name that
+    check's second run passes too is the race, and the case passes saying so; the same on the check the fixture
+    names still fails."""
+    from ros2course.dev.child import grade_in_child  # noqa: PLC0415
+    from ros2course.dev.parity import batch_parity, case_workspace  # noqa: PLC0415
+    from ros2course.dev.validate import Outcome  # noqa: PLC0415
+
+    lesson = load_catalog().get("python-node-template")
+    fixture = "greeting-without-period"  # fails [greeting]; exit_code passes
+    checked = grade_in_child(lesson.id, case_workspace(lesson, fixture, tmp_path / "ws"), (), tmp_path / "logs")
+    assert "greeting" in checked.failed_checks() and "exit_code" not in checked.failed_checks(), checked.checks
+
+    def lost(check_id: str) -> Outcome:
+        checks = [dataclasses.replace(c, passed=False, points=0.0) if c.id == check_id else c for c in checked.checks]
+        result = dataclasses.replace(checked, checks=checks, score=sum(c.points for c in checks))
+        return Outcome(lesson.id, fixture, True, "", "", 0.0, result)
+
+    raced = lost("exit_code")
+    passed_too = dataclasses.replace(checked, checks=[dataclasses.replace(c, passed=True, points=c.max_points)
+                                                      if c.id == "greeting" else c for c in checked.checks])
+    named = Outcome(lesson.id, fixture, True, "", "", 0.0, dataclasses.replace(passed_too, score=checked.max_score))
+    [told] = batch_parity([lesson], [raced])
+    [parity] = batch_parity([lesson], [named])
+    assert told.ok and "exit_code changed between check's two runs" in told.got, told.got
+    assert not parity.ok and "races itself" not in parity.got, parity.got

@@ -10,7 +10,7 @@ import types
 
 import pytest
 
-from ros2course.dev.parity import same_verdicts
+from ros2course.dev.parity import differing_checks, own_race, same_verdicts
 from ros2course.dev.validate import Fixture
 from ros2course.grade.checklist import STOPPED_SETTLED, Check, StopWhen, VerdictSettled
 from ros2course.grade.engine import _run_grader
@@ -126,6 +126,31 @@ def test_grades_batch_verdicts_are_compared_on_the_checks_check_judged():
     # compared on the checks both judged, the named ones always among them
     assert same_verdicts(checked, result(exists, rate, stopped))
     assert not same_verdicts(checked, result(exists, CheckResult("rate", "r", 2, 2, True, "", "", ""), stopped))
+
+
+def test_a_wrong_solution_racing_itself_on_a_check_its_fixture_does_not_name_is_not_a_parity_failure():
+    """CI of 893e21c: check lost goal_sent and sigint_exit of actions-client's main-called-at-import, grade only
+    sigint_exit (the start-over's second goal came before or after the count). A second check run that gives
+    grade's verdict shows the race is the program's; one on a named check, or not reproduced, still fails."""
+    def result(*checks: CheckResult) -> LessonResult:
+        return LessonResult("l", sum(c.points for c in checks), 5.0, Status.FAILED, list(checks))
+
+    exists, lost_rate = CheckResult("exists", "e", 1, 1, True, "", "", ""), CheckResult("rate", "r", 0, 2, False, "", "", "")
+    rate = CheckResult("rate", "r", 2, 2, True, "", "", "")
+    log, lost_log = CheckResult("log", "l", 1, 1, True, "", "", ""), CheckResult("log", "l", 0, 1, False, "", "", "")
+    checked, graded = result(exists, lost_rate, lost_log), result(exists, rate, lost_log)
+    assert differing_checks(checked, graded) == ["rate"] and not same_verdicts(checked, graded)
+    # the fixture names log; rate changed between check's runs and grade got the second run's verdict
+    assert own_race(checked, graded, result(exists, rate, lost_log), ("log",)) == ["rate"]
+    # check did not reproduce grade's verdict: parity fails
+    assert own_race(checked, graded, result(exists, lost_rate, lost_log), ("log",)) == []
+    assert own_race(checked, graded, None, ("log",)) == []
+    # the check that changed is one the fixture names: what it claims to prove is a race, which never passes
+    assert own_race(checked, graded, result(exists, rate, lost_log), ("rate", "log")) == []
+    # a check stopped by --until-settled in either run is not compared
+    stopped = CheckResult("log", "l", 0, 1, False, NOT_CHECKED + STOPPED_SETTLED, "", "", skipped=True)
+    assert differing_checks(result(exists, lost_rate, stopped), result(exists, lost_rate, log)) == []
+    assert own_race(result(exists, lost_rate, log), result(exists, rate, log), result(exists, rate, log), ()) == ["rate"]
 
 
 def test_the_stop_is_raised_at_the_next_step_once_and_only_on_the_grading_thread(tmp_path):
