@@ -332,10 +332,10 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
              f"no record names SUCCEEDED; last log records: {_last(rosout, CLIENT_NODE)}",
              "a log record naming the status SUCCEEDED")
     ends(s, "ends", node.proc, "once its goal had SUCCEEDED")
-    # counted once the client has ended (or 3 s after its goal ended), as actions-client counts: a client that
-    # starts over (main() called at import, then by the entry point) sends its second goal a second later
+    # counted once the client has ended (or END_TIMEOUT after its goal ended), as actions-client counts: a client
+    # that starts over (main() called at import, then by the entry point) sends its second goal a second later
     s.record("goal_sent", len(server.goals) == 1, f"{len(server.goals)} goal(s) by the time the client had ended "
-             "(or 3 s after the first goal had)", expected)
+             f"(or {END_TIMEOUT:.0f} s after the first goal had)", expected)
 
 
 def _judge_goal(s: Session, goal: Any, received: float) -> None:
