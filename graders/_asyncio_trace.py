@@ -63,6 +63,29 @@ class Trace:
         stamps = [e[3] for e in self.events if e[0] == "draw" and e[1] == index]
         return [later - earlier for earlier, later in zip(stamps, stamps[1:])]
 
+    def cancelled(self, plans: list[list[float]]) -> str:
+        """``"; task 1 stopped after 3 of its 8 rolls ..."`` when a task never drew the winning (last) roll of its
+        plan in ``plans`` (one list of rolls per task, in the order tasks first draw), else ""."""
+        order = self.draw_order()
+        for index, plan in enumerate(plans):
+            drawn = order.count(index)
+            if 0 < drawn < len(plan):
+                return (f"; task {index + 1} stopped after {drawn} of its {len(plan)} rolls without returning: the "
+                        "program ended while it was still retrying (asyncio.run cancels every task still running "
+                        "when its coroutine returns), so await every task you created, not only the last one")
+        return ""
+
+    def blocking(self) -> list[list]:
+        """The ``["blocking", task, seconds asked, seconds]`` events: ``time.sleep`` called inside a task."""
+        return [e for e in self.events if e[0] == "blocking"]
+
+    def idle_after_draws(self) -> float | None:
+        """Seconds from the last draw to the run's end (None when either is missing): a program that sleeps
+        instead of awaiting its tasks ends well after the last one returned."""
+        stamps = [e[3] for e in self.events if e[0] == "draw"]
+        end = next((e[1] for e in reversed(self.events) if e[0] == "end"), None)
+        return end - max(stamps) if stamps and end is not None else None
+
     def last_draw(self, index: int) -> int:
         """Position of task ``index``'s last draw in the events (-1 if it never drew)."""
         positions = [i for i, e in enumerate(self.events) if e[0] == "draw" and e[1] == index]
@@ -140,3 +163,16 @@ def result_lines(s: Session, trace: Trace, check_id: str, wanted: list[tuple[str
                  if found else "")
              + (f"; other lines: {'; '.join(repr(o) for o in others[:3])}" if others else ""),
              "; ".join(f"'The result of task={tag} was {value}.'" for tag, value in wanted))
+
+
+def progress_lines(s: Session, part: Trace) -> None:
+    """Record ``prints_progress`` on the probe's default scenario (tag "probe", 3 misses then a hit): the lines
+    the python-asyncio contract names."""
+    printed = [e[2].strip() for e in part.events if e[0] == "out"]
+    retries = [line for line in printed if "probe" in line and "retry" in line.lower()]
+    done = [line for line in printed if "probe Done." in line]
+    shown = "; ".join(printed[:5]) + (" ..." if len(printed) > 5 else "") if printed else "nothing"
+    s.record("prints_progress", len(retries) == 3 and len(done) == 1,
+             f"with 3 misses then a hit it printed {len(retries)} retry line(s) and {len(done)} 'probe Done.' "
+             f"line(s): {shown}",
+             "3 lines saying a retry is needed (with the tag), then 'probe Done.' (the tag was 'probe')")

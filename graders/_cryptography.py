@@ -134,18 +134,23 @@ def pair(key: Path, pub: Path, tmp: Path) -> Found:
     }
 
 
-def sealed(path: Path, key: Path) -> Found:
+def sealed(path: Path, key: Path, message: str) -> Found:
     """age_format, instructor_decrypts: ``path`` starts with an age header and the shipped private ``key`` (a
-    private copy) decrypts it to a non-empty text (only age_format when the header is wrong)."""
+    private copy) decrypts it to a non-empty text of the learner's own: not the shipped ``message`` (a copy of the
+    shipped ``.age``, or the decrypted secret encrypted again: the lesson's "a short text of your own"; audit of
+    stop 71). Only age_format when the header is wrong."""
     head = path.read_bytes()[:40]
     if not head.startswith(AGE_HEADERS):
         return {"age_format": (False, f"{path.name} starts with {head[:30]!r}, not an age header")}
     opened = tool("age", "-d", "-i", str(key), str(path))
     text = opened.stdout.decode("utf-8", "replace").strip()
+    theirs = bool(text) and text == message.strip()
     return {"age_format": (True, f"{path.name} starts with {head.splitlines()[0][:40]!r}"),
-            "instructor_decrypts": (opened.returncode == 0 and bool(text),
-                                    f"the shipped key decrypts it to {text[:60]!r}" if opened.returncode == 0
-                                    else f"age -d -i exercise_ed25519 failed: {said(opened)}")}
+            "instructor_decrypts": (opened.returncode == 0 and bool(text) and not theirs,
+                                    f"age -d -i exercise_ed25519 failed: {said(opened)}" if opened.returncode else
+                                    f"the shipped key decrypts it to {text[:60]!r}" + (
+                                        ": that is the instructor's own message, not a text of yours" if theirs
+                                        else ""))}
 
 
 def decrypted(path: Path, message: str) -> tuple[bool, str]:
@@ -262,7 +267,7 @@ def script_made(s: Session, names: dict[str, str], where: Path, folder: str, scr
     made, judges = where / folder, {  # the same judgements as above, of the files the script made
         "script_decrypts": ("decrypted_message.txt", lambda path: {"decrypted": decrypted(path, message)}),
         "script_keeps_key": ("my_key", lambda path: kept(made, handed_in)),
-        "script_encrypts": ("message_to_instructor.txt.age", lambda path: sealed(path, key))}
+        "script_encrypts": ("message_to_instructor.txt.age", lambda path: sealed(path, key, message))}
     for check_id, (name, judge) in judges.items():
         path = made / name
         found = judge(path) if path.is_file() and not path.is_symlink() else {

@@ -191,10 +191,28 @@ def read_profile(path: Path) -> list[str]:
     return problems
 
 
+class _ComposeLoader(yaml.SafeLoader):
+    """pyyaml's safe loader that refuses a key repeated in one mapping, as docker compose (Go's yaml.v3:
+    'mapping key "environment" already defined') does; pyyaml alone keeps the last one silently, so a file docker
+    refuses was graded by its last key (audit of stop 71)."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict:
+        seen: set = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=True)
+            if isinstance(key, str) and key in seen:
+                raise yaml.constructor.ConstructorError(
+                    None, None, f"mapping key {key!r} already defined (line {key_node.start_mark.line + 1}): docker "
+                    "compose refuses the file", key_node.start_mark)
+            seen.add(key)
+        return super().construct_mapping(node, deep)
+
+
 def read_compose(path: Path) -> tuple[dict[str, dict], str]:
-    """``(services, error)`` of a compose file: service name -> its mapping; error "" when it parses."""
+    """``(services, error)`` of a compose file: service name -> its mapping; error "" when it parses (a key twice
+    in one mapping is an error, as for docker compose: :class:`_ComposeLoader`)."""
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        data = yaml.load(path.read_text(encoding="utf-8"), Loader=_ComposeLoader)  # noqa: S506 - a SafeLoader
     except (OSError, yaml.YAMLError) as exc:
         return {}, f"it is not readable YAML ({str(exc).splitlines()[0]})"
     services = data.get("services") if isinstance(data, dict) else None

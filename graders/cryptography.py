@@ -77,7 +77,7 @@ def grade(s: Session) -> None:
         crypto.record(s, names, crypto.pair(my_key, real / "my_key.pub", tmp))
     with s.part("encrypt"):
         age_file = files.entry(s, "age_format", real / "message_to_instructor.txt.age", real, names["age_format"])
-        crypto.record(s, names, crypto.sealed(age_file, key))
+        crypto.record(s, names, crypto.sealed(age_file, key, message))
     with s.part("script"):
         script = files.entry(s, "script_runs", real / SCRIPT, real, f"crypto/{SCRIPT}")
         pair = {name: files.read_text(real / name) for name in ("my_key", "my_key.pub") if (real / name).is_file()}

@@ -19,7 +19,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ros2course.kit import Check, Session, Unmet
-from ._asyncio_trace import Trace, result_lines, run_traced
+from ._asyncio_trace import Trace, progress_lines, result_lines, run_traced
 
 #: No continuous observation: each run ends by itself (about 1 s of asyncio.sleep at 0.1 s per retry).
 WINDOW = 3.0
@@ -32,6 +32,14 @@ WRAPPER = Path(__file__).resolve().parent / "data" / "python_asyncio" / "wrapper
 EXAMPLE_PLANS = [[0.52, 0.81, 0.67, 0.93, 0.58, 0.74, 0.85, 0.0312], [0.61, 0.77, 0.0687]]
 #: The successful roll of each plan above: what each task must return.
 EXAMPLE_RESULTS = [plan[-1] for plan in EXAMPLE_PLANS]
+#: The plans the other way round, for a second run of each example: task 1 finishes first, task 2 last. Printing
+#: every result after the last await (asyncio.gather), or awaiting only the first task, or sleeping instead of
+#: awaiting, gives the first run's output (task 1 was the slower) but not this one's (audit of stop 71).
+SWAPPED_PLANS = EXAMPLE_PLANS[::-1]
+SWAPPED_RESULTS = [plan[-1] for plan in SWAPPED_PLANS]
+#: Seconds a run may go on after its last draw (the reference ends within milliseconds; a sleep of its own
+#: instead of awaiting the tasks, longer).
+IDLE_AFTER = 0.5
 #: The tags the examples give their two tasks, in creation order (the lesson's task1 and task2).
 EXAMPLE_TAGS = ["task1", "task2"]
 #: How close a printed number must be to a result to count as printing it (allows rounding to 2 decimals).
@@ -98,42 +106,47 @@ def grade(s: Session) -> None:
     """Probe the coroutine, then run both examples with known rolls (about 3 s in all)."""
     _probe(s)
     with s.part("await"):
-        trace = _example(s, "async_await_example", "await_runs", "await_concurrent")
+        trace, module = _example(s, "async_await_example", "await_runs", "await_concurrent")
         first, second = (trace.mentions(i, EXAMPLE_RESULTS[i], RESULT_TOLERANCE) for i in (0, 1))
         missing = " and ".join(f"task {i + 1}'s ({EXAMPLE_RESULTS[i]})" for i, m in enumerate((first, second))
                                if not m)
         finished_first = "task 2" if trace.last_draw(1) < trace.last_draw(0) else "task 1"
-        s.record("await_order", bool(first and second) and first[0] < second[0],
-                 f"it never printed {missing} result{_cancelled(trace)}" if missing else
-                 f"{finished_first} finished first; task {1 if first[0] < second[0] else 2}'s result was printed first",
+        swapped = _swapped(s, module, "async_await_example")
+        early = swapped.mentions(0, SWAPPED_RESULTS[0], RESULT_TOLERANCE)
+        right_after = bool(early) and early[0] < swapped.last_draw(1)
+        s.record("await_order", bool(first and second) and first[0] < second[0] and right_after,
+                 f"it never printed {missing} result{trace.cancelled(EXAMPLE_PLANS)}" if missing else
+                 f"{finished_first} finished first; task {1 if first[0] < second[0] else 2}'s result was printed first"
+                 if first[0] > second[0] or right_after else
+                 "in await order; but when task 1 finished first, its result was printed only after task 2 had "
+                 "finished too: each result must be printed right after its own await, not all after the last",
                  f"task 1's result ({EXAMPLE_RESULTS[0]}) printed before task 2's ({EXAMPLE_RESULTS[1]}), "
-                 "even though task 2 finishes first")
+                 "even though task 2 finishes first; and, when task 1 finishes first, as soon as its await returns")
         result_lines(s, trace, "await_result_lines", list(zip(EXAMPLE_TAGS, EXAMPLE_RESULTS)), RESULT_TOLERANCE)
     with s.part("callback"):
-        trace = _example(s, "async_callback_example", "callback_runs", "callback_concurrent")
+        trace, module = _example(s, "async_callback_example", "callback_runs", "callback_concurrent")
         second, last_first = trace.mentions(1, EXAMPLE_RESULTS[1], RESULT_TOLERANCE), trace.last_draw(0)
         first = trace.mentions(0, EXAMPLE_RESULTS[0], RESULT_TOLERANCE)
-        cancelled = _cancelled(trace)
-        s.record("callback_as_completed", bool(second and first) and second[0] < last_first,
+        cancelled = trace.cancelled(EXAMPLE_PLANS)
+        swapped = _swapped(s, module, "async_callback_example")
+        done = [swapped.mentions(i, SWAPPED_RESULTS[i], RESULT_TOLERANCE) for i in (0, 1)]
+        idle = swapped.idle_after_draws()
+        waits_all = all(done) and done[0][0] < swapped.last_draw(1) and idle is not None and idle <= IDLE_AFTER
+        s.record("callback_as_completed", bool(second and first) and second[0] < last_first and waits_all,
                  f"it never printed task 2's result ({EXAMPLE_RESULTS[1]}){cancelled}" if not second else
                  f"task 2's result was printed, but task 1's ({EXAMPLE_RESULTS[0]}) never was{cancelled}" if not first
-                 else "task 2's result was printed while task 1 was still retrying" if second[0] < last_first else
-                 "task 2's result was printed only after task 1 had finished",
-                 f"task 2's result ({EXAMPLE_RESULTS[1]}) printed as soon as task 2 ends, before task 1's last roll")
+                 else "task 2's result was printed only after task 1 had finished" if second[0] > last_first else
+                 "task 2's result was printed while task 1 was still retrying" if waits_all else
+                 "when task 1 finished first, task 2's result was never printed"
+                 f"{swapped.cancelled(SWAPPED_PLANS)}" if not done[1] else
+                 "when task 1 finished first, its result was printed only after task 2 had finished" if not (
+                     done[0] and done[0][0] < swapped.last_draw(1)) else
+                 f"the run went on {idle or 0:.1f} s after its last task had returned: await the tasks themselves "
+                 "(a sleep of your own is too short on a slow day, and too long on every other)",
+                 f"each result printed as soon as its task ends, whichever ends first, and the run ends with its "
+                 f"last task (within {IDLE_AFTER} s)")
         result_lines(s, trace, "callback_result_lines", list(zip(EXAMPLE_TAGS, EXAMPLE_RESULTS)),
                      RESULT_TOLERANCE)
-
-
-def _cancelled(trace: Trace) -> str:
-    """``"; task 1 stopped after 3 of its 8 rolls ..."`` when a task never drew its winning roll, else ""."""
-    order = trace.draw_order()
-    for index, plan in enumerate(EXAMPLE_PLANS):
-        drawn = order.count(index)
-        if 0 < drawn < len(plan):
-            return (f"; task {index + 1} stopped after {drawn} of its {len(plan)} rolls without returning: the "
-                    "program ended while it was still retrying (asyncio.run cancels every task still running when "
-                    "its coroutine returns), so await every task you created, not only the last one")
-    return ""
 
 
 def _probe(s: Session) -> None:
@@ -159,7 +172,7 @@ def _probe(s: Session) -> None:
         s.record(check_id, ok and outcome[2] == value and len(part.draw_order()) == draws,
                  f"{rolls} it drew {len(part.draw_order())} time(s) and returned {outcome[2]!r}" if ok else
                  f"calling it failed: {outcome[2] if outcome else trace.error(run)}", expected)
-    _progress_lines(s, trace.scenario("default")[1])
+    progress_lines(s, trace.scenario("default")[1])
     outcome, part = trace.scenario("gather")
     ok = outcome is not None and outcome[0] == "result"
     pauses = sorted(part.pauses(0))
@@ -167,7 +180,9 @@ def _probe(s: Session) -> None:
     paced = pause is not None and PAUSE_RANGE[0] <= pause <= PAUSE_RANGE[1]
     paced_text = "" if pause is None else f"; the first call's draws were {pause:.2f} s apart (median)" + (
         "" if paced else ": the sleep between two draws is not the 0.1 s of the contract")
-    s.record("yields_between_draws", ok and part.interleaved() and paced,
+    blocking = part.blocking()
+    paced_text += f"; it called time.sleep({blocking[0][2]}) between draws, which blocks every task" if blocking else ""
+    s.record("yields_between_draws", ok and part.interleaved() and paced and not blocking,
              f"asyncio.gather of two calls drew in the order {part.describe_order()}{paced_text}" if ok else
              f"asyncio.gather of two calls failed: {outcome[2] if outcome else trace.error(run)}",
              "the second call draws while the first is still retrying (e.g. 1 2 1 2 1 1 1), "
@@ -175,20 +190,15 @@ def _probe(s: Session) -> None:
              f"{PAUSE_RANGE[1]} s count)")
 
 
-def _progress_lines(s: Session, part: Trace) -> None:
-    """prints_progress, on the default scenario (tag "probe", 3 misses then a hit): the lines the contract names."""
-    printed = [e[2].strip() for e in part.events if e[0] == "out"]
-    retries = [line for line in printed if "probe" in line and "retry" in line.lower()]
-    done = [line for line in printed if "probe Done." in line]
-    shown = "; ".join(printed[:5]) + (" ..." if len(printed) > 5 else "") if printed else "nothing"
-    s.record("prints_progress", len(retries) == 3 and len(done) == 1,
-             f"with 3 misses then a hit it printed {len(retries)} retry line(s) and {len(done)} 'probe Done.' "
-             f"line(s): {shown}",
-             "3 lines saying a retry is needed (with the tag), then 'probe Done.' (the tag was 'probe')")
+def _swapped(s: Session, module: str, name: str) -> Trace:
+    """Run example ``module`` again with :data:`SWAPPED_PLANS` (task 1 finishes first); its trace."""
+    return run_traced(s, WRAPPER, "module", module, SWAPPED_PLANS, f"{name}_swapped", cwd=s.workspace_root / FOLDER,
+                      timeout=RUN_TIMEOUT)[1]
 
 
-def _example(s: Session, name: str, runs_check: str, concurrent_check: str) -> Trace:
-    """Run example ``name`` with the example plans; record ``runs_check`` and ``concurrent_check``; return the trace.
+def _example(s: Session, name: str, runs_check: str, concurrent_check: str) -> tuple[Trace, str]:
+    """Run example ``name`` with the example plans; record ``runs_check`` and ``concurrent_check``; return the trace
+    and the module run (``minimalist_package.<name>``, or in the tutorial's subpackage).
 
     Raises:
         Unmet: the example is missing or did not run cleanly with two tasks (its part ends).
@@ -216,4 +226,4 @@ def _example(s: Session, name: str, runs_check: str, concurrent_check: str) -> T
              f"all, over {trace.draw_seconds():.1f} s){sequential}",
              "task 2 draws while task 1 is still retrying (1 2 1 2 1 1 ...): with 0.1 s sleeps the run takes about "
              "as long as the slower task, not the sum of both")
-    return trace
+    return trace, module

@@ -13,11 +13,13 @@ must remove both.
 
 from __future__ import annotations
 
-import re
 import shutil
 from pathlib import Path
 
 import tomllib
+
+from packaging.requirements import InvalidRequirement, Requirement
+from packaging.utils import canonicalize_name
 
 from ros2course.kit import Check, Session, Unmet
 from . import _pip as kpip
@@ -35,9 +37,13 @@ PACKAGE = "minimalist_package"
 SCRIPT = "minimalist_script"
 #: The project's test folder, which [tool.setuptools.packages.find] must leave out of the install.
 TEST_FOLDER = "test"
-#: A build requirement naming setuptools ("setuptools", "setuptools>=61", "setuptools ; python_version..."),
-#: not another distribution whose name starts the same (setuptools_scm, setuptools-rust).
-SETUPTOOLS_REQUIREMENT = re.compile(r"^\s*setuptools\s*(?:[<>=!~;\[(@]|$)", re.IGNORECASE)
+#: setuptools versions that read [project] (PEP 621 support came in 61.0): a requirement must admit one of them, so
+#: an isolated build on the learner's machine can work ("setuptools==58.2.0", the pin many Humble guides give to
+#: silence a colcon warning, installs a package named UNKNOWN there; audit of stop 71: it passed before).
+PEP621_SETUPTOOLS = ("61.0", "65.0", "70.0", "75.0", "80.0")
+#: What else a build may require: the tutorial installs wheel beside setuptools (the lesson: "your package may not
+#: need anything else to build").
+ALSO_ALLOWED = {"wheel"}
 
 CHECKS = [
     Check("project_file", "python/minimalist_package has a valid pyproject.toml (or setup.py)", 1,
@@ -100,12 +106,28 @@ def _build_requires(s: Session, data: dict) -> None:
     """
     build_system = data.get("build-system")
     requires = build_system.get("requires") if isinstance(build_system, dict) else None
-    named = isinstance(requires, list) and any(isinstance(r, str) and SETUPTOOLS_REQUIREMENT.match(r)
-                                               for r in requires)
-    s.record("build_requires", named, "pyproject.toml has no [build-system] table" if build_system is None else
-             f"[build-system] requires = {requires!r}" if requires is not None else
-             "[build-system] has no requires key",
-             "[build-system] requires = [\"setuptools>=61\"]: pip installs setuptools before building")
+    parsed = [_requirement(r) for r in requires] if isinstance(requires, list) else []
+    names = [canonicalize_name(r.name) if r else None for r in parsed]
+    modern = any(r and name == "setuptools" and any(r.specifier.contains(v, prereleases=True) for v in PEP621_SETUPTOOLS)
+                 for r, name in zip(parsed, names))
+    others = [str(r) for r, name in zip(requires or [], names) if name not in ("setuptools", *ALSO_ALLOWED)]
+    s.record("build_requires", modern and not others,
+             "pyproject.toml has no [build-system] table" if build_system is None else
+             "[build-system] has no requires key" if requires is None else
+             f"[build-system] requires = {requires!r}" + (
+                 f": the build also needs {', '.join(others)}" if others else "" if modern else
+                 ": no setuptools 61 or newer (older ones ignore [project]: pip would install a package UNKNOWN)"
+                 if "setuptools" in names else ": no setuptools"),
+             "[build-system] requires = [\"setuptools>=61\"] (and nothing else but wheel): pip installs exactly that "
+             "before building")
+
+
+def _requirement(text: object) -> Requirement | None:
+    """``text`` as a PEP 508 requirement (packaging's own parser), None when it is not one."""
+    try:
+        return Requirement(text) if isinstance(text, str) else None
+    except InvalidRequirement:
+        return None
 
 
 def grade(s: Session) -> None:

@@ -136,6 +136,10 @@ def _grade_listing(s: Session, lesson: Path) -> None:
     # what plain ls shows: every entry except those whose names start with a dot
     present = {entry.name for entry in os.scandir(lesson) if not entry.name.startswith(".")}
     missing, extra = (present - {own}) - listed, listed - present
+    # in ls's order: sorted by its locale's collation (letters and digits, case aside) or, under LANG=C, byte by
+    # byte; ls -r, ls -t or a listing typed by hand in another order is not plain ls's output (audit of stop 71)
+    in_order = names in (sorted(names), sorted(names, key=_collation))
+    blank = any(not line.strip() for line in lines)  # plain ls writes no empty line
     long_format = any(line.startswith("total ") or (len(line) > 10 and line[0] in "-dl"
                                                     and not line[1:10].strip("rwxsStT-")) for line in lines)
     hint = None
@@ -145,7 +149,9 @@ def _grade_listing(s: Session, lesson: Path) -> None:
     else:
         details = ([f"not in the listing: {files.names(missing)}"] if missing else []) + (
             [f"listed but not in the folder: {files.names(extra)}"] if extra else []) + (
-            [f"listed more than once: {files.names(twice)}"] if twice else [])
+            [f"listed more than once: {files.names(twice)}"] if twice else []) + (
+            [f"not in ls's sorted order: {', '.join(names)[:200]}"] if not in_order else []) + (
+            ["an empty line among the names"] if blank else [])
         observed = f"result_of_ls.txt lists {files.names(listed)}; {FOLDER}/ holds {files.names(present)}" + (
             f" ({'; '.join(details)})" if details else ", which is what the folder holds")
         if missing and not extra:
@@ -153,5 +159,13 @@ def _grade_listing(s: Session, lesson: Path) -> None:
                     "as your last command")
         elif twice:
             hint = "> replaces the file's contents, >> adds to them: ls > result_of_ls.txt, as your last command"
-    s.record("result_of_ls", listed in (present, present - {own}) and not long_format and not twice, observed, what,
-             hint=hint)
+        elif not in_order or blank:
+            hint = "write the listing with plain ls, no options and nothing added: ls > result_of_ls.txt"
+    s.record("result_of_ls", listed in (present, present - {own}) and not long_format and not twice and in_order
+             and not blank, observed, what, hint=hint)
+
+
+def _collation(name: str) -> tuple[str, str]:
+    """A sort key close to ls's in an English UTF-8 locale (glibc's collation): letters and digits first, case
+    aside, then the whole name as the tie-break."""
+    return "".join(c for c in name.lower() if c.isalnum()), name

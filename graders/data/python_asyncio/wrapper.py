@@ -10,6 +10,9 @@ printed, with the task that did it, into the trace file (a JSON list of
 events, read by :mod:`graders._asyncio_trace`):
 
 * ``["draw", task, value, seconds]``, ``["out", task or -1, text, seconds]``;
+* ``["blocking", task, seconds asked, seconds]``: ``time.sleep`` called inside a task (it blocks the event loop:
+  the lesson's "never time.sleep", seen even when an ``await asyncio.sleep(0)`` after it lets the draws alternate);
+* ``["end", seconds]``: the module (or probe) returned, written last;
 * ``["function", exists, is_coroutine]``, ``["scenario", name]``,
   ``["result", name, value]``, ``["error", name or mode, "Type: message"]``.
 
@@ -81,6 +84,17 @@ def _uniform(a, b):
 
 random.random = _draw
 random.uniform = _uniform
+_real_sleep = time.sleep
+
+
+def _sleep(seconds):
+    index = _index(False)
+    if index != -1:
+        events.append(["blocking", index, seconds, time.monotonic() - start])
+    return _real_sleep(seconds)
+
+
+time.sleep = _sleep  # before the learner's import: `from time import sleep` gets this one too
 
 
 class _Tee(io.TextIOBase):
@@ -111,7 +125,7 @@ def _probe():
     if not inspect.iscoroutinefunction(function):
         return
     scenarios = [
-        ("default", [[0.5, 0.95, 0.3, 0.0777]], lambda: function("probe")),
+        ("default", [[0.5, 0.95, 0.3, 0.0777]], lambda: function(tag="probe")),  # the contract's parameter name
         ("likelihood", [[0.5, 0.35]], lambda: function("probe", likelihood=0.4)),
         ("boundary", [[0.1, 0.0999]], lambda: function("probe")),
         ("gather", [[0.52, 0.81, 0.67, 0.93, 0.0312], [0.61, 0.0687]],
@@ -161,4 +175,5 @@ except BaseException as exc:
         events.append(["error", MODE, f"{type(exc).__name__}: {exc}"])
     raise
 finally:
+    events.append(["end", time.monotonic() - start])
     _dump()
