@@ -247,7 +247,9 @@ def run_script(s: Session, where: Path, label: str, script: str) -> ProgramRun:
     """
     env = {**s.base_env, "NSS_WRAPPER_LIB": nss_wrapper()}
     wrapper = SCRIPT_WRAPPER.format(no_passwd=NO_PASSWD, script=script)
-    run = run_program(s, ["bash", "-c", wrapper], label, timeout=30.0, cwd=where, env=env)
+    # stdin a pipe nobody writes to: a question (ssh-keygen without -N asks for a passphrase) waits, as in a
+    # terminal, instead of reading an empty answer from /dev/null
+    run = run_program(s, ["bash", "-c", wrapper], label, timeout=30.0, cwd=where, env=env, stdin_open=True)
     if run.returncode == NO_PASSWD and not run.stdout and not run.stderr:
         raise NotGradable("the script runs as a uid with no passwd entry, for which ssh-keygen refuses to work, "
                           "and this machine has no nss_wrapper library to lend it one",

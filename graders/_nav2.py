@@ -181,7 +181,7 @@ def _says_it_waits(s: Session, check_id: str, rosout: Any, node: kit.StartedNode
 
 def pose_run(s: Session, message_type: type, path: Any) -> None:
     """pose_waits, pose_waits_throttled, pose_published, after_second, pose_frame, pose_values, covariance,
-    pose_stamp, published_once, pose_ends: one subscriber from the start, the second joining late."""
+    pose_stamp, published_once, pose_ends: one subscriber from the start, the second joining late with a third."""
     first = s.graph.topic(TOPIC, message_type, reliable_qos(100))  # rviz2: there before the node
     rosout = s.graph.rosout()
     node = kit.start_node(s, "pose_node_name", path, POSE_NODE, label=POSE_EXECUTABLE)
@@ -194,6 +194,9 @@ def pose_run(s: Session, message_type: type, path: Any) -> None:
     # misses it under grade's load: CI of e09f7d1), while one written once the node counts amcl always reaches
     # it (this process already knows the node's publisher, so amcl's subscription matches it at once)
     second = s.graph.topic(TOPIC, message_type, reliable_qos(100))  # amcl: joins late
+    # and with it a third (a `ros2 topic echo /initialpose` left open): "until two nodes subscribe" is at least
+    # two, and a node that publishes only at exactly two sees one, then three, and never publishes
+    s.graph.topic(TOPIC, message_type, reliable_qos(100))
     with s.phase("observe"):
         kit.wait_until(lambda: bool(second.messages()), PUBLISH_TIMEOUT, abort=_gone(node.proc))
     received, received_stamps = second.messages(), second.send_stamps()
@@ -210,7 +213,7 @@ def pose_run(s: Session, message_type: type, path: Any) -> None:
     elif not received:
         early = len(heard)
         s.record("pose_published", False, f"amcl (the second subscriber) got no message on {TOPIC} in "
-                 f"{PUBLISH_TIMEOUT:.0f} s after it joined"
+                 f"{PUBLISH_TIMEOUT:.0f} s after it joined (with a third subscriber: at least two is enough)"
                  + (f"; the first subscriber got {early} before amcl joined" if early else
                     " (one published before a subscriber matched is lost: the topic is VOLATILE)")
                  + f"; last log records: {_last(rosout, POSE_NODE)}; {kit.process_state(node.proc)}",

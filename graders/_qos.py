@@ -187,6 +187,12 @@ class Probe:
 UNITS = ("kelvin", "fahrenheit", "rankine", "reaumur", "delisle", "newton")
 
 
+#: Seconds the configuration node is listened to before anything is set: a message then was not asked for.
+UNASKED_WINDOW = 1.0
+#: Seconds for the second instance (units set on its command line) to start, be discovered and publish.
+START_PARAMETER_TIMEOUT = 10.0
+
+
 def random_units(other_than: Iterable[str] = ()) -> str:
     """One of :data:`UNITS`, drawn for this check, none of ``other_than``."""
     return _RANDOM.choice([u for u in UNITS if u not in set(other_than)])
@@ -411,6 +417,9 @@ def grade_config(s: Session, string: type, package: str, executable: str, node_n
         wait_for(lambda: early.matched() > 0, 3.0, abort=node.ended)  # else the new configuration is missed
         if start_can_match:  # before units is set: the first message replayed is the one of the start
             wait_for(lambda: bool(start.messages()), LATE_DELIVERY, abort=node.ended)
+        # nothing is set yet: what the VOLATILE listener hears now was not asked for (a timer that re-publishes)
+        wait_for(lambda: bool(early.messages()), UNASKED_WINDOW, abort=node.ended)
+    unasked = [m.data for m in early.messages()]
     initial = [m.data for m in start.messages()]
     wanted = f"units: {default_units}"
     s.record("config_initial", initial[:1] == [wanted],
@@ -434,11 +443,14 @@ def grade_config(s: Session, string: type, package: str, executable: str, node_n
         latest = f"units: {units}"
     seen = [m.data for m in early.messages()]
     refused = [a.line() for a in answers if not a.successful]
-    s.record("config_republish", latest in seen,
+    s.record("config_republish", latest in seen and not unasked,
+             f"before anything was set it published {', '.join(map(repr, unasked[:2]))} within "
+             f"{UNASKED_WINDOW:.0f} s (the configuration is published at start and when units is set, not on a "
+             "timer)" if unasked else
              f"after `ros2 param set /{node.name} units {units}`"
              + (f" ({'; '.join(refused)})" if refused else "")
              + f" the grader received {', '.join(map(repr, seen[-3:])) or 'nothing'} on {target}",
-             f"{latest!r} published after the parameter changed")
+             f"{latest!r} published after the parameter changed, and nothing while it did not")
 
     late = Probe(s.ros, target, string, profile(reliable=True, transient_local=True, depth=10))
     verdicts = [compatible(p, late.qos) for p in profiles]
@@ -464,6 +476,27 @@ def grade_config(s: Session, string: type, package: str, executable: str, node_n
     latched = bool(profiles) and all(word(p.reliability) == "RELIABLE"
                                      and word(p.durability) == "TRANSIENT_LOCAL" for p in profiles)
     s.record("config_latched", latched, f"it offers {offered} on {target}", "RELIABLE, TRANSIENT_LOCAL")
+    _start_from_parameter(s, string, path, node_name, topic)
+
+
+def _start_from_parameter(s: Session, string: type, path: Any, node_name: str, topic: str) -> None:
+    """``config_start_parameter``: a second instance, in a graph of its own, started with
+    ``--ros-args -p units:=<random unit>`` (as a launch file or ``ros2 run`` would set it), must publish
+    ``units: <that unit>`` at start: the value is the parameter's, not a fixed text (audit of stop 71, Q4)."""
+    units = random_units()
+    graph = s.new_graph()
+    wanted = f"units: {units}"
+    proc = s.launch(path, f"{path.name}.units", ["--ros-args", "-p", f"units:={units}"], graph=graph)
+    start = Probe(graph, topic, string, profile(reliable=True, transient_local=True, depth=10))
+    with s.phase("observe"):
+        wait_for(lambda: any(m.data == wanted for m in start.messages()), START_PARAMETER_TIMEOUT,
+                 abort=lambda: proc.poll() is not None)
+    got = [m.data for m in start.messages()]
+    proc.stop(sigint_timeout=1.0, sigterm_timeout=1.0)
+    s.record("config_start_parameter", got[:1] == [wanted],
+             f"started with units:={units}, it published {', '.join(map(repr, got[:3])) or 'nothing'} on {node_name}'s "
+             f"{topic}" + ("" if got else f" in {START_PARAMETER_TIMEOUT:.0f} s ({kit.process_state(proc)})"),
+             f"{wanted!r} at start: the parameter's value (get_parameter('units')), not a fixed text")
 
 
 def matching(readings: list[float], text: str) -> list[float]:

@@ -139,7 +139,7 @@ def judge_logs(s: Session, rosout, started) -> None:
 def grade(s: Session) -> None:
     """package.xml, then the library part (install + consumer package, CPU-bound) on a worker thread while
     the node part (mostly waiting for its 3 s of ticks) runs here (kit.parts.at_once)."""
-    kit.depends(s, "depends", PACKAGE, DEPENDENCIES)
+    kit.depends(s, "depends", PACKAGE, DEPENDENCIES, kinds=("build", "exec"))
 
     def library() -> None:
         cpp.installed_library(s, ("library_installed", "header_installed", "exported_target"), PACKAGE,

@@ -139,8 +139,10 @@ def grade(s: Session) -> None:
                  "task 2's result was printed while task 1 was still retrying" if waits_all else
                  "when task 1 finished first, task 2's result was never printed"
                  f"{swapped.cancelled(SWAPPED_PLANS)}" if not done[1] else
-                 "when task 1 finished first, its result was printed only after task 2 had finished" if not (
-                     done[0] and done[0][0] < swapped.last_draw(1)) else
+                 "when task 1 finished first, its result was never printed"
+                 f"{swapped.cancelled(SWAPPED_PLANS)}" if not done[0] else
+                 "when task 1 finished first, its result was printed only after task 2 had finished"
+                 if done[0][0] >= swapped.last_draw(1) else
                  f"the run went on {idle or 0:.1f} s after its last task had returned: await the tasks themselves "
                  "(a sleep of your own is too short on a slow day, and too long on every other)",
                  f"each result printed as soon as its task ends, whichever ends first, and the run ends with its "

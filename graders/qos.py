@@ -87,7 +87,10 @@ CHECKS = [
           "replayed to a later TRANSIENT_LOCAL subscription", 1,
           f"declare_parameter('units', '{DEFAULT_UNITS}'), create the latched publisher, then publish "
           f"String(data='units: {DEFAULT_UNITS}') once in __init__", **CONFIG),
-    Check("config_republish", "Setting the parameter units publishes 'units: <new value>'", 1,
+    Check("config_start_parameter", "Started with units set (-p units:=kelvin), it publishes that value at start",
+          1, "publish f\"units: {self.get_parameter('units').value}\" at start, not a fixed 'units: celsius'",
+          **CONFIG),
+    Check("config_republish", "Setting the parameter units publishes 'units: <new value>', and only then", 1,
           "declare_parameter('units', 'celsius'); add_post_set_parameters_callback(...) publishes the new "
           "configuration", **CONFIG),
     Check("config_late_joiner", "A TRANSIENT_LOCAL subscription made after the configuration was published "

@@ -91,6 +91,9 @@ CHECKS = [
     Check("client_calls", "Once the service exists, the client calls /what_is_the_point", 2,
           "create the client with srv_type=WhatIsThePoint, srv_name='/what_is_the_point' "
           "and call self.service_client.call_async(request) in a timer callback", **CLIENT),
+    Check("client_quiet_while_missing", "It sends no request while the service is missing", 1,
+          "return from the timer callback while service_is_ready() is false: a request sent then reaches no one",
+          part="client", needs=("client_calls",)),
     Check("client_rate", "It calls twice a second (every 0.5 s)", 2,
           "self.create_timer(0.5, self.timer_callback), one call_async per tick", part="client",
           needs=("client_calls",)),
@@ -124,6 +127,25 @@ def _grade_server(s: Session, srv_type: type) -> None:
                          where)
 
 
+def _quiet_while_missing(s: Session, server: ts.DeferredServer) -> None:
+    """``client_quiet_while_missing`` from the first request the service took: a client numbers its requests
+    from 1 (``rmw_request_id_t.sequence_number``, one count per client; rmw_fastrtps takes it from the request
+    writer's sample number), and a request sent while no server existed was matched by no reader and lost, so
+    a first request numbered n > 1 means n - 1 were sent while the service was missing. Recorded only once a
+    call arrived (``needs`` client_calls); a number of 0 (an rmw that does not give one) is not held against it.
+    """
+    if not server.sequence_numbers:
+        return
+    first = server.sequence_numbers[0]
+    expected = "no request until the service exists: the first request it receives is the client's request 1"
+    if first > 1:
+        s.record("client_quiet_while_missing", False,
+                 f"the first request that reached {SERVICE} was the client's request {first}: "
+                 f"{first - 1} were sent while the service did not exist (lost: nothing answers them)", expected)
+    else:
+        s.record("client_quiet_while_missing", True, "the first request it sent reached the service", expected)
+
+
 def _grade_client(s: Session, srv_type: type) -> None:
     path = kit.executable(s, "client_executable", PACKAGE, CLIENT_EXE)
     rosout = s.graph.rosout()  # the part's own graph
@@ -137,6 +159,7 @@ def _grade_client(s: Session, srv_type: type) -> None:
                                  window=THROTTLE_WINDOW)
     server.offer()  # 2. prompt answers: the calls, their rate, the points in the log
     services.calls(s, "client_calls", "client_rate", server, node, service=SERVICE, count=CALLS, period=PERIOD)
+    _quiet_while_missing(s, server)
     services.logs_answers(s, "client_logs_points", server, rosout, node)
     # 3. late answers: a client that does not block keeps calling every 0.5 s meanwhile
     services.keeps_calling(s, "client_keeps_calling_when_slow", server, node, count=CALLS, period=PERIOD,

@@ -359,3 +359,45 @@ def test_a_wrong_solutions_own_race_is_told_apart_from_parity_by_a_second_check_
     [parity] = batch_parity([lesson], [named])
     assert told.ok and "exit_code changed between check's two runs" in told.got, told.got
     assert not parity.ok and "races itself" not in parity.got, parity.got
+
+
+def _program_session(tmp_path: Path) -> GradingSession:
+    return GradingSession(load_catalog().get("inspect-topics"), [Check("a", "a", 1)], tmp_path, tmp_path / "log",
+                          {"PATH": "/usr/bin:/bin"})
+
+
+def test_a_program_that_leaves_a_command_running_is_told_from_one_that_stopped_it(tmp_path: Path) -> None:
+    """run_program names what a script left running when it ended (``cmd &``, never stopped: kit.scripts.ended
+    fails on it), shown as typed; a child it killed as it ended (``kill $!``) is still exiting then, and gets
+    LEFT_GRACE to be gone, so it does not count (audits of stops 69-71: ``ros2 topic hz ... &``)."""
+    from ros2course.kit.programs import run_program  # noqa: PLC0415 - the course's kit, on the content root
+
+    session = _program_session(tmp_path)
+    env = {"PATH": "/usr/bin:/bin"}
+    try:
+        left = run_program(session, ["/bin/sh", "-c", "sleep 30 & echo started"], "leaves", env=env)
+        assert left.returncode == 0 and len(left.left_running) == 1
+        assert left.left_running_text() == "sleep 30"
+        # a child that needs a moment to die after the script ended (a trap that sleeps, as a node shutting down)
+        stopped = run_program(session, ["/bin/sh", "-c", "sh -c 'trap \"sleep 0.3; exit\" TERM; "
+                                        "while :; do sleep 0.05; done' & sleep 0.2; kill $!"], "stops", env=env)
+        assert stopped.returncode == 0 and stopped.left_running == ()
+    finally:
+        session.close()
+
+
+def test_stdin_open_makes_a_question_wait_as_in_a_terminal(tmp_path: Path) -> None:
+    """With ``stdin_open`` a program that asks something (``read``; ssh-keygen's passphrase prompt) waits for an
+    answer nobody types, until its timeout; with /dev/null (the default) it reads end of file at once."""
+    from ros2course.kit.programs import run_program  # noqa: PLC0415 - the course's kit, on the content root
+
+    session = _program_session(tmp_path)
+    env = {"PATH": "/usr/bin:/bin"}
+    ask = ["/bin/sh", "-c", "read answer; echo done"]
+    try:
+        waited = run_program(session, ask, "asks-open", env=env, timeout=1.0, stdin_open=True)
+        assert waited.timed_out and "done" not in waited.stdout
+        at_once = run_program(session, ask, "asks-null", env=env, timeout=10.0)
+        assert not at_once.timed_out and at_once.stdout.strip() == "done" and at_once.seconds < 10.0
+    finally:
+        session.close()

@@ -370,7 +370,7 @@ class GradingSession:
         return proc
 
     def start_program(self, argv: list[str], label: str, *, env: dict[str, str] | None = None,
-                      cwd: Path | None = None, deadline: float = 60.0) -> LearnerProcess:
+                      cwd: Path | None = None, deadline: float = 60.0, stdin_open: bool = False) -> LearnerProcess:
         """Start a learner program that is not a ROS node (a script, a compiled binary, pip).
 
         The same care as nodes: its own process group, capped output in
@@ -381,10 +381,12 @@ class GradingSession:
             argv: the command (``argv[0]`` a path or a name on ``env``'s PATH).
             env: its whole environment (default: the ROS install's, without the workspace overlay).
             cwd: working directory (default: the workspace root).
+            stdin_open: stdin a pipe nobody writes to, as a terminal nobody types into (a question waits for
+                ever), instead of ``/dev/null`` (:class:`~ros2course.run.process.LearnerProcess`).
         """
         self.book.stop_if_settled()
         proc = self.machine.process(argv, dict(self.base_env if env is None else env), label, cwd=cwd,
-                                    deadline=deadline)
+                                    deadline=deadline, stdin_open=stdin_open)
         proc.start()
         return proc
 

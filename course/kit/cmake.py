@@ -97,17 +97,27 @@ def cmake_files(folder: Path) -> list[Path]:
     return out
 
 
+#: An install destination made absolute from the configured prefix (``DESTINATION ${CMAKE_INSTALL_PREFIX}/lib``,
+#: ``DESTINATION "${CMAKE_INSTALL_FULL_LIBDIR}"``), ``INSTALL_DESTINATION`` of configure_package_config_file too.
+_PREFIXED_DESTINATION = re.compile(r"""DESTINATION\s+"?(\$\{CMAKE_INSTALL_(?:PREFIX|FULL_\w+)\}[^\s)"]*)""")
+
+
 def hardcoded_paths(text: str, variables: tuple[str, ...] = ("CMAKE_INSTALL_PREFIX", "CMAKE_PREFIX_PATH")) -> list[str]:
     """What in one CMake file's text hard-codes a location: absolute paths, and ``set()``s of ``variables``.
 
     CMake's own advice (cmake-packages(7), "Creating Relocatable Packages"):
     locations come from the command line and from ``${CMAKE_CURRENT_SOURCE_DIR}`` /
-    GNUInstallDirs, so the project builds and installs anywhere.
+    GNUInstallDirs, so the project builds and installs anywhere. An install ``DESTINATION`` made absolute
+    with ``${CMAKE_INSTALL_PREFIX}/...`` or ``${CMAKE_INSTALL_FULL_<dir>}`` counts too: it is fixed when the
+    project is configured, so ``cmake --install --prefix <other>`` still writes into the configured prefix
+    (install(): "relative paths are interpreted with respect to the installation prefix"), and the exported
+    targets are not relocatable (cmake-packages(7)).
     """
     code = strip_comments(text)
     setter = re.compile(r"\b(?:set|list)\s*\(\s*(?:APPEND\s+|PREPEND\s+)?(" + "|".join(map(re.escape, variables))
                         + r")\b", re.IGNORECASE)
     found = [m.group(1) for m in _ABSOLUTE.finditer(code)]
+    found += [f"DESTINATION {m.group(1)}" for m in _PREFIXED_DESTINATION.finditer(code)]
     found += [re.sub(r"\s+", " ", m.group(0)) + " ...)" for m in setter.finditer(code)]
     return list(dict.fromkeys(found))
 

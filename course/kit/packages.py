@@ -15,27 +15,38 @@ def source_package(s: Session, name: str) -> tuple[Any, Any] | None:
     return find_packages(s.workspace_root / "src").get(name)
 
 
-def declared_dependencies(package: Any) -> set[str]:
-    """Names a ``package.xml`` lists as build, build-export or run dependencies (``<depend>`` is all three)."""
-    return {d.name for d in (*package.exec_depends, *package.build_depends, *package.build_export_depends)}
+#: The dependency kinds of package.xml format 2/3 (REP 149), as catkin_pkg's Package lists them.
+DEPENDENCY_KINDS = ("build", "build_export", "exec")
 
 
-def depends(s: Session, check_id: str, package: str, needed: tuple[str, ...] | list[str]) -> bool:
-    """Record ``check_id`` on whether ``package``'s package.xml declares every name in ``needed``.
+def declared_dependencies(package: Any, kinds: tuple[str, ...] = DEPENDENCY_KINDS) -> set[str]:
+    """Names a ``package.xml`` lists as dependencies of ``kinds`` (``<depend>`` is all three: REP 149); by default
+    any kind."""
+    return {d.name for kind in kinds for d in getattr(package, f"{kind}_depends")}
+
+
+def depends(s: Session, check_id: str, package: str, needed: tuple[str, ...] | list[str],
+            kinds: tuple[str, ...] = ("exec",)) -> bool:
+    """Record ``check_id`` on whether ``package``'s package.xml declares every name in ``needed`` as a dependency
+    of each of ``kinds`` (default: run time, what ``ros2 run`` needs of a Python package; a C++ package also needs
+    ``("build", "exec")``).
 
     Partial credit per name. The rule is the tutorial's (ch. 12.1, 15.1,
-    18.1: ``ros2 pkg create --dependencies ...`` writes ``<depend>`` tags);
+    18.1: ``ros2 pkg create --dependencies ...`` writes ``<depend>`` tags, every kind at once);
     without them ``colcon build --packages-up-to`` does not build the
-    dependency first and rosdep cannot install it.
+    dependency first and rosdep cannot install it. A ``<build_depend>`` alone is not one ``ros2 run`` sees
+    (audit of stop 71: print-forever-node's rclpy passed so).
     """
     expected = ", ".join(f"<depend>{n}</depend>" for n in needed) + " in package.xml"
     found = source_package(s, package)
     if found is None:
         return s.record(check_id, False, f"no package {package} in src/", expected)
     deps = declared_dependencies(found[1])
-    missing = [n for n in needed if n not in deps]
+    missing = [n for n in needed if not all(n in declared_dependencies(found[1], (kind,)) for kind in kinds)]
     return s.record(check_id, not missing, f"package.xml dependencies: {', '.join(sorted(deps)) or 'none'}"
-                    + (f" (missing {', '.join(missing)})" if missing else ""), expected,
+                    + (f" (missing {', '.join(missing)} as {' and '.join(kinds)} dependenc{'y' if len(missing) == 1 else 'ies'}: "
+                       "<depend> is every kind)"
+                       if missing else ""), expected,
                     fraction=(len(needed) - len(missing)) / len(needed))
 
 

@@ -18,7 +18,7 @@ from pathlib import Path
 
 from ros2course.kit.session_protocol import Session
 from ros2course.run.probes import wait_until
-from ros2course.run.process import rclpy_shutdown_race
+from ros2course.run.process import marked_processes, rclpy_shutdown_race
 
 #: What a signal that ended a program usually means, for C++ programs (signal(7)).
 _SIGNAL_MEANING = {"SIGABRT": " (abort: an assertion failed or an exception nothing caught)",
@@ -86,6 +86,19 @@ class ProgramRun:
         last = self.exception()
         return f"{self.ending()} after {self.seconds:.1f} s" + (f" ({last})" if last else "")
 
+    def left_running_text(self, count: int = 3) -> str:
+        """The first ``count`` of :attr:`left_running` as a learner typed them (``ros2 topic hz /chatter``), "; "
+        between them: the pid, the interpreter of a Python program and the folders of the program are left out."""
+        names = []
+        for entry in self.left_running[:count]:
+            words = entry.split(" ")[1:]  # "<pid> <command line>"
+            if len(words) > 1 and Path(words[0]).name.startswith("python"):
+                words = words[1:]
+            if words:
+                words[0] = Path(words[0]).name
+            names.append(" ".join(words)[:80])
+        return "; ".join(names)
+
 
 def last_line(text: str) -> str:
     """The last non-blank line of ``text``, stripped ("" if none)."""
@@ -130,20 +143,32 @@ def compile_errors(run: ProgramRun, *, paths: Mapping[str, str] | None = None, l
     return text
 
 
+#: Seconds a program's children get to end after it exited before they count as left running: a child it
+#: signalled as it ended (``kill $!; exit``) is still exiting then, one it never stopped (``cmd &``) is not.
+LEFT_GRACE = 1.0
+
+
 def run_program(s: Session, argv: list[str], label: str, *, timeout: float = 30.0,
-                env: dict[str, str] | None = None, cwd: Path | None = None) -> ProgramRun:
+                env: dict[str, str] | None = None, cwd: Path | None = None, stdin_open: bool = False) -> ProgramRun:
     """Run ``argv`` to completion (at most ``timeout`` seconds, then stopped) and return what it did.
 
     Raises nothing for the learner's faults: a program that loops, floods
-    output or never exits comes back with ``timed_out`` and capped output.
+    output or never exits comes back with ``timed_out`` and capped output. ``stdin_open``: its stdin is a pipe
+    nobody writes to, so a program that asks something waits (and times out) as in a terminal nobody types
+    into (:meth:`~ros2course.grade.session.GradingSession.start_program`).
     """
-    proc = s.start_program(argv, label, env=env, cwd=cwd, deadline=timeout + 10.0)
+    proc = s.start_program(argv, label, env=env, cwd=cwd, deadline=timeout + 10.0, stdin_open=stdin_open)
     begin = time.monotonic()
     with s.phase("run"):
         finished = wait_until(lambda: proc.poll() is not None, timeout, interval=0.02)
     seconds = time.monotonic() - begin
+    if finished:  # a child it killed as it ended (`kill $!` then exit) is given LEFT_GRACE s to be gone
+        wait_until(lambda: not _children(tuple(marked_processes(proc.marker))), LEFT_GRACE, interval=0.05)
     report = proc.stop(sigint_timeout=0.5, sigterm_timeout=1.0)
-    return ProgramRun(report.returncode, proc.stdout(), proc.stderr(), not finished, seconds, report.traceback)
+    # what it left running when it ended by itself (a `cmd &` never waited for), ros2 daemons aside: stopped here
+    # with the run, and named so that kit.scripts.ended can fail on it
+    return ProgramRun(report.returncode, proc.stdout(), proc.stderr(), not finished, seconds, report.traceback,
+                      left_running=_children(report.left_running))
 
 
 def interrupt_after(s: Session, argv: list[str], label: str, seconds: float, *,
@@ -230,9 +255,8 @@ def judge_interrupted_run(s: Session, check_id: str, run: ProgramRun, exit_timeo
     elif run.traceback:
         observed = f"{run.ending()} with a traceback: {run.exception()}"
     elif run.left_running:
-        names = "; ".join(p.split(" ", 1)[-1][:80] for p in run.left_running[:3])
         observed = (f"{run.ending()}, but while {len(run.left_running)} process(es) it started were still "
-                    f"stopping ({names})")
+                    f"stopping ({run.left_running_text()})")
     else:
         observed = f"{run.ending()}, no traceback"
     return s.record(check_id, race or (run.interrupted and not run.timed_out and run.returncode == 0

@@ -287,7 +287,10 @@ def ended(s: Session, check_id: str, run: ProgramRun, expected: str) -> bool:
     """Record ``check_id``: the script ended by itself, with exit code 0, before its deadline.
 
     A script still running at the deadline names the usual cause (a ``ros2 topic
-    echo`` or ``pub`` without ``--once``); a non-zero exit quotes its last error line.
+    echo`` or ``pub`` without ``--once``); a non-zero exit quotes its last error line. A script that ended
+    but left a command it started running (``ros2 topic hz /chatter &``, never stopped: it outlives the
+    script in the learner's terminal) fails too, naming it (:attr:`ProgramRun.left_running`, ``ros2``
+    daemons aside; a child killed as the script ends gets :data:`~ros2course.kit.programs.LEFT_GRACE`).
     """
     if run.timed_out:
         s.record(check_id, False, f"your script was {run.describe()}", expected,
@@ -297,6 +300,12 @@ def ended(s: Session, check_id: str, run: ProgramRun, expected: str) -> bool:
         last = excerpt(run.stderr or run.stdout, 200)
         s.record(check_id, False, f"your script ended with {run.describe()}; its last output: {last}", expected,
                  hint="run it yourself in a sourced terminal and fix the first command that fails")
+        return False
+    if run.left_running:
+        s.record(check_id, False, f"your script ended ({run.describe()}), but left {len(run.left_running)} "
+                 f"process(es) it started running: {run.left_running_text()}", expected,
+                 hint="a command started with & outlives the script: run it in the foreground with an end "
+                 "(--once, timeout N), or not at all")
         return False
     s.record(check_id, True, f"it ended by itself ({run.describe()})", expected)
     return True

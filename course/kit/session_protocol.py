@@ -144,9 +144,10 @@ class Session(Protocol):
         ...
 
     def start_program(self, argv: list[str], label: str, *, env: dict[str, str] | None = None,
-                      cwd: Path | None = None, deadline: float = 60.0) -> LearnerProcess:
+                      cwd: Path | None = None, deadline: float = 60.0, stdin_open: bool = False) -> LearnerProcess:
         """Start a learner program that is not a ROS node (a script, a binary, pip) as the submission;
-        killed ``deadline`` seconds after start; ``env`` default :attr:`base_env`, ``cwd`` the workspace."""
+        killed ``deadline`` seconds after start; ``env`` default :attr:`base_env`, ``cwd`` the workspace;
+        ``stdin_open``: stdin a pipe nobody writes to (a question waits), else ``/dev/null``."""
         ...
 
     def run_colcon(self, args: Sequence[str], *, timeout: float = 120.0) -> subprocess.CompletedProcess:

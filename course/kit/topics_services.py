@@ -370,6 +370,9 @@ class DeferredServer:
 
     Attributes:
         calls: ``(time.monotonic() seconds, request)`` per call, oldest first.
+        sequence_numbers: per call, the request's sequence number (``request_id.sequence_number`` of the
+            ``rmw_service_info_t``): the client's own count of the requests it sent, from 1, so a first call
+            numbered above 1 was preceded by requests nothing answered (sent while no server existed).
         sent: per call, when the client sent it (the request's DDS source
             timestamp, system clock seconds): rates use these, so delivery
             delays on a loaded machine do not count against the client.
@@ -383,6 +386,7 @@ class DeferredServer:
         self.delay = delay
         self.calls: list[tuple[float, Any]] = []
         self.sent: list[float] = []
+        self.sequence_numbers: list[int] = []
         self.answers: list[tuple[float, Any]] = []
         self._graph = graph
         self._name = name
@@ -424,6 +428,8 @@ class DeferredServer:
                     index = len(self.calls)
                     self.calls.append((now, request))
                     self.sent.append(sent)
+                    self.sequence_numbers.append(int(getattr(getattr(header, "request_id", None),
+                                                             "sequence_number", 0) or 0))
                     response = self._handler(index, request, self._srv_type.Response())
                     self._due.append((now + self.delay, response, header))
                 continue  # take everything queued before sleeping

@@ -296,11 +296,15 @@ class LearnerProcess:
             and rclcpp install their handlers regardless, so nodes still stop.
         deadline: seconds after start when a watchdog SIGKILLs the group and
             the marked processes, whatever the grader is doing (None: never).
+        stdin_open: its stdin is a pipe kept open and never written, as a terminal nobody types into: a
+            program that asks a question (``ssh-keygen`` without ``-N ''`` asks for a passphrase) waits for an
+            answer until it is stopped. Default: ``/dev/null``, where such a question reads an empty answer at
+            once (end of file).
     """
 
     def __init__(self, argv: list[str], env: dict[str, str], log_dir: Path, name: str,
                  output_cap: int = DEFAULT_OUTPUT_CAP, cwd: Path | None = None, ros_sigint: bool = False,
-                 deadline: float | None = DEFAULT_DEADLINE) -> None:
+                 deadline: float | None = DEFAULT_DEADLINE, stdin_open: bool = False) -> None:
         # sh's `trap '' INT` sets SIGINT to ignored and exec keeps that (POSIX); util-linux's
         # setpriv sets the parent-death signal, so the node dies even if ros2course is
         # SIGKILLed. Both exec into the learner's program (same PID); no preexec_fn, which is
@@ -332,6 +336,7 @@ class LearnerProcess:
         self.output_cap = output_cap
         self.cwd = cwd or log_dir
         self.popen: subprocess.Popen | None = None
+        self.stdin_open = stdin_open
         self.started_at = 0.0
         self._drains: list[OutputDrain] = []
         self.report: ExitReport | None = None
@@ -358,7 +363,7 @@ class LearnerProcess:
         self.log_dir.mkdir(parents=True, exist_ok=True)
         self.started_at = time.monotonic()
         self.popen = subprocess.Popen(  # noqa: S603 - runs the learner's own executable, by design
-            self.argv, env=self._popen_env, cwd=self.cwd, stdin=subprocess.DEVNULL,
+            self.argv, env=self._popen_env, cwd=self.cwd, stdin=subprocess.PIPE if self.stdin_open else subprocess.DEVNULL,
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, start_new_session=True)
         self._drains = [OutputDrain(self.popen.stdout, self.stdout_log, self.output_cap),
                         OutputDrain(self.popen.stderr, self.stderr_log, self.output_cap)]
@@ -488,6 +493,9 @@ class LearnerProcess:
         seconds = time.monotonic() - begin
         self._signal_group(signal.SIGKILL)  # children left in the group
         kill_marked(self.marker)
+        if self.popen.stdin is not None:  # stdin_open: the pipe's end kept for it
+            with contextlib.suppress(OSError):
+                self.popen.stdin.close()
         for drain in self._drains:
             drain.join(timeout=2.0)
         # Python writes tracebacks to stderr; stdout only when a program prints one itself

@@ -1,0 +1,37 @@
+"""The kit's static readings of a learner's files (no ROS graph): package.xml dependency kinds, CMake paths."""
+
+from __future__ import annotations
+
+from catkin_pkg.package import parse_package_string
+
+from ros2course.kit.cmake import hardcoded_paths
+from ros2course.kit.packages import declared_dependencies
+
+_PACKAGE_XML = """<?xml version="1.0"?>
+<package format="3">
+  <name>p</name><version>0.0.0</version><description>d</description>
+  <maintainer email="learner@example.com">a</maintainer><license>MIT</license>
+  <depend>std_msgs</depend>
+  <build_depend>rclpy</build_depend>
+  <exec_depend>geometry_msgs</exec_depend>
+</package>
+"""
+
+
+def test_dependency_kinds_are_told_apart_and_depend_is_every_kind() -> None:
+    """REP 149: <depend> is build, build_export and exec at once; a <build_depend> alone is not one ros2 run
+    sees (audit of stop 71: print-forever-node's rclpy passed so)."""
+    package = parse_package_string(_PACKAGE_XML)
+    assert declared_dependencies(package) == {"std_msgs", "rclpy", "geometry_msgs"}
+    assert declared_dependencies(package, ("exec",)) == {"std_msgs", "geometry_msgs"}
+    assert declared_dependencies(package, ("build",)) == {"std_msgs", "rclpy"}
+
+
+def test_a_destination_made_absolute_from_the_prefix_is_a_hardcoded_path() -> None:
+    """``DESTINATION ${CMAKE_INSTALL_PREFIX}/lib`` and ``${CMAKE_INSTALL_FULL_<dir>}`` are fixed at configure
+    time; GNUInstallDirs' relative ``${CMAKE_INSTALL_LIBDIR}`` is what the lesson asks for."""
+    found = hardcoded_paths("install(TARGETS g LIBRARY DESTINATION ${CMAKE_INSTALL_PREFIX}/lib)\n"
+                            'install(FILES c DESTINATION "${CMAKE_INSTALL_FULL_LIBDIR}/cmake/G")\n'
+                            "install(DIRECTORY include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})\n"
+                            "# install(FILES x DESTINATION ${CMAKE_INSTALL_PREFIX}/share)\n")
+    assert found == ["DESTINATION ${CMAKE_INSTALL_PREFIX}/lib", "DESTINATION ${CMAKE_INSTALL_FULL_LIBDIR}/cmake/G"]
