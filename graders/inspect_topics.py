@@ -71,23 +71,33 @@ def grade(s: Session) -> None:
                     f"type and publisher count of {mystery.topic}", f"ros2 topic info {mystery.topic}")
     scripts.printed(s, "echo", run, [f"id: {mystery.quote_id}", mystery.quote, mystery.philosopher],
                     f"message from {mystery.topic}", f"ros2 topic echo --once {mystery.topic}")
-    judge_inbox(s, inbox)
-    judge_late_topic(s, path, msg_type, scripts.late_by(run))
+    # the second run goes on to its pub only where the first one's may have been lost: it ended by itself
+    again = judge_late_topic(s, path, msg_type, scripts.late_by(run), inbox if run.returncode == 0 and not
+                             run.timed_out else None)
+    judge_inbox(s, inbox, again)
 
 
-def judge_late_topic(s: Session, path, msg_type, delay: float) -> None:
+def _wanted(msg) -> bool:
+    return msg.id == PUB_ID and msg.philosopher_name == PUB_PHILOSOPHER
+
+
+def judge_late_topic(s: Session, path, msg_type, delay: float, first_inbox):
     """Record ``asks_again``: run the script again in a fresh graph with no daemon; the mystery node starts
     ``delay`` s (``kit.scripts.late_by``: as long as the first run took) after the script's first ``ros2``
-    command joined the graph; its topic must be printed."""
+    command joined the graph; its topic must be printed. The run stops once it has, unless ``first_inbox`` (the
+    first run's, None: do not wait) missed the quote: then it goes on to its ``pub``. Returns this run's inbox
+    (None when not run)."""
     if (blocker := s.unmet_need("asks_again")) is not None:
         s.record("asks_again", False, blocker, "")
-        return
+        return None
     with s.part("late topic", own_graph=True):
-        quote_inbox(s, msg_type)  # so that `ros2 topic pub --once` ends as in the first run
+        inbox = quote_inbox(s, msg_type)  # so that `ros2 topic pub --once` ends as in the first run
         late: list[QuotePublisher] = []
         run = scripts.run_script_first(s, path, lambda: late.append(QuotePublisher(s, msg_type)),
                                        late_by=delay, timeout=TIMEOUT,
-                                       until=lambda out: bool(late) and late[0].topic in out)
+                                       until=lambda out: bool(late) and late[0].topic in out and (
+                                           first_inbox is None or any(_wanted(m) for m in
+                                                                      first_inbox.messages() + inbox.messages())))
         found = late[0].topic in run.run.stdout
         s.record("asks_again", found,
                  f"{run.describe()}; " + (f"it printed {late[0].topic}" if found else
@@ -95,17 +105,21 @@ def judge_late_topic(s: Session, path, msg_type, delay: float) -> None:
                                           f"{scripts.excerpt(run.run.stdout)}"),
                  f"the script finds and prints the topic of a node that joins {delay:.1f} s after its first "
                  "ros2 command, as long as its first run took (it asks again until the topic shows up)")
+    return inbox
 
 
-def judge_inbox(s: Session, inbox) -> None:
-    """Record ``published``: the grader's subscription on /amazing_quote_in received id 1994 from Lloyd."""
-    def wanted(msg) -> bool:
-        return msg.id == PUB_ID and msg.philosopher_name == PUB_PHILOSOPHER
+def judge_inbox(s: Session, inbox, again=None) -> None:
+    """Record ``published``: the grader's subscription on /amazing_quote_in received id 1994 from Lloyd, in the
+    script's first run or in its second (``again``: the late-topic run's inbox, None when it did not run).
 
-    wait_until(lambda: any(wanted(m) for m in inbox.messages()), 2.0)  # a reliable sample in flight
-    received = inbox.messages()
+    ``ros2 topic pub --once`` publishes as soon as it sees the grader's subscription and is gone 0.1 s later
+    (its ``--keep-alive``); when the grader's side has not matched its publisher yet, the reliable sample is
+    dropped and never repaired (1 reference run in 40 at load 2, stop 72), so the same script's second run
+    counts too: what it sends is the same."""
+    wait_until(lambda: any(_wanted(m) for m in inbox.messages()), 2.0)  # a reliable sample in flight
+    received = inbox.messages() or (again.messages() if again is not None else [])
     expected = f"the grader receives id {PUB_ID}, philosopher_name {PUB_PHILOSOPHER} on {INBOX_TOPIC}"
-    if any(wanted(m) for m in received):
+    if any(_wanted(m) for m in received):
         s.record("published", True, f"the grader received {len(received)} message(s) on {INBOX_TOPIC}, "
                  f"id {PUB_ID} from {PUB_PHILOSOPHER} among them", expected)
     elif received:
