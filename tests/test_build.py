@@ -18,6 +18,7 @@ from ros2course.builder.colcon import build_log_excerpt, build_packages, overlay
 from ros2course.errors import NotGradable
 from ros2course.ros import env as env_mod
 from ros2course.ros.manifests import find_packages
+from ros2course.run.process import last_traceback, rclpy_shutdown_race
 
 DATA = Path(__file__).parent / "data"
 
@@ -270,14 +271,21 @@ def test_colcon_test_runs_a_launch_testing_test_of_a_learners_node(tmp_path):
     assert (package / "test" / LAUNCH_TEST.name).is_file()  # copied with the package
     result = build_packages(root, [package.name], _env(), tmp_path / "b.log")
     assert result.ok, result.excerpt
+    log = (root / "log" / "latest_test" / package.name / "stdout_stderr.log")
     with RosSession() as graph:  # a private domain id for the node the test launches
         env = graph.learner_env(overlay_env(root, _env()))
-        test = subprocess.run(["colcon", "test", "--packages-select", package.name], cwd=root, env=env,
-                              capture_output=True, text=True, timeout=180)
+        # One more run only when the node's Ctrl+C exit was rclpy's own shutdown race (an RCLError raised inside
+        # rclpy's executor, about 1 % of presses: rclpy_shutdown_race; CI of stop 72 failed on it once): the
+        # test's verdict on the learner's node, not on rclpy
+        for _ in range(2):
+            test = subprocess.run(["colcon", "test", "--packages-select", package.name], cwd=root, env=env,
+                                  capture_output=True, text=True, timeout=180)
+            shown = log.read_text(errors="replace") if log.is_file() else test.stdout
+            if test.returncode == 0 or not rclpy_shutdown_race(last_traceback(shown)):
+                break
         summary = subprocess.run(["colcon", "test-result", "--all", "--verbose"], cwd=root, env=env,
                                  capture_output=True, text=True, timeout=60)
-    log = (root / "log" / "latest_test" / package.name / "stdout_stderr.log")
-    shown = log.read_text(errors="replace")[-3000:] if log.is_file() else test.stdout[-3000:]
+    shown = shown[-3000:]
     assert test.returncode == 0, shown
     # launch_testing reports its test description as one pytest item
     assert "Summary: 1 test, 0 errors, 0 failures" in summary.stdout, summary.stdout + shown

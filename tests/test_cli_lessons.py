@@ -6,7 +6,7 @@ domain (ros2cli's ``spawn_daemon`` detaches it with ``setsid``, out of the
 script's process group), and this script also leaves a ``sleep`` running in
 the background. After the check: no process of the script, no daemon of that
 domain (none in the process list, nothing listening on its port 11511 + domain
-id) and no unused Fast DDS shared-memory file from the check. Real ROS nodes;
+id) and no unused Fast DDS shared-memory file from the check (its /dev/shm is its own). Real ROS nodes;
 nothing here depends on timing.
 """
 
@@ -14,24 +14,28 @@ from __future__ import annotations
 
 import contextlib
 import fcntl
+import json
 import os
 import re
+import shutil
 import socket
+import subprocess
+import sys
 from pathlib import Path
 
 import psutil
 import pytest
 
-from ros2course.grade.engine import grade_lesson
 from ros2course.dev.validate import reference_workspace
 from ros2course.lesson.catalog import load_catalog
-from ros2course.run.process import MARKER_VAR, SHM_DIR, _shm_files_in_use
+from ros2course.run.process import MARKER_VAR
 from ros2course.kit.scripts import daemon_port
 
 #: Put before the reference script: a daemon, the domain and a background process to find afterwards.
 PREAMBLE = """ros2 topic list
 ros2 daemon status
 echo "DOMAIN=${ROS_DOMAIN_ID}"
+echo "SHM=$(ls /dev/shm | grep -c fastrtps)"
 sleep 300 &
 echo "BACKGROUND=$!"
 """
@@ -66,13 +70,14 @@ def listening(port: int) -> bool:
         return sock.connect_ex(("127.0.0.1", port)) == 0
 
 
-def unused_shm(names: set[str]) -> list[str]:
-    """Those of ``names`` (files in /dev/shm) that no live participant holds: what a sweep would remove."""
-    used = _shm_files_in_use()
+def unused_shm(folder: Path) -> list[str]:
+    """The Fast DDS files in ``folder`` (the check's private /dev/shm) no live participant holds: what a sweep
+    would remove. A segment is held while its ``<name>_el`` lock file is locked; a file with no lock file of its
+    own (a port's semaphore) is held by nothing once every process of the check has ended."""
     stale = []
-    for name in sorted(names):
-        path = SHM_DIR / name
-        if not path.exists():
+    for path in sorted(folder.iterdir()):
+        name = path.name
+        if "fastrtps_" not in name:  # not Fast DDS's: e.g. LTTng's lttng-ust-wait-<n>, which rcl's tracing makes
             continue
         if name.endswith("_el"):
             with open(path, "rb") as lock:
@@ -81,23 +86,42 @@ def unused_shm(names: set[str]) -> list[str]:
                 except OSError:
                     continue  # a live participant holds it
                 stale.append(name)
-        elif not (SHM_DIR / f"{name}_el").exists() and str(path) not in used:
+        elif not (folder / f"{name}_el").exists():
             stale.append(name)
     return stale
+
+
+#: Grades inspect-topics in the process ``unshare`` starts (argv: workspace, log folder); prints its check count.
+CHILD = """import json, sys
+from pathlib import Path
+from ros2course.grade.engine import grade_lesson
+from ros2course.lesson.catalog import load_catalog
+result = grade_lesson(load_catalog().get("inspect-topics"), Path(sys.argv[1]), log_dir=Path(sys.argv[2]))
+print(json.dumps({"checks": len(result.checks), "message": result.message}))
+"""
 
 
 @pytest.mark.ros
 @pytest.mark.timeout(300)
 def test_a_cli_check_leaves_no_process_daemon_or_shared_memory(tmp_path):
+    """The check runs in a mount namespace of its own whose /dev/shm is a fresh folder (root: ``unshare``), so
+    every Fast DDS file found there afterwards is the check's: the other xdist worker's participants write to
+    the real /dev/shm (CI of stop 72: their segment files, unused for an instant, were counted as this check's)."""
+    if os.geteuid() != 0 or not shutil.which("unshare"):
+        pytest.skip("a private /dev/shm needs root and unshare(1)")
     lesson = load_catalog().get("inspect-topics")
     workspace = reference_workspace(lesson, tmp_path / "ws")
     script = workspace / "cli" / "inspect_topics.sh"
     script.write_text(PREAMBLE + script.read_text(encoding="utf-8"), encoding="utf-8")
-    shm_before = set(os.listdir(SHM_DIR)) if SHM_DIR.is_dir() else set()
-
-    result = grade_lesson(lesson, workspace, log_dir=tmp_path / "log")
-
-    assert result.checks, result.message
+    shm = tmp_path / "shm"
+    shm.mkdir()
+    shm.chmod(0o1777)
+    child = subprocess.run(["unshare", "--mount", "--propagation", "private", "sh", "-c",
+                            'mount --bind "$0" /dev/shm && exec "$@"', str(shm), sys.executable, "-c", CHILD,
+                            str(workspace), str(tmp_path / "log")], capture_output=True, text=True, timeout=280)
+    assert child.returncode == 0, child.stderr[-3000:]
+    result = json.loads(child.stdout.strip().splitlines()[-1])
+    assert result["checks"], result["message"]
     output = (tmp_path / "log" / "inspect_topics.stdout.log").read_text(encoding="utf-8")
     assert "The daemon is running" in output, f"the script's first command started no daemon: {output[:500]}"
     domain = int(re.search(r"DOMAIN=(\d+)", output).group(1))
@@ -107,15 +131,5 @@ def test_a_cli_check_leaves_no_process_daemon_or_shared_memory(tmp_path):
     assert marked_in(workspace) == [], "a process of the learner's script outlived the check"
     assert daemons_of(domain) == [], f"a ros2 daemon of domain {domain} outlived the check"
     assert not listening(daemon_port(domain)), f"something still listens on the daemon port of domain {domain}"
-    shm_after = set(os.listdir(SHM_DIR)) if SHM_DIR.is_dir() else set()
-    # Port-named files (``fastrtps_port<N>``) of another domain belong to a test running on the other
-    # xdist worker (CI: the fastdds-udp-profile lesson's ports 7000 and 8413, unused for an instant
-    # between its participants); this check's own ports are 7400 + 250 * domain + 0..249 (RTPS).
-    ours = range(7400 + 250 * domain, 7400 + 250 * (domain + 1))
-
-    def this_check(name: str) -> bool:
-        port = re.search(r"port(\d+)", name)
-        return port is None or int(port.group(1)) in ours
-
-    left = [name for name in unused_shm(shm_after - shm_before) if this_check(name)]
-    assert left == [], "the check left unused Fast DDS shared-memory files"
+    assert int(re.search(r"SHM=(\d+)", output).group(1)) > 0, "the daemon wrote no Fast DDS file to the private /dev/shm"
+    assert unused_shm(shm) == [], "the check left unused Fast DDS shared-memory files"

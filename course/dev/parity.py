@@ -17,7 +17,11 @@ lesson and case, each graded for its own lesson only), grades it with
 failed checks differs from the ``check`` result of the same case. A wrong solution that differs is graded
 once more with ``check``: when that run gives ``grade``'s verdict and what changed between ``check``'s two
 runs is no check its fixture names, the difference is the wrong program's own race, not parity
-(:func:`own_race`), and the case passes saying so.
+(:func:`own_race`), and the case passes saying so. When ``check`` gives its first verdict again, the case is
+graded once more through ``grade``: a difference ``grade`` does not repeat either was one run's race of the
+wrong program and the grader (CI of stop 72: gazebo-custom-nodes' ``thrust-ctrl-c-uncaught`` passed its
+Ctrl+C check once under ``grade``; 6 of 6 ``grade`` runs failed it afterwards), and the case passes saying so;
+a difference either path repeats fails.
 """
 
 from __future__ import annotations
@@ -151,6 +155,20 @@ def own_race(checked: LessonResult, batch: LessonResult, again: LessonResult | N
     return [] if not changed or set(changed) & set(named) else changed
 
 
+def _grade_again(root: Path, student: str, lesson: str, student_lessons: dict[str, list[str]],
+                 stop_when: dict[str, StopWhen]) -> LessonResult | None:
+    """``student``'s submission (in ``root``/submissions) graded once more through ``grade``, alone in a batch of
+    its own; None when the batch gave no result."""
+    lone, out = root / "again-batch" / student / "submissions", root / "again-batch" / student / "out"
+    lone.mkdir(parents=True)
+    for folder in (lone.parent, lone):
+        folder.chmod(0o755)
+    shutil.copytree(root / "submissions" / student, lone / student, symlinks=True)
+    report = run_batch(lone, [lesson], out, jobs=1, student_lessons={student: student_lessons[student]},
+                       stop_when={k: v for k, v in stop_when.items() if k == student})
+    return next((r for r in report.records if r.student == student and r.lesson == lesson), None)
+
+
 def _describe(result: LessonResult) -> str:
     text = f"{result.status} {result.score:g}/{result.max_score:g}; failed: {', '.join(result.failed_checks()) or 'none'}"
     if result.message and not result.status.graded:
@@ -222,6 +240,15 @@ def batch_parity(lessons: list[Lesson], checked: list[Outcome], jobs: int = 1, p
                     said += (f"; check's second run gave this verdict too: {', '.join(raced)} changed between "
                              "check's two runs (this wrong solution races itself on checks its fixture does not "
                              "name: not parity)")
+                elif again is not None and same_verdicts(want, again):
+                    # check gives its verdict twice: does grade give it on a second run? (a difference that
+                    # does not repeat is one run's race, not the two paths' difference)
+                    second = _grade_again(root, student, checked_case.lesson, student_lessons, stop_when)
+                    if second is not None and same_verdicts(want, second):
+                        ok = True
+                        said += (f"; grade's second run gave check's verdict ({', '.join(differing_checks(want, got))}"
+                                 " differed in its first run only: this wrong solution's bug was missed in one run, a "
+                                 "race of the program and the grader, not parity)")
             outcome = Outcome(checked_case.lesson, checked_case.case + BATCH_CASE, ok, "as check: " + _describe(want),
                               said, float(got.timings.get("total", 0.0)) if got is not None else 0.0, got)
             out.append(outcome)
