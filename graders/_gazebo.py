@@ -79,6 +79,11 @@ THROTTLE_WINDOW = 2.5
 #: Seconds the thrust controller is watched after it said twice that it waits, before the world appears
 #: (its records over that span judged as the wrench publisher's: at most one a second).
 THRUST_THROTTLE_WINDOW = 1.0
+#: Wall seconds the world's clock runs with no /tf once the controller subscribes to /tf (thrust_no_transform):
+#: a warning throttled to one a second comes two or three times, an unthrottled one about 250 times a second
+NO_TF_WINDOW = 2.5
+#: rcl_interfaces/msg/Log's level of a warning (WARN); ERROR and FATAL are above it
+WARN_LEVEL = 30
 #: Seconds: for the request or message once the world is there; for a node to end by itself; for the
 #: controller's first answer (a node that starts, then waits for the world's subscriber and /clock).
 SEND_TIMEOUT = 3.0
@@ -311,8 +316,8 @@ def _plot(s: Session, steps: list[sim.StepRecord], ideal: list[sim.StepRecord], 
 def thrust_run(s: Session, path: Any) -> None:
     """thrust_node_name, thrust_waits, thrust_waits_throttled, thrust_entity, thrust_rate, thrust_law, thrust_settles (and
     thrust_sigint_exit when the part ends): with no world, the controller must say it waits for a subscriber
-    (within :data:`WAIT_WINDOW` s); then the world appears and runs the controller on the world's clock, in
-    lockstep, from the box at rest at x = 0."""
+    (within :data:`WAIT_WINDOW` s); then the world appears with its clock alone (:func:`no_transform_yet`), then
+    runs the controller on the world's clock, in lockstep, from the box at rest at x = 0."""
     rosout = s.graph.rosout()
     node = kit.start_node(s, "thrust_node_name", path, THRUST_NODE, sigint_check="thrust_sigint_exit",
                           args=["--ros-args", "-p", "use_sim_time:=true"])
@@ -322,7 +327,11 @@ def thrust_run(s: Session, path: Any) -> None:
         # without its spin_once logged as fast as it could, and passed)
         services.waits_throttled(s, "thrust_waits_throttled", rosout, node, node_name=node.name or THRUST_NODE,
                                  window=THRUST_THROTTLE_WINDOW)
-    world = sim.physics_world(s, real_time_factor=None, wait_for_input=STARTUP_WAIT)
+    # the world's clock first runs alone, in real time, with no /tf: the lesson's "while the transform is not
+    # there yet" (its branch ran only by chance while /tf came with the first tick: cosmic-ray held-out seed 35)
+    world = sim.physics_world(s, real_time_factor=1.0, withhold_tf=True)
+    no_transform_yet(s, "thrust_no_transform", rosout, node, world)
+    world.real_time_factor, world.wait_for_input, world.withhold_tf = None, STARTUP_WAIT, False
     with s.phase("observe"):
         kit.wait_until(lambda: bool(world.wrenches), ANSWER_TIMEOUT, abort=node.ended)
     if not world.wrenches:
@@ -342,6 +351,45 @@ def thrust_run(s: Session, path: Any) -> None:
     world.pause()
     steps = [e for e in world.trajectory if e.step >= start][:STEPS]
     _judge_thrust(s, world, steps, world.wrenches[heard:], done)
+
+
+def no_transform_yet(s: Session, check_id: str, rosout: Any, node: kit.StartedNode, world: sim.PhysicsWorld) -> bool:
+    """Record ``check_id``: the world's clock runs with no /tf; from when the controller subscribes to /tf (its
+    TransformListener, made after its wait) for :data:`NO_TF_WINDOW` s, it keeps running, publishes no wrench
+    and warns (a record at WARN or above) at most once a second: the lesson's "while the transform is not there
+    yet, it logs a warning (throttle_duration_sec=1.0) and publishes nothing". A record that mentions a
+    subscriber is its wait's, not this warning. Stamps are the records' own (wall clock)."""
+    name = node.name or THRUST_NODE
+    expected = (f"with /clock running and no /tf ({NO_TF_WINDOW:g} s): still running, no message on {WRENCH_TOPIC}, "
+                "a warning at most once a second")
+    with s.phase("observe"):
+        listening = kit.wait_until(lambda: world.peers()[0] > 0, ANSWER_TIMEOUT, abort=node.ended)
+        since = time.time()
+        if listening:
+            kit.wait_until(lambda: False, NO_TF_WINDOW, abort=node.ended)
+    sent, running = len(world.wrenches), node.proc.poll() is None
+    if not listening:
+        return s.record(check_id, False, f"nothing subscribed to /tf in {ANSWER_TIMEOUT:.0f} s after the world "
+                        f"appeared; {kit.process_state(node.proc)}", expected,
+                        "make the tf2_ros.TransformListener(self.buffer, self) once the wait is over")
+    stamps = sorted(r.stamp.sec + r.stamp.nanosec * 1e-9 for r in rosout.records(node=name, match=lambda text:
+                    "subscri" not in text.lower()) if r.level >= WARN_LEVEL and r.stamp.sec + r.stamp.nanosec * 1e-9 >= since)
+    span = stamps[-1] - stamps[0] if stamps else 0.0
+    allowed = int(span) + 2  # once a second, a timer that catches up after a late tick forgiven (services)
+    said = (f"{len(stamps)} warning(s) in {NO_TF_WINDOW:g} s with the clock running and no /tf"
+            + (f" ({span:.1f} s from the first to the last)" if len(stamps) > 1 else "")
+            + f", {sent} message(s) on {WRENCH_TOPIC}")
+    if not running:
+        return s.record(check_id, False, f"{said}; {kit.process_state(node.proc)}", expected,
+                        "catch tf2_ros.TransformException around lookup_transform: warn and return (an exception "
+                        "out of a timer callback ends the node)")
+    if sent:
+        return s.record(check_id, False, said, expected, "publish nothing without a transform: return after the warning")
+    if not stamps:
+        return s.record(check_id, False, said, expected, "log the missing transform: self.get_logger().warn(..., "
+                        "throttle_duration_sec=1.0)")
+    return s.record(check_id, len(stamps) <= allowed, said, expected + f" (at most {allowed})",
+                    "throttle_duration_sec=1.0 on the warning: the timer ticks 250 times a second on the world's clock")
 
 
 def _judge_thrust(s: Session, world: sim.PhysicsWorld, steps: list[sim.StepRecord], wrenches: list, done: bool) -> None:

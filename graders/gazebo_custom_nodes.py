@@ -104,6 +104,10 @@ CHECKS = [
     Check("thrust_waits_throttled", "It says so at most once a second", 1,
           "wait a second between two looks: rclpy.spin_once(self, timeout_sec=1.0) in the loop (without it the "
           "loop looks, and logs, as fast as it can)", needs=("thrust_waits",), part="thrust"),
+    Check("thrust_no_transform", "While the world's clock runs and the box's transform is not there yet, it keeps "
+          "running, publishes nothing and warns at most once a second", 1,
+          "try: lookup_transform(...) except tf2_ros.TransformException as exc: self.get_logger().warn(..., "
+          "throttle_duration_sec=1.0); return", **THRUST),
     Check("thrust_entity", f"Each force is for entity {ENTITY_ID}, along x only", 1,
           f"message.entity.id = {ENTITY_ID}; only message.wrench.force.x set", **THRUST),
     Check("thrust_rate", "It answers every step of the world (a 1 kHz timer on the world's clock)", 2,

@@ -255,6 +255,18 @@ with RosSession() as graph:
 
     out["x"] = [push(9, "", 0, 1000.0), push(0, "box", 0, -1000.0), push(0, "box", 2, -1000.0)]
     out["clock"] = [clocks[0], clocks[-1], all(b > a for a, b in zip(clocks, clocks[1:]))]
+    # withhold_tf: the clock runs and no /tf goes out until it is set back
+    withheld = PhysicsWorld(graph, TYPES, world="withheld", withhold_tf=True).start()
+    poses = []
+    peer.node.create_subscription(TYPES.tf_message, "/tf", lambda m: poses.extend(
+        1 for t in m.transforms if t.header.frame_id == "withheld"), 100)
+    assert wait_until(lambda: withheld.peers()[0] >= 2, 10)  # the peer's listener and this subscription
+    start = withheld.sim_time
+    assert withheld.wait_for_sim_time(start + 1.0, 10)
+    out["withheld"] = [len(poses)]
+    withheld.withhold_tf = False
+    out["withheld"].append(wait_until(lambda: len(poses) > 0, 10))
+    withheld.close()
     peer.close()
     world.close(); strict.close(); world.close()  # idempotent
     out["gone"] = world_gone(graph, world)
@@ -342,6 +354,7 @@ def test_the_world_serves_set_pose_wrench_tf_and_clock(ros_env):
     assert by_model_name == pytest.approx(pushed - 0.8086, abs=0.01)  # name "box" with type MODEL
     first, last, increasing = out["clock"]
     assert last > first + 1.0 and increasing
+    assert out["withheld"] == [0, True]  # a second of sim time with no pose on /tf, then poses
     assert out["gone"]
 
 

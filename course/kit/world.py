@@ -40,7 +40,7 @@ def physics_world(s: Session, *, paused: bool = False, graph: Any = None, **opti
     Args:
         options: :class:`~ros2course.run.physics.PhysicsWorld`'s keywords (``world``, ``friction``,
             ``real_time_factor`` in sim seconds per wall second, ``wait_for_input`` in wall seconds for
-            lockstep, ``strict_set_pose``).
+            lockstep, ``strict_set_pose``, ``withhold_tf``: /clock without /tf while true).
 
     Raises:
         MissingRequirement: MuJoCo is not installed (hint: ``pip install 'ros2course[gazebo]'``).

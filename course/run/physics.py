@@ -562,6 +562,10 @@ class PhysicsWorld:
             gz-sim answers a bridged request only after the simulation's next update, so a client gets its
             answer some time after asking; a delay makes a client that ends without waiting for the answer
             end before it (:attr:`SetPoseRecord.answered_at`). Other callbacks of the world wait meanwhile.
+        withhold_tf: publish /clock only, no /tf, while this attribute is True (settable at any time): a world
+            whose clock runs before the box's pose reaches the controller (in Gazebo: the bridge of the pose
+            not up yet, or the PosePublisher's first message still on its way), so a controller's "no
+            transform yet" branch runs on purpose.
 
     Attributes:
         physics: the :class:`BoxWorld` (read it under :attr:`lock`, or through :meth:`box_state`).
@@ -577,8 +581,10 @@ class PhysicsWorld:
     def __init__(self, graph: Any, types: WorldTypes | None = None, *, world: str = WORLD,
                  friction: float = FRICTION, gravity: float = GRAVITY, real_time_factor: float | None = 1.0,
                  wait_for_input: float | None = None, strict_set_pose: bool = False,
-                 keep_velocity_on_set_pose: bool = False, answer_delay: float = 0.0) -> None:
+                 keep_velocity_on_set_pose: bool = False, answer_delay: float = 0.0,
+                 withhold_tf: bool = False) -> None:
         self.physics = BoxWorld(friction, gravity)
+        self.withhold_tf = withhold_tf
         self.types = types or load_types()
         self.graph, self.world = graph, world
         self.real_time_factor, self.wait_for_input = real_time_factor, wait_for_input
@@ -815,7 +821,8 @@ class PhysicsWorld:
         return False
 
     def _publish(self, state: BoxState, stamp_ns: int) -> None:
-        """The box's pose on /tf (parent ``world``, child ``box``), then the time on /clock, both at ``stamp_ns``."""
+        """The box's pose on /tf (parent ``world``, child ``box``; not while :attr:`withhold_tf`), then the time on
+        /clock, both at ``stamp_ns``."""
         from builtin_interfaces.msg import Time  # noqa: PLC0415 - ROS only when a world is served
         from geometry_msgs.msg import TransformStamped  # noqa: PLC0415 - ROS only when a world is served
 
@@ -826,7 +833,8 @@ class PhysicsWorld:
         t.x, t.y, t.z = state.position
         r.x, r.y, r.z, r.w = state.orientation
         try:
-            self._tf_pub.publish(self.types.tf_message(transforms=[transform]))
+            if not self.withhold_tf:
+                self._tf_pub.publish(self.types.tf_message(transforms=[transform]))
             self._clock_pub.publish(self.types.clock(clock=stamp))
         except Exception:  # noqa: BLE001 - the context was shut down under a step: close() follows
             if self.graph.context.ok():
