@@ -114,7 +114,7 @@ def judge_inbox(s: Session, inbox, again=None) -> None:
 
     ``ros2 topic pub --once`` publishes as soon as it sees the grader's subscription and is gone 0.1 s later
     (its ``--keep-alive``); when the grader's side has not matched its publisher yet, the reliable sample is
-    dropped and never repaired (1 reference run in 40 at load 2, stop 72), so the same script's second run
+    dropped and never repaired (1 reference run in 20 at load 2, stop 72), so the same script's second run
     counts too: what it sends is the same."""
     wait_until(lambda: any(_wanted(m) for m in inbox.messages()), 2.0)  # a reliable sample in flight
     received = inbox.messages() or (again.messages() if again is not None else [])
