@@ -621,7 +621,7 @@ def _sweep_once(shm_dir: Path, min_age: float) -> tuple[list[str], bool]:
     if orphans:
         used = _shm_files_in_use(shm_dir)
         for path in orphans:
-            if str(path) not in used and not too_young(path):
+            if _shm_file_id(path) not in used and not too_young(path):
                 with contextlib.suppress(FileNotFoundError):
                     path.unlink()
                     removed.append(path.name)
@@ -647,23 +647,38 @@ def _sweep_once(shm_dir: Path, min_age: float) -> tuple[list[str], bool]:
     return removed, young
 
 
-def _shm_files_in_use(shm_dir: Path = SHM_DIR) -> set[str]:
-    """Paths under ``shm_dir`` that some process maps or holds open (as far as we may look)."""
+def _shm_file_id(path: Path) -> tuple[int, int] | None:
+    """``(st_dev, st_ino)`` of ``path``, or None when it is gone."""
+    try:
+        info = path.stat()
+    except OSError:
+        return None
+    return info.st_dev, info.st_ino
+
+
+def _shm_files_in_use(shm_dir: Path = SHM_DIR) -> set[tuple[int, int]]:
+    """``(st_dev, st_ino)`` of the files under ``shm_dir`` that some process maps or holds open (as far as we may
+    look). By device and inode, not by path: a process in another mount namespace (a submission graded with a
+    private /dev/shm, ``ros2course.sandbox``) maps files of the same names that are other files (a check beside
+    such a one kept its own orphaned ``fastrtps_port7000`` for one in use)."""
     prefix = str(shm_dir).rstrip("/") + "/"
-    used: set[str] = set()
+    used: set[tuple[int, int]] = set()
     for pid in os.listdir("/proc"):
         if not pid.isdigit():
             continue
         with contextlib.suppress(OSError):
             with open(f"/proc/{pid}/maps", encoding="utf-8", errors="replace") as maps:
                 for line in maps:
-                    index = line.find(prefix)
-                    if index >= 0:
-                        used.add(line[index:].strip().removesuffix(" (deleted)"))
+                    if prefix not in line:
+                        continue
+                    fields = line.split(maxsplit=5)  # address perms offset dev(major:minor, hex) inode path
+                    with contextlib.suppress(ValueError, IndexError):
+                        major, minor = (int(part, 16) for part in fields[3].split(":"))
+                        used.add((os.makedev(major, minor), int(fields[4])))
         with contextlib.suppress(OSError):
             for fd in os.listdir(f"/proc/{pid}/fd"):
                 with contextlib.suppress(OSError):
-                    target = os.readlink(f"/proc/{pid}/fd/{fd}")
-                    if target.startswith(prefix):
-                        used.add(target)
+                    if os.readlink(f"/proc/{pid}/fd/{fd}").startswith(prefix):
+                        info = os.stat(f"/proc/{pid}/fd/{fd}")  # the open file itself, whatever its namespace
+                        used.add((info.st_dev, info.st_ino))
     return used
