@@ -372,8 +372,8 @@ def no_transform_yet(s: Session, check_id: str, rosout: Any, node: kit.StartedNo
         return s.record(check_id, False, f"nothing subscribed to /tf in {ANSWER_TIMEOUT:.0f} s after the world "
                         f"appeared; {kit.process_state(node.proc)}", expected,
                         "make the tf2_ros.TransformListener(self.buffer, self) once the wait is over")
-    stamps = sorted(r.stamp.sec + r.stamp.nanosec * 1e-9 for r in rosout.records(node=name, match=lambda text:
-                    "subscri" not in text.lower()) if r.level >= WARN_LEVEL and r.stamp.sec + r.stamp.nanosec * 1e-9 >= since)
+    warnings = rosout.records(node=name, match=lambda text: "subscri" not in text.lower())
+    stamps = sorted(t for t in (kit.stamp_seconds(r.stamp) for r in warnings if r.level >= WARN_LEVEL) if t >= since)
     span = stamps[-1] - stamps[0] if stamps else 0.0
     allowed = int(span) + 2  # once a second, a timer that catches up after a late tick forgiven (services)
     said = (f"{len(stamps)} warning(s) in {NO_TF_WINDOW:g} s with the clock running and no /tf"
