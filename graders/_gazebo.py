@@ -79,9 +79,15 @@ THROTTLE_WINDOW = 2.5
 #: Seconds the thrust controller is watched after it said twice that it waits, before the world appears
 #: (its records over that span judged as the wrench publisher's: at most one a second).
 THRUST_THROTTLE_WINDOW = 1.0
+#: Seconds: the longest gap between two records of a node that says so "once a second" (its records' own
+#: stamps): a spin_once(timeout_sec=1.0) loop or a throttle_duration_sec=1.0 warning, late on a loaded
+#: machine, against a loop or throttle of 2 s (held-out seed 36: both passed while only "at most once a
+#: second" was judged).
+LOOK_AGAIN = 1.5
 #: Wall seconds the world's clock runs with no /tf once the controller subscribes to /tf (thrust_no_transform):
-#: a warning throttled to one a second comes two or three times, an unthrottled one about 250 times a second
-NO_TF_WINDOW = 2.5
+#: a warning throttled to one a second comes three or four times (two at least, LOOK_AGAIN apart at most), an
+#: unthrottled one about 250 times a second
+NO_TF_WINDOW = 3.5
 #: rcl_interfaces/msg/Log's level of a warning (WARN); ERROR and FATAL are above it
 WARN_LEVEL = 30
 #: Seconds: for the request or message once the world is there; for a node to end by itself; for the
@@ -145,7 +151,8 @@ def says_it_waits(s: Session, check_id: str, rosout: Any, node: kit.StartedNode,
                   keeps: float = 0.0) -> bool:
     """Record ``check_id``: within :data:`WAIT_WINDOW` s, with ``what`` missing, the node logs that it waits (a
     record holding "wait" or "availab"); with ``keeps`` (seconds), it says so again within that long after
-    the first record (a loop that gives up after one look says it once)."""
+    the first record (a loop that gives up after one look says it once), its second record stamped at most
+    :data:`LOOK_AGAIN` s after its first (it looks once a second, not every two)."""
     def said() -> list:
         return rosout.records(node=node_name, match=lambda text: services.WAITING.search(text) is not None)
 
@@ -155,10 +162,17 @@ def says_it_waits(s: Session, check_id: str, rosout: Any, node: kit.StartedNode,
             kit.wait_until(lambda: len(said()) > 1, keeps, abort=node.ended)
     found = said()
     expected = f"a log record saying it waits while {what} is missing (e.g. '... not available, waiting...')" + (
-        f", again within {keeps:g} s while it is still missing (it goes on waiting: once a second)" if keeps else "")
+        f", again within {keeps:g} s while it is still missing (it goes on waiting: once a second, the second "
+        f"record at most {LOOK_AGAIN:g} s after the first)" if keeps else "")
     if found and keeps and len(found) < 2:
         return s.record(check_id, False, f"logged '{found[0].msg.strip()[:120]}' once, and not again in the "
                         f"{keeps:g} s after with {what} still missing: it stopped waiting", expected)
+    if found and keeps:
+        first, second = sorted(kit.stamp_seconds(r.stamp) for r in found)[:2]
+        if second - first > LOOK_AGAIN:
+            return s.record(check_id, False, f"logged '{found[0].msg.strip()[:120]}', then again only "
+                            f"{second - first:.1f} s later: it looks less often than once a second", expected,
+                            "rclpy.spin_once(self, timeout_sec=1.0) between two looks")
     if found:
         return s.record(check_id, True, f"logged '{found[0].msg.strip()[:120]}' while {what} was missing"
                         + (f", {len(found)} times" if keeps else ""), expected)
@@ -356,12 +370,13 @@ def thrust_run(s: Session, path: Any) -> None:
 def no_transform_yet(s: Session, check_id: str, rosout: Any, node: kit.StartedNode, world: sim.PhysicsWorld) -> bool:
     """Record ``check_id``: the world's clock runs with no /tf; from when the controller subscribes to /tf (its
     TransformListener, made after its wait) for :data:`NO_TF_WINDOW` s, it keeps running, publishes no wrench
-    and warns (a record at WARN or above) at most once a second: the lesson's "while the transform is not there
-    yet, it logs a warning (throttle_duration_sec=1.0) and publishes nothing". A record that mentions a
-    subscriber is its wait's, not this warning. Stamps are the records' own (wall clock)."""
+    and warns (a record at WARN or above) once a second: at most once a second, and again within
+    :data:`LOOK_AGAIN` s: the lesson's "while the transform is not there yet, it logs a warning
+    (throttle_duration_sec=1.0) and publishes nothing". A record that mentions a subscriber is its wait's, not
+    this warning. Stamps are the records' own (wall clock)."""
     name = node.name or THRUST_NODE
     expected = (f"with /clock running and no /tf ({NO_TF_WINDOW:g} s): still running, no message on {WRENCH_TOPIC}, "
-                "a warning at most once a second")
+                f"a warning once a second (at most one a second, at least two, at most {LOOK_AGAIN:g} s apart)")
     with s.phase("observe"):
         listening = kit.wait_until(lambda: world.peers()[0] > 0, ANSWER_TIMEOUT, abort=node.ended)
         since = time.time()
@@ -376,8 +391,10 @@ def no_transform_yet(s: Session, check_id: str, rosout: Any, node: kit.StartedNo
     stamps = sorted(t for t in (kit.stamp_seconds(r.stamp) for r in warnings if r.level >= WARN_LEVEL) if t >= since)
     span = stamps[-1] - stamps[0] if stamps else 0.0
     allowed = int(span) + 2  # once a second, a timer that catches up after a late tick forgiven (services)
+    widest = max((b - a for a, b in zip(stamps, stamps[1:])), default=0.0)
     said = (f"{len(stamps)} warning(s) in {NO_TF_WINDOW:g} s with the clock running and no /tf"
-            + (f" ({span:.1f} s from the first to the last)" if len(stamps) > 1 else "")
+            + (f" ({span:.1f} s from the first to the last, {widest:.1f} s apart at the widest)"
+               if len(stamps) > 1 else "")
             + f", {sent} message(s) on {WRENCH_TOPIC}")
     if not running:
         return s.record(check_id, False, f"{said}; {kit.process_state(node.proc)}", expected,
@@ -388,8 +405,13 @@ def no_transform_yet(s: Session, check_id: str, rosout: Any, node: kit.StartedNo
     if not stamps:
         return s.record(check_id, False, said, expected, "log the missing transform: self.get_logger().warn(..., "
                         "throttle_duration_sec=1.0)")
-    return s.record(check_id, len(stamps) <= allowed, said, expected + f" (at most {allowed})",
-                    "throttle_duration_sec=1.0 on the warning: the timer ticks 250 times a second on the world's clock")
+    if len(stamps) > allowed:
+        return s.record(check_id, False, said, expected + f" (at most {allowed})", "throttle_duration_sec=1.0 on "
+                        "the warning: the timer ticks 250 times a second on the world's clock")
+    rare = len(stamps) < 2 or widest > LOOK_AGAIN
+    return s.record(check_id, not rare, said + (": less often than once a second" if rare else ""), expected,
+                    "warn on every tick that finds no transform, throttled to once a second "
+                    "(throttle_duration_sec=1.0): not once only, nor every two seconds")
 
 
 def _judge_thrust(s: Session, world: sim.PhysicsWorld, steps: list[sim.StepRecord], wrenches: list, done: bool) -> None:

@@ -105,7 +105,7 @@ CHECKS = [
           "wait a second between two looks: rclpy.spin_once(self, timeout_sec=1.0) in the loop (without it the "
           "loop looks, and logs, as fast as it can)", needs=("thrust_waits",), part="thrust"),
     Check("thrust_no_transform", "While the world's clock runs and the box's transform is not there yet, it keeps "
-          "running, publishes nothing and warns at most once a second", 1,
+          "running, publishes nothing and warns once a second (throttled)", 1,
           "try: lookup_transform(...) except tf2_ros.TransformException as exc: self.get_logger().warn(..., "
           "throttle_duration_sec=1.0); return", **THRUST),
     Check("thrust_entity", f"Each force is for entity {ENTITY_ID}, along x only", 1,

@@ -547,6 +547,37 @@ def test_sweep_orphan_held_open_is_kept_then_removed_when_closed(real_shm_name):
     assert not orphan.exists()
 
 
+@pytest.mark.parametrize("held", ["open", "mapped"])
+def test_sweep_removes_an_orphan_whose_name_another_mount_namespace_holds(real_shm_name, tmp_path, held):
+    """A process with a /dev/shm of its own (a mount namespace: a submission graded with a private /dev/shm)
+    holds a file of the orphan's name there: another file, so our orphan is still stale (by device and inode,
+    run.process._shm_files_in_use; by path it was kept: the fresh-clone CI of 92b00ae)."""
+    import shutil  # noqa: PLC0415
+    import subprocess  # noqa: PLC0415
+    if os.geteuid() != 0 or not shutil.which("unshare"):
+        pytest.skip("needs root and unshare(1) for a mount namespace")
+    private = tmp_path / "shm"
+    private.mkdir()
+    hold = ("f = open('/dev/shm/{0}', 'w+b'); f.write(bytes(4096)); f.flush(); "
+            "m = __import__('mmap').mmap(f.fileno(), 4096)" + ("; f.close()" if held == "mapped" else "")
+            + "; print('ready', flush=True); __import__('sys').stdin.read()").format(real_shm_name)
+    child = subprocess.Popen(
+        ["unshare", "--mount", "--propagation", "private", "sh", "-c",
+         f'mount --bind "{private}" /dev/shm && exec "{sys.executable}" -c "{hold}"'],
+        stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        assert child.stdout.readline().strip() == "ready"
+        assert (private / real_shm_name).exists()  # the other namespace's file, of the same name
+        orphan = touch(Path("/dev/shm") / real_shm_name, 4096)  # ours, made while the other is held
+        sweep_stale_fastdds_shm()
+        # (another test run's sweep, while the other file was held too, may have removed it first)
+        assert not orphan.exists()
+        assert (private / real_shm_name).exists()  # never touched: not ours
+    finally:
+        child.stdin.close()
+        child.wait(timeout=10)
+
+
 def test_sweep_orphan_mapped_but_closed_is_kept(real_shm_name):
     orphan = touch(Path("/dev/shm") / real_shm_name, 4096)
     with open(orphan, "r+b") as handle:
