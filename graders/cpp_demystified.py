@@ -31,6 +31,7 @@ from ros2course.kit import Check, Session, Unmet
 from ros2course.kit import cmake as ck
 from ros2course.kit.parts import at_once
 from ros2course.kit.programs import last_line, run_program, verdict_test
+from ros2course.kit.topics_services import numbers_in
 
 PROJECT = Path("cpp") / "cpp_demystified"
 HEADER = Path("include") / "cpp_demystified" / "demystified.hpp"
@@ -44,6 +45,8 @@ DATA = Path(__file__).resolve().parent / "data" / "cpp_demystified"
 #: What libstdc++'s std::out_of_range from ``vector::at(22)`` says of the index (its ``_M_range_check``: the
 #: text is the library's, not the learner's, so the demo's own wording stays free).
 WHAT_22 = "which is 22"
+#: The size the demo's Potato is made with, ``make_potato(20.0)``: std::cout prints the double as ``20``.
+POTATO_SIZE = 20.0
 RUN_TIMEOUT = 10.0  # seconds for the demo and for each harness test (each takes milliseconds)
 #: Seconds of observation the contract needs (benchmarks read it): none, every program runs to its end.
 WINDOW = 0.0
@@ -64,6 +67,9 @@ CHECKS = [
           "call values.at(22) inside try, and in catch (const std::out_of_range& e) print e.what(): the "
           "exception's own text says which index was asked for and how many elements there are",
           needs=("cmake_build",), part="cmake"),
+    Check("demo_potato_size", f"./{DEMO} prints the size of make_potato(20.0)", 1,
+          "print potato->size() of the Potato that make_potato(20.0) returns: std::cout shows the double 20.0 as "
+          "20; the words around it are yours", needs=("cmake_build",), part="cmake"),
     Check("harness_compiles", "src/demystified.cpp compiles with the course's test harness (the fixed signatures)", 1,
           "keep the four functions of demystified.hpp exactly as the lesson declares them (namespace "
           "cpp_demystified, same names, argument and return types), include \"cpp_demystified/potato.hpp\" "
@@ -119,6 +125,10 @@ def _judge_cmake(s: Session, project: Path) -> None:
                                                                              if out else ""),
              f"a line with e.what() of .at(22)'s std::out_of_range (libstdc++: 'vector::_M_range_check: __n "
              f"({WHAT_22}) >= this->size() (which is 4)')")
+    sized = [line.strip() for line in out if POTATO_SIZE in numbers_in(line)]
+    s.record("demo_potato_size", bool(sized), f"it printed {sized[0][:160]!r}" if sized else
+             f"none of its {len(out)} line(s) holds the number {POTATO_SIZE:g}",
+             f"a line with the size of make_potato({POTATO_SIZE}), {POTATO_SIZE:g} (the wording is yours)")
 
 
 def _scratch_copy(s: Session, project: Path) -> Path:

@@ -77,7 +77,8 @@ CHECKS = [
     checks.ctrl_c("pose_sigint_exit", "the pose client while it waits for the world", needs=("pose_executable",),
                   part="pose_interrupted"),
     *checks.started("wrench", PACKAGE, WRENCH_EXECUTABLE, WRENCH_NODE, part="wrench"),
-    Check("wrench_waits", f"While nothing subscribes to {WRENCH_TOPIC}, it says in its log that it waits", 1,
+    Check("wrench_waits", f"While nothing subscribes to {WRENCH_TOPIC}, it waits, saying so in its log once a "
+          "second", 1,
           "while self.publisher.get_subscription_count() == 0: log '... waiting ...' and "
           "rclpy.spin_once(self, timeout_sec=1.0)",
           needs=("wrench_executable",), part="wrench"),
