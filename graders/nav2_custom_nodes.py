@@ -24,6 +24,7 @@ from __future__ import annotations
 
 from ros2course import kit
 from ros2course.kit import Check, Session, checks
+from ros2course.kit.settle import part_needed
 
 from . import _nav2 as steps
 from ._nav2 import (
@@ -135,24 +136,28 @@ def grade(s: Session) -> None:
     kit.depends(s, "depends", PACKAGE, ("rclpy", "geometry_msgs", "nav2_msgs"))
     pose_message = s.installed_type("geometry_msgs", "msg", "PoseWithCovarianceStamped")
     action = steps.navigate_to_pose(s)  # the nav2 component of the underlay
-    with s.part("pose", own_graph=True):
-        pose_path = kit.executable(s, "pose_executable", PACKAGE, POSE_EXECUTABLE)
-        steps.pose_run(s, pose_message, pose_path)
-    with s.part("pose_interrupted", own_graph=True):
-        s.require("pose_executable")
-        steps.interrupted_run(s, "pose_sigint_exit", pose_path, POSE_NODE, f"{POSE_EXECUTABLE}.interrupted")
-    with s.part("goal", own_graph=True):
-        client_path = kit.executable(s, "client_executable", PACKAGE, CLIENT_EXECUTABLE)
-        steps.goal_run(s, action, client_path)
-    with s.part("aborted", own_graph=True):
-        s.require("client_executable")
-        steps.aborted_run(s, action, client_path)
-    with s.part("canceled", own_graph=True):
-        s.require("client_executable")
-        steps.canceled_run(s, action, client_path)
-    with s.part("rejected", own_graph=True):
-        s.require("client_executable")
-        steps.rejected_run(s, action, client_path)
-    with s.part("interrupted", own_graph=True):
-        s.require("client_executable")
-        steps.interrupted_run(s, "client_sigint_exit", client_path, CLIENT_NODE, f"{CLIENT_EXECUTABLE}.interrupted")
+    # each part runs only if a check of it can still change the verdict (always, but in dev validate
+    # --until-settled); the later runs' checks need pose_executable or client_executable, so the part that
+    # finds the executable runs whenever they do
+    if part_needed(s, CHECKS, "pose"):
+        with s.part("pose", own_graph=True):
+            pose_path = kit.executable(s, "pose_executable", PACKAGE, POSE_EXECUTABLE)
+            steps.pose_run(s, pose_message, pose_path)
+    if part_needed(s, CHECKS, "pose_interrupted"):
+        with s.part("pose_interrupted", own_graph=True):
+            s.require("pose_executable")
+            steps.interrupted_run(s, "pose_sigint_exit", pose_path, POSE_NODE, f"{POSE_EXECUTABLE}.interrupted")
+    if part_needed(s, CHECKS, "goal"):
+        with s.part("goal", own_graph=True):
+            client_path = kit.executable(s, "client_executable", PACKAGE, CLIENT_EXECUTABLE)
+            steps.goal_run(s, action, client_path)
+    for part, run in (("aborted", steps.aborted_run), ("canceled", steps.canceled_run),
+                      ("rejected", steps.rejected_run)):
+        if part_needed(s, CHECKS, part):
+            with s.part(part, own_graph=True):
+                s.require("client_executable")
+                run(s, action, client_path)
+    if part_needed(s, CHECKS, "interrupted"):
+        with s.part("interrupted", own_graph=True):
+            s.require("client_executable")
+            steps.interrupted_run(s, "client_sigint_exit", client_path, CLIENT_NODE, f"{CLIENT_EXECUTABLE}.interrupted")

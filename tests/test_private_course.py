@@ -123,15 +123,20 @@ def test_check_on_the_private_course_withholds_what_it_hides(cli, tmp_path: Path
 def test_a_merged_course_unused_for_two_weeks_is_deleted_when_another_is_made(tmp_path: Path) -> None:
     import os
     import time
+    import uuid
 
     from ros2course.lesson.courses import MERGED_MAX_AGE
 
     shutil.copytree(PUBLIC, tmp_path / "lab_course")
     shutil.copytree(PRIVATE, tmp_path / "private_course")
+    grader = tmp_path / "private_course/graders/hello_node.py"
+    # content no earlier run had: merged courses are kept by path and content in the venv's cache, which outlives
+    # pytest's numbered temp folders (a temp path used again found its "new" course already made, and nothing
+    # was pruned)
+    grader.write_text(grader.read_text() + f"\n# {uuid.uuid4()}\n")
     old = find_course(str(tmp_path / "private_course"))
     then = time.time() - MERGED_MAX_AGE - 60
     os.utime(old / "course.yaml", (then, then))
-    grader = tmp_path / "private_course/graders/hello_node.py"
     grader.write_text(grader.read_text() + "\n# edited\n")
     new = find_course(str(tmp_path / "private_course"))
     assert new.is_dir() and not old.exists()

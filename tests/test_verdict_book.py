@@ -174,3 +174,23 @@ def test_a_verdict_the_engine_marked_not_checked_stays() -> None:
     assert book.results["starts"].skipped and book.results["starts"].observed.endswith("the part stopped")
     with pytest.raises(Unmet, match="^'The node starts' did not pass$"):
         book.require("starts")
+
+
+def test_a_part_is_needed_while_a_check_of_it_can_still_change_the_verdict() -> None:
+    """kit.settle.part_needed: every part for a learner's grading; under --until-settled only the parts of the
+    named checks and of what they need; a part no check names is an error, not a silent skip."""
+    from ros2course.kit.settle import part_needed  # noqa: PLC0415
+
+    class Book:  # the one member of Session that part_needed reads
+        def __init__(self, book: VerdictBook) -> None:
+            self.wanted = book.wanted
+
+    whole = Book(VerdictBook(CHECKS))
+    assert part_needed(whole, CHECKS, "a") and part_needed(whole, CHECKS, "b")
+    settling = Book(VerdictBook(CHECKS, StopWhen(judged=frozenset({"rate"}))))
+    assert part_needed(settling, CHECKS, "a") and not part_needed(settling, CHECKS, "b")
+    needing = Book(VerdictBook([*CHECKS, Check("late", "A later run", 1, needs=("other",), part="c")],
+                               StopWhen(judged=frozenset({"late"}))))
+    assert part_needed(needing, CHECKS, "b")  # "late" needs "other": part b must still run
+    with pytest.raises(ValueError, match="part='nope'"):
+        part_needed(whole, CHECKS, "nope")
