@@ -65,6 +65,8 @@ WAIT_WINDOW = 3.0
 THROTTLE_WINDOW = 2.5
 #: Seconds for the pose once the second subscriber has joined, and for a node to end by itself after its work.
 PUBLISH_TIMEOUT = 3.0
+#: Seconds for a node's process to start and join the graph (as long as ``kit.start_node`` waits for a node).
+STARTUP_WINDOW = 10.0
 END_TIMEOUT = 3.0
 #: Seconds for the log records the grader looks for (one goal lasts under a second).
 LOG_TIMEOUT = 5.0
@@ -181,7 +183,8 @@ def _says_it_waits(s: Session, check_id: str, rosout: Any, node: kit.StartedNode
 
 def pose_run(s: Session, message_type: type, path: Any) -> None:
     """pose_waits, pose_waits_throttled, pose_published, after_second, pose_frame, pose_values, covariance,
-    pose_stamp, published_once, pose_ends: one subscriber from the start, the second joining late with a third."""
+    pose_stamp, published_once, pose_ends: one subscriber from the start, the second joining late (a third
+    subscriber is :func:`crowded_run`'s)."""
     first = s.graph.topic(TOPIC, message_type, reliable_qos(100))  # rviz2: there before the node
     rosout = s.graph.rosout()
     node = kit.start_node(s, "pose_node_name", path, POSE_NODE, label=POSE_EXECUTABLE)
@@ -194,9 +197,6 @@ def pose_run(s: Session, message_type: type, path: Any) -> None:
     # misses it under grade's load: CI of e09f7d1), while one written once the node counts amcl always reaches
     # it (this process already knows the node's publisher, so amcl's subscription matches it at once)
     second = s.graph.topic(TOPIC, message_type, reliable_qos(100))  # amcl: joins late
-    # and with it a third (a `ros2 topic echo /initialpose` left open): "until two nodes subscribe" is at least
-    # two, and a node that publishes only at exactly two sees one, then three, and never publishes
-    s.graph.topic(TOPIC, message_type, reliable_qos(100))
     with s.phase("observe"):
         kit.wait_until(lambda: bool(second.messages()), PUBLISH_TIMEOUT, abort=_gone(node.proc))
     received, received_stamps = second.messages(), second.send_stamps()
@@ -244,6 +244,33 @@ def pose_run(s: Session, message_type: type, path: Any) -> None:
              + ("the process ended" if node.proc.poll() is not None else f"{END_TIMEOUT:.0f} s after the first"),
              "one message")
     ends(s, "pose_ends", node.proc, "once it had published", timeout=0.0)  # waited above
+
+
+def crowded_run(s: Session, message_type: type, path: Any) -> None:
+    """at_least_two: three subscribers of /initialpose (rviz2, amcl and a ``ros2 topic echo`` left open) are
+    there before the node starts; it must publish (a message any of them receives, within
+    :data:`STARTUP_WINDOW` + :data:`PUBLISH_TIMEOUT` s).
+
+    Why a run of its own, not a third subscriber joining with amcl in :func:`pose_run`: a subscription count
+    moves one match at a time, so going from one to three passes through two, for about a millisecond (two
+    subscriptions made one after the other by one process: 0.6-0.9 ms, 5 of 5 runs, stop 76), and a node that
+    publishes only at exactly two and polls every 0.1 s caught it in about one run in a hundred (CI of 92ddb5a:
+    fixture publishes-at-exactly-two passed). Subscriptions the node's participant discovers together, as it
+    starts, match in one burst: it saw three at once in 9 of 10 runs, two for 0.3 ms in the tenth."""
+    heard = [s.graph.topic(TOPIC, message_type, reliable_qos(100)) for _ in range(3)]
+    rosout = s.graph.rosout()
+    node = s.launch(path, f"{POSE_EXECUTABLE}.crowded", [])
+    with s.phase("observe"):
+        kit.wait_until(lambda: any(probe.messages() for probe in heard), STARTUP_WINDOW + PUBLISH_TIMEOUT,
+                       abort=_gone(node))
+    got = max(len(probe.messages()) for probe in heard)
+    expected = f"a PoseWithCovarianceStamped on {TOPIC}: two subscribers is a minimum, not an exact count"
+    if got:
+        s.record("at_least_two", True, f"with three subscribers on {TOPIC} from its start, it published", expected)
+        return
+    s.record("at_least_two", False, f"with three subscribers on {TOPIC} from its start, nothing was published in "
+             f"{STARTUP_WINDOW + PUBLISH_TIMEOUT:.0f} s; last log records: {_last(rosout, POSE_NODE)}; "
+             f"{kit.process_state(node)}", expected)
 
 
 def _judge_pose(s: Session, message: Any, sent: float) -> None:
@@ -305,6 +332,7 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
     if services.says_it_waits(s, "client_waits", rosout, node, ACTION, timeout=WAIT_WINDOW, what="action server"):
         services.waits_throttled(s, "client_waits_throttled", rosout, node, node_name=CLIENT_NODE,
                                  window=THROTTLE_WINDOW)
+    offered = time.time()  # just before the server exists: nothing the client sends it can be stamped earlier
     server.offer()
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.goals), LOG_TIMEOUT, abort=node.ended)
@@ -318,7 +346,7 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
         kit.wait_until(lambda: bool(server.ended), len(distances) * PERIOD + 2.0, abort=node.ended)
         kit.wait_until(lambda: any(re.search(r"succe", text, re.IGNORECASE) for text in _records(rosout, CLIENT_NODE)),
                        LOG_TIMEOUT, abort=_gone(node.proc))
-    _judge_goal(s, server.goals[0][1], received)
+    _judge_goal(s, server.goals[0][1], offered, received)
     records = _records(rosout, CLIENT_NODE)
     found = _feedback_records(records, distances)
     anywhere = [d for d in distances if any(_has(text, d) for text in records)]
@@ -341,9 +369,16 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
              f"(or {END_TIMEOUT:.0f} s after the first goal had)", expected)
 
 
-def _judge_goal(s: Session, goal: Any, received: float) -> None:
-    """goal_pose and goal_stamp on the first goal (``received``: when it reached the server, seconds since
-    the epoch)."""
+def _judge_goal(s: Session, goal: Any, offered: float, received: float) -> None:
+    """goal_pose and goal_stamp on the first goal (``offered``: the wall time just before the server was created;
+    ``received``: when the goal reached it; seconds since the epoch).
+
+    "Stamped as it is sent" is judged as: stamped after the server appeared (a client sends only once it sees
+    the server; one stamped earlier, in ``__init__`` or at a tick before the server appeared, was not stamped as
+    it was sent) and no later than :data:`STAMP_TOLERANCE` s after it arrived (a clock of its
+    own). Not "within 1.5 s of its arrival": a goal request written before the server's reader has matched the
+    client's writer is resent by DDS only after the next heartbeat, 3 s later (Fast DDS's default period): a
+    reference goal arrived 3.12 s after its stamp in one validation, stop 76."""
     pose = goal.pose
     position, orientation = _xyz(pose.pose.position), _xyzw(pose.pose.orientation)
     problems = []
@@ -360,11 +395,13 @@ def _judge_goal(s: Session, goal: Any, received: float) -> None:
              f"header.frame_id '{FRAME}', position {_shown(GOAL_POSITION)}, orientation {_shown(IDENTITY)}, "
              "behavior_tree '' (nav2's default tree)")
     stamp = _stamp(pose.header)
-    s.record("goal_stamp", abs(stamp - received) <= STAMP_TOLERANCE,
+    s.record("goal_stamp", offered <= stamp <= received + STAMP_TOLERANCE,
              "pose.header.stamp is 0 (never set)" if stamp == 0 else
-             f"pose.header.stamp {abs(stamp - received):.2f} s {'before' if stamp < received else 'after'} the goal "
-             "reached the server",
-             f"stamped with the node's clock as the goal is sent (within {STAMP_TOLERANCE} s of its arrival)")
+             f"pose.header.stamp {offered - stamp:.2f} s before the server appeared (the goal reached it "
+             f"{received - offered:.2f} s after it appeared)" if stamp < offered else
+             f"pose.header.stamp {stamp - received:.2f} s after the goal reached the server",
+             "stamped with the node's clock as the goal is sent: after the server appeared, not after the goal "
+             "reached it")
 
 
 def _feedback_records(records: list[str], distances: list[float]) -> list[float]:

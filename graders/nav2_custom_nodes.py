@@ -8,6 +8,8 @@ it (graders/_nav2.py), each run in a graph of its own.
   2.5 s after its first such record. The one message it then publishes is judged: sent after the second
   subscriber joined, frame ``map``, the lesson's pose, covariance and a fresh stamp; it publishes once and
   ends by itself.
+* **pose_crowded**: three subscribers of ``/initialpose`` (rviz2, amcl, a ``ros2 topic echo`` left open) there
+  before it starts: two is a minimum, so it must publish.
 * **pose_interrupted**: no subscriber at all; Ctrl+C while it waits.
 * **goal**: ``nav2_navigate_to_pose_action_client_node`` with no ``/navigate_to_pose`` server at first (it
   must say it waits, at most once a second); then the grader's server appears, accepts the goal (judged:
@@ -65,6 +67,11 @@ CHECKS = [
           "receives", 1,
           f"self.create_publisher(PoseWithCovarianceStamped, '{TOPIC}', 1), then publish once the two subscribers "
           "are there (one published before amcl subscribes never reaches it: the topic is VOLATILE)", **POSE),
+    Check("at_least_two", "Two subscribers is a minimum: with three there from its start (rviz2, amcl and a "
+          "ros2 topic echo left open), it publishes", 1,
+          "compare with >= (self.publisher.get_subscription_count() >= 2), not == 2: a `ros2 topic echo "
+          f"{TOPIC}` left open makes three, and a node waiting for exactly two would never publish",
+          needs=("pose_executable",), part="pose_crowded"),
     Check("after_second", "It publishes only once the second subscriber (amcl) has joined", 2,
           "wait for two subscribers, not one: rviz2 is there first, amcl joins later and must get the pose "
           "(self.publisher.get_subscription_count() >= 2)", **PUBLISHED),
@@ -143,6 +150,10 @@ def grade(s: Session) -> None:
         with s.part("pose", own_graph=True):
             pose_path = kit.executable(s, "pose_executable", PACKAGE, POSE_EXECUTABLE)
             steps.pose_run(s, pose_message, pose_path)
+    if part_needed(s, CHECKS, "pose_crowded"):
+        with s.part("pose_crowded", own_graph=True):
+            s.require("pose_executable")
+            steps.crowded_run(s, pose_message, pose_path)
     if part_needed(s, CHECKS, "pose_interrupted"):
         with s.part("pose_interrupted", own_graph=True):
             s.require("pose_executable")
