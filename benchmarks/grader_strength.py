@@ -241,8 +241,10 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "count against it and are listed below for the author (strengthen the grader, or add a rule that "
         "applies from the next held-out sample on). Where a lesson's universalmutator mutants were all shown by "
         "earlier samples, a held-out sample can come from a second tool, cosmic-ray's core operators on the "
-        "lesson's Python files (`--held-out 30 --family cosmic-ray`; the cell says \"cosmic-ray mutants\"): "
-        "mutants nobody looked at while the rules were written, an edit both tools make counted once. Where more than one held-out sample was graded under the lesson's current grader, the cell also gives **all of them together** (killed / counted over every one): a lesson is judged by that pooled figure, never by the best or the latest sample, since drawing samples until one scores well would narrow the sample to a lucky one. **Fingerprint**: each run records its lesson's "
+        "lesson's Python files (`--held-out 30 --family cosmic-ray`; the cell says \"cosmic-ray mutants\"), and "
+        "where those were all shown too, from a third, mutmut 2's mutations of the Python files (`--family mutmut`: "
+        "strings wrapped in XX, assignments of None, numbers off by one, swapped keywords and operators): "
+        "mutants nobody looked at while the rules were written, an edit two tools make counted once. Where more than one held-out sample was graded under the lesson's current grader, the cell also gives **all of them together** (killed / counted over every one): a lesson is judged by that pooled figure, never by the best or the latest sample, since drawing samples until one scores well would narrow the sample to a lucky one. **Fingerprint**: each run records its lesson's "
         "grader fingerprint (`ros2course.grade.fingerprint`: the grader and the course modules it imports, the kit "
         "and grading engine modules they or the engine import, lesson.yaml, the reference files); a row measured under another fingerprint (the "
         "grader, engine or reference changed since) is **stale**, with the date of its run, and `dev validate` "
@@ -420,9 +422,9 @@ def main() -> int:
     parser.add_argument("--held-out-seed", type=int, default=None, metavar="S",
                         help="with --held-out: its seed (default: --seed + 1)")
     parser.add_argument("--family", default="universalmutator", metavar="TOOL",
-                        help="with --held-out: the tool whose mutants it draws, universalmutator or cosmic-ray (its "
+                        help="with --held-out: the tool whose mutants it draws, universalmutator, cosmic-ray (its "
                              "core operators on the Python files: fresh mutants for a lesson whose universalmutator "
-                             "pool earlier samples spent)")
+                             "pool earlier samples spent) or mutmut (mutmut 2's mutations of the Python files)")
     parser.add_argument("--readme", action="store_true",
                         help="only rewrite README.md's lesson table from the scores the lessons recorded (no mutants graded)")
     args = parser.parse_args()

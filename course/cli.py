@@ -768,8 +768,9 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
            held_out_seed: Annotated[Optional[int], typer.Option(
                "--held-out-seed", metavar="S", help="Random seed of --held-out (default: --seed + 1).")] = None,
            family: Annotated[str, typer.Option(
-               "--family", metavar="TOOL", help="With --held-out: whose mutants it draws, universalmutator or "
-                                                "cosmic-ray (core operators, Python files only).")] = "universalmutator",
+               "--family", metavar="TOOL", help="With --held-out: whose mutants it draws, universalmutator, "
+                                                "cosmic-ray (core operators) or mutmut (mutmut 2's mutations; "
+                                                "these two: Python files only).")] = "universalmutator",
            jobs: Annotated[int, typer.Option("--jobs", "-j", help="Mutants graded at once.")] = 1,
            out: Annotated[Path, typer.Option("--out", "-o", metavar="DIR", help="Cache, batch outputs, mutation.json and survivors' diffs.")] = Path("mutation-out"),
            timeout: Annotated[float, typer.Option("--timeout", help="Wall-clock limit per mutant, seconds.")] = 300.0,
@@ -779,7 +780,7 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
            as_json: Annotated[bool, typer.Option("--json", help="Print the results as JSON instead of the table.")] = False,
            course: CourseOpt = None,
            ) -> None:
-    """Grade mutants of each lesson's reference (universalmutator; cosmic-ray for a held-out sample) with its grader:
+    """Grade mutants of each lesson's reference (universalmutator; cosmic-ray or mutmut for a held-out sample) with its grader:
     killed, survived, score."""
     _choose_course(None, course)
     _ros()

@@ -799,6 +799,29 @@ def test_cosmic_ray_mutants_are_another_tools_edits_compiled_and_fixed_in_order(
     assert same.key in {m.key for m in made}
 
 
+def test_mutmut_mutants_are_a_third_tools_edits_compiled_and_fixed_in_order(tmp_path: Path) -> None:
+    """The third family (fresh held-out pools once cosmic-ray's are spent too): mutmut 2's mutations of a
+    Python file, one edit each, in mutmut's order; none that fails to compile or compiles to the original's
+    bytecode; an edit another tool also makes has the same key."""
+    pytest.importorskip("mutmut")
+    source = tmp_path / "node.py"
+    source.write_text("TOPIC = '/initialpose'\n\n\ndef ready(count):\n    if count < 2:\n        return False\n"
+                      "    return count * 3 > 4\n")
+    made = mut.generate_mutmut_mutants(tmp_path, "node.py")
+    assert made == mut.generate_mutmut_mutants(tmp_path, "node.py") and len(made) >= 6
+    assert len({m.content for m in made}) == len(made)
+    for m in made:
+        compile(m.content, "node.py", "exec")
+        assert m.content != source.read_text() and m.file == "node.py" and m.line in (1, 5, 6, 7)
+        assert sum(a != b for a, b in zip(m.content.splitlines(), source.read_text().splitlines())) == 1
+    edits = {(m.line, m.original.strip(), m.mutated.strip()) for m in made}
+    assert (1, "TOPIC = '/initialpose'", "TOPIC = 'XX/initialposeXX'") in edits  # mutmut's own string mutation
+    assert (6, "return False", "return True") in edits
+    same = mut.Mutant("node.py", 6, "        return False", "        return True", "")
+    assert same.key in {m.key for m in made}
+    assert mut.MUTMUT in mut.FAMILIES
+
+
 def test_a_family_other_than_universalmutator_draws_only_held_out_samples(tmp_path: Path) -> None:
     """--family: a bad name and a first sample from cosmic-ray are one-line errors before anything is graded."""
     from ros2course.dev.mutate import mutate_lessons

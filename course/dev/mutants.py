@@ -12,7 +12,11 @@ lessons whose universalmutator mutants every earlier sample has already shown
 (issue 37), comes from `cosmic-ray <https://github.com/sixty-north/cosmic-ray>`_'s
 core operators on the lesson's Python files (:func:`generate_cosmic_ray_mutants`):
 another tool's operators (parso syntax trees, not regular expressions), so a
-sample of them was never looked at while the rules were written.
+sample of them was never looked at while the rules were written. A third, for
+lessons whose cosmic-ray pools are spent too, comes from
+`mutmut <https://github.com/boxed/mutmut>`_ 2's mutations of the Python files
+(:func:`generate_mutmut_mutants`): strings wrapped in ``XX``, assignments of
+``None``, numbers off by one, swapped keywords and operators, dropped arguments.
 
 Each mutant is graded by the lesson's grader (through the batch engine,
 :mod:`ros2course.dev.mutate`) and classified (:func:`classify`):
@@ -125,9 +129,11 @@ LANGUAGES = {".py": "python", ".c": "c", ".h": "c", ".cpp": "cpp", ".cc": "cpp",
 #: C/C++ cannot be compiled alone (ROS headers): their broken mutants are counted as killed by build.
 CHECKED_LANGUAGES = {"python"}
 #: Where mutants come from: universalmutator (every sample until issue 37's pools were spent, and every first
-#: sample) and cosmic-ray (held-out samples only: ``--held-out N --family cosmic-ray``).
-UNIVERSALMUTATOR, COSMIC_RAY = "universalmutator", "cosmic-ray"
-FAMILIES = (UNIVERSALMUTATOR, COSMIC_RAY)
+#: sample), cosmic-ray and mutmut (held-out samples only: ``--held-out N --family cosmic-ray`` or ``mutmut``).
+UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT = "universalmutator", "cosmic-ray", "mutmut"
+FAMILIES = (UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT)
+#: The module each family's tool is imported as.
+_FAMILY_MODULES = {UNIVERSALMUTATOR: "universalmutator", COSMIC_RAY: "cosmic_ray", MUTMUT: "mutmut"}
 #: Files never mutated: generated, binary or bookkeeping.
 _SKIP_PARTS = {"__pycache__", "build", "install", "log", ".git"}
 _SKIP_SUFFIXES = {".pyc", ".png", ".jpg", ".gif", ".zip", ".gz", ".so", ".a", ".o", ".mcap", ".db3"}
@@ -602,7 +608,7 @@ def require_tool(family: str = UNIVERSALMUTATOR) -> None:
     """
     if family not in FAMILIES:
         raise CourseError(f"unknown mutant family {family!r}", f"one of: {', '.join(FAMILIES)}")
-    module = "cosmic_ray" if family == COSMIC_RAY else "universalmutator"
+    module = _FAMILY_MODULES[family]
     if importlib.util.find_spec(module) is None:
         raise MissingRequirement(f"dev mutate needs {family}, which is not installed",
                                  f"pip install 'ros2course[mutate]' (or pip install {family})")
@@ -883,7 +889,7 @@ def _keyed_mutant(rel: str, original: str, lines: list[str], content: str, numbe
 def generate_mutants(lesson: Lesson, reference: Path, config: MutationConfig | None = None,
                      family: str = UNIVERSALMUTATOR) -> list[Mutant]:
     """The mutants of every file of :func:`lesson_files`, file by file, made by ``family``'s tool
-    (:data:`FAMILIES`; cosmic-ray mutates only the ``.py`` files among them).
+    (:data:`FAMILIES`; cosmic-ray and mutmut mutate only the ``.py`` files among them).
 
     Raises:
         MissingRequirement: the family's tool is not installed.
@@ -894,8 +900,9 @@ def generate_mutants(lesson: Lesson, reference: Path, config: MutationConfig | N
     if not files:
         raise CourseError(f"lesson {lesson.id} has no reference file to mutate",
                           f"name them with 'files:' in {triage_path(lesson)}")
-    if family == COSMIC_RAY:
-        return [m for rel in files if rel.endswith(".py") for m in generate_cosmic_ray_mutants(reference, rel)]
+    if family in (COSMIC_RAY, MUTMUT):
+        generate = generate_cosmic_ray_mutants if family == COSMIC_RAY else generate_mutmut_mutants
+        return [m for rel in files if rel.endswith(".py") for m in generate(reference, rel)]
     return [m for rel in files for m in generate_file_mutants(reference, rel)]
 
 
@@ -951,6 +958,43 @@ def generate_cosmic_ray_mutants(reference: Path, rel: str) -> list[Mutant]:
             if (mutant := _keyed_mutant(rel, original, lines, content, number + 1, seen)) is not None:
                 number += 1
                 out.append(mutant)
+    return out
+
+
+def generate_mutmut_mutants(reference: Path, rel: str) -> list[Mutant]:
+    """Every mutant mutmut 2 makes of the Python file ``reference/rel``, in mutmut's own order (its
+    ``list_mutations``: the file's nodes in order, each node's mutations by index), one edit each
+    (``mutmut.mutate`` with that mutation id), as ``mutmut run`` applies them.
+
+    mutmut 2, not 3: mutmut 3 writes one "trampolined" file holding every mutant of a function as a function
+    of its own, switched at run time, so it has no one-edit file to grade; mutmut 2's ``Context`` /
+    ``list_mutations`` / ``mutate`` is the single-edit API. Dropped, as for the other families: a mutant that
+    does not compile, that compiles to the original's bytecode, or that an earlier mutation already made
+    (:func:`_keyed_mutant`: an edit another tool also makes gets the same :attr:`Mutant.key`, so a held-out
+    draw never takes it twice).
+
+    Raises:
+        MissingRequirement: mutmut is not installed.
+    """
+    require_tool(MUTMUT)
+    from mutmut import Context, list_mutations, mutate  # noqa: PLC0415 - optional: the mutate extra
+
+    original = (reference / rel).read_text(encoding="utf-8")
+    base = _bytecode(original, rel)
+    lines = original.splitlines(keepends=True)
+    out: list[Mutant] = []
+    made: set[str] = {original}
+    seen: dict[tuple[str, str], int] = {}
+    for mutation_id in list_mutations(Context(source=original, filename=rel, dict_synonyms=[])):
+        content, _count = mutate(Context(source=original, mutation_id=mutation_id, filename=rel, dict_synonyms=[]))
+        if content in made:
+            continue
+        made.add(content)
+        code = _bytecode(content, rel)
+        if code is None or code == base:
+            continue
+        if (mutant := _keyed_mutant(rel, original, lines, content, len(out) + 1, seen)) is not None:
+            out.append(mutant)
     return out
 
 
