@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import re
 import shutil
 import sys
 import tempfile
@@ -152,6 +153,51 @@ def _recorded_row(lesson_id: str, data: dict) -> str:
             f"{data['survived']} | {data['triaged']}{by_rule} | "
             f"{data.get('timed_out', 0) + data.get('grader_error', 0)} | "
             f"{_pct(row.raw)} | {row.counted} | {tuned} | {_held_out_cell(row)} | {current} | {steadiness_text(lesson)} |")
+
+
+#: Kinds of edit :func:`edit_kind` tells apart, in the order the doc lists them.
+EDIT_KINDS = ("text wrapped in XX", "None or '' assigned", "a number changed", "another edit")
+
+
+def edit_kind(original: str, mutated: str) -> str:
+    """The kind of a mutant's one-line edit, read from the two lines' text only (never from a verdict), for the
+    doc's summary of held-out survivors (:data:`EDIT_KINDS`): mutmut's string mutation (a literal wrapped in
+    ``XX``), an assignment's value replaced by ``None`` or ``""``, a number literal changed (the lines equal with
+    every number replaced by one symbol), else another edit."""
+    before, after = original.strip(), mutated.strip()
+    if "XX" in after and "XX" not in before and after.replace("XX", "") == before:
+        return EDIT_KINDS[0]
+    if before != after and re.search(r"=\s*(None|''|\"\")\s*$", after):
+        return EDIT_KINDS[1]
+    number = r"(?<![\w.])\d+(\.\d*)?(e-?\d+)?"
+    if before != after and re.sub(number, "#", before) == re.sub(number, "#", after):
+        return EDIT_KINDS[2]
+    return EDIT_KINDS[3]
+
+
+def _survivor_edit(lesson_id: str, where: str, section: str) -> tuple[str, str] | None:
+    """The (original, mutated) lines of a recorded survivor (``file:line (key)``) from the lesson's
+    ``mutation-outcomes.json`` (``section``: ``mutants`` or ``held_out``); None when it is not there."""
+    key = where.rsplit("(", 1)[-1].rstrip(")")
+    lesson = load_catalog().get(lesson_id)
+    try:
+        outcomes = json.loads((lesson.folder / mut.OUTCOMES_FILE).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        outcomes = {}
+    rows = outcomes.get(section, []) if section == "mutants" else (outcomes.get(section) or {}).get("mutants", [])
+    row = next((r for r in rows if isinstance(r, dict) and r.get("key") == key), None)
+    return None if row is None else (row["original"], row["mutant"])
+
+
+def _survivor_kinds(lesson_id: str, wheres: list[str]) -> str:
+    """``lesson: N survivor(s): 3 text wrapped in XX, 1 another edit`` for a lesson's held-out survivors."""
+    counts: dict[str, int] = {}
+    for where in wheres:
+        edit = _survivor_edit(lesson_id, where, "held_out")
+        kind = edit_kind(*edit) if edit is not None else EDIT_KINDS[3]
+        counts[kind] = counts.get(kind, 0) + 1
+    return (f"- {lesson_id}: {len(wheres)} survivor(s): "
+            + ", ".join(f"{counts[k]} {k}" for k in EDIT_KINDS if k in counts))
 
 
 def _survivor_line(lesson_id: str, where: str, section: str) -> str:
@@ -288,6 +334,10 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
                   "the triage was not written for. For the author: strengthen the grader, or add a rule (it applies "
                   "from the next held-out sample on).", ""]
         lines += held
+        lines += ["", "By kind of edit, read from each edit's text alone (a summary for the reader: every one of them "
+                  "still counts against its lesson):", ""]
+        lines += [_survivor_kinds(lesson_id, wheres) for lesson_id in ranked
+                  if (wheres := (records[lesson_id].get("held_out") or {}).get("survivors", []))]
         lines.append("")
     if survivors:
         lines += ["## Survivors not triaged", "",

@@ -17,6 +17,7 @@ from typing import Any
 from ros2course import kit
 from ros2course.kit import Session, Unmet
 from ros2course.kit import actions as act
+from ros2course.kit.records import names_status
 from ros2course.kit.topics_services import numbers_in
 
 from ros2course.kit import services
@@ -134,8 +135,8 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
              "each distance_to_goal in a log record of its own as it arrives (the logger, not print())",
              fraction=len(found) / len(distances))
     shown = [text for text in records if _has(text, final[0]) and _has(text, final[1])]
-    said = [text for text in shown if re.search(r"succe", text, re.IGNORECASE)]
-    expected = f"a log record with the final position ({final[0]}, {final[1]}) and SUCCEEDED"
+    said = [text for text in shown if names_status(text, act.SUCCEEDED)]
+    expected = f"a log record with the final position ({final[0]}, {final[1]}) and SUCCEEDED (as a word)"
     if said:
         s.record("logs_result", True, f"'{said[0][:120]}'", expected)
     elif shown:
@@ -209,7 +210,6 @@ def ended_run(s: Session, action: Any, path: Any, status: int, check_id: str, en
         Unmet: no goal reached the server.
     """
     name = act.status_name(status)
-    word = name[:5].lower()  # 'abort', 'cance': any spelling of the name (CANCELED, cancelled, Canceled)
     xy = _goal_xy(s)
     final = (round(xy[0] / 2, 3), round(xy[1] / 2, 3))
     server = act.stand_in_action_server(s, action, ACTION, lambda index, goal: _result_script(
@@ -218,12 +218,12 @@ def ended_run(s: Session, action: Any, path: Any, status: int, check_id: str, en
     proc = _started(s, path, xy, f"{EXECUTABLE}.{name.lower()}")
     act.offer_once_it_waits(s, server, rosout, NODE, proc, WAIT_WINDOW)
     with s.phase("observe"):
-        kit.wait_until(lambda: any(re.search(word, text, re.IGNORECASE) for text in _records(rosout)),
+        kit.wait_until(lambda: any(names_status(text, status) for text in _records(rosout)),
                        2 * LOG_TIMEOUT, abort=_gone(proc))
     with s.phase("observe"):  # the position may be in a record of its own, just after
         kit.wait_until(lambda: any(_has(text, final[0]) and _has(text, final[1]) for text in _records(rosout)),
                        LOG_TIMEOUT, abort=_gone(proc))
-    said = [text for text in _records(rosout) if re.search(word, text, re.IGNORECASE)]
+    said = [text for text in _records(rosout) if names_status(text, status)]
     where = [text for text in _records(rosout) if _has(text, final[0]) and _has(text, final[1])]
     expected = f"a log record naming the status {name}, and the final position ({final[0]}, {final[1]})"
     if not server.goals:

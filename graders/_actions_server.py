@@ -380,7 +380,8 @@ def cancel(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNod
     problems = []
     if goal.status != act.CANCELED:
         problems.append(f"status {act.status_name(goal.status)}")
-    if abs(short - last) > LAST_FEEDBACK_TOLERANCE or short < POSITION_TOLERANCE:
+    # not (... <= tolerance): a NaN position or distance is never "within" it (abs(nan - x) > t is False)
+    if not abs(short - last) <= LAST_FEEDBACK_TOLERANCE or short < POSITION_TOLERANCE:
         problems.append(f"final_position {_show(final)} is {short:.3f} m from the goal, the last feedback said "
                         f"{last:.3f}")
     elif known_start and _passed(s, "position_kept") and all(map(math.isfinite, final)) and (off := _off_the_way(start, target, final)) > OFF_THE_WAY:

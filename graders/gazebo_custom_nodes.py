@@ -56,7 +56,9 @@ CHECKS = [
     Check("launch_files", "The three launch files are installed, each with its node and a ros_gz_bridge", 2,
           "put send_poses_to_gazebo_launch.py, send_wrenches_to_gazebo_launch.py and control_shape_thrust_launch.py "
           "in launch/ and install them (data_files: ('share/' + package_name + '/launch', glob('launch/*_launch.py'))); "
-          "each starts its node and Node(package='ros_gz_bridge', executable='parameter_bridge', ...); the thrust one "
+          "each starts its node (package='python_package_that_uses_gazebo', under its own name: no other name=) and "
+          "Node(package='ros_gz_bridge', executable='parameter_bridge', ...), one bridge per "
+          "argument string (arguments=['<topic>@<ROS type>]<Gazebo type>'], nothing else in it); the thrust one "
           "gives the node parameters=[{'use_sim_time': True}] and the bridge its config_file"),
     Check("bridge_config", f"config_bridge/{BRIDGE_FILE} bridges /clock, the box's pose and the wrench topic", 1,
           "three entries (ros_topic_name, gz_topic_name, ros_type_name, gz_type_name, direction): /clock and /tf "

@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 
 from ros2course import kit
-from ros2course.kit import Check, Session, checks
+from ros2course.kit import Check, Session, Unmet, checks, params
 from . import _sas as sas
 
 PACKAGE = "sas_robot_driver_myrobot"
@@ -91,6 +91,10 @@ CHECKS = [
     Check("driver_starts", f"The driver runs as node {NODE}", 1,
           "create one Node in main() and do not exit: a missing parameter or an exception in __init__ ends it",
           **DRIVER_PART),
+    Check("declares_parameters", "It declares ip, joint_limits_min, joint_limits_max and thread_sampling_time_sec "
+          "(ros2 param list)", 1,
+          "read every parameter with get_ros_parameter(node, name, type), which declares it: a value typed in "
+          "the code (ip = '127.0.0.1') leaves the launch file's parameter undeclared", **DRIVER_PART),
     Check("interface", f"It has the sas topics under /{NODE}/", 2,
           "use the node's name as the prefix: f'{node.get_name()}/get/joint_states' and so on (ROS_ENV.md list)",
           **DRIVER_PART),
@@ -160,6 +164,7 @@ def grade(s: Session) -> None:
     with s.part("driver"):
         kit.executable(s, "executable", PACKAGE, DRIVER_EXECUTABLE)
         driver = sas.start_driver(s, "driver_starts", DRIVER, sigint_check="sigint_exit")
+        declares_parameters(s, "declares_parameters", driver)
         sas.interface(s, "interface", driver)
         sas.limits(s, "limits_published", "limits_radians", driver)
         sas.stream(s, "stream_rate", "stream_shape", "zeros_at_start", driver, span=RATE_SPAN)
@@ -183,3 +188,20 @@ def grade(s: Session) -> None:
         sas.client_swing(s, "client_swing", client, targets, amplitude=CLIENT_AMPLITUDE, step=CLIENT_STEP,
                          tolerance=CLIENT_LAW_TOLERANCE, unnumbered_tolerance=CLIENT_LAW_TOLERANCE_UNNUMBERED,
                          phase_slack=CLIENT_LAW_PHASE_SLACK)
+
+
+def declares_parameters(s: Session, check_id: str, run: sas.DriverRun) -> None:
+    """Record ``check_id``: ``ros2 param list /myrobot_1`` has every parameter of the launch file (seed ch. 31.7:
+    the driver reads ip, joint_limits_min, joint_limits_max and thread_sampling_time_sec with sas's
+    get_ros_parameter, which declares each). Only the names: a parameter declared with another type than the
+    launch file's value ends the node as it starts (driver_starts), and ip's value changes nothing the driver
+    shows (the lesson's robot is simulated)."""
+    wanted = list(run.driver.parameters)
+    try:
+        names = params.connect(s, run.driver.node, proc=run.proc).names()
+    except Unmet as exc:
+        s.record(check_id, False, str(exc), f"{', '.join(wanted)} declared")
+        return
+    missing = [name for name in wanted if name not in names]
+    s.record(check_id, not missing, f"declared: {', '.join(sorted(n for n in names if n in wanted)) or 'none of them'}"
+             + (f"; missing: {', '.join(missing)}" if missing else ""), f"{', '.join(wanted)} declared")

@@ -191,3 +191,20 @@ def test_sigint_window_benchmark_names_an_unknown_fixture() -> None:
                           stdin=subprocess.DEVNULL, check=False)
     assert proc.returncode == 2 and "no fixture 'no-such-fixture'" in proc.stderr, proc.stderr[-2000:]
     assert "Traceback" not in proc.stderr
+
+
+def test_held_out_survivors_are_summed_by_the_kind_of_their_edit() -> None:
+    """The doc's summary of held-out survivors reads each edit's kind from its two lines alone: mutmut's XX-wrapped
+    string, a value replaced by None or '', a changed number, anything else."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("grader_strength", BENCH / "grader_strength.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    text, none, number, other = module.EDIT_KINDS
+    cases = [("log('waiting...')", "log('XXwaiting...XX')", text),
+             ("self.timer = None", 'self.timer = ""', none), ("t.rotation.y = qy", "t.rotation.y = None", none),
+             ("throttle_duration_sec=1.0)", "throttle_duration_sec=2.0)", number), ("x[:5]", "x[:6]", number),
+             ("if a < b:", "if a <= b:", other), ("x = 'XX'", "x = 'XXXXXX'", other), ("x = 1", "x = 1", other)]
+    for original, mutated, kind in cases:
+        assert module.edit_kind(original, mutated) == kind, (original, mutated)

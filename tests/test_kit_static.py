@@ -1,4 +1,5 @@
-"""The kit's static readings of a learner's files (no ROS graph): package.xml dependency kinds, CMake paths."""
+"""The kit's static readings of a learner's files (no ROS graph): package.xml dependency kinds, CMake paths, the
+words of a log record."""
 
 from __future__ import annotations
 
@@ -6,6 +7,7 @@ from catkin_pkg.package import parse_package_string
 
 from ros2course.kit.cmake import hardcoded_paths
 from ros2course.kit.packages import declared_dependencies
+from ros2course.kit.records import names_status
 
 _PACKAGE_XML = """<?xml version="1.0"?>
 <package format="3">
@@ -35,3 +37,16 @@ def test_a_destination_made_absolute_from_the_prefix_is_a_hardcoded_path() -> No
                             "install(DIRECTORY include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})\n"
                             "# install(FILES x DESTINATION ${CMAKE_INSTALL_PREFIX}/share)\n")
     assert found == ["DESTINATION ${CMAKE_INSTALL_PREFIX}/lib", "DESTINATION ${CMAKE_INSTALL_FULL_LIBDIR}/cmake/G"]
+
+
+def test_a_record_names_a_goal_status_only_as_a_word() -> None:
+    """Any case or spelling of the status, or its enum name, names it; its letters inside another word do not
+    ('unsuccessful' held 'succe', so a client logging it for a goal that succeeded passed logs_result)."""
+    succeeded, canceled, aborted = 4, 5, 6
+    for text in ("Goal SUCCEEDED: final position (1.000, 2.000)", "goal succeeded", "Success!",
+                 "status=STATUS_SUCCEEDED", "[SUCCEEDED]"):
+        assert names_status(text, succeeded), text
+    for text in ("Goal unsuccessful", "XXSUCCEEDEDXX", "Goal status 4", "Goal ABORTED"):
+        assert not names_status(text, succeeded), text
+    assert names_status("Goal cancelled by the server", canceled) and names_status("ABORTED", aborted)
+    assert not names_status("uncanceled", canceled)

@@ -100,6 +100,7 @@ import sys
 import tempfile
 import warnings
 import xml.etree.ElementTree as ET  # noqa: N817 - the standard alias
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -916,6 +917,29 @@ def _bytecode(text: str, rel: str) -> bytes | None:
         return None
 
 
+def _compiled_mutants(rel: str, original: str, contents: Iterable[str]) -> list[Mutant]:
+    """The mutants of the Python file ``rel`` (source ``original``) among ``contents`` (whole mutated files, in
+    the tool's order), numbered from 1 in that order. Dropped, as universalmutator's trivial-compiler-equivalence
+    check drops them: a content made before (or the original), one that does not compile, one that compiles
+    to the original's bytecode, and one :func:`_keyed_mutant` finds equivalent; the step the cosmic-ray and
+    mutmut generators share."""
+    base = _bytecode(original, rel)
+    lines = original.splitlines(keepends=True)
+    out: list[Mutant] = []
+    made: set[str] = {original}
+    seen: dict[tuple[str, str], int] = {}
+    for content in contents:
+        if content in made:
+            continue
+        made.add(content)
+        code = _bytecode(content, rel)
+        if code is None or code == base:
+            continue
+        if (mutant := _keyed_mutant(rel, original, lines, content, len(out) + 1, seen)) is not None:
+            out.append(mutant)
+    return out
+
+
 def generate_cosmic_ray_mutants(reference: Path, rel: str) -> list[Mutant]:
     """Every mutant cosmic-ray's core operators make of the Python file ``reference/rel``, in a fixed order
     (operators by name, then each operator's occurrences in the file).
@@ -935,30 +959,19 @@ def generate_cosmic_ray_mutants(reference: Path, rel: str) -> list[Mutant]:
     from cosmic_ray.mutating import mutate_code  # noqa: PLC0415 - optional: the mutate extra
 
     original = (reference / rel).read_text(encoding="utf-8")
-    base = _bytecode(original, rel)
-    lines = original.splitlines(keepends=True)
-    out: list[Mutant] = []
-    made: set[str] = {original}
-    seen: dict[tuple[str, str], int] = {}
-    number = 0
-    for name in sorted(plugins.operator_names()):
-        try:
-            operator = plugins.get_operator(name)()
-        except TypeError:  # needs arguments: the variable names to insert or replace
-            continue
-        occurrence = 0
-        while (content := mutate_code(original, operator, occurrence)) is not None:
-            occurrence += 1
-            if content in made:
+
+    def edits() -> Iterator[str]:
+        for name in sorted(plugins.operator_names()):
+            try:
+                operator = plugins.get_operator(name)()
+            except TypeError:  # needs arguments: the variable names to insert or replace
                 continue
-            made.add(content)
-            code = _bytecode(content, rel)
-            if code is None or code == base:
-                continue
-            if (mutant := _keyed_mutant(rel, original, lines, content, number + 1, seen)) is not None:
-                number += 1
-                out.append(mutant)
-    return out
+            occurrence = 0
+            while (content := mutate_code(original, operator, occurrence)) is not None:
+                occurrence += 1
+                yield content
+
+    return _compiled_mutants(rel, original, edits())
 
 
 def generate_mutmut_mutants(reference: Path, rel: str) -> list[Mutant]:
@@ -980,22 +993,9 @@ def generate_mutmut_mutants(reference: Path, rel: str) -> list[Mutant]:
     from mutmut import Context, list_mutations, mutate  # noqa: PLC0415 - optional: the mutate extra
 
     original = (reference / rel).read_text(encoding="utf-8")
-    base = _bytecode(original, rel)
-    lines = original.splitlines(keepends=True)
-    out: list[Mutant] = []
-    made: set[str] = {original}
-    seen: dict[tuple[str, str], int] = {}
-    for mutation_id in list_mutations(Context(source=original, filename=rel, dict_synonyms=[])):
-        content, _count = mutate(Context(source=original, mutation_id=mutation_id, filename=rel, dict_synonyms=[]))
-        if content in made:
-            continue
-        made.add(content)
-        code = _bytecode(content, rel)
-        if code is None or code == base:
-            continue
-        if (mutant := _keyed_mutant(rel, original, lines, content, len(out) + 1, seen)) is not None:
-            out.append(mutant)
-    return out
+    edits = (mutate(Context(source=original, mutation_id=mutation_id, filename=rel, dict_synonyms=[]))[0]
+             for mutation_id in list_mutations(Context(source=original, filename=rel, dict_synonyms=[])))
+    return _compiled_mutants(rel, original, edits)
 
 
 def sample_mutants(mutants: list[Mutant], count: int | None, seed: int) -> list[Mutant]:
