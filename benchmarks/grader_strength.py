@@ -175,9 +175,10 @@ def edit_kind(original: str, mutated: str) -> str:
     return EDIT_KINDS[3]
 
 
-def _survivor_edit(lesson_id: str, where: str, section: str) -> tuple[str, str] | None:
-    """The (original, mutated) lines of a recorded survivor (``file:line (key)``) from the lesson's
-    ``mutation-outcomes.json`` (``section``: ``mutants`` or ``held_out``); None when it is not there."""
+def _survivor_row(lesson_id: str, where: str, section: str) -> dict | None:
+    """A recorded survivor's row (``file:line (key)``, matched by its key) in the lesson's ``mutation-outcomes.json``
+    (``section``: ``mutants`` or ``held_out``): ``key``, ``file``, ``line``, ``original``, ``mutant``...; None when
+    it is not there (or the file cannot be read)."""
     key = where.rsplit("(", 1)[-1].rstrip(")")
     lesson = load_catalog().get(lesson_id)
     try:
@@ -185,7 +186,12 @@ def _survivor_edit(lesson_id: str, where: str, section: str) -> tuple[str, str] 
     except (OSError, ValueError):
         outcomes = {}
     rows = outcomes.get(section, []) if section == "mutants" else (outcomes.get(section) or {}).get("mutants", [])
-    row = next((r for r in rows if isinstance(r, dict) and r.get("key") == key), None)
+    return next((r for r in rows if isinstance(r, dict) and r.get("key") == key), None)
+
+
+def _survivor_edit(lesson_id: str, where: str, section: str) -> tuple[str, str] | None:
+    """The (original, mutated) lines of a recorded survivor (:func:`_survivor_row`); None when it is not there."""
+    row = _survivor_row(lesson_id, where, section)
     return None if row is None else (row["original"], row["mutant"])
 
 
@@ -202,18 +208,11 @@ def _survivor_kinds(lesson_id: str, wheres: list[str]) -> str:
 
 def _survivor_line(lesson_id: str, where: str, section: str) -> str:
     """``- lesson `key`: file:line: `original` -> `mutated``` for a recorded survivor (``file:line (key)``), the lines
-    from the lesson's ``mutation-outcomes.json`` (``section``: ``mutants`` or ``held_out``)."""
-    key = where.rsplit("(", 1)[-1].rstrip(")")
-    lesson = load_catalog().get(lesson_id)
-    try:
-        outcomes = json.loads((lesson.folder / mut.OUTCOMES_FILE).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        outcomes = {}
-    rows = outcomes.get(section, []) if section == "mutants" else (outcomes.get(section) or {}).get("mutants", [])
-    row = next((r for r in rows if isinstance(r, dict) and r.get("key") == key), None)
+    from the lesson's ``mutation-outcomes.json`` (:func:`_survivor_row`)."""
+    row = _survivor_row(lesson_id, where, section)
     if row is None:
         return f"- {lesson_id} (last run): {where}"
-    return f"- {lesson_id} `{key}`: {row['file']}:{row['line']}: `{row['original']}` -> `{row['mutant']}`"
+    return f"- {lesson_id} `{row['key']}`: {row['file']}:{row['line']}: `{row['original']}` -> `{row['mutant']}`"
 
 
 def recorded_scores(lesson_ids: list[str]) -> dict[str, dict]:
@@ -299,7 +298,9 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "default: the files the lesson's own starter gives with TODOs or does not give): first **rules**, kinds "
         "of survivor decided before they are tested and applied mechanically (a docstring replaced by `pass`, "
         "the `if __name__ == '__main__':` block of a console_scripts node, package.xml free text), each with a "
-        "reason; a rule may never cover a line that implements a requirement of the lesson's `contract.yaml` "
+        "reason (a rule many lessons share is written once, in `chapters/mutation-rules.yaml`, and a lesson takes "
+        "it as it is with `- use: <id>`); a rule may never cover a line that implements a requirement of the "
+        "lesson's `contract.yaml` "
         "(`ros2course.dev.mutants.rule_conflicts`); then per-mutant **entries** for what no rule covers, each "
         "naming one mutant by its identity (its key), never by line text alone. `triaged (by rule)` counts both, "
         "and in brackets those a rule covers. A rule marked `set_aside` (free text no program reads) takes its "

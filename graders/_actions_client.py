@@ -17,6 +17,7 @@ from typing import Any
 from ros2course import kit
 from ros2course.kit import Session, Unmet
 from ros2course.kit import actions as act
+from ros2course.kit.console import log_texts
 from ros2course.kit.records import names_status
 from ros2course.kit.topics_services import numbers_in
 
@@ -70,13 +71,15 @@ def _has(text: str, value: float) -> bool:
     return any(abs(number - value) <= NUMBER_TOLERANCE for number in numbers_in(text))
 
 
-def _records(rosout: Any) -> list[str]:
-    """The client's log records (its node's logger), oldest first, on one line each."""
-    return [" ".join(r.msg.split()) for r in rosout.records(node=NODE)]
+def _records(rosout: Any, proc: kit.LearnerProcess) -> list[str]:
+    """The client's log records (its node's logger), oldest first, on one line each: /rosout's, then those its
+    console holds after them (a client that logs its result and exits at once can lose that record on /rosout:
+    :mod:`ros2course.kit.console`)."""
+    return log_texts(rosout, NODE, proc)
 
 
-def _last(rosout: Any, count: int = 3) -> str:
-    return " | ".join(text[:80] for text in _records(rosout)[-count:]) or "no log records"
+def _last(rosout: Any, proc: kit.LearnerProcess, count: int = 3) -> str:
+    return " | ".join(text[:80] for text in _records(rosout, proc)[-count:]) or "no log records"
 
 
 def _result_script(action: Any, final: tuple[float, float], distances: list[float], status: int) -> act.Script:
@@ -117,13 +120,13 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
     expected = f"one goal, desired_position ({xy[0]}, {xy[1]}) (the parameters x and y)"
     if not server.goals:
         s.record("goal_sent", False, f"no goal in {LOG_TIMEOUT:.0f} s after the server appeared; "
-                 f"last log records: {_last(rosout)}; {kit.process_state(node.proc)}", expected)
+                 f"last log records: {_last(rosout, node.proc)}; {kit.process_state(node.proc)}", expected)
         s.require("goal_sent")
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.ended), len(distances) * PERIOD + 2.0, abort=node.ended)
-        kit.wait_until(lambda: any(_has(text, final[0]) and _has(text, final[1]) for text in _records(rosout)),
+        kit.wait_until(lambda: any(_has(text, final[0]) and _has(text, final[1]) for text in _records(rosout, node.proc)),
                        LOG_TIMEOUT, abort=_gone(node.proc))
-    records = _records(rosout)
+    records = _records(rosout, node.proc)
     found = _feedback_records(records, distances, final)
     anywhere = [d for d in distances if any(_has(text, d) for text in records)]
     s.record("logs_feedback", len(found) == len(distances),
@@ -131,7 +134,7 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
              "found in the log, each in a record of its own, in the order sent, before the result"
              + ("" if len(anywhere) == len(found) else
                 f" ({len(anywhere)} written somewhere: several in one record, out of order, or only with the result)")
-             + ("" if found else f"; last log records: {_last(rosout)}"),
+             + ("" if found else f"; last log records: {_last(rosout, node.proc)}"),
              "each distance_to_goal in a log record of its own as it arrives (the logger, not print())",
              fraction=len(found) / len(distances))
     shown = [text for text in records if _has(text, final[0]) and _has(text, final[1])]
@@ -142,7 +145,7 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
     elif shown:
         s.record("logs_result", False, f"'{shown[0][:120]}': the position, but not the status", expected)
     else:
-        s.record("logs_result", False, f"no record with ({final[0]}, {final[1]}); last log records: {_last(rosout)}",
+        s.record("logs_result", False, f"no record with ({final[0]}, {final[1]}); last log records: {_last(rosout, node.proc)}",
                  expected)
     _ends(s, "ends", node.proc, "once its goal had SUCCEEDED")
     # counted once the client has ended (or END_TIMEOUT after its goal ended), not when the first goal ended: a
@@ -218,21 +221,21 @@ def ended_run(s: Session, action: Any, path: Any, status: int, check_id: str, en
     proc = _started(s, path, xy, f"{EXECUTABLE}.{name.lower()}")
     act.offer_once_it_waits(s, server, rosout, NODE, proc, WAIT_WINDOW)
     with s.phase("observe"):
-        kit.wait_until(lambda: any(names_status(text, status) for text in _records(rosout)),
+        kit.wait_until(lambda: any(names_status(text, status) for text in _records(rosout, proc)),
                        2 * LOG_TIMEOUT, abort=_gone(proc))
     with s.phase("observe"):  # the position may be in a record of its own, just after
-        kit.wait_until(lambda: any(_has(text, final[0]) and _has(text, final[1]) for text in _records(rosout)),
+        kit.wait_until(lambda: any(_has(text, final[0]) and _has(text, final[1]) for text in _records(rosout, proc)),
                        LOG_TIMEOUT, abort=_gone(proc))
-    said = [text for text in _records(rosout) if names_status(text, status)]
-    where = [text for text in _records(rosout) if _has(text, final[0]) and _has(text, final[1])]
+    said = [text for text in _records(rosout, proc) if names_status(text, status)]
+    where = [text for text in _records(rosout, proc) if _has(text, final[0]) and _has(text, final[1])]
     expected = f"a log record naming the status {name}, and the final position ({final[0]}, {final[1]})"
     if not server.goals:
-        raise Unmet(f"no goal reached the server; last log records: {_last(rosout)}; {kit.process_state(proc)}")
+        raise Unmet(f"no goal reached the server; last log records: {_last(rosout, proc)}; {kit.process_state(proc)}")
     ended = act.status_name(server.ended[0][1]) if server.ended else "not ended yet"
     s.record(check_id, bool(said and where),
              (f"'{said[0][:120]}'" + ("" if said[0] in where else f"; '{where[0][:120]}'" if where else
                                      f": no record with the final position ({final[0]}, {final[1]})"))
-             if said else f"the goal ended {ended}; its log: {_last(rosout)}", expected)
+             if said else f"the goal ended {ended}; its log: {_last(rosout, proc)}", expected)
     if ends_id is not None:
         _ends(s, ends_id, proc, f"once its goal was {name}")
 
@@ -247,12 +250,12 @@ def rejected_run(s: Session, action: Any, path: Any) -> None:
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.goals), 2 * LOG_TIMEOUT, abort=lambda: proc.poll() is not None)
         if not server.goals:
-            raise Unmet(f"no goal reached the server; last log records: {_last(rosout)}; {kit.process_state(proc)}")
-        kit.wait_until(lambda: any(re.search(r"reject", text, re.IGNORECASE) for text in _records(rosout))
+            raise Unmet(f"no goal reached the server; last log records: {_last(rosout, proc)}; {kit.process_state(proc)}")
+        kit.wait_until(lambda: any(re.search(r"reject", text, re.IGNORECASE) for text in _records(rosout, proc))
                        and proc.poll() is not None, END_TIMEOUT, abort=_gone(proc))
         if proc.poll() is not None:  # what it logged just before exiting may still be on its way
             kit.wait_until(lambda: False, 0.5)
-    records = _records(rosout)
+    records = _records(rosout, proc)
     said = [text for text in records if re.search(r"reject", text, re.IGNORECASE)]
     after = records[records.index(said[0]) + 1:] if said else []
     pretends = [text for text in after if (PRETENDS.search(text) or ACCEPTED.search(text))
@@ -261,7 +264,7 @@ def rejected_run(s: Session, action: Any, path: Any) -> None:
     traceback = "Traceback (most recent call last)" in proc.stderr() + proc.stdout()
     problems = []
     if not said:
-        problems.append(f"no log record says the goal was rejected (last records: {_last(rosout)})")
+        problems.append(f"no log record says the goal was rejected (last records: {_last(rosout, proc)})")
     if ended is None:
         problems.append(f"still running {END_TIMEOUT:.0f} s after the rejection")
     elif ended.returncode != 0 or traceback:

@@ -37,6 +37,7 @@ from typing import Any
 from ros2course import kit
 from ros2course.kit import Session, Unmet, services
 from ros2course.kit import actions as act
+from ros2course.kit.console import log_texts
 from ros2course.kit.records import names_status
 from ros2course.kit.topics_services import numbers_in, reliable_qos
 
@@ -102,13 +103,15 @@ def _gone(proc: kit.LearnerProcess) -> Callable[[], bool]:
     return gone
 
 
-def _records(rosout: Any, node: str) -> list[str]:
-    """The log records of ``node``'s logger, oldest first, on one line each."""
-    return [" ".join(r.msg.split()) for r in rosout.records(node=node)]
+def _records(rosout: Any, node: str, proc: kit.LearnerProcess | None = None) -> list[str]:
+    """The log records of ``node``'s logger, oldest first, on one line each: /rosout's, then, with ``proc``,
+    those its console holds after them (a client that logs its result and exits at once can lose that record
+    on /rosout: :mod:`ros2course.kit.console`)."""
+    return log_texts(rosout, node, proc)
 
 
-def _last(rosout: Any, node: str, count: int = 3) -> str:
-    return " | ".join(text[:80] for text in _records(rosout, node)[-count:]) or "no log records"
+def _last(rosout: Any, node: str, proc: kit.LearnerProcess | None = None, count: int = 3) -> str:
+    return " | ".join(text[:80] for text in _records(rosout, node, proc)[-count:]) or "no log records"
 
 
 def _has(text: str, value: float, tolerance: float = NUMBER_TOLERANCE) -> bool:
@@ -343,15 +346,15 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
     expected = f"one goal on {ACTION}"
     if not server.goals:
         s.record("goal_sent", False, f"no goal in {LOG_TIMEOUT:.0f} s after the server appeared; last log records: "
-                 f"{_last(rosout, CLIENT_NODE)}; {kit.process_state(node.proc)}", expected)
+                 f"{_last(rosout, CLIENT_NODE, node.proc)}; {kit.process_state(node.proc)}", expected)
         s.require("goal_sent")
     received = time.time() - (time.monotonic() - server.goals[0][0])  # wall time the first goal arrived
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.ended), len(distances) * PERIOD + 2.0, abort=node.ended)
-        kit.wait_until(lambda: any(names_status(text, act.SUCCEEDED) for text in _records(rosout, CLIENT_NODE)),
+        kit.wait_until(lambda: any(names_status(text, act.SUCCEEDED) for text in _records(rosout, CLIENT_NODE, node.proc)),
                        LOG_TIMEOUT, abort=_gone(node.proc))
     _judge_goal(s, server.goals[0][1], offered, received)
-    records = _records(rosout, CLIENT_NODE)
+    records = _records(rosout, CLIENT_NODE, node.proc)
     found = _feedback_records(records, distances)
     anywhere = [d for d in distances if any(_has(text, d) for text in records)]
     s.record("logs_feedback", len(found) == len(distances),
@@ -359,12 +362,12 @@ def goal_run(s: Session, action: Any, path: Any) -> None:
              "found in the log, each in a record of its own, in the order sent, before the result"
              + ("" if len(anywhere) == len(found) else
                 f" ({len(anywhere)} written somewhere: several in one record, out of order, or only with the result)")
-             + ("" if found else f"; last log records: {_last(rosout, CLIENT_NODE)}"),
+             + ("" if found else f"; last log records: {_last(rosout, CLIENT_NODE, node.proc)}"),
              "each distance_remaining in a log record of its own as it arrives (the logger, not print())",
              fraction=len(found) / len(distances))
     said = [text for text in records if names_status(text, act.SUCCEEDED)]
     s.record("logs_result", bool(said), f"'{said[0][:120]}'" if said else
-             f"no record names SUCCEEDED; last log records: {_last(rosout, CLIENT_NODE)}",
+             f"no record names SUCCEEDED; last log records: {_last(rosout, CLIENT_NODE, node.proc)}",
              "a log record naming the status SUCCEEDED")
     ends(s, "ends", node.proc, "once its goal had SUCCEEDED")
     # counted once the client has ended (or END_TIMEOUT after its goal ended), as actions-client counts: a client
@@ -457,23 +460,23 @@ def ended_run(s: Session, action: Any, path: Any, status: int, check_id: str) ->
                    (f"no log record holds the error_msg '{text}'", lambda r: token in r)]
 
     def shown() -> bool:
-        records = _records(rosout, CLIENT_NODE)
+        records = _records(rosout, CLIENT_NODE, proc)
         return all(any(test(r) for r in records) for _, test in wanted)
 
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.goals), 2 * LOG_TIMEOUT, abort=lambda: proc.poll() is not None)
         if not server.goals:
-            raise Unmet(f"no goal reached the server; last log records: {_last(rosout, CLIENT_NODE)}; "
+            raise Unmet(f"no goal reached the server; last log records: {_last(rosout, CLIENT_NODE, proc)}; "
                         f"{kit.process_state(proc)}")
         kit.wait_until(shown, LOG_TIMEOUT, abort=_gone(proc))
         kit.wait_until(lambda: proc.poll() is not None, END_TIMEOUT)
         if proc.poll() is not None:  # what it logged just before exiting may still be on its way
             kit.wait_until(lambda: False, 0.5)
-    records = _records(rosout, CLIENT_NODE)
+    records = _records(rosout, CLIENT_NODE, proc)
     problems = [why for why, test in wanted if not any(test(r) for r in records)]
     problems += _not_ended(proc, f"after the goal was {name}")
     said = [r for r in records if names_status(r, status)]
-    s.record(check_id, not problems, "; ".join(problems) + f" (last records: {_last(rosout, CLIENT_NODE)})"
+    s.record(check_id, not problems, "; ".join(problems) + f" (last records: {_last(rosout, CLIENT_NODE, proc)})"
              if problems else f"'{said[0][:120]}', then the process {proc.exit_state().describe()}",
              f"a log record naming {name}" + (f", the error_code ({code}) and the error_msg ('{text}')" if aborted
                                               else "") + ", then exit code 0, no traceback")
@@ -499,18 +502,18 @@ def rejected_run(s: Session, action: Any, path: Any) -> None:
     with s.phase("observe"):
         kit.wait_until(lambda: bool(server.goals), 2 * LOG_TIMEOUT, abort=lambda: proc.poll() is not None)
         if not server.goals:
-            raise Unmet(f"no goal reached the server; last log records: {_last(rosout, CLIENT_NODE)}; "
+            raise Unmet(f"no goal reached the server; last log records: {_last(rosout, CLIENT_NODE, proc)}; "
                         f"{kit.process_state(proc)}")
-        kit.wait_until(lambda: any(re.search(r"reject", text, re.IGNORECASE) for text in _records(rosout, CLIENT_NODE)),
+        kit.wait_until(lambda: any(re.search(r"reject", text, re.IGNORECASE) for text in _records(rosout, CLIENT_NODE, proc)),
                        LOG_TIMEOUT, abort=_gone(proc))
         kit.wait_until(lambda: proc.poll() is not None, END_TIMEOUT)
         if proc.poll() is not None:  # what it logged just before exiting may still be on its way
             kit.wait_until(lambda: False, 0.5)
-    records = _records(rosout, CLIENT_NODE)
+    records = _records(rosout, CLIENT_NODE, proc)
     said = [text for text in records if re.search(r"reject", text, re.IGNORECASE)]
     after = records[records.index(said[0]) + 1:] if said else []
     pretends = [text for text in after if PRETENDS.search(text) and not re.search(r"reject", text, re.IGNORECASE)]
-    problems = [] if said else [f"no log record says the goal was rejected (last records: {_last(rosout, CLIENT_NODE)})"]
+    problems = [] if said else [f"no log record says the goal was rejected (last records: {_last(rosout, CLIENT_NODE, proc)})"]
     problems += _not_ended(proc, "after the rejection")
     if pretends:
         problems.append(f"after the rejection, a record that pretends the goal ended: '{pretends[0][:120]}' (a rejected "

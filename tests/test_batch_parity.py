@@ -238,7 +238,8 @@ def test_the_batch_sample_is_the_wrong_solutions_check_graded_fastest() -> None:
     checked[2] = Outcome(lesson.id, "grep_keeps_the_inbox", True, "", "", 7.9,
                          LessonResult(lesson.id, 1.0, 11.0, "failed", [died]))
     assert sample_fixtures(lesson, 1, checked) == ["wrong_topic_name"]
-    # ... even when it was graded whole and the others were stopped once their checks were judged
+    # ... even when it was graded whole and the others were stopped once their checks were judged (which, like
+    # the ones graded whole, are taken fastest first)
     from ros2course.grade.checklist import STOPPED_SETTLED
 
     from ros2course.dev.mutants import NOT_CHECKED
@@ -248,7 +249,8 @@ def test_the_batch_sample_is_the_wrong_solutions_check_graded_fastest() -> None:
         old = checked[index]
         checked[index] = Outcome(lesson.id, old.case, True, "", "", old.seconds,
                                  LessonResult(lesson.id, 1.0, 11.0, "failed", [settled]))
-    assert sample_fixtures(lesson, 1, checked)[0] != "grep_keeps_the_inbox"
+    assert sample_fixtures(lesson, 1, checked) == ["wrong_topic_name"], "stopped or whole: the fastest"
+    assert sample_fixtures(lesson, 2, checked) == ["wrong_topic_name", "pub_without_once"]
 
 
 def test_the_graders_random_draws_follow_the_files_not_their_times_or_modes(tmp_path: Path) -> None:

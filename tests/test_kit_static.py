@@ -3,9 +3,12 @@ words of a log record."""
 
 from __future__ import annotations
 
+import types
+
 from catkin_pkg.package import parse_package_string
 
 from ros2course.kit.cmake import hardcoded_paths
+from ros2course.kit.console import console_records, log_texts
 from ros2course.kit.packages import declared_dependencies
 from ros2course.kit.records import names_status
 
@@ -50,3 +53,41 @@ def test_a_record_names_a_goal_status_only_as_a_word() -> None:
         assert not names_status(text, succeeded), text
     assert names_status("Goal cancelled by the server", canceled) and names_status("ABORTED", aborted)
     assert not names_status("uncanceled", canceled)
+
+
+_CONSOLE = """[INFO] [1796113233.1] [client]: Waiting for the server...
+[INFO] [1796113233.2] [other]: not the client's
+[INFO] [1796113233.3] [client]: Distance to goal: 0.000 m
+plain print() output
+[WARN] [1796113233.4] [client]: two
+lines
+[INFO] [1796113233.5] [client]: Goal SUCCEEDED: final position (0.447, -0.330)
+"""
+
+
+class _Rosout:
+    """A stand-in for the session's RosoutProbe: ``records(node=...)`` of messages with ``.msg``."""
+
+    def __init__(self, texts: list[str]) -> None:
+        self.texts = texts
+
+    def records(self, node: str | None = None) -> list:
+        return [types.SimpleNamespace(msg=text, name="client") for text in self.texts]
+
+
+def test_a_record_lost_on_rosout_with_an_exiting_process_is_read_from_its_console() -> None:
+    """kit.console: the console (stderr) completes /rosout after its last record, never before it, never twice
+    (dev validate of actions-client: the reference's last record, logged just before it exited, never came)."""
+    assert console_records(_CONSOLE, "client") == [
+        "Waiting for the server...", "Distance to goal: 0.000 m plain print() output", "two lines",
+        "Goal SUCCEEDED: final position (0.447, -0.330)"]
+    proc = types.SimpleNamespace(stderr=lambda: _CONSOLE)
+    lost = _Rosout(["Waiting for the server...", "Distance to goal: 0.000 m plain print() output"])
+    assert log_texts(lost, "client", proc)[-2:] == ["two lines", "Goal SUCCEEDED: final position (0.447, -0.330)"]
+    assert log_texts(lost, "client") == lost.texts, "no process: /rosout alone"
+    whole = _Rosout(["Waiting for the server...", "x", "two lines", "Goal SUCCEEDED: final position (0.447, -0.330)"])
+    assert log_texts(whole, "client", proc) == whole.texts, "nothing after /rosout's last: nothing added"
+    unknown = _Rosout(["a record the console does not hold"])
+    assert log_texts(unknown, "client", proc) == unknown.texts, "the console cut elsewhere: nothing added"
+    assert log_texts(_Rosout([]), "client", proc)[0] == "Waiting for the server..."
+    assert console_records("[INFO] [1.0] [client]: a\n[not a record\n", "client") == ["a"]

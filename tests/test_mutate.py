@@ -15,6 +15,7 @@ import shutil
 from pathlib import Path
 
 import pytest
+import yaml
 
 from ros2course.dev import mutants as mut
 from ros2course.lesson import active_course
@@ -531,6 +532,8 @@ def test_a_held_out_run_is_recorded_beside_the_first_and_shown(tmp_path: Path) -
     ("survivors:\n  - file: x.py\n    reason: too short\n", "survivors.0"),
     ("survivors: [\n", "not valid YAML"),
     ("- just a list\n", "expected a mapping"),
+    ("rules:\n  - use: no-such-rule\n", "use: 'no-such-rule' is not a rule of"),
+    ("rules:\n  - use: docstring-pass\n    reason: mine\n", "'use' takes a shared rule as it is"),
 ])
 def test_a_bad_mutation_yaml_is_a_one_line_error(cli, tmp_path: Path, triage: str, words: str) -> None:
     course = _course(tmp_path / "course", triage)
@@ -740,6 +743,12 @@ def test_every_lessons_mutation_yaml_is_valid() -> None:
         assert not mut.rule_conflicts(lesson, config), "\n".join(mut.rule_conflicts(lesson, config))
         checked += 1
     assert checked >= 20
+    # the course's shared rules (chapters/mutation-rules.yaml): each one used by a lesson, none left behind
+    library = mut.rule_library(ROOT / "chapters")
+    used = {item["use"] for lesson_id in catalog.ids() if mut.triage_path(catalog.get(lesson_id)).is_file()
+            for item in (yaml.safe_load(mut.triage_path(catalog.get(lesson_id)).read_text()) or {}).get("rules") or []
+            if isinstance(item, dict) and "use" in item}
+    assert library and set(library) == used, sorted(set(library) ^ used)
 
 
 def test_a_second_held_out_sample_leaves_out_every_mutant_an_earlier_one_showed(tmp_path: Path) -> None:

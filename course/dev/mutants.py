@@ -53,6 +53,7 @@ triage by rule, decided before it is tested)::
         reason: "..."
         original: '^\s*\([^()]*\),\s*$'     # a case of a parametrized test ...
         holds: {names: [a, b, expected], that: "(a + b) ** 2 == expected"}  # ... still true once mutated
+      - use: main-guard-string              # a rule of the course's library, as it is there (RULE_LIBRARY)
     survivors:                              # one mutant each, for what no rule covers (:class:`TriageEntry`)
       - file: src/python_package_with_a_node/setup.py
         key: 3f2a9c0d1e4b                   # its identity (Mutant.key); or `line: 12` + original + mutated
@@ -100,7 +101,7 @@ import sys
 import tempfile
 import warnings
 import xml.etree.ElementTree as ET  # noqa: N817 - the standard alias
-from collections.abc import Iterable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -116,6 +117,10 @@ from ros2course.lesson.courses import MANIFEST, load_manifest
 
 #: Name of the triage file beside ``lesson.yaml``.
 TRIAGE_FILE = "mutation.yaml"
+#: The course's library of rules many lessons share, beside the lesson folders (``chapters/mutation-rules.yaml``,
+#: ``rules:`` as in a ``mutation.yaml``): a lesson's ``- use: <id>`` takes one as it is written there
+#: (:func:`rule_library`), so one kind of equivalent mutant has one reason, not a copy per lesson.
+RULE_LIBRARY = "mutation-rules.yaml"
 #: The lesson's last mutation score, beside ``lesson.yaml``: written by ``dev mutate``, shown by ``dev validate``.
 SCORE_FILE = "mutation-score.json"
 #: Every graded mutant's outcome of the lesson's last run, beside its score (:func:`write_score`).
@@ -519,25 +524,93 @@ def triage_path(lesson: Lesson) -> Path:
     return lesson.folder / TRIAGE_FILE
 
 
-def load_config(lesson: Lesson) -> MutationConfig:
-    """The lesson's ``mutation.yaml`` (an empty config when there is none).
+def _read_yaml_mapping(path: Path, what: str) -> dict:
+    """``path``'s YAML, a mapping ({} when the file is empty).
 
     Raises:
-        LessonFormatError: unreadable YAML or a schema violation, naming the file and field.
+        LessonFormatError: unreadable YAML, or not a mapping, naming the file.
     """
-    path = triage_path(lesson)
-    if not path.is_file():
-        return MutationConfig()
     try:
         data = yaml.safe_load(path.read_text(encoding="utf-8"))
     except yaml.YAMLError as exc:
         raise LessonFormatError(f"{path}: not valid YAML: {yaml_error_text(exc)}",
                                 "fix the YAML syntax (indentation, quotes)") from exc
     if data is None:
-        return MutationConfig()
+        return {}
     if not isinstance(data, dict):
-        raise LessonFormatError(f"{path}: (top level): expected a mapping with 'rules', 'survivors' (and 'files'), "
-                                f"got {type(data).__name__}", "see course/dev/mutants.py for the format")
+        raise LessonFormatError(f"{path}: (top level): expected a mapping with {what}, got {type(data).__name__}",
+                                "see course/dev/mutants.py for the format")
+    return data
+
+
+def rule_library(chapters: Path) -> dict[str, dict]:
+    """The course's shared rules (``chapters/mutation-rules.yaml``, :data:`RULE_LIBRARY`) by id, each as its
+    YAML mapping (validated as a :class:`Rule`); {} when the course has none.
+
+    Raises:
+        LessonFormatError: unreadable YAML, a rule that is not a valid :class:`Rule`, or an id given twice,
+            naming the file.
+    """
+    path = chapters / RULE_LIBRARY
+    if not path.is_file():
+        return {}
+    data = _read_yaml_mapping(path, "'rules'")
+    found: dict[str, dict] = {}
+    for index, item in enumerate(data.get("rules") or []):
+        try:
+            rule = Rule.model_validate(item)
+        except ValidationError as exc:
+            raise LessonFormatError(format_validation_error(path, exc) + f" (in rules[{index}])",
+                                    "a rule has an id, a reason of a sentence and matchers (course/dev/mutants.py: "
+                                    "Rule)") from exc
+        if rule.id in found:
+            raise LessonFormatError(f"{path}: rule id {rule.id} given twice", "give each shared rule one id")
+        found[rule.id] = item
+    return found
+
+
+def _expand_uses(path: Path, data: dict, library: Callable[[], dict[str, dict]]) -> dict:
+    """``data`` (a ``mutation.yaml``'s mapping) with each ``- use: <id>`` of its ``rules`` replaced by that rule
+    of the course's library (``library()``: :func:`rule_library`, read only when a rule is used).
+
+    Raises:
+        LessonFormatError: a ``use`` naming no rule of the library, or with other keys beside it.
+    """
+    rules = data.get("rules")
+    if not isinstance(rules, list) or not any(isinstance(r, dict) and "use" in r for r in rules):
+        return data
+    shared = library()
+    expanded = []
+    for index, item in enumerate(rules):
+        if isinstance(item, dict) and "use" in item:
+            if set(item) != {"use"}:
+                raise LessonFormatError(f"{path}: rules[{index}]: 'use' takes a shared rule as it is, with no other "
+                                        f"key (got {', '.join(sorted(set(item) - {'use'}))})",
+                                        "write the rule out in full to change it for this lesson")
+            if item["use"] not in shared:
+                raise LessonFormatError(f"{path}: rules[{index}]: use: {item['use']!r} is not a rule of "
+                                        f"{path.parent.parent / RULE_LIBRARY}",
+                                        "shared rules: " + (", ".join(sorted(shared)) or "none"))
+            item = shared[item["use"]]
+        expanded.append(item)
+    return {**data, "rules": expanded}
+
+
+def load_config(lesson: Lesson) -> MutationConfig:
+    """The lesson's ``mutation.yaml`` (an empty config when there is none), its ``- use: <id>`` rules taken from
+    the course's library (:func:`rule_library`).
+
+    Raises:
+        LessonFormatError: unreadable YAML, a schema violation or a ``use`` of no shared rule, naming the file
+            and field.
+    """
+    path = triage_path(lesson)
+    if not path.is_file():
+        return MutationConfig()
+    data = _read_yaml_mapping(path, "'rules', 'survivors' (and 'files')")
+    if not data:
+        return MutationConfig()
+    data = _expand_uses(path, data, lambda: rule_library(lesson.folder.parent))
     try:
         config = MutationConfig.model_validate(data)
     except ValidationError as exc:
