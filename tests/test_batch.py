@@ -98,6 +98,23 @@ def test_unreadable_and_unsafe_archives_are_not_gradable(tmp_path: Path) -> None
     assert not (tmp_path.parent / "escaped.txt").exists() and not Path("/tmp/ros2course-escaped.txt").exists()
 
 
+def test_a_workspace_without_src_is_graded_for_a_lesson_without_packages(tmp_path: Path) -> None:
+    """workspace-setup's hand-in is the workspace folder itself: one without src/ (its sources in source/) is
+    graded as check grades it, and loses src_folder, instead of being not gradable (dev validate --batch of its
+    fixture no-src-folder, fresh-clone rehearsal of f372114); a lesson with packages still refuses it."""
+    from ros2course.batch.job import _packages_needed  # noqa: PLC0415
+
+    entry = tmp_path / "bob"
+    (entry / "source").mkdir(parents=True)
+    (entry / "install").mkdir()
+    assert not _packages_needed(["workspace-setup"]) and _packages_needed(["workspace-setup", "parameters"])
+    assert _packages_needed(["no-such-lesson"])
+    ws = prepare(Submission("bob", entry), tmp_path / "scratch", packages_needed=False)
+    assert (ws / "source").is_dir() and (ws / "install").is_dir() and not (ws / "src").exists()
+    with pytest.raises(NotGradable):
+        prepare(Submission("bob", entry), tmp_path / "scratch-2")
+
+
 # --- gradebook exports ----------------------------------------------------------------------------
 
 def _record(student: str, status: str, checks: list[tuple[str, float, float, bool]], message: str = "") -> dict:

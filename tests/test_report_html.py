@@ -168,6 +168,8 @@ def _grade_the_class(root: Path) -> None:
     for name, own in zip(("gus_other", "hal_other"), OTHER_CODE):  # alike only in an earlier lesson's starter
         shutil.copytree(STARTER, subs / name / "src" / "pkg" / "minimalist_package")
         (subs / name / "src" / "pkg" / "own.py").write_text(own)
+    # graded, as check grades it: workspace-setup's hand-in is the workspace folder, and one without src/ loses
+    # src_folder (batch.archive.prepare's packages_needed); the broken zip is the class's not-gradable hand-in
     (subs / "bob_nosrc").mkdir()
     (subs / "cy_broken.zip").write_bytes(b"not a zip")
     run_batch(subs, [LESSON], out, jobs=2)
@@ -198,7 +200,7 @@ def test_report_from_a_real_batch(graded: tuple[Path, Path]) -> None:
     out, subs = graded
     text = render_report(out, submissions=subs)
     for part in ('id="class"', 'id="checks"', 'id="students"', 'id="similar"', "<svg", "not gradable",
-                 "timed out after 300 s", "no src/ folder", "olga_old", "2 line(s) could not be read",
+                 "timed out after 300 s", "unreadable .zip", "bob_nosrc", "olga_old", "2 line(s) could not be read",
                  "Isolation in effect", "Grading time: median"):
         assert part in text, part
     assert "zed_cut" not in text and "una_unknown" not in text

@@ -206,8 +206,14 @@ def _workspace_root(folder: Path) -> Path:
     return current
 
 
-def prepare(submission: Submission, scratch: Path) -> Path:
+def prepare(submission: Submission, scratch: Path, packages_needed: bool = True) -> Path:
     """Copy or extract ``submission`` into ``scratch``; returns the workspace root to grade.
+
+    ``packages_needed``: False when no lesson graded for it has packages of its own (workspace-setup, whose
+    hand-in is the workspace folder itself): a folder with neither ``src/`` nor a ``package.xml`` is then
+    graded as the workspace it is, as ``check`` grades it, and the lesson's checks say what it lacks (a
+    workspace without ``src/`` failed workspace-setup's src_folder under ``check`` and was "not gradable"
+    under ``grade``: dev validate --batch of no-src-folder).
 
     A ``build/`` or ``install/`` the submission holds is kept (workspace-setup grades it), but
     never trusted: the engine's build record is removed, so each lesson's packages are rebuilt
@@ -219,7 +225,7 @@ def prepare(submission: Submission, scratch: Path) -> Path:
 
     Raises:
         NotGradable: the entry has a problem, cannot be read, is an unsafe
-            archive, or holds neither ``src/`` nor any ``package.xml``.
+            archive, or holds neither ``src/`` nor any ``package.xml`` while ``packages_needed``.
     """
     if submission.problem:
         raise NotGradable(submission.problem)
@@ -253,6 +259,8 @@ def prepare(submission: Submission, scratch: Path) -> Path:
     elif _has_packages(root):
         ws.mkdir()
         root.rename(ws / "src")
+    elif not packages_needed:
+        root.rename(ws)
     else:
         raise NotGradable("neither a workspace (no src/ folder) nor a folder of ROS packages (no package.xml)",
                           "submit your workspace folder (with src/) or your package folders")

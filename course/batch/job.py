@@ -225,6 +225,20 @@ class JobResult:
     cancelled: bool = False
 
 
+def _packages_needed(lesson_ids: Sequence[str]) -> bool:
+    """Whether a lesson among ``lesson_ids`` has packages of its own (``packages:`` in its lesson.yaml), so that a
+    hand-in without any is not gradable for it (:func:`ros2course.batch.archive.prepare`); an id the catalog
+    does not know counts as needing them (the batch reports it elsewhere)."""
+    catalog = load_catalog()
+    for lesson_id in lesson_ids:
+        try:
+            if catalog.get(lesson_id).packages:
+                return True
+        except CourseError:
+            return True
+    return False
+
+
 def run_job(job: Job) -> JobResult:
     """Prepare, grade and clean up one submission; never raises for the submission's faults.
 
@@ -242,7 +256,8 @@ def run_job(job: Job) -> JobResult:
     records: list[LessonResult] = []
     try:
         try:
-            ws = prepare(Submission(job.student, Path(job.entry), job.problem), scratch)
+            ws = prepare(Submission(job.student, Path(job.entry), job.problem), scratch,
+                         packages_needed=_packages_needed(job.lessons))
         except NotGradable as exc:
             isolation = sandbox.Isolation.never_ran("not run (not gradable)")
             records = [unfinished_result(lesson, Status.NOT_GRADABLE, exc.message, exc.hint) for lesson in job.lessons]
