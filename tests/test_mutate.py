@@ -831,6 +831,30 @@ def test_mutmut_mutants_are_a_third_tools_edits_compiled_and_fixed_in_order(tmp_
     assert mut.MUTMUT in mut.FAMILIES
 
 
+def test_poodle_mutants_are_a_fourth_tools_edits_compiled_and_fixed_in_order(tmp_path: Path) -> None:
+    """The fourth family (fresh held-out pools once mutmut's are spent too): poodle's built-in mutators on a
+    Python file, one edit each, in poodle's order; operators the other three lack (a call or a subscript
+    replaced by None, a return of None); none that fails to compile; an edit another tool makes has its key."""
+    pytest.importorskip("poodle")
+    source = tmp_path / "node.py"
+    source.write_text("TOPIC = '/initialpose'\n\n\ndef ready(node, counts):\n    if counts[0] < 2:\n"
+                      "        node.get_logger().info('waiting')\n        return False\n    return counts[0] * 3 > 4\n")
+    made = mut.generate_poodle_mutants(tmp_path, "node.py")
+    assert made == mut.generate_poodle_mutants(tmp_path, "node.py") and len(made) >= 8
+    assert len({m.content for m in made}) == len(made)
+    for m in made:
+        compile(m.content, "node.py", "exec")
+        assert m.content != source.read_text() and m.file == "node.py" and m.line in (1, 5, 6, 7, 8)
+    edits = {(m.line, m.original.strip(), m.mutated.strip()) for m in made}
+    assert (6, "node.get_logger().info('waiting')", "None") in edits  # FuncCall: the call replaced by None
+    assert (5, "if counts[0] < 2:", "if None < 2:") in edits  # DictArray: the subscript replaced by None
+    assert (7, "return False", "return None") in edits  # Return
+    assert (7, "return False", "return True") in edits  # Keyword
+    same = mut.Mutant("node.py", 7, "        return False", "        return True", "")
+    assert same.key in {m.key for m in made}
+    assert mut.POODLE in mut.FAMILIES
+
+
 def test_a_family_other_than_universalmutator_draws_only_held_out_samples(tmp_path: Path) -> None:
     """--family: a bad name and a first sample from cosmic-ray are one-line errors before anything is graded."""
     from ros2course.dev.mutate import mutate_lessons

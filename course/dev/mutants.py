@@ -83,6 +83,7 @@ them together, never by its latest or best one.
 from __future__ import annotations
 
 import ast
+import copy
 import dataclasses
 import difflib
 import fnmatch
@@ -99,6 +100,7 @@ import shutil
 import subprocess
 import sys
 import tempfile
+import types
 import warnings
 import xml.etree.ElementTree as ET  # noqa: N817 - the standard alias
 from collections.abc import Callable, Iterable, Iterator
@@ -136,10 +138,11 @@ LANGUAGES = {".py": "python", ".c": "c", ".h": "c", ".cpp": "cpp", ".cc": "cpp",
 CHECKED_LANGUAGES = {"python"}
 #: Where mutants come from: universalmutator (every sample until issue 37's pools were spent, and every first
 #: sample), cosmic-ray and mutmut (held-out samples only: ``--held-out N --family cosmic-ray`` or ``mutmut``).
-UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT = "universalmutator", "cosmic-ray", "mutmut"
-FAMILIES = (UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT)
+UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT, POODLE = "universalmutator", "cosmic-ray", "mutmut", "poodle"
+FAMILIES = (UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT, POODLE)
 #: The module each family's tool is imported as.
-_FAMILY_MODULES = {UNIVERSALMUTATOR: "universalmutator", COSMIC_RAY: "cosmic_ray", MUTMUT: "mutmut"}
+_FAMILY_MODULES = {UNIVERSALMUTATOR: "universalmutator", COSMIC_RAY: "cosmic_ray", MUTMUT: "mutmut",
+                   POODLE: "poodle"}
 #: Files never mutated: generated, binary or bookkeeping.
 _SKIP_PARTS = {"__pycache__", "build", "install", "log", ".git"}
 _SKIP_SUFFIXES = {".pyc", ".png", ".jpg", ".gif", ".zip", ".gz", ".so", ".a", ".o", ".mcap", ".db3"}
@@ -963,7 +966,7 @@ def _keyed_mutant(rel: str, original: str, lines: list[str], content: str, numbe
 def generate_mutants(lesson: Lesson, reference: Path, config: MutationConfig | None = None,
                      family: str = UNIVERSALMUTATOR) -> list[Mutant]:
     """The mutants of every file of :func:`lesson_files`, file by file, made by ``family``'s tool
-    (:data:`FAMILIES`; cosmic-ray and mutmut mutate only the ``.py`` files among them).
+    (:data:`FAMILIES`; cosmic-ray, mutmut and poodle mutate only the ``.py`` files among them).
 
     Raises:
         MissingRequirement: the family's tool is not installed.
@@ -974,8 +977,9 @@ def generate_mutants(lesson: Lesson, reference: Path, config: MutationConfig | N
     if not files:
         raise CourseError(f"lesson {lesson.id} has no reference file to mutate",
                           f"name them with 'files:' in {triage_path(lesson)}")
-    if family in (COSMIC_RAY, MUTMUT):
-        generate = generate_cosmic_ray_mutants if family == COSMIC_RAY else generate_mutmut_mutants
+    if family in (COSMIC_RAY, MUTMUT, POODLE):
+        generate = {COSMIC_RAY: generate_cosmic_ray_mutants, MUTMUT: generate_mutmut_mutants,
+                    POODLE: generate_poodle_mutants}[family]
         return [m for rel in files if rel.endswith(".py") for m in generate(reference, rel)]
     return [m for rel in files for m in generate_file_mutants(reference, rel)]
 
@@ -1069,6 +1073,44 @@ def generate_mutmut_mutants(reference: Path, rel: str) -> list[Mutant]:
     edits = (mutate(Context(source=original, mutation_id=mutation_id, filename=rel, dict_synonyms=[]))[0]
              for mutation_id in list_mutations(Context(source=original, filename=rel, dict_synonyms=[])))
     return _compiled_mutants(rel, original, edits)
+
+
+def generate_poodle_mutants(reference: Path, rel: str) -> list[Mutant]:
+    """Every mutant poodle's built-in mutators make of the Python file ``reference/rel``, in poodle's own order
+    (its ``builtin_mutators``, each mutator's mutations in the order it visits the syntax tree), one edit each,
+    applied as poodle applies them (``poodle.util.mutate_lines``: the node's source span replaced by the
+    mutator's text).
+
+    The fourth family (issue 37), for lessons whose universalmutator, cosmic-ray and mutmut pools are all spent:
+    a fourth tool (Python ``ast`` visitors) with operators none of the three has: a call replaced by ``None``,
+    a subscript replaced by ``None``, a ``return`` of ``None``, a decorator removed, ``None`` replaced by
+    ``' '``, an augmented assignment made plain. Every built-in mutator is used with poodle's default options
+    (``mutator_opts`` empty: operator level ``std``; its one default filter leaves ``__name__ == '__main__'``
+    alone). Dropped, as for the other families (:func:`_compiled_mutants`): a mutant that does not compile,
+    that compiles to the original's bytecode, or that an earlier mutation already made; an edit another tool
+    also makes has the same :attr:`Mutant.key`, so a held-out draw never takes it twice.
+
+    Raises:
+        MissingRequirement: poodle is not installed.
+    """
+    require_tool(POODLE)
+    from poodle.mutate import builtin_mutators  # noqa: PLC0415 - optional: the mutate extra
+    from poodle.util import mutate_lines  # noqa: PLC0415 - optional: the mutate extra
+
+    original = (reference / rel).read_text(encoding="utf-8")
+    lines = original.splitlines(keepends=True)
+    tree = ast.parse(original, rel)
+    # poodle's mutators read one thing of its PoodleConfig, ``mutator_opts``; building a whole PoodleConfig
+    # (poodle.config.build_config) would read a poodle.toml or pyproject.toml from the working directory.
+    options = types.SimpleNamespace(mutator_opts={})
+
+    def edits() -> Iterator[str]:
+        for mutator_class in builtin_mutators.values():
+            mutator = mutator_class(config=options, echo=lambda *_, **__: None)
+            for mutation in mutator.create_mutations(parsed_ast=copy.deepcopy(tree), file_lines=list(lines)):
+                yield "".join(mutate_lines(mutation, lines))
+
+    return _compiled_mutants(rel, original, edits())
 
 
 def sample_mutants(mutants: list[Mutant], count: int | None, seed: int) -> list[Mutant]:
