@@ -788,20 +788,29 @@ def test_a_second_held_out_sample_leaves_out_every_mutant_an_earlier_one_showed(
     assert not fifth
 
 
+def _family_mutants(generate, folder: Path, text: str, lines: tuple[int, ...]) -> tuple[list, set]:
+    """A family's mutants of ``text`` (written to ``folder/node.py``), checked as every family's must be: the same
+    list on a second call, no two alike, each compiling, changing the file, on one of ``lines``; with the
+    ``(line, original, mutated)`` edits (stripped) they make."""
+    (folder / "node.py").write_text(text)
+    made = generate(folder, "node.py")
+    assert made == generate(folder, "node.py")
+    assert len({m.content for m in made}) == len(made)
+    for m in made:
+        compile(m.content, "node.py", "exec")
+        assert m.content != text and m.file == "node.py" and m.line in lines
+    return made, {(m.line, m.original.strip(), m.mutated.strip()) for m in made}
+
+
 def test_cosmic_ray_mutants_are_another_tools_edits_compiled_and_fixed_in_order(tmp_path: Path) -> None:
     """The second family (issue 37: fresh held-out pools): cosmic-ray's core operators on a Python file, in a
     fixed order; none that fails to compile or compiles to the original's bytecode; an edit universalmutator
     also makes has the same key, so no sample draws it twice."""
     pytest.importorskip("cosmic_ray")
-    source = tmp_path / "node.py"
-    source.write_text("def ready(count):\n    if count == 2:\n        return True\n    return count * 3 > 4\n")
-    made = mut.generate_cosmic_ray_mutants(tmp_path, "node.py")
-    assert made == mut.generate_cosmic_ray_mutants(tmp_path, "node.py") and len(made) > 10
-    assert len({m.content for m in made}) == len(made)
-    for m in made:
-        compile(m.content, "node.py", "exec")
-        assert m.content != source.read_text() and m.file == "node.py" and m.line in (2, 3, 4)
-    edits = {(m.line, m.original.strip(), m.mutated.strip()) for m in made}
+    made, edits = _family_mutants(mut.generate_cosmic_ray_mutants, tmp_path,
+                                  "def ready(count):\n    if count == 2:\n        return True\n    return count * 3 > 4\n",
+                                  (2, 3, 4))
+    assert len(made) > 10
     assert (2, "if count == 2:", "if count != 2:") in edits  # ReplaceComparisonOperator_Eq_NotEq
     assert (3, "return True", "return False") in edits  # ReplaceTrueWithFalse
     same = mut.Mutant("node.py", 2, "    if count == 2:", "    if count != 2:", "")
@@ -813,17 +822,11 @@ def test_mutmut_mutants_are_a_third_tools_edits_compiled_and_fixed_in_order(tmp_
     Python file, one edit each, in mutmut's order; none that fails to compile or compiles to the original's
     bytecode; an edit another tool also makes has the same key."""
     pytest.importorskip("mutmut")
-    source = tmp_path / "node.py"
-    source.write_text("TOPIC = '/initialpose'\n\n\ndef ready(count):\n    if count < 2:\n        return False\n"
-                      "    return count * 3 > 4\n")
-    made = mut.generate_mutmut_mutants(tmp_path, "node.py")
-    assert made == mut.generate_mutmut_mutants(tmp_path, "node.py") and len(made) >= 6
-    assert len({m.content for m in made}) == len(made)
+    text = "TOPIC = '/initialpose'\n\n\ndef ready(count):\n    if count < 2:\n        return False\n    return count * 3 > 4\n"
+    made, edits = _family_mutants(mut.generate_mutmut_mutants, tmp_path, text, (1, 5, 6, 7))
+    assert len(made) >= 6
     for m in made:
-        compile(m.content, "node.py", "exec")
-        assert m.content != source.read_text() and m.file == "node.py" and m.line in (1, 5, 6, 7)
-        assert sum(a != b for a, b in zip(m.content.splitlines(), source.read_text().splitlines())) == 1
-    edits = {(m.line, m.original.strip(), m.mutated.strip()) for m in made}
+        assert sum(a != b for a, b in zip(m.content.splitlines(), text.splitlines())) == 1
     assert (1, "TOPIC = '/initialpose'", "TOPIC = 'XX/initialposeXX'") in edits  # mutmut's own string mutation
     assert (6, "return False", "return True") in edits
     same = mut.Mutant("node.py", 6, "        return False", "        return True", "")
@@ -836,16 +839,11 @@ def test_poodle_mutants_are_a_fourth_tools_edits_compiled_and_fixed_in_order(tmp
     Python file, one edit each, in poodle's order; operators the other three lack (a call or a subscript
     replaced by None, a return of None); none that fails to compile; an edit another tool makes has its key."""
     pytest.importorskip("poodle")
-    source = tmp_path / "node.py"
-    source.write_text("TOPIC = '/initialpose'\n\n\ndef ready(node, counts):\n    if counts[0] < 2:\n"
-                      "        node.get_logger().info('waiting')\n        return False\n    return counts[0] * 3 > 4\n")
-    made = mut.generate_poodle_mutants(tmp_path, "node.py")
-    assert made == mut.generate_poodle_mutants(tmp_path, "node.py") and len(made) >= 8
-    assert len({m.content for m in made}) == len(made)
-    for m in made:
-        compile(m.content, "node.py", "exec")
-        assert m.content != source.read_text() and m.file == "node.py" and m.line in (1, 5, 6, 7, 8)
-    edits = {(m.line, m.original.strip(), m.mutated.strip()) for m in made}
+    made, edits = _family_mutants(mut.generate_poodle_mutants, tmp_path,
+                                  "TOPIC = '/initialpose'\n\n\ndef ready(node, counts):\n    if counts[0] < 2:\n"
+                                  "        node.get_logger().info('waiting')\n        return False\n"
+                                  "    return counts[0] * 3 > 4\n", (1, 5, 6, 7, 8))
+    assert len(made) >= 8
     assert (6, "node.get_logger().info('waiting')", "None") in edits  # FuncCall: the call replaced by None
     assert (5, "if counts[0] < 2:", "if None < 2:") in edits  # DictArray: the subscript replaced by None
     assert (7, "return False", "return None") in edits  # Return

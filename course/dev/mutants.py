@@ -137,7 +137,8 @@ LANGUAGES = {".py": "python", ".c": "c", ".h": "c", ".cpp": "cpp", ".cc": "cpp",
 #: C/C++ cannot be compiled alone (ROS headers): their broken mutants are counted as killed by build.
 CHECKED_LANGUAGES = {"python"}
 #: Where mutants come from: universalmutator (every sample until issue 37's pools were spent, and every first
-#: sample), cosmic-ray and mutmut (held-out samples only: ``--held-out N --family cosmic-ray`` or ``mutmut``).
+#: sample), cosmic-ray, mutmut and poodle (held-out samples only: ``--held-out N --family cosmic-ray``, ``mutmut``
+#: or ``poodle``).
 UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT, POODLE = "universalmutator", "cosmic-ray", "mutmut", "poodle"
 FAMILIES = (UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT, POODLE)
 #: The module each family's tool is imported as.
@@ -977,10 +978,10 @@ def generate_mutants(lesson: Lesson, reference: Path, config: MutationConfig | N
     if not files:
         raise CourseError(f"lesson {lesson.id} has no reference file to mutate",
                           f"name them with 'files:' in {triage_path(lesson)}")
-    if family in (COSMIC_RAY, MUTMUT, POODLE):
-        generate = {COSMIC_RAY: generate_cosmic_ray_mutants, MUTMUT: generate_mutmut_mutants,
-                    POODLE: generate_poodle_mutants}[family]
-        return [m for rel in files if rel.endswith(".py") for m in generate(reference, rel)]
+    python_only = {COSMIC_RAY: generate_cosmic_ray_mutants, MUTMUT: generate_mutmut_mutants,
+                   POODLE: generate_poodle_mutants}.get(family)
+    if python_only is not None:
+        return [m for rel in files if rel.endswith(".py") for m in python_only(reference, rel)]
     return [m for rel in files for m in generate_file_mutants(reference, rel)]
 
 
