@@ -8,7 +8,7 @@ Kept apart from the kit so reading a course manifest does not import the kit (st
 #: kit no longer exports colcon_command, overlay_env and sandbox_run, a grader reaches colcon and the
 #: sourced workspace through its session, GradingSession.run_colcon and overlay(); kit.testing.Mutant is
 #: DeclaredMutant, apart from dev mutate's generated Mutant)
-API_VERSION = "2.9"  # 2.1: kit.scripts.run_script_first (discovery steps, issue 37); 2.2: kit.rate(median=...);
+API_VERSION = "2.10"  # 2.1: kit.scripts.run_script_first (discovery steps, issue 37); 2.2: kit.rate(median=...);
 # 2.3: GradingSession.random (a grader's probes drawn per submission content); 2.4 (issue 38): kit.Session (the
 # Protocol graders are typed with), kit.services and kit.learner_files (steps two lessons used, from graders/),
 # kit.checks.spins + kit.params.record_spins, kit.sigint_exit(again=...) (a second run after rclpy's race)
@@ -23,3 +23,5 @@ API_VERSION = "2.9"  # 2.1: kit.scripts.run_script_first (discovery steps, issue
 # 2.9: kit.ctrl_c_once_it_logs (a waiting program's Ctrl+C: the actions client's, Gazebo's and Nav2's own copies);
 # sigint_exit judges a fresh run that exited before it was ready (it was skipped, and the race counted as clean);
 # run.process.rclpy_shutdown_race knows rclpy's global-executor race; kit.topics_services.fields judges the order
+# 2.10: kit.sigint_exit presses Ctrl+C while the node's main thread waits (run.process.LearnerProcess.wait_idle:
+# a press during a callback ends rclpy.spin() with no ExternalShutdownException, and the Humble habit passed)

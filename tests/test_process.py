@@ -148,6 +148,36 @@ def test_ctrl_c_reaches_a_program_when_ros2course_itself_started_with_sigint_ign
     assert "KeyboardInterrupt" in report.traceback
 
 
+def test_wait_idle_waits_for_a_main_thread_asleep(tmp_path):
+    """A program whose main thread waits is idle at once; one that never waits (a busy loop in its main thread,
+    or in a child of its group, as a launched node would be) is not, and the wait ends at its timeout."""
+    sleeper = python_learner(tmp_path, "sleeper", """
+        import time
+        print("ready", flush=True)
+        time.sleep(60)
+    """)
+    busy = python_learner(tmp_path, "busy", """
+        print("ready", flush=True)
+        while True:
+            pass
+    """)
+    parent = python_learner(tmp_path, "parent", """
+        import subprocess, sys
+        child = subprocess.Popen([sys.executable, "-c", "print('ready', flush=True)\\nwhile True: pass"])
+        child.wait()
+    """)
+    try:
+        for proc in (sleeper, busy, parent):
+            wait_ready(proc)
+        assert sleeper.wait_idle(timeout=5.0)
+        assert not busy.wait_idle(timeout=0.3)
+        assert not parent.wait_idle(timeout=0.3)
+    finally:
+        for proc in (sleeper, busy, parent):
+            proc.stop(sigint_timeout=0.5, sigterm_timeout=2.0)
+    assert not sleeper.wait_idle(timeout=0.3)  # gone: nothing to wait for
+
+
 def test_ignores_sigint_escalates_to_sigterm(tmp_path):
     proc = python_learner(tmp_path, "deaf_int", """
         import signal, time

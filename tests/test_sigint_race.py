@@ -54,6 +54,10 @@ class StandInProcess:
         self.running = False
         return True
 
+    def wait_idle(self) -> bool:
+        """Its main thread waits at once (the stand-in has none)."""
+        return True
+
     def stop(self, sigint_timeout: float = 5.0, sigterm_timeout: float = 2.0) -> ExitReport:
         return ExitReport(self.returncode, None, 0.0, self.traceback)
 

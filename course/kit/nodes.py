@@ -227,6 +227,11 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
       very error on every run (sas held-out seed 28). Without ``again`` that
       exit counts as clean.
 
+    The first press waits (at most 1 s) until the node's main thread is asleep, i.e. its executor waits
+    (:meth:`~ros2course.run.process.LearnerProcess.wait_idle`): a Ctrl+C that lands while a callback runs
+    ends ``spin()`` with no ``ExternalShutdownException``, so a node that catches only ``KeyboardInterrupt``
+    passed in that run (CI of d9e731d, use-python-library ``humble-keyboardinterrupt-only``).
+
     A node that ignores Ctrl+C still fails (it ignores the second one too).
     A program that starts its node again after Ctrl+C (``main()`` called twice,
     e.g. once at import and once from the entry point) also ends only on the
@@ -248,6 +253,7 @@ def sigint_exit(s: Session, check_id: str, proc: LearnerProcess | ProgramRun,
                         f"SIGINT{last}", expected, "the node must keep running until Ctrl+C")
     presses = 0
     with s.phase("stop"):
+        proc.wait_idle()  # pressed while the node waits, as a person's Ctrl+C is (see LearnerProcess.wait_idle)
         begin = time.monotonic()
         for wait in ((sigint_timeout / 2, sigint_timeout / 2) if second_press else (sigint_timeout,)):
             presses += 1
