@@ -199,9 +199,9 @@ def aborted_run(s: Session, action: Any, path: Any) -> None:
 
 
 def canceled_run(s: Session, action: Any, path: Any) -> None:
-    """logs_canceled: the grader cancels the goal after two feedback messages (the server sends the cancel
-    request itself, :class:`ros2course.kit.actions.Script`), so it ends CANCELED."""
-    ended_run(s, action, path, act.CANCELED, "logs_canceled")
+    """logs_canceled, canceled_ends: the grader cancels the goal after two feedback messages (the server sends the
+    cancel request itself, :class:`ros2course.kit.actions.Script`), so it ends CANCELED."""
+    ended_run(s, action, path, act.CANCELED, "logs_canceled", "canceled_ends")
 
 
 def ended_run(s: Session, action: Any, path: Any, status: int, check_id: str, ends_id: str | None = None) -> None:

@@ -496,7 +496,8 @@ def preempt(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNo
     for attempt in range(CANCEL_ATTEMPTS):
         far = _away_from(s.random, places, PREEMPT_DISTANCE)
         back = (round(places[0][0], 3), round(places[0][1], 3))
-        expected = ("the first goal ABORTED once the second is accepted; the second SUCCEEDED, final_position "
+        expected = ("the first goal ABORTED once the second is accepted (a goal rejected meanwhile leaves it running); "
+                    "the second starts where the first left the point and SUCCEEDED, final_position "
                     f"{_show(back)} ± {POSITION_TOLERANCE} m")
         first = client.send(_goal(action, *far))
         if not first.accepted:
@@ -505,6 +506,7 @@ def preempt(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNo
             return []
         # the first try waits three feedback messages (the point moved); a try again sends at the first
         _wait_feedback(s, client, first, 1 if attempt else 3, node, 3.0)
+        refused = _rejected_meanwhile(s, action, client, first, places, far, node)
         second = client.send(_goal(action, *back))
         client.wait_result(first, PREEMPT_DISTANCE / SPEED + GOAL_SLACK, abort=node.ended)
         client.wait_result(second, PREEMPT_DISTANCE / SPEED + GOAL_SLACK, abort=node.ended)
@@ -519,12 +521,20 @@ def preempt(s: Session, action: Any, client: act.GoalClient, node: kit.StartedNo
                           "second goal was sent")
         places = [back]
     observed = [f"first goal {_show(far)}: {act.status_name(first.status)}"]
+    ok = True
+    if refused:
+        observed.append(refused)
+        ok = False
     if second.accepted:
         final = _xy(second.result.final_position) if second.result is not None else None
         observed.append(f"second goal {_show(back)}: {act.status_name(second.status)}"
                         + (f" at {_show(final)}" if final else ""))
-        ok = (first.status == act.ABORTED and second.status == act.SUCCEEDED and final is not None
-              and math.dist(final, back) <= POSITION_TOLERANCE)
+        ok = ok and (first.status == act.ABORTED and second.status == act.SUCCEEDED and final is not None
+                     and math.dist(final, back) <= POSITION_TOLERANCE)
+        lost = _progress_lost(client, first, second, places, far)
+        if lost:
+            observed.append(lost)
+            ok = False
         # a first goal that succeeded before the second was accepted did not run alongside it
         if first.status == act.SUCCEEDED and first.ended is not None and first.ended <= second.sent + PERIOD:
             observed.append("the first goal ended before the second was accepted (was the server able to take "
@@ -562,6 +572,84 @@ def cli(s: Session, node: kit.StartedNode, start: tuple[float, float]) -> None:
                            "\"{desired_position: {x: $1, y: $2}}\"")
     if sent:
         _sequence(s, run)
+
+
+#: Metres from every point of the executing goal's way to the goal :func:`_rejected_meanwhile` sends: well over
+#: MAX_DISTANCE, wherever on its way the point is.
+REJECTED_MARGIN = MAX_DISTANCE + 1.5
+
+
+def _to_segment(point: tuple[float, float], a: tuple[float, float], b: tuple[float, float]) -> float:
+    """Metres from ``point`` to the segment from ``a`` to ``b``."""
+    ux, uy = b[0] - a[0], b[1] - a[1]
+    length2 = ux * ux + uy * uy
+    t = 0.0 if not length2 else max(0.0, min(1.0, ((point[0] - a[0]) * ux + (point[1] - a[1]) * uy) / length2))
+    return math.dist(point, (a[0] + t * ux, a[1] + t * uy))
+
+
+def _rejected_meanwhile(s: Session, action: Any, client: act.GoalClient, running: act.Goal,
+                        places: list[tuple[float, float]], far: tuple[float, float], node: kit.StartedNode) -> str:
+    """While ``running`` (a goal from one of ``places`` to ``far``) executes, send a goal the server must reject
+    (over :data:`REJECTED_MARGIN` m from every point of that way); ``running`` must go on: the lesson aborts the
+    old goal when a new one is *accepted*, and a rejected goal never runs (the independent review of stop 82
+    got full marks with a server that aborted the executing goal in goal_callback, before deciding).
+
+    Returns what was wrong, or "" (also when the probe is not sent: ``rejects`` failed, so a goal this far may
+    be accepted and would move the point, or no such goal is found, or ``running`` already ended).
+    """
+    if not _passed(s, "rejects") or not running.accepted or running.status is not None:
+        return ""
+    a = places[0]
+    away = math.dist(a, far) or 1.0
+    target = (round(a[0] - (far[0] - a[0]) / away * (REJECTED_MARGIN + 0.5), 3),
+              round(a[1] - (far[1] - a[1]) / away * (REJECTED_MARGIN + 0.5), 3))
+    if min(_to_segment(target, p, far) for p in places) < REJECTED_MARGIN:
+        return ""
+    probe = client.send(_goal(action, *target))
+    if probe.accepted:  # judged by rejects; cancelled at once, so that the preemption is judged as before
+        client.cancel(probe)
+        client.wait_result(probe, 1.0, abort=node.ended)
+        return ""
+    with s.phase("observe"):  # a server that aborts in goal_callback has done so before it answered
+        client.wait_result(running, 2 * PERIOD, abort=node.ended)
+    if running.status is None:
+        return ""
+    return (f"the goal {_show(target)}, sent while the first executed, was rejected, and the first then ended "
+            f"{act.status_name(running.status)}: a rejected goal must leave the executing one running (abort the "
+            "old goal in handle_accepted_callback, not in goal_callback)")
+
+
+def _progress_lost(client: act.GoalClient, first: act.Goal, second: act.Goal, places: list[tuple[float, float]],
+                   far: tuple[float, float]) -> str:
+    """What shows that the aborted ``first`` goal's progress was lost, or "": ``second`` (back to ``places[0]``)
+    must start from where ``first`` left the point (the lesson: the point stays where each goal leaves it). By
+    ``first``'s last feedback the point was ``d`` m short of ``far`` on its way from one of ``places``; the
+    second goal's first feedback must then say nearly as far from its goal (two steps of slack: the two goals
+    may overlap by a step). Judged only when that way left the point over 0.35 m from the second goal (the
+    independent review of stop 82 got full marks with a server that restored the point an aborted goal
+    started from, so a goal back there 'succeeded' without moving)."""
+    if first.status != act.ABORTED or second.status != act.SUCCEEDED:
+        return ""
+    left = [d for _, d in _distances(client, first)]
+    went = [d for _, d in _distances(client, second)]
+    if not left or not all(math.isfinite(d) for d in left + went):
+        return ""
+    went = went or [0.0]  # it succeeded without a feedback message: it had nowhere to go
+    back = places[0]
+    span = math.dist(back, far) or 1.0
+    ahead = []
+    for p in places:
+        length = math.dist(p, far) or 1.0
+        t = min(left) / length  # the point: min(left) m short of far, on the way from p
+        ahead.append(math.dist((far[0] + (p[0] - far[0]) * t, far[1] + (p[1] - far[1]) * t), back))
+    gap = min(ahead)
+    if gap < 0.35 or span < 0.35:
+        return ""
+    if went[0] >= gap - 2 * STEP_TOLERANCE:
+        return ""
+    return (f"the first goal's feedback had left the point about {gap:.2f} m from {_show(back)}, but the second "
+            f"goal's first feedback said {went[0]:.3f} m to go: the aborted goal's progress was lost (the point "
+            "must stay where each goal leaves it, an aborted one too)")
 
 
 def _sequence(s: Session, run: Any) -> None:

@@ -118,16 +118,20 @@ class Lifecycle:
             return None, f"{exc}; {kit.process_state(self.node.proc)}"
 
 
-def shutdown_any_state(s: Session, path: Any, executable: str, name: str) -> None:
+def shutdown_any_state(s: Session, path: Any, executable: str, name: str, topic: str) -> None:
     """Record ``shutdown_any_state``: two more runs of the node, each in a graph of its own, started at once.
 
     One is shut down straight from unconfigured (its ``on_shutdown`` runs before any ``on_configure``:
     nothing was created yet), the other configured, then shut down from inactive. Each must answer
-    ``success: true`` and reach finalized, as ``ros2 lifecycle set <node> shutdown`` would.
+    ``success: true`` and reach finalized, as ``ros2 lifecycle set <node> shutdown`` would; the one shut down
+    from inactive must also have destroyed its publisher of ``topic`` (it leaves the graph within
+    ``GONE_TIMEOUT`` s): the lesson's on_shutdown destroys what exists, whatever the state it comes from
+    (the independent review of stop 82 got full marks with an on_shutdown that destroyed only when active).
 
     Args:
         path: the executable's path (``kit.executable``); executable: its name (names each run's log).
         name: the node's name (no leading ``/``), the same in every run.
+        topic: the topic the node publishes once configured (``/heartbeat``).
     """
     runs = []
     for origin, steps in OTHER_SHUTDOWNS:
@@ -162,14 +166,26 @@ def shutdown_any_state(s: Session, path: Any, executable: str, name: str) -> Non
         success, why = life.change(SHUTDOWN_FROM[origin])
         final, final_label = life.state()
         done = bool(success) and final == FINALIZED
+        kept = ""
+        if done and origin == INACTIVE:  # configure made the publisher: shutdown must destroy it
+
+            def gone(graph: Any = graph) -> bool:
+                return topic not in ts.endpoints(graph, name, "publishers")
+
+            with s.phase("observe"):
+                wait_until(gone, GONE_TIMEOUT, interval=0.05, abort=node.ended)
+            if not gone():
+                done = False
+                kept = (f"; {GONE_TIMEOUT:.0f} s later it still publishes {topic}: on_shutdown from inactive "
+                        "destroyed nothing")
         ok = ok and done
         observed.append(f"from {origin_label}" + (f" ({', '.join(said)})" if said else "") + ": " + (
             f"no answer to shutdown: {why}" if success is None else
             f"shutdown {'succeeded' if success else 'failed (success: false)'}, the node is now {final_label} [{final}]"
-            + ("" if done else f"; {kit.process_state(node.proc)}")))
+            + kept + ("" if done or kept else f"; {kit.process_state(node.proc)}")))
     s.record("shutdown_any_state", ok and judged > 0, "; ".join(observed),
              "ros2 lifecycle set <node> shutdown: 'Transition successful' and finalized [4], from unconfigured "
-             "(a node just started) and from inactive (after configure)")
+             f"(a node just started) and from inactive (after configure; then no publisher of {topic} left)")
 
 
 def managed(s: Session, life: Lifecycle) -> float:

@@ -82,19 +82,21 @@ def random_point(about_life: bool) -> tuple[float, float, float]:
 
 
 class PointOracle(MysteryNode):
-    """A node ``/point_oracle_NNN`` of the grader serving :data:`SERVICE` until the part ends.
+    """A node ``/oracle_NNN`` of the grader serving :data:`SERVICE` until the part ends.
 
     Args:
         s: the grading session (the node joins ``s.ros``, the check's domain).
         srv_type: the WhatIsThePoint class (``s.interface_type("package_with_interfaces", "srv", "WhatIsThePoint")``).
 
     Attributes:
-        name: the node's random name (its parameter services, e.g. ``/point_oracle_417/list_parameters``,
+        name: the node's random name (its parameter services, e.g. ``/oracle_417/list_parameters``,
             show in ``ros2 service list``).
     """
 
     def __init__(self, s: Session, srv_type: type) -> None:
-        self.name = f"point_oracle_{_RANDOM.randrange(100, 1000)}"
+        # no "point" in it: a list filtered with | grep point would keep its services too and pass as the whole
+        # list (the independent review of stop 82)
+        self.name = f"oracle_{_RANDOM.randrange(100, 1000)}"
         super().__init__(s, self.name, parameter_services=True)
         self._lock = threading.Lock()
         self._calls: list[Call] = []

@@ -235,6 +235,14 @@ class Feed:
         self._timer = graph.node.create_timer(period, self._tick)
         s.on_close(self.close)
 
+    def publish_config(self) -> str:
+        """Publish a second configuration, ``units: <another random unit>``, on the latched topic, as a
+        ``ros2 param set`` of the lesson's configuration publisher would; returns its text (``config`` stays
+        the first one's)."""
+        text = f"units: {random_units(other_than=[self.config.removeprefix('units: ')])}"
+        self._config.publish(self._config.msg_type(data=text))
+        return text
+
     def _tick(self) -> None:
         if self._closed.is_set():
             return
@@ -586,6 +594,10 @@ def grade_monitor(s: Session, temperature: type, string: type, package: str, exe
              + ("; it appeared on stdout only (print() instead of the logger?)" if on_stdout and not config_logged
                 else ""),
              f"a log record containing 'Config: {feed.config}'")
+    # the lesson: 'Config: <data>' for every configuration, not only the one it found on joining (the independent
+    # review of stop 82 got full marks with a monitor that logged its first configuration only); published now,
+    # its record is looked for after the readings' window, which it spends no time of its own
+    second = feed.publish_config() if config_logged else None
     readings = logged_readings()
     s.record("monitor_logs_sensor", len(readings) >= logged,
              f"{len(readings)} of the grader's {len(feed.published())} readings found in the node's log"
@@ -595,6 +607,14 @@ def grade_monitor(s: Session, temperature: type, string: type, package: str, exe
              fraction=min(1.0, len(readings) / logged))
     if readings:
         _logs_every_reading(s, feed, logged_readings, node, period)
+    if second is not None:
+        with s.phase("observe"):
+            wait_for(lambda: any(f"Config: {second}" in t for t in records()), LATE_DELIVERY, abort=node.ended)
+        texts = [t for t in records() if "Config:" in t]
+        s.record("monitor_logs_each_config", any(f"Config: {second}" in t for t in texts),
+                 f"the grader then published {second!r} while the node ran; its 'Config:' records: "
+                 + (" | ".join(t.strip()[:60] for t in texts[-3:]) or "none"),
+                 f"a record containing 'Config: {second}' too: every configuration is logged, not only the first")
 
 
 #: Consecutive readings (from the first one the monitor logged) of which it must log at least

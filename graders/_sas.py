@@ -164,6 +164,9 @@ def launch_file(s: Session, check_id: str, driver: SasDriver, name: str) -> bool
         problems.append(f"package={action.package!r}")
     if action.name != driver.node:
         problems.append(f"name={action.name!r}")
+    if (action.namespace or "").strip("/"):  # the lesson's graph: /myrobot_1/get/joint_states, no namespace above it
+        problems.append(f"namespace={action.namespace!r} puts the topics under /{action.namespace.strip('/')}/; the "
+                        "lesson's graph has none")
     params: dict[str, Any] = {}
     for item in action.parameters:
         if isinstance(item, dict):

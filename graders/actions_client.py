@@ -73,6 +73,9 @@ CHECKS = [
           "name every status the result response can carry (GoalStatus: 4 SUCCEEDED, 5 CANCELED, 6 ABORTED): a "
           "goal another client cancels ends CANCELED, and the log must not call it anything else", needs=RUN,
           part="canceled"),
+    Check("canceled_ends", "After a canceled goal too, the client ends by itself: exit code 0, no traceback", 1,
+          "end whatever the status: set the flag that ends main() in the result callback for every status "
+          "(SUCCEEDED, CANCELED, ABORTED), not only for the ones you expect", needs=RUN, part="canceled"),
     checks.ctrl_c("sigint_exit", "the client while it waits for the server", 1, needs=RUN, part="interrupted"),
     Check("handles_rejection", "A rejected goal is logged as rejected, and the client ends cleanly", 2,
           "in goal_response_callback: if not goal_handle.accepted: log that the goal was rejected, set the flag "

@@ -27,7 +27,15 @@ VARIABLE = dds.PROFILE_VARIABLES[0]
 SHELLS = ("/bin/bash", "/bin/sh", "/usr/bin/bash", "/usr/bin/sh", "bash", "sh")
 #: What the lesson's two services run (tutorial ch. 32.4.2): a talker on /chatter, and a listener of it.
 TALKER = re.compile(r"\bros2\s+run\s+demo_nodes_(cpp|py)\s+talker\b|\bros2\s+topic\s+pub\s.*?/?\bchatter\b")
-LISTENER = re.compile(r"\bros2\s+topic\s+echo\s.*?/?\bchatter\b|\bros2\s+run\s+demo_nodes_(cpp|py)\s+listener\b")
+#: The listener: `ros2 topic echo /chatter`, which task 2 names (the independent review of stop 82 got full marks with
+#: demo_nodes_cpp's listener, which the check's own title did not accept)
+LISTENER = re.compile(r"\bros2\s+topic\s+echo\s.*?/?\bchatter\b")
+#: The variable with which Jazzy's RMW picks the transports itself (the lesson: leave it unset in a container).
+DISCOVERY_RANGE = "ROS_AUTOMATIC_DISCOVERY_RANGE"
+#: ROS 2 distributions other than Jazzy, as an image's name or tag may say (ROS 2 docs, Distributions): the lesson
+#: takes "any image with ROS 2 Jazzy".
+OTHER_DISTROS = ("ardent", "bouncy", "crystal", "dashing", "eloquent", "foxy", "galactic", "humble", "iron",
+                 "kilted", "rolling")
 #: The largest ROS domain id (ROS 2 docs, "The ROS_DOMAIN_ID": 0-232; 0-101 are safe on every platform).
 MAX_DOMAIN_ID = 232
 
@@ -89,9 +97,11 @@ def grade_compose(s: Session) -> None:
     services, error = dds.read_compose(s.workspace_root / COMPOSE)
     images = {name: service.get("image") for name, service in services.items()}
     one_image = len(services) >= 2 and len(set(images.values())) == 1 and None not in images.values()
-    s.record("compose_services", not error and one_image,
-             error or ", ".join(f"{n}: image {i!r}" for n, i in images.items()) or "no service",
-             f"{COMPOSE} has two services using one image")
+    other = sorted({d for i in images.values() for d in OTHER_DISTROS if re.search(rf"\b{d}\b", str(i or ""))})
+    s.record("compose_services", not error and one_image and not other,
+             (error or ", ".join(f"{n}: image {i!r}" for n, i in images.items()) or "no service")
+             + (f": an image of ROS 2 {other[0].capitalize()}, not Jazzy" if other and not error else ""),
+             f"{COMPOSE} has two services using one image with ROS 2 Jazzy")
     wrong = [n for n, svc in services.items() if str(svc.get("stop_signal", "")).upper() not in ("SIGINT", "INT", "2")]
     s.record("compose_stop_signal", not wrong and bool(services),
              f"no `stop_signal: SIGINT` in {', '.join(wrong)}" if wrong else "every service stops with SIGINT",
@@ -170,6 +180,10 @@ def _profile_problem(service: dict, compose: Path) -> str:
                if os.path.normpath(compose.parent / os.path.expanduser(source)) == wanted]
     env = dds.environment(service)
     value = env.get(VARIABLE)
+    absolute = sorted(source for source in named.values() if source.startswith(("/", "~")))
+    if absolute:  # the lesson: "a path relative to the compose file"; an absolute one is only this machine's
+        return (f"the profile is mounted from the absolute host path {absolute[0]}: it exists on your machine "
+                "only; give it relative to the compose file, ./fastrtps_profile.xml")
     if named and not mounted:
         return (f"the profile is mounted from {', '.join(sorted(set(named.values())))}, which from {COMPOSE}'s "
                 f"folder is not {PROFILE} (a relative path starts at the compose file: ./fastrtps_profile.xml)")
@@ -181,4 +195,7 @@ def _profile_problem(service: dict, compose: Path) -> str:
                                            if other else "")
     if value not in mounted:
         return f"{VARIABLE}={value}, but the profile is mounted at {', '.join(mounted)}"
+    if env.get(DISCOVERY_RANGE, "").strip().upper() == "LOCALHOST":  # the lesson's "Where the tutorial differs"
+        return (f"{DISCOVERY_RANGE}=LOCALHOST: Jazzy's RMW then chooses the transports itself (shared memory on) "
+                "whatever the profile says; leave it unset in a container")
     return ""

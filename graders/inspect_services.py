@@ -1,6 +1,6 @@
 """Grader for ``inspect-services`` (tutorial ch. 21; contract in shared/LESSONS.md).
 
-The grader's node ``/point_oracle_NNN`` (random name) serves ``/what_is_the_point``
+The grader's node ``/oracle_NNN`` (random name) serves ``/what_is_the_point``
 (the learner's WhatIsThePoint) and answers each request with a random point,
 summing to 42 for a quote about life (:mod:`graders._mystery_services`).
 The learner's ``cli/inspect_services.sh`` runs in that graph (kit.scripts); it

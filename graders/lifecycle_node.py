@@ -94,7 +94,7 @@ CHECKS = [
           "on_cleanup does", needs=("shutdown",)),
     checks.ctrl_c("sigint_exit", "the finalized node", 1, needs=RUN),
     Check("shutdown_any_state", "shutdown also reaches finalized from unconfigured (before any configure) and from "
-          "inactive", 2, "__init__ sets self.heartbeat_publisher = None and self.timer = None, and on_shutdown "
+          "inactive, destroying what exists", 2, "__init__ sets self.heartbeat_publisher = None and self.timer = None, and on_shutdown "
           "destroys each only if it is not None: shutdown may come before configure ever ran", needs=("managed",)),
 ]
 
@@ -127,4 +127,4 @@ def grade(s: Session) -> None:
         _lifecycle.reconfigure(s, life, stream)
         _lifecycle.shutdown(s, life, stream)
     finally:  # judged whatever stopped the sequence above: the runs are of their own
-        _lifecycle.shutdown_any_state(s, path, EXECUTABLE, node.name)
+        _lifecycle.shutdown_any_state(s, path, EXECUTABLE, node.name, TOPIC)

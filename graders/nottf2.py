@@ -124,6 +124,16 @@ def parse(text: str) -> dict[str, list[Q | str]]:
     return found
 
 
+def _sharing(text: str, name: str) -> list[str]:
+    """The other names printed on the line of ``name``'s first print (the lesson: each "on a line of its own";
+    the independent review of stop 82 got full marks with all four on one summary line)."""
+    for line in text.splitlines():
+        names = [m.group(1) for m in PRINTED.finditer(line)]
+        if name in names:
+            return sorted(set(names) - {name})
+    return []
+
+
 def _mistakes(want: dict[str, Q]) -> dict[str, dict[str, Q]]:
     """The values a usual slip prints instead, per name, to say which slip it was."""
     s, c = math.sin(PHI / 2), math.cos(PHI / 2)
@@ -156,7 +166,10 @@ def record_value(s: Session, check_id: str, name: str, what: str, printed: dict,
         observed += f", which is {slip[0]}"
     if len(items) > 1:  # the chapter's output: each quantity once
         observed += f"; {name}= printed {len(items)} times (is main() also called when the module is imported?)"
-    return s.record(check_id, _close(got, want[name]) and len(items) == 1, observed, expected)
+    sharing = _sharing(run.stdout + "\n" + run.stderr, name)
+    if sharing:
+        observed += f"; on the same line as {', '.join(sharing)}: each quaternion goes on a line of its own"
+    return s.record(check_id, _close(got, want[name]) and len(items) == 1 and not sharing, observed, expected)
 
 
 def record_requires(s: Session) -> bool:

@@ -82,9 +82,15 @@ if f is not None:
         try:
             r = f(a, b)
             ok = isinstance(r, (int, float)) and not isinstance(r, bool)
-            out["calls"].append({"a": a, "b": b, "value": float(r) if ok else None, "repr": repr(r)[:80]})
+            out["calls"].append({"a": a, "b": b, "value": float(r) if ok else None, "repr": repr(r)[:80],
+                                 "type": type(r).__name__})
         except BaseException as exc:
             out["calls"].append({"a": a, "b": b, "error": text(exc)})
+    try:  # by the parameter names the lesson gives, (a, b), as SampleClass is made with name=...
+        r = f(a=cases[0][0], b=cases[0][1])
+        out["keywords"] = {"repr": repr(r)[:80]}
+    except BaseException as exc:
+        out["keywords"] = {"error": text(exc)}
 cls = getattr(mod, @CLASS@, None)
 if cls is not None:
     out["class_module"] = str(getattr(cls, "__module__", None))
@@ -107,7 +113,8 @@ for _key, _value in {"@CASES@": json.dumps(CASES), "@NAMES@": json.dumps(NAMES),
 
 def _record_function(s: Session, result: dict) -> None:
     """``square_of_sum``: the probe's calls of the function returned (a + b)**2 (seed ch. 14.3)."""
-    expected = "(a + b)**2 for " + ", ".join(f"({a}, {b})" for a, b in CASES)
+    expected = ("(a + b)**2 for " + ", ".join(f"({a}, {b})" for a, b in CASES)
+                + " (an int for two ints), called positionally and as (a=..., b=...)")
     calls = result.get("calls")
     if calls is None:
         s.record("square_of_sum", False, f"{MODULE} has no {FUNCTION}; it exports: "
@@ -123,8 +130,15 @@ def _record_function(s: Session, result: dict) -> None:
             wrong.append(f"({a}, {b}) returned {call['repr']}, not a number")
         elif not math.isclose(call["value"], want, rel_tol=REL_TOL, abs_tol=1e-12):
             wrong.append(f"({a}, {b}) returned {call['repr']} instead of {want!r}")
+        elif isinstance(want, int) and call.get("type") != "int":
+            # (a + b)**2 of two ints is an int (the lesson's own try-out prints f(1, 2) as 9); math.pow gives 9.0
+            wrong.append(f"({a}, {b}) returned {call['repr']} (a {call.get('type')}), not the int {want!r}")
+    keywords = result.get("keywords") or {}
+    if "error" in keywords:
+        a, b = CASES[0]
+        wrong.append(f"{FUNCTION}(a={a}, b={b}) raised {keywords['error']}: the parameters are not named a and b")
     right = len(calls) - len(wrong)
-    observed = (f"correct for all {len(calls)} pairs" if not wrong
+    observed = (f"correct for all {len(calls)} pairs, also called as (a=..., b=...)" if not wrong
                 else f"{right}/{len(calls)} right; " + "; ".join(wrong[:3]) + (" ..." if len(wrong) > 3 else ""))
     s.record("square_of_sum", not wrong, observed, expected)
 

@@ -13,6 +13,7 @@ that asserts nothing catches none of them.
 from __future__ import annotations
 
 import ast
+import re
 import sys
 from pathlib import Path
 
@@ -149,20 +150,45 @@ def _judge_main(s: Session, project: Path) -> None:
                           exit_timeout=SIGINT_EXIT_TIMEOUT, env=py.python_env(s), cwd=project, wait_for=GREETING,
                           first_timeout=FIRST_LINE_TIMEOUT)
     before, marked, after = run.stdout.partition(MAIN_MARK)
-    at_import = [line.strip() for line in before.splitlines()].count(GREETING)
+    printed = [line.strip() for line in before.splitlines() if line.strip()]
+    at_import = printed.count(GREETING)
     called = [line.strip() for line in after.splitlines()].count(GREETING)
+    guard = _guard_problem(project / SCRIPT)
     if not marked:
         observed = (f"importing minimalist_package.minimalist_script printed {at_import} 'Howdy!' line(s) and never "
                     "returned: the loop runs at import, not in main()" if at_import else
                     f"importing minimalist_package.minimalist_script failed: {run.exception() or run.describe()}")
-    elif at_import:
-        observed = f"importing the module already printed {at_import} 'Howdy!' line(s), before main() was called"
+    elif printed:  # the lesson: importing the module "must print nothing", a banner as much as a Howdy!
+        observed = (f"importing the module already printed {len(printed)} line(s) before main() was called: "
+                    + "; ".join(repr(line) for line in printed[:3]))
     else:
         observed = f"main() printed {called} 'Howdy!' line(s)" + (
             "" if called else f" and {'raised: ' + run.exception() if run.traceback else 'returned'}")
-    s.record("main_function", bool(marked) and not at_import and called > 0, observed,
+    if guard:
+        observed += f"; {guard}"
+    s.record("main_function", bool(marked) and not printed and called > 0 and not guard, observed,
              "'import minimalist_package.minimalist_script' prints nothing; calling its main() prints Howdy! "
-             "(what an installed console script does)")
+             "(what an installed console script does); the file ends with if __name__ == \"__main__\": followed "
+             "only by main()")
+
+
+def _guard_problem(script: Path) -> str:
+    """What breaks the lesson's "end the file with ``if __name__ == "__main__":`` followed only by a call to
+    ``main()``" (task 1), or "" when the file does so (or has no such guard, or does not parse: then ``howdy`` and
+    ``main_function`` already fail). That block runs when the script is started by its path, never when a console
+    script calls ``main()``: anything else in it makes the two ways of starting differ."""
+    try:
+        tree = ast.parse(script.read_text(encoding="utf-8"), filename=str(script))
+    except (OSError, UnicodeDecodeError, SyntaxError):
+        return ""
+    guard = next((node for node in reversed(tree.body) if isinstance(node, ast.If)
+                  and {"__main__", "__name__"} <= set(re.findall(r"\w+", ast.unparse(node.test)))), None)
+    body = [ast.unparse(stmt) for stmt in guard.body] + (["else: ..."] if guard.orelse else []) if guard else []
+    if guard is not None and body != ["main()"]:
+        return f"its if __name__ == \"__main__\": block (line {guard.lineno}) holds {'; '.join(body)}, not only main()"
+    if guard is not None and tree.body[-1] is not guard:
+        return f"code follows its if __name__ == \"__main__\": block (line {tree.body[-1].lineno}): it must end the file"
+    return ""
 
 
 def _judge_class(s: Session, project: Path) -> None:

@@ -98,6 +98,15 @@ NODE_MUTANTS = [
            "a node that exits with status 1 on Ctrl+C",
            "add a @launch_testing.post_shutdown_test() class that calls "
            "launch_testing.asserts.assertExitCodes(proc_info, process=node)"),
+    # the independent review of stop 82 got full marks with assertExitCodes(..., allowable_exit_codes=[0, -2, -9,
+    # -15, 130, 137, 143]): a test that lets a signal's death pass as clean; the lesson's Ctrl+C ends it with 0
+    DeclaredMutant("catches_death_by_signal", NODE_PACKAGE, NODE_FILE,
+           "    except (KeyboardInterrupt, ExternalShutdownException):\n        pass\n",
+           "    except (KeyboardInterrupt, ExternalShutdownException):\n"
+           "        import os, signal; signal.signal(signal.SIGINT, signal.SIG_DFL); os.kill(os.getpid(), signal.SIGINT)\n",
+           "a node that dies of the signal on Ctrl+C (exit code -2, what a shell shows as 130) instead of exiting with 0",
+           "keep assertExitCodes(proc_info, process=node) at its default, which accepts 0 only: a list of "
+           "allowable_exit_codes with -2, -15 or 130 lets a node that never handles Ctrl+C pass"),
 ]
 
 CHECKS = [

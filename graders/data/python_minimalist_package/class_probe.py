@@ -69,6 +69,7 @@ attempt("private_after_set", lambda: after_set(None))
 attempt("private_stored_after_set", lambda: after_set("_private_attribute"))
 attempt("method", lambda: repr(C(attribute_arg=3.5, private_attribute_arg=4.25).method()))
 attempt("static", lambda: repr(C.static_method()))
+attempt("static_kind", lambda: repr(type(vars(C).get("static_method")).__name__))  # @staticmethod, not @classmethod
 attempt("static_instance", lambda: repr(C().static_method()))
 attempt("reference", lambda: repr(C.attribute_reference))
 attempt("reference_instance", lambda: repr(C().attribute_reference))
