@@ -221,16 +221,39 @@ def read_compose(path: Path) -> tuple[dict[str, dict], str]:
     return {str(k): (v if isinstance(v, dict) else {}) for k, v in services.items()}, ""
 
 
+def _host_path(source: str) -> bool:
+    """Whether a short-syntax volume source is a host path: Compose reads it as one only when it starts with
+    ``.``, ``/`` or ``~``; anything else (``fastrtps_profile.xml``) names a Docker volume (Compose file
+    reference, services.volumes, short syntax)."""
+    return source.startswith((".", "/", "~"))
+
+
 def mounts(service: dict) -> dict[str, str]:
-    """A compose service's bind mounts: container path -> host path (short ``src:dst[:mode]`` or long syntax)."""
+    """A compose service's bind mounts: container path -> host path (short ``src:dst[:mode]`` or long syntax
+    ``{type: bind, source, target}``). A named volume (short syntax without ``./``, or ``type: volume``) is not one
+    (:func:`named_volumes`)."""
     out = {}
     for volume in service.get("volumes") or []:
         if isinstance(volume, str) and ":" in volume:
             source, target = volume.split(":")[:2]
-            out[target] = source
-        elif isinstance(volume, dict) and volume.get("target"):
+            if _host_path(source):
+                out[target] = source
+        elif isinstance(volume, dict) and volume.get("target") and volume.get("type", "bind") == "bind":
             out[str(volume["target"])] = str(volume.get("source", ""))
     return out
+
+
+def named_volumes(service: dict) -> list[str]:
+    """The Docker volume names a compose service mounts (short syntax whose source is not a host path, or
+    ``type: volume``), in file order: ``fastrtps_profile.xml:/profiles/...`` mounts an (empty) volume of that
+    name, never the file beside the compose file (independent review of stop 73)."""
+    names = []
+    for volume in service.get("volumes") or []:
+        if isinstance(volume, str) and ":" in volume and not _host_path(source := volume.split(":")[0]):
+            names.append(source)
+        elif isinstance(volume, dict) and volume.get("type") == "volume" and volume.get("source"):
+            names.append(str(volume["source"]))
+    return names
 
 
 def environment(service: dict) -> dict[str, str]:
@@ -241,5 +264,5 @@ def environment(service: dict) -> dict[str, str]:
     return {str(k): "" if v is None else str(v) for k, v in env.items()} if isinstance(env, dict) else {}
 
 
-__all__ = ["PROFILE_VARIABLES", "DdsRun", "environment", "exchange", "mounts", "read_compose", "read_profile",
-           "xml_errors"]
+__all__ = ["PROFILE_VARIABLES", "DdsRun", "environment", "exchange", "mounts", "named_volumes", "read_compose",
+           "read_profile", "xml_errors"]

@@ -45,6 +45,8 @@ DATA = Path(__file__).resolve().parent / "data" / "cpp_demystified"
 #: What libstdc++'s std::out_of_range from ``vector::at(22)`` says of the index (its ``_M_range_check``: the
 #: text is the library's, not the learner's, so the demo's own wording stays free).
 WHAT_22 = "which is 22"
+#: ... and of the vector's size: the lesson's demo reads ``.at(22)`` of a four-element vector.
+WHAT_SIZE = "(which is 4)"
 #: The size the demo's Potato is made with, ``make_potato(20.0)``: std::cout prints the double as ``20``.
 POTATO_SIZE = 20.0
 RUN_TIMEOUT = 10.0  # seconds for the demo and for each harness test (each takes milliseconds)
@@ -119,12 +121,14 @@ def _judge_cmake(s: Session, project: Path) -> None:
              + (f"; stderr: {problem!r}" if run.returncode != 0 and problem else ""),
              f"exit code 0 within {RUN_TIMEOUT:.0f} s")
     said = [line.strip() for line in (run.stdout + "\n" + run.stderr).splitlines() if WHAT_22 in line]
-    s.record("demo_out_of_range", bool(said),
-             f"it printed {said[0][:160]!r}" if said else
+    sized_4 = [line for line in said if WHAT_SIZE in line]  # the closing bracket: "(which is 40)" is not it
+    s.record("demo_out_of_range", bool(sized_4),
+             f"it printed {said[0][:160]!r}" + ("" if sized_4 else ": the vector does not hold four elements")
+             if said else
              f"none of its {len(out)} line(s) holds the exception's text" + (f"; the first: {out[0].strip()[:120]!r}"
                                                                              if out else ""),
              f"a line with e.what() of .at(22)'s std::out_of_range (libstdc++: 'vector::_M_range_check: __n "
-             f"({WHAT_22}) >= this->size() (which is 4)')")
+             f"({WHAT_22}) >= this->size() {WHAT_SIZE}')")
     sized = [line.strip() for line in out if POTATO_SIZE in numbers_in(line)]
     s.record("demo_potato_size", bool(sized), f"it printed {sized[0][:160]!r}" if sized else
              f"none of its {len(out)} line(s) holds the number {POTATO_SIZE:g}",

@@ -180,6 +180,9 @@ def _profile_problem(service: dict, compose: Path) -> str:
                if os.path.normpath(compose.parent / os.path.expanduser(source)) == wanted]
     env = dds.environment(service)
     value = env.get(VARIABLE)
+    if volume := next((v for v in dds.named_volumes(service) if PurePosixPath(v).name == "fastrtps_profile.xml"), ""):
+        return (f"volumes: {volume}:... names a Docker volume, not the file: in the short syntax a host path "
+                "starts with ./ (./fastrtps_profile.xml)")
     absolute = sorted(source for source in named.values() if source.startswith(("/", "~")))
     if absolute:  # the lesson: "a path relative to the compose file"; an absolute one is only this machine's
         return (f"the profile is mounted from the absolute host path {absolute[0]}: it exists on your machine "
