@@ -228,32 +228,31 @@ def _host_path(source: str) -> bool:
     return source.startswith((".", "/", "~"))
 
 
-def mounts(service: dict) -> dict[str, str]:
-    """A compose service's bind mounts: container path -> host path (short ``src:dst[:mode]`` or long syntax
-    ``{type: bind, source, target}``). A named volume (short syntax without ``./``, or ``type: volume``) is not one
-    (:func:`named_volumes`)."""
-    out = {}
+def volume_entries(service: dict) -> list[tuple[str, str, str]]:
+    """A compose service's ``volumes:`` as ``(kind, source, target)`` in file order; ``kind`` is Compose's mount
+    type, ``"bind"`` or ``"volume"`` (or what a long entry's ``type:`` says). Short syntax ``src:dst[:mode]``:
+    a source that is a host path (``./``, ``/``, ``~``) is a bind mount, any other names a Docker volume
+    (``fastrtps_profile.xml:/profiles/...`` mounts an empty volume of that name, never the file beside the
+    compose file: independent review of stop 73). Long syntax: its ``type:``, ``bind`` when absent."""
+    out = []
     for volume in service.get("volumes") or []:
         if isinstance(volume, str) and ":" in volume:
             source, target = volume.split(":")[:2]
-            if _host_path(source):
-                out[target] = source
-        elif isinstance(volume, dict) and volume.get("target") and volume.get("type", "bind") == "bind":
-            out[str(volume["target"])] = str(volume.get("source", ""))
+            out.append(("bind" if _host_path(source) else "volume", source, target))
+        elif isinstance(volume, dict):
+            out.append((str(volume.get("type", "bind")), str(volume.get("source", "")), str(volume.get("target") or "")))
     return out
 
 
+def mounts(service: dict) -> dict[str, str]:
+    """A compose service's bind mounts: container path -> host path (:func:`volume_entries` of kind ``bind``)."""
+    return {target: source for kind, source, target in volume_entries(service) if kind == "bind" and target}
+
+
 def named_volumes(service: dict) -> list[str]:
-    """The Docker volume names a compose service mounts (short syntax whose source is not a host path, or
-    ``type: volume``), in file order: ``fastrtps_profile.xml:/profiles/...`` mounts an (empty) volume of that
-    name, never the file beside the compose file (independent review of stop 73)."""
-    names = []
-    for volume in service.get("volumes") or []:
-        if isinstance(volume, str) and ":" in volume and not _host_path(source := volume.split(":")[0]):
-            names.append(source)
-        elif isinstance(volume, dict) and volume.get("type") == "volume" and volume.get("source"):
-            names.append(str(volume["source"]))
-    return names
+    """The Docker volume names a compose service mounts, in file order (:func:`volume_entries` of kind
+    ``volume``)."""
+    return [source for kind, source, _ in volume_entries(service) if kind == "volume" and source]
 
 
 def environment(service: dict) -> dict[str, str]:
@@ -265,4 +264,4 @@ def environment(service: dict) -> dict[str, str]:
 
 
 __all__ = ["PROFILE_VARIABLES", "DdsRun", "environment", "exchange", "mounts", "named_volumes", "read_compose",
-           "read_profile", "xml_errors"]
+           "read_profile", "volume_entries", "xml_errors"]

@@ -49,7 +49,8 @@ NEW_QUOTE = "You got a good-guy heart. That's just who you are."
 SET_COMMAND = f"ros2 param set {NODE} quote \"{NEW_QUOTE}\""
 #: The parameters the node declares (ros2 param list prints each on a line, indented two spaces).
 NAMES = ("period", "philosopher_name", "quote", "topic_name")
-TIMEOUT = 30.0  # seconds for the whole script (each ros2 command starts in ~1 s)
+TIMEOUT = 60.0  # seconds for the whole script: each ros2 command starts in ~1 s, 3 s on a busy machine (a loop
+# that waits all its 10 tries took over 30 s under CI's load of stop 73, and lost `ends` and `got` with it)
 NEXT_MESSAGES = 2  # the change must show within this many messages (one may be on its way)
 
 #: Seconds from the start of the first run (a daemon lists the node all along) by which the script's first

@@ -21,7 +21,8 @@ def test_dev_validate(lesson_id, cli):
     # beside actions-client): 207 s with --jobs 3 against 253 s with --jobs 2, the same verdicts and notes in
     # every case; the fresh-clone CI of --jobs 2 took 48.0 min, over its 45-min budget.
     # --until-settled: a wrong solution is graded until the checks its fixture names are judged, the starter
-    # until its first lost point (the rest cannot change their verdicts); references whole
+    # until its first lost point (the rest cannot change their verdicts); references whole. --batch grades the
+    # reference beside the one sampled wrong solution (dev.parity.validate_with_batch: inspect-params 183 -> 154 s)
     proc = cli("dev", "validate", lesson_id, "--json", "--batch", "--sample", "1", "--jobs", "3", "--until-settled",
                timeout=1200)
     assert "Traceback" not in proc.stderr, proc.stderr
