@@ -242,3 +242,38 @@ def test_a_stop_or_a_crash_inside_a_part_still_closes_the_part_every_action_of_i
     (tmp_path / "log").mkdir(exist_ok=True)
     status, _, _ = run(session(tmp_path), grade_crashing)
     assert status == Status.GRADER_ERROR and closed == ["world"]
+
+
+def test_a_hung_grading_says_where_its_main_thread_was(monkeypatch, tmp_path) -> None:
+    """A child that runs past its deadline is killed, and the grader error names where its grading thread was:
+    the stacks faulthandler wrote (``--dump-stacks-after``) from a real hung Python process, read by hung_at."""
+    import subprocess
+    import sys
+
+    from ros2course.dev import child
+    from ros2course.grade.results import LessonResult, Status
+
+    hang = ("import faulthandler, threading, time\n"
+            "def wait_for_peer():\n    time.sleep(30)\n"
+            "def _main():\n    faulthandler.dump_traceback_later(0.5, exit=False)\n"
+            "    threading.Thread(target=time.sleep, args=(30,), daemon=True).start()\n    wait_for_peer()\n"
+            "_main()\n")
+    with pytest.raises(subprocess.TimeoutExpired) as hung:
+        subprocess.run([sys.executable, "-c", hang], capture_output=True, text=True, timeout=3, check=False)
+    seen: list[list[str]] = []
+
+    def run(argv, **kwargs):
+        seen.append(argv)
+        raise hung.value
+
+    monkeypatch.setattr(child.subprocess, "run", run)
+    result = child.grade_in_child("print-forever-node", tmp_path, (), tmp_path / "log", timeout=3)
+    assert result.status == Status.GRADER_ERROR
+    assert "ran past 3 s; its main thread was at <string>:3 in wait_for_peer <- <string>:7 in _main" in result.message
+    assert "most recent call first" in (tmp_path / "log" / "hung-child.stderr.log").read_text()
+    assert seen[0][seen[0].index("--dump-stacks-after") + 1] == "1.5"  # half the deadline when it is short
+    assert child.hung_at(b"no stacks here", tmp_path) == ""
+    # the grading printed its result and only the child's exit hung: the result stands
+    record = json.dumps(LessonResult("print-forever-node", 1.0, 1.0, Status.PASSED, []).to_record())
+    hung.value.stdout = (record + "\n").encode()
+    assert child.grade_in_child("print-forever-node", tmp_path, (), tmp_path / "log").status == Status.PASSED
