@@ -375,7 +375,10 @@ def _grade(ws: Workspace, lesson, quiet: bool = False):
     if not quiet:  # --json: no console made before the nodes start (rich's import, issue 36)
         err = stderr_console()
         status = err.status(f"grading {lesson.id} in {ws.root} ...") if err.is_terminal else None
-    with status or contextlib.nullcontext(), _ctrl_c_seen() as interrupted:
+    from ros2course.grade.deadline import check_deadline  # noqa: PLC0415 - start time, see the imports
+
+    with status or contextlib.nullcontext(), _ctrl_c_seen() as interrupted, \
+            check_deadline(f"the check of {lesson.id}", ws.root / "log" / "ros2course" / lesson.id):
         progress = (lambda line: status.update(f"{lesson.id}: {line}")) if status is not None else None
         # the learner sees the visible checks only (issue 39): the others are graded when the work is handed in
         result = check_lesson(lesson, ws.root, progress=progress)
