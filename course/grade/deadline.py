@@ -87,6 +87,8 @@ def _expired(what: str, dump_dir: Path, seconds: float) -> None:
     with contextlib.suppress(Exception):
         sweep_stale_fastdds_shm()
     where = f"; every thread's stack is in {stacks}" if stacks else ""
+    if sys.stderr.isatty():  # rich's status line hid the cursor and no longer runs to show it again (ANSI DECTCEM)
+        sys.stderr.write("\r\x1b[2K\x1b[?25h")
     sys.stderr.write(f"error: {what} ran past its {seconds:.0f}-s deadline and was stopped: a hang in ros2course, "
                      f"not a verdict on your code (nothing was recorded){where}\n"
                      f"hint: run the check again; if it hangs again, report it with that file (and set "
