@@ -291,7 +291,10 @@ def write_doc(path: Path, found: list, not_run: list[str], sample: int, seed: in
         "strings wrapped in XX, assignments of None, numbers off by one, swapped keywords and operators), and "
         "after those, from a fourth, poodle's built-in mutators (`--family poodle`: a call, a subscript or a return "
         "value replaced by None, a decorator removed, an augmented assignment made plain, besides its own operator, "
-        "number, keyword and XX string edits): "
+        "number, keyword and XX string edits), and after those, from a fifth, MutPy's operators (`--family mutpy`, "
+        "mutpy-pynguin: `self.x` made `x`, an exception handler's body swallowed or re-raised, a `super()` call "
+        "removed, a loop run zero times, once or reversed, a statement made `pass`, a decorator removed or added; "
+        "each spliced into the file's text, and one whose syntax tree another tool's mutant has is dropped): "
         "mutants nobody looked at while the rules were written, an edit two tools make counted once. Where more than one held-out sample was graded under the lesson's current grader, the cell also gives **all of them together** (killed / counted over every one): a lesson is judged by that pooled figure, never by the best or the latest sample, since drawing samples until one scores well would narrow the sample to a lucky one. **Fingerprint**: each run records its lesson's "
         "grader fingerprint (`ros2course.grade.fingerprint`: the grader and the course modules it imports, the kit "
         "and grading engine modules they or the engine import, lesson.yaml, the reference files); a row measured under another fingerprint (the "
@@ -478,8 +481,9 @@ def main() -> int:
     parser.add_argument("--family", default="universalmutator", metavar="TOOL",
                         help="with --held-out: the tool whose mutants it draws, universalmutator, cosmic-ray (its "
                              "core operators on the Python files: fresh mutants for a lesson whose universalmutator "
-                             "pool earlier samples spent), mutmut (mutmut 2's mutations of the Python files) or poodle "
-                             "(poodle's built-in mutators on the Python files)")
+                             "pool earlier samples spent), mutmut (mutmut 2's mutations of the Python files), poodle "
+                             "(poodle's built-in mutators on the Python files) or mutpy (MutPy's operators, spliced "
+                             "into the Python files; a mutant another tool makes in other words is dropped)")
     parser.add_argument("--readme", action="store_true",
                         help="only rewrite README.md's lesson table from the scores the lessons recorded (no mutants graded)")
     args = parser.parse_args()

@@ -772,8 +772,9 @@ def mutate(lesson_ids: Annotated[list[str], typer.Argument(metavar="LESSON...", 
                "--held-out-seed", metavar="S", help="Random seed of --held-out (default: --seed + 1).")] = None,
            family: Annotated[str, typer.Option(
                "--family", metavar="TOOL", help="With --held-out: whose mutants it draws, universalmutator, "
-                                                "cosmic-ray (core operators) or mutmut (mutmut 2's mutations; "
-                                                "these two: Python files only).")] = "universalmutator",
+                                                "cosmic-ray (core operators), mutmut (mutmut 2's mutations), "
+                                                "poodle or mutpy (MutPy's operators; the last four: Python files "
+                                                "only).")] = "universalmutator",
            jobs: Annotated[int, typer.Option("--jobs", "-j", help="Mutants graded at once.")] = 1,
            out: Annotated[Path, typer.Option("--out", "-o", metavar="DIR", help="Cache, batch outputs, mutation.json and survivors' diffs.")] = Path("mutation-out"),
            timeout: Annotated[float, typer.Option("--timeout", help="Wall-clock limit per mutant, seconds.")] = 300.0,

@@ -853,6 +853,32 @@ def test_poodle_mutants_are_a_fourth_tools_edits_compiled_and_fixed_in_order(tmp
     assert mut.POODLE in mut.FAMILIES
 
 
+def test_mutpy_mutants_are_a_fifth_tools_edits_spliced_into_the_original_text(tmp_path: Path) -> None:
+    """The fifth family (fresh held-out pools once poodle's are spent too): MutPy's operators on a node's file,
+    each mutation spliced into the original text (the rest of the file, its comments and quotes, unchanged);
+    operators the other four lack (self.x made x, an except body swallowed, a super() call removed, a loop run
+    reversed or zero times); a mutant another family makes in other words is dropped by its syntax tree."""
+    pytest.importorskip("mutpy")
+    text = ("class Node(Base):\n    def __init__(self, names):\n        super().__init__(\"talker\")  # the node\n"
+            "        self.count = 0\n        for name in names:\n            self.count += 1\n\n"
+            "    def stop(self):\n        try:\n            self.close()\n        except KeyError:\n"
+            "            print('gone')\n")
+    made, edits = _family_mutants(mut.generate_mutpy_mutants, tmp_path, text, tuple(range(1, 13)))
+    assert (6, "self.count += 1", "count += 1") in edits  # SVD: self variable deletion
+    assert (12, "print('gone')", "pass") in edits  # EXS: the handler's body swallowed
+    assert (3, 'super().__init__("talker")  # the node', "pass  # the node") in edits  # SCD, the comment kept
+    assert (5, "for name in names:", "for name in reversed(names):") in edits  # RIL: the loop reversed
+    assert (6, "self.count += 1", "break") in edits  # ZIL: the loop's body left at once
+    for m in made:  # one place changed: every line outside the edit is the original's
+        assert m.content.splitlines()[:m.line - 1] == text.splitlines()[:m.line - 1]
+    # another family's mutant: the same edit in other words (spacing), so the same syntax tree
+    other = mut.Mutant("node.py", 6, "            self.count += 1", "            self.count  +=  2",
+                       text.replace("self.count += 1", "self.count  +=  2"))
+    kept = mut.drop_made_by_others(made, [other])
+    assert len(kept) == len(made) - 1 and all("self.count += 2" not in m.content for m in kept)
+    assert mut.MUTPY in mut.FAMILIES
+
+
 def test_a_family_other_than_universalmutator_draws_only_held_out_samples(tmp_path: Path) -> None:
     """--family: a bad name and a first sample from cosmic-ray are one-line errors before anything is graded."""
     from ros2course.dev.mutate import mutate_lessons

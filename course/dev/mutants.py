@@ -83,6 +83,7 @@ them together, never by its latest or best one.
 from __future__ import annotations
 
 import ast
+import contextlib
 import copy
 import dataclasses
 import difflib
@@ -137,13 +138,15 @@ LANGUAGES = {".py": "python", ".c": "c", ".h": "c", ".cpp": "cpp", ".cc": "cpp",
 #: C/C++ cannot be compiled alone (ROS headers): their broken mutants are counted as killed by build.
 CHECKED_LANGUAGES = {"python"}
 #: Where mutants come from: universalmutator (every sample until issue 37's pools were spent, and every first
-#: sample), cosmic-ray, mutmut and poodle (held-out samples only: ``--held-out N --family cosmic-ray``, ``mutmut``
-#: or ``poodle``).
-UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT, POODLE = "universalmutator", "cosmic-ray", "mutmut", "poodle"
-FAMILIES = (UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT, POODLE)
+#: sample), cosmic-ray, mutmut, poodle and mutpy (held-out samples only: ``--held-out N --family cosmic-ray``,
+#: ``mutmut``, ``poodle`` or ``mutpy``).
+UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT, POODLE, MUTPY = "universalmutator", "cosmic-ray", "mutmut", "poodle", "mutpy"
+FAMILIES = (UNIVERSALMUTATOR, COSMIC_RAY, MUTMUT, POODLE, MUTPY)
 #: The module each family's tool is imported as.
 _FAMILY_MODULES = {UNIVERSALMUTATOR: "universalmutator", COSMIC_RAY: "cosmic_ray", MUTMUT: "mutmut",
-                   POODLE: "poodle"}
+                   POODLE: "poodle", MUTPY: "mutpy"}
+#: The pip distribution of each family's tool, where it is not the family's name.
+_FAMILY_DISTRIBUTIONS = {MUTPY: "mutpy-pynguin"}
 #: Files never mutated: generated, binary or bookkeeping.
 _SKIP_PARTS = {"__pycache__", "build", "install", "log", ".git"}
 _SKIP_SUFFIXES = {".pyc", ".png", ".jpg", ".gif", ".zip", ".gz", ".so", ".a", ".o", ".mcap", ".db3"}
@@ -689,7 +692,8 @@ def require_tool(family: str = UNIVERSALMUTATOR) -> None:
     module = _FAMILY_MODULES[family]
     if importlib.util.find_spec(module) is None:
         raise MissingRequirement(f"dev mutate needs {family}, which is not installed",
-                                 f"pip install 'ros2course[mutate]' (or pip install {family})")
+                                 f"pip install 'ros2course[mutate]' (or pip install "
+                                 f"{_FAMILY_DISTRIBUTIONS.get(family, family)})")
 
 
 def _own_starter(lesson: Lesson) -> dict[str, Path]:
@@ -979,7 +983,7 @@ def generate_mutants(lesson: Lesson, reference: Path, config: MutationConfig | N
         raise CourseError(f"lesson {lesson.id} has no reference file to mutate",
                           f"name them with 'files:' in {triage_path(lesson)}")
     python_only = {COSMIC_RAY: generate_cosmic_ray_mutants, MUTMUT: generate_mutmut_mutants,
-                   POODLE: generate_poodle_mutants}.get(family)
+                   POODLE: generate_poodle_mutants, MUTPY: generate_mutpy_mutants}.get(family)
     if python_only is not None:
         return [m for rel in files if rel.endswith(".py") for m in python_only(reference, rel)]
     return [m for rel in files for m in generate_file_mutants(reference, rel)]
@@ -1112,6 +1116,149 @@ def generate_poodle_mutants(reference: Path, rel: str) -> list[Mutant]:
                 yield "".join(mutate_lines(mutation, lines))
 
     return _compiled_mutants(rel, original, edits())
+
+
+def generate_mutpy_mutants(reference: Path, rel: str) -> list[Mutant]:
+    """Every mutant MutPy's operators make of the Python file ``reference/rel`` (mutpy-pynguin, the maintained
+    fork of MutPy): its 20 standard operators and 7 experimental ones, by name, each operator's mutations in
+    the order it visits the syntax tree.
+
+    The fifth family (issue 37), for lessons whose four other pools are spent: operators none of the four has
+    as such, on the object model a ROS node is written in: ``self.x`` made ``x`` (SVD), an exception handler's
+    body swallowed or re-raised (EXS, EHD), a ``super()`` call removed or moved (SCD, SCI), a loop run zero
+    times, once or reversed (ZIL, OIL, RIL), a statement replaced by ``pass`` (SDL), a decorator removed or a
+    ``classmethod`` / ``staticmethod`` one added (DDL, CDI, SDI), a hiding variable removed (IHD), an
+    overriding method removed (IOD), a slice's index removed (SIR), constants replaced (CRP).
+
+    MutPy mutates a syntax tree and writes the whole module back with its own code generator, which would
+    reformat every line; here each mutation is spliced into the original text instead: the source span of
+    the smallest mutated node that has one (a decorated definition's span starts at its first decorator) is
+    replaced by ``ast.unparse`` of what the tree holds there now, its later lines indented as the span's
+    first line. So the rest of the file keeps its text, but the spliced span is in ``ast.unparse``'s style
+    (single quotes, no redundant parentheses): an edit another family also makes may then differ from it in
+    text only, and its :attr:`Mutant.key` with it, which is why :func:`drop_made_by_others` removes the
+    mutants whose syntax tree another family's mutant already has. Dropped as for the other families
+    (:func:`_compiled_mutants`). An operator that raises on this file (MutPy predates Python 3.11's syntax
+    tree in places) gives the mutants it made before it raised.
+
+    Raises:
+        MissingRequirement: mutpy-pynguin is not installed.
+    """
+    require_tool(MUTPY)
+    import mutpy.operators as mutpy_operators  # noqa: PLC0415 - optional: the mutate extra
+    from mutpy import utils as mutpy_utils  # noqa: PLC0415 - optional: the mutate extra
+
+    original = (reference / rel).read_text(encoding="utf-8")
+    lines = original.splitlines(keepends=True)
+    operators = sorted([*mutpy_operators.standard_operators, *mutpy_operators.experimental_operators],
+                       key=lambda cls: cls.name())
+
+    def edits() -> Iterator[str]:
+        for mutpy_operator in operators:
+            tree = mutpy_utils.create_ast(original)
+            slots = _slots(tree)
+            with warnings.catch_warnings():  # MutPy reads ast.Str / ast.Num, deprecated in Python 3.8+
+                warnings.simplefilter("ignore", DeprecationWarning)
+                try:
+                    for mutation, _ in mutpy_operator().mutate(tree):
+                        content = _splice_mutation(lines, mutation.node, slots)
+                        if content is not None:
+                            yield content
+                except Exception:  # noqa: BLE001, S112 - MutPy's operator failed on this file: its other mutants are kept
+                    continue
+                finally:
+                    _unmark_shared_nodes(tree)
+
+    return _compiled_mutants(rel, original, edits())
+
+
+def _unmark_shared_nodes(tree: ast.AST) -> None:
+    """Remove what MutPy wrote on the nodes CPython's parser shares between every tree it makes (``Load``,
+    ``Store``, the operators: one instance each, with no position of their own): a ``lineno`` there made the
+    next tool that reads positions (cosmic-ray, poodle, ``ast`` itself) fail on every later file."""
+    for node in ast.walk(tree):
+        if not type(node)._attributes:
+            for name in ("lineno", "parent", "children", "marker"):
+                node.__dict__.pop(name, None)
+
+
+def _slots(tree: ast.AST) -> dict[int, tuple[ast.AST, str, int | None, int]]:
+    """Where each node of ``tree`` sits: ``id(node) -> (parent, field, index in the field's list or None,
+    the list's length then)``."""
+    out: dict[int, tuple[ast.AST, str, int | None, int]] = {}
+    for parent in ast.walk(tree):
+        for field, value in ast.iter_fields(parent):
+            if isinstance(value, list):
+                for index, item in enumerate(value):
+                    if isinstance(item, ast.AST):
+                        out[id(item)] = (parent, field, index, len(value))
+            elif isinstance(value, ast.AST):
+                out[id(value)] = (parent, field, None, 0)
+    return out
+
+
+def _span(node: ast.AST) -> tuple[int, int, int, int] | None:
+    """``(first line, first column, last line, end column)`` of ``node`` in its source (1-based lines, UTF-8
+    byte columns as ``ast`` gives them), from its first decorator when it has some; None without positions."""
+    try:
+        span = [node.lineno, node.col_offset, node.end_lineno, node.end_col_offset]  # type: ignore[attr-defined]
+    except AttributeError:
+        return None
+    if None in span:
+        return None
+    for decorator in getattr(node, "decorator_list", None) or []:
+        if hasattr(decorator, "lineno") and (decorator.lineno, decorator.col_offset - 1) < (span[0], span[1]):
+            span[0], span[1] = decorator.lineno, decorator.col_offset - 1
+    return span[0], span[1], span[2], span[3]
+
+
+def _splice_mutation(lines: list[str], node: ast.AST, slots: dict[int, tuple[ast.AST, str, int | None, int]]
+                     ) -> str | None:
+    """The whole file ``lines`` with the mutation MutPy made at ``node`` spliced in (see
+    :func:`generate_mutpy_mutants`), or None when it cannot be placed."""
+    target = node
+    while _span(target) is None:  # an operator (ast.Add) or a context has no span: its nearest ancestor's
+        if id(target) not in slots:
+            return None
+        target = slots[id(target)][0]
+    if id(target) not in slots:
+        return None
+    parent, field, index, length = slots[id(target)]
+    now = getattr(parent, field, None)
+    if target is not node:  # the ancestor itself stays in its slot, changed below
+        replacement: list[ast.AST] = [target]
+    elif index is None:
+        replacement = [] if now is None else [now]
+    else:  # a list: the slot's one item may now be several, or none
+        count = len(now) - length + 1
+        replacement = list(now[index:index + count]) if count > 0 else []
+    try:
+        text = "\n".join(ast.unparse(item) for item in replacement)
+    except Exception:  # noqa: BLE001 - a tree MutPy left that ast cannot write back
+        return None
+    first, col, last, end = _span(target)  # type: ignore[misc]
+    head = lines[first - 1].encode()[:col].decode(errors="replace")
+    tail = lines[last - 1].encode()[end:].decode(errors="replace")
+    if not text and isinstance(target, ast.stmt):
+        text = "pass"
+    indent = " " * len(head) if not head.strip() else ""
+    text = text.replace("\n", "\n" + indent)
+    return "".join(lines[:first - 1]) + head + text + tail + "".join(lines[last:])
+
+
+def drop_made_by_others(mutants: list[Mutant], others: Iterable[Mutant]) -> list[Mutant]:
+    """``mutants`` without those whose file's syntax tree one of ``others`` (another family's mutants of the same
+    files) already has: the same edit written in another style (:func:`generate_mutpy_mutants`). A file that
+    does not parse as Python is compared by its text."""
+    def form(mutant: Mutant) -> tuple[str, str]:
+        if mutant.file.endswith(".py"):
+            with contextlib.suppress(SyntaxError, ValueError), warnings.catch_warnings():
+                warnings.simplefilter("ignore", SyntaxWarning)
+                return mutant.file, ast.dump(ast.parse(mutant.content))
+        return mutant.file, mutant.content
+
+    made = {form(m) for m in others}
+    return [m for m in mutants if form(m) not in made]
 
 
 def sample_mutants(mutants: list[Mutant], count: int | None, seed: int) -> list[Mutant]:

@@ -109,6 +109,10 @@ def mutate_lesson(lesson: Lesson, out: Path, sample: int | None = None, seed: in
             first = picked
             if family != mut.UNIVERSALMUTATOR:  # another tool's mutants; an edit both make has one key
                 others = mut.generate_mutants(lesson, reference, config, family)
+                if family == mut.MUTPY:  # its spliced edits are in ast.unparse's style: compared by syntax tree
+                    made = [*every, *(m for other in (mut.COSMIC_RAY, mut.MUTMUT, mut.POODLE)
+                                      for m in mut.generate_mutants(lesson, reference, config, other))]
+                    others = mut.drop_made_by_others(others, made)
                 candidates, aside = mut.set_aside(others, config)
                 generated, every = len(others), [*every, *others]
             picked = mut.held_out_sample(candidates, first, held_out,
