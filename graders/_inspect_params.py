@@ -25,6 +25,25 @@ GET_LINE = re.compile(r"^\s*(?:String|Integer|Double|Boolean) value is: ")
 PLACEHOLDER = "ros2course_placeholder: this file is replaced by your script's ros2 param dump\n"
 
 
+#: A line Fast DDS's logging wrote: its default consumer (StdoutConsumer, Fast DDS 2.14 as Jazzy ships it) prints
+#: every log entry, errors included, on the process's **stdout**, coloured with ANSI escapes:
+#: ``ESC[31;1m2026-12-03 ... [RTPS_TRANSPORT_SHM Error] Failed init_port fastrtps_port7413: open_and_lock_file
+#: failed -> Function open_port_internal ESC[0m`` (Fast DDS docs, Logging > Consumers).
+FASTDDS_LOG_LINE = re.compile(r"\x1b\[[0-9;]*m|\[[A-Z][A-Z0-9_]* (?:Error|Warning|Info)\]")
+
+
+def without_fastdds_log(text: str) -> tuple[str, list[str]]:
+    """``text`` (what a ``ros2`` command wrote on stdout, e.g. into a dump file) without the lines Fast DDS's
+    logging put there (:data:`FASTDDS_LOG_LINE`), and those lines. ``ros2 param dump > file`` run while a shared-
+    memory port of an ended participant is still locked writes such an error into the dump (fresh-clone CI of
+    stop 74: ``dump_file`` lost as "not valid YAML" on an escape character): the middleware's words, not the
+    script's."""
+    kept, dropped = [], []
+    for line in text.splitlines(keepends=True):
+        (dropped if FASTDDS_LOG_LINE.search(line) else kept).append(line)
+    return "".join(kept), [re.sub(r"\x1b\[[0-9;]*m", "", line).strip() for line in dropped]
+
+
 def get_lines(line: str) -> str:
     """What of an output line is the value ``ros2 param get`` printed (``String value is: X`` -> ``X``)."""
     return GET_LINE.sub("", line.rstrip(), count=1)

@@ -27,7 +27,7 @@ import yaml
 
 from ros2course.kit import Check, Session, params, scripts
 
-from ._inspect_params import DumpPlaceholder, FirstParamCommand, get_lines
+from ._inspect_params import DumpPlaceholder, FirstParamCommand, get_lines, without_fastdds_log
 from ros2course.kit.mystery import (
     CONFIGURABLE_NODE,
     CONFIGURABLE_PERIOD,
@@ -199,10 +199,13 @@ def judge_dump(s: Session, dump, started: float, current: dict[str, Any], placeh
                  f"({scripts.excerpt(placeholder.before, 80)}), with the dump after it: appended (>>), not "
                  "overwritten", expected, hint=f"`>` overwrites the file: ros2 param dump {NODE} > {DUMP}")
         return
+    text, middleware = without_fastdds_log(text)
+    aside = (f" (left aside: {len(middleware)} line(s) Fast DDS's logging wrote on stdout, e.g. "
+             f"{scripts.excerpt(middleware[0], 100)})") if middleware else ""
     try:
         data = yaml.safe_load(text)
     except yaml.YAMLError as exc:
-        s.record("dump_file", False, f"{DUMP} is not valid YAML ({str(exc).splitlines()[0]})", expected)
+        s.record("dump_file", False, f"{DUMP} is not valid YAML ({str(exc).splitlines()[0]}){aside}", expected)
         return
     values, problem = (params.dump_section(data, NODE) if isinstance(data, dict) and data
                        else (None, f"it holds {scripts.excerpt(text, 120)}"))
@@ -216,6 +219,6 @@ def judge_dump(s: Session, dump, started: float, current: dict[str, Any], placeh
                         if missing else [])
     s.record("dump_file", not problems,
              f"{DUMP}: " + ("; ".join(problems) if problems
-                            else f"{NODE} -> ros__parameters with {len(values)} parameters"), expected)
+                            else f"{NODE} -> ros__parameters with {len(values)} parameters") + aside, expected)
     s.record("dump_after_set", values.get("quote") == NEW_QUOTE, f"the dump's quote is {short(str(values.get('quote')))}",
              f"the dump's quote is {NEW_QUOTE!r} (the value after your set)")
