@@ -147,5 +147,5 @@ if __name__ == "__main__":
     # Fast DDS is skipped once the result is out. `check` never runs that teardown, and it can hang on its own
     # (destructors of DDS objects left to the garbage collector waiting on threads already gone: Fast-DDS #235,
     # #1921, rclpy #456); the suspected cause of the one child that ran past its 600-s deadline (CI of stop 73,
-    # sas-robot-driver swallows-ctrl-c, 7-18 s in 100 runs here, three and six at once)
+    # sas-robot-driver swallows-ctrl-c, which took 7-45 s in each of 116 runs here, three and six at once)
     os._exit(code)
